@@ -1,0 +1,20 @@
+"""jaxspline: batched, differentiable attitude-maneuver kinematics for agile EO satellites.
+
+Public names are re-exported here from small private-by-convention modules, one
+concern each (see README "Architecture"). The library never enables float64 on
+import; call ``jax.config.update("jax_enable_x64", True)`` for double precision
+(the CLI, tests and benchmarks do).
+"""
+
+from jaxspline.limits import AxisLimits, validate_limits
+
+# --- reach (per-channel reachable sets; SPEC section 1) ---
+# --- slew (eigen-axis slew profiles; SPEC section 2) ---
+# --- flex (flexible-mode residual and simulator) ---
+# --- attitude (quaternion / MRP / rotation matrices) ---
+# --- joins (degree-7 joins, vector spline, spatial maneuvers) ---
+# --- retarget (minimum-peak-control retargeting) ---
+# --- geometry (orbit, pointing, routes) ---
+# --- engine (screen, sequence, refine, validate, scenario) ---
+
+__version__ = "0.1.0"

@@ -1,0 +1,37 @@
+"""The ``jaxspline`` command line."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+__all__ = ["main"]
+
+
+def _enable_x64(float32: bool) -> None:
+    import jax
+
+    jax.config.update("jax_enable_x64", not float32)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The argument parser of the ``jaxspline`` command (sub-commands register here)."""
+    parser = argparse.ArgumentParser(prog="jaxspline", description=__doc__)
+    parser.add_subparsers(dest="command", required=True)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``jaxspline`` console script; returns the exit code."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    _enable_x64(getattr(args, "float32", False))
+    try:
+        return int(args.func(args) or 0)
+    except (ValueError, FileExistsError, FileNotFoundError) as exc:
+        print(f"jaxspline: error: {exc}", file=sys.stderr)
+        return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main())

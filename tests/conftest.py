@@ -1,0 +1,8 @@
+"""Tests run in float64 by default (the library itself never flips x64 on import)."""
+
+import os
+
+os.environ.setdefault("XLA_FLAGS", "")
+import jax  # noqa: E402
+
+jax.config.update("jax_enable_x64", True)
