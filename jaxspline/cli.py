@@ -14,10 +14,19 @@ def _enable_x64(float32: bool) -> None:
     jax.config.update("jax_enable_x64", not float32)
 
 
+# Each module registers its own sub-commands with ``register(subparsers)``; the module
+# sets ``func(args) -> int`` on its parsers. Imported lazily to keep start-up fast.
+_SUBCOMMAND_MODULES = ("jaxspline.cli_plan", "jaxspline.aeossp.cli")
+
+
 def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``jaxspline`` command (sub-commands register here)."""
+    import importlib
+
     parser = argparse.ArgumentParser(prog="jaxspline", description=__doc__)
-    parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", required=True)
+    for name in _SUBCOMMAND_MODULES:
+        importlib.import_module(name).register(sub)
     return parser
 
 
