@@ -1,0 +1,359 @@
+"""Loading aeossp_standard cases and reading / writing solutions.
+
+A case directory holds ``mission.yaml``, ``satellites.yaml`` and ``tasks.yaml``
+(benchmark ``aeossp_standard``, repository Mtrya/astro-reason). Every field is
+validated on load; a missing or malformed field raises ``ValueError`` naming the
+file and the field. Times are timezone-aware UTC ``datetime`` objects; the
+solution format uses ISO 8601 strings ending in ``Z``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import tempfile
+from dataclasses import dataclass
+from datetime import UTC, datetime, timedelta
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+__all__ = [
+    "Case",
+    "Satellite",
+    "Task",
+    "format_time",
+    "load_case",
+    "load_solution",
+    "parse_time",
+    "write_solution",
+]
+
+_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+
+def parse_time(text: str, *, where: str = "time") -> datetime:
+    """Parse an ISO 8601 UTC time (``2026-04-14T04:00:00Z``) to an aware ``datetime``.
+
+    A string without an offset is taken as UTC; an offset other than UTC is converted.
+    ``where`` names the field in the ``ValueError`` raised for malformed input.
+    """
+    if isinstance(text, datetime):
+        value = text
+    elif isinstance(text, str):
+        s = text.strip()
+        if s.endswith(("Z", "z")):
+            s = s[:-1] + "+00:00"
+        try:
+            value = datetime.fromisoformat(s)
+        except ValueError:
+            raise ValueError(f"{where}: not an ISO 8601 time: {text!r}") from None
+    else:
+        raise ValueError(f"{where}: expected an ISO 8601 time string, got {text!r}")
+    if value.tzinfo is None:
+        value = value.replace(tzinfo=UTC)
+    return value.astimezone(UTC)
+
+
+def format_time(value: datetime) -> str:
+    """Format an aware (or naive = UTC) ``datetime`` as ``YYYY-MM-DDTHH:MM:SS[.ffffff]Z``."""
+    if value.tzinfo is None:
+        value = value.replace(tzinfo=UTC)
+    value = value.astimezone(UTC)
+    fmt = "%Y-%m-%dT%H:%M:%S.%fZ" if value.microsecond else "%Y-%m-%dT%H:%M:%SZ"
+    return value.strftime(fmt)
+
+
+@dataclass(frozen=True)
+class Satellite:
+    """One satellite of a case: TLE, sensor, attitude and battery model.
+
+    Units: degrees, degrees/s, degrees/s², seconds, watt-hours, watts (as in the files).
+    """
+
+    satellite_id: str
+    norad_id: int
+    tle_line1: str
+    tle_line2: str
+    sensor_type: str
+    max_slew_rate_deg_s: float
+    max_slew_accel_deg_s2: float
+    settling_time_s: float
+    max_off_nadir_deg: float
+    battery_capacity_wh: float
+    initial_battery_wh: float
+    idle_power_w: float
+    imaging_power_w: float
+    slew_power_w: float
+    sunlit_charge_power_w: float
+
+
+@dataclass(frozen=True)
+class Task:
+    """One point target: WGS84 geodetic position, time window, duration, sensor, weight."""
+
+    task_id: str
+    name: str
+    latitude_deg: float
+    longitude_deg: float
+    altitude_m: float
+    release_time: datetime
+    due_time: datetime
+    required_duration_s: float
+    required_sensor_type: str
+    weight: float
+
+
+@dataclass(frozen=True)
+class Case:
+    """A loaded aeossp_standard case (horizon, grids, satellites, tasks)."""
+
+    case_id: str
+    horizon_start: datetime
+    horizon_end: datetime
+    action_step_s: float
+    geometry_step_s: float
+    resource_step_s: float
+    satellites: tuple[Satellite, ...]
+    tasks: tuple[Task, ...]
+
+    @property
+    def duration_s(self) -> float:
+        """Horizon length in seconds."""
+        return (self.horizon_end - self.horizon_start).total_seconds()
+
+    def seconds(self, value: datetime) -> float:
+        """Seconds from ``horizon_start`` to ``value``."""
+        return (value - self.horizon_start).total_seconds()
+
+    def at(self, seconds: float) -> datetime:
+        """The instant ``seconds`` after ``horizon_start``."""
+        return self.horizon_start + timedelta(seconds=float(seconds))
+
+    @property
+    def satellite_by_id(self) -> dict[str, Satellite]:
+        """Satellites keyed by id."""
+        return {s.satellite_id: s for s in self.satellites}
+
+    @property
+    def task_by_id(self) -> dict[str, Task]:
+        """Tasks keyed by id."""
+        return {t.task_id: t for t in self.tasks}
+
+    def task_table(self) -> dict[str, np.ndarray]:
+        """Tasks as struct-of-arrays (float64; times in seconds from ``horizon_start``).
+
+        Keys: ``latitude_deg``, ``longitude_deg``, ``altitude_m``, ``release_s``,
+        ``due_s``, ``duration_s``, ``weight``, ``infrared`` (bool).
+        """
+        ts = self.tasks
+        return {
+            "latitude_deg": np.array([t.latitude_deg for t in ts], dtype=float),
+            "longitude_deg": np.array([t.longitude_deg for t in ts], dtype=float),
+            "altitude_m": np.array([t.altitude_m for t in ts], dtype=float),
+            "release_s": np.array([self.seconds(t.release_time) for t in ts], dtype=float),
+            "due_s": np.array([self.seconds(t.due_time) for t in ts], dtype=float),
+            "duration_s": np.array([t.required_duration_s for t in ts], dtype=float),
+            "weight": np.array([t.weight for t in ts], dtype=float),
+            "infrared": np.array([t.required_sensor_type == "infrared" for t in ts]),
+        }
+
+
+_SENSORS = ("visible", "infrared")
+
+
+def _read_yaml(path: Path) -> Any:
+    if not path.is_file():
+        raise FileNotFoundError(f"{path}: case file not found")
+    with open(path, encoding="utf-8") as fh:
+        try:
+            return yaml.load(fh, Loader=_Loader)
+        except yaml.YAMLError as exc:
+            raise ValueError(f"{path}: not valid YAML: {exc}") from None
+
+
+def _get(mapping: Any, key: str, where: str) -> Any:
+    if not isinstance(mapping, dict) or key not in mapping:
+        raise ValueError(f"{where}: missing field {key!r}")
+    return mapping[key]
+
+
+def _num(mapping: Any, key: str, where: str, *, positive=False, nonneg=False) -> float:
+    value = _get(mapping, key, where)
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise ValueError(f"{where}.{key}: expected a number, got {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise ValueError(f"{where}.{key}: must be finite, got {value!r}")
+    if positive and not value > 0:
+        raise ValueError(f"{where}.{key}: must be > 0, got {value!r}")
+    if nonneg and not value >= 0:
+        raise ValueError(f"{where}.{key}: must be >= 0, got {value!r}")
+    return value
+
+
+def _str(mapping: Any, key: str, where: str) -> str:
+    value = _get(mapping, key, where)
+    if not isinstance(value, str) or not value:
+        raise ValueError(f"{where}.{key}: expected a non-empty string, got {value!r}")
+    return value
+
+
+def _sensor(mapping: Any, key: str, where: str) -> str:
+    value = _str(mapping, key, where)
+    if value not in _SENSORS:
+        raise ValueError(f"{where}.{key}: expected one of {_SENSORS}, got {value!r}")
+    return value
+
+
+def _time(mapping: Any, key: str, where: str) -> datetime:
+    return parse_time(_get(mapping, key, where), where=f"{where}.{key}")
+
+
+def _load_satellite(raw: Any, where: str) -> Satellite:
+    sid = _str(raw, "satellite_id", where)
+    where = f"{where}[{sid}]"
+    norad = _get(raw, "norad_catalog_id", where)
+    if isinstance(norad, bool) or not isinstance(norad, int):
+        raise ValueError(f"{where}.norad_catalog_id: expected an integer, got {norad!r}")
+    l1, l2 = _str(raw, "tle_line1", where), _str(raw, "tle_line2", where)
+    if not l1.startswith("1 ") or len(l1) < 69:
+        raise ValueError(f"{where}.tle_line1: not a TLE line 1: {l1!r}")
+    if not l2.startswith("2 ") or len(l2) < 69:
+        raise ValueError(f"{where}.tle_line2: not a TLE line 2: {l2!r}")
+    sensor = _get(raw, "sensor", where)
+    att = _get(raw, "attitude_model", where)
+    res = _get(raw, "resource_model", where)
+    wa, wr = f"{where}.attitude_model", f"{where}.resource_model"
+    sat = Satellite(
+        satellite_id=sid,
+        norad_id=norad,
+        tle_line1=l1,
+        tle_line2=l2,
+        sensor_type=_sensor(sensor, "sensor_type", f"{where}.sensor"),
+        max_slew_rate_deg_s=_num(att, "max_slew_velocity_deg_per_s", wa, positive=True),
+        max_slew_accel_deg_s2=_num(att, "max_slew_acceleration_deg_per_s2", wa, positive=True),
+        settling_time_s=_num(att, "settling_time_s", wa, nonneg=True),
+        max_off_nadir_deg=_num(att, "max_off_nadir_deg", wa, positive=True),
+        battery_capacity_wh=_num(res, "battery_capacity_wh", wr, positive=True),
+        initial_battery_wh=_num(res, "initial_battery_wh", wr, nonneg=True),
+        idle_power_w=_num(res, "idle_power_w", wr, nonneg=True),
+        imaging_power_w=_num(res, "imaging_power_w", wr, nonneg=True),
+        slew_power_w=_num(res, "slew_power_w", wr, nonneg=True),
+        sunlit_charge_power_w=_num(res, "sunlit_charge_power_w", wr, nonneg=True),
+    )
+    if sat.initial_battery_wh > sat.battery_capacity_wh:
+        raise ValueError(
+            f"{wr}.initial_battery_wh: {sat.initial_battery_wh} exceeds "
+            f"battery_capacity_wh {sat.battery_capacity_wh}"
+        )
+    return sat
+
+
+def _load_task(raw: Any, where: str) -> Task:
+    tid = _str(raw, "task_id", where)
+    where = f"{where}[{tid}]"
+    name = raw.get("name", tid) if isinstance(raw, dict) else tid
+    task = Task(
+        task_id=tid,
+        name=str(name),
+        latitude_deg=_num(raw, "latitude_deg", where),
+        longitude_deg=_num(raw, "longitude_deg", where),
+        altitude_m=_num(raw, "altitude_m", where),
+        release_time=_time(raw, "release_time", where),
+        due_time=_time(raw, "due_time", where),
+        required_duration_s=_num(raw, "required_duration_s", where, positive=True),
+        required_sensor_type=_sensor(raw, "required_sensor_type", where),
+        weight=_num(raw, "weight", where, nonneg=True),
+    )
+    if not -90.0 <= task.latitude_deg <= 90.0:
+        raise ValueError(f"{where}.latitude_deg: outside [-90, 90]: {task.latitude_deg}")
+    if task.due_time < task.release_time:
+        raise ValueError(f"{where}.due_time: before release_time")
+    return task
+
+
+def load_case(case_dir: str | os.PathLike) -> Case:
+    """Load and validate one aeossp_standard case directory.
+
+    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file
+    and the field for a missing or malformed field, duplicate ids, or a bad horizon.
+    """
+    case_dir = Path(case_dir)
+    if not case_dir.is_dir():
+        raise FileNotFoundError(f"{case_dir}: case directory not found")
+    mpath = case_dir / "mission.yaml"
+    mission = _get(_read_yaml(mpath), "mission", str(mpath))
+    w = f"{mpath}: mission"
+    start, end = _time(mission, "horizon_start", w), _time(mission, "horizon_end", w)
+    if not end > start:
+        raise ValueError(f"{w}.horizon_end: must be after horizon_start")
+    steps = [
+        _num(mission, key, w, positive=True)
+        for key in ("action_time_step_s", "geometry_sample_step_s", "resource_sample_step_s")
+    ]
+    case_id = str(_get(mission, "case_id", w))
+
+    spath = case_dir / "satellites.yaml"
+    raw_sats = _get(_read_yaml(spath), "satellites", str(spath))
+    if not isinstance(raw_sats, list):
+        raise ValueError(f"{spath}: field 'satellites' must be a list")
+    sats = tuple(_load_satellite(r, f"{spath}: satellites[{i}]") for i, r in enumerate(raw_sats))
+
+    tpath = case_dir / "tasks.yaml"
+    raw_tasks = _get(_read_yaml(tpath), "tasks", str(tpath))
+    if not isinstance(raw_tasks, list):
+        raise ValueError(f"{tpath}: field 'tasks' must be a list")
+    tasks = tuple(_load_task(r, f"{tpath}: tasks[{i}]") for i, r in enumerate(raw_tasks))
+
+    for path, items, key in ((spath, sats, "satellite_id"), (tpath, tasks, "task_id")):
+        seen: set[str] = set()
+        for item in items:
+            ident = getattr(item, key)
+            if ident in seen:
+                raise ValueError(f"{path}: duplicate {key} {ident!r}")
+            seen.add(ident)
+    return Case(case_id, start, end, *steps, satellites=sats, tasks=tasks)
+
+
+def load_solution(path: str | os.PathLike) -> dict:
+    """Read a solution JSON file ``{"actions": [...]}``; ValueError if it is not one."""
+    path = Path(path)
+    with open(path, encoding="utf-8") as fh:
+        try:
+            data = json.load(fh)
+        except json.JSONDecodeError as exc:
+            raise ValueError(f"{path}: not valid JSON: {exc}") from None
+    if not isinstance(data, dict) or not isinstance(data.get("actions"), list):
+        raise ValueError(f"{path}: expected an object with an 'actions' list")
+    return data
+
+
+def write_solution(path: str | os.PathLike, actions, force: bool = False) -> Path:
+    """Write ``{"actions": actions}`` atomically (temp file + ``os.replace``).
+
+    ``actions`` is a list of action dicts or a full solution dict with an ``actions``
+    key. Refuses to overwrite an existing file unless ``force`` (``FileExistsError``).
+    """
+    path = Path(path)
+    if path.exists() and not force:
+        raise FileExistsError(f"{path}: exists (use --force to overwrite)")
+    data = dict(actions) if isinstance(actions, dict) else {"actions": list(actions)}
+    if not isinstance(data.get("actions"), list):
+        raise ValueError("actions: expected a list of action objects")
+    directory = path.parent if str(path.parent) else Path(".")
+    directory.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(data, fh, indent=2)
+            fh.write("\n")
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+    return path
