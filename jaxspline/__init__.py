@@ -10,6 +10,14 @@ from jaxspline.limits import AxisLimits, validate_limits
 
 # --- reach (per-channel reachable sets; SPEC section 1) ---
 # --- slew (eigen-axis slew profiles; SPEC section 2) ---
+from jaxspline.slew import (
+    bang_bang_time,
+    bang_bang_time_kernel,
+    bang_coast_bang_time,
+    bang_coast_bang_time_kernel,
+    scurve_time,
+    scurve_time_kernel,
+)
 # --- flex (flexible-mode residual and simulator) ---
 # --- attitude (quaternion / MRP / rotation matrices) ---
 # --- joins (degree-7 joins, vector spline, spatial maneuvers) ---
