@@ -20,7 +20,39 @@ from jaxspline.slew import (
 )
 # --- flex (flexible-mode residual and simulator) ---
 # --- attitude (quaternion / MRP / rotation matrices) ---
+from jaxspline.attitude import (  # noqa: E402
+    angular_accel_from_mrp,
+    attitude_angle,
+    dcm_to_mrp,
+    dcm_to_quat,
+    mrp_derivs_from_omega,
+    mrp_rate,
+    mrp_shadow,
+    mrp_to_dcm,
+    mrp_to_quat,
+    omega_from_mrp_derivs,
+    omega_from_mrp_rate,
+    quat_conjugate,
+    quat_multiply,
+    quat_normalize,
+    quat_rate,
+    quat_rotate,
+    quat_to_dcm,
+    quat_to_mrp,
+)
 # --- joins (degree-7 joins, vector spline, spatial maneuvers) ---
+from jaxspline.joins import (  # noqa: E402
+    Maneuver,
+    ManeuverCheck,
+    attitude_spline,
+    join7_coeffs,
+    maneuver_check,
+    maneuver_check_kernel,
+    maneuver_eval,
+    maneuver_plan,
+    poly_eval,
+    spline7_coeffs,
+)
 # --- retarget (minimum-peak-control retargeting) ---
 # --- geometry (orbit, pointing, routes) ---
 # --- engine (screen, sequence, refine, validate, scenario) ---
