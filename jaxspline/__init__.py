@@ -9,6 +9,17 @@ import; call ``jax.config.update("jax_enable_x64", True)`` for double precision
 from jaxspline.limits import AxisLimits, validate_limits
 
 # --- reach (per-channel reachable sets; SPEC section 1) ---
+from jaxspline.reach import (  # noqa: E402
+    angle_interval,
+    envelopes,
+    feasible_durations,
+    is_reachable,
+    min_peak_accel,
+    min_transfer_time,
+    rate_interval,
+    reach_margin,
+    transfer,
+)
 # --- slew (eigen-axis slew profiles; SPEC section 2) ---
 from jaxspline.slew import (
     bang_bang_time,
