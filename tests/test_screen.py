@@ -1,0 +1,365 @@
+"""Tests of the bulk screening engine against brute-force numpy references.
+
+The exact-T reference here is the SPEC section 1 envelope formula written in
+plain numpy, one candidate at a time, independent of :mod:`jaxspline.reach`.
+Until ``jaxspline.reach`` exists the engine runs on ``StandInReach`` (a tiny
+jnp version of the same formulas, used only by the tests).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+import pytest
+
+from jaxspline import screen
+from jaxspline.limits import AxisLimits
+from jaxspline.options import RouteOptions
+
+# ----------------------------------------------------------------------------
+# stand-in kernels (only while jaxspline.reach has not landed) and references
+# ----------------------------------------------------------------------------
+
+
+def _hi_lo(a1, b1, b2, T, b, d, xp):
+    ya = (b1 + b2 + d * T) / 2
+    yc = (b1 + b2 - d * T) / 2
+    hi2 = a1 - (b1 - b2) ** 2 / (4 * d) + T * (b1 + b2) / 2 + d * T**2 / 4
+    hi3 = a1 - ((b - b1) ** 2 + (b - b2) ** 2) / (2 * d) + b * T
+    lo2 = a1 + (b1 - b2) ** 2 / (4 * d) + T * (b1 + b2) / 2 - d * T**2 / 4
+    lo3 = a1 + ((b + b1) ** 2 + (b + b2) ** 2) / (2 * d) - b * T
+    return xp.where(ya <= b, hi2, hi3), xp.where(yc >= -b, lo2, lo3)
+
+
+def ref_reachable(a1, b1, a2, b2, T, b, d, tol=0.0):
+    """numpy reference of exact-T membership (SPEC section 1), elementwise."""
+    a1, b1, a2, b2, T, b, d = np.broadcast_arrays(*map(np.asarray, (a1, b1, a2, b2, T, b, d)))
+    rate_ok = (np.abs(b1) <= b) & (np.abs(b2) <= b) & (np.abs(b1 - b2) <= d * T + tol) & (T > 0)
+    with np.errstate(all="ignore"):
+        hi, lo = _hi_lo(a1, b1, b2, T, b, d, np)
+    return rate_ok & (lo - tol <= a2) & (a2 <= hi + tol)
+
+
+class StandInReach:
+    """jnp stand-in for the four reach kernels (tests only)."""
+
+    @staticmethod
+    def _parts(a1, b1, a2, b2, T, rate, accel):
+        Ts = jnp.where(T > 0, T, 1.0)
+        hi, lo = _hi_lo(a1, b1, b2, Ts, rate, accel, jnp)
+        rate_gap = jnp.minimum(
+            jnp.minimum(rate - jnp.abs(b1), rate - jnp.abs(b2)), accel * Ts - jnp.abs(b1 - b2)
+        )
+        return hi, lo, rate_gap
+
+    @staticmethod
+    def reach_margin_kernel(a1, b1, a2, b2, T, rate, accel):
+        hi, lo, rate_gap = StandInReach._parts(a1, b1, a2, b2, T, rate, accel)
+        m = jnp.where(rate_gap >= 0, jnp.minimum(hi - a2, a2 - lo), rate_gap)
+        return jnp.where(T > 0, m, -jnp.inf)
+
+    @staticmethod
+    def is_reachable_kernel(a1, b1, a2, b2, T, rate, accel):
+        return StandInReach.reach_margin_kernel(a1, b1, a2, b2, T, rate, accel) >= 0
+
+    @staticmethod
+    def min_peak_accel_kernel(a1, b1, a2, b2, T, rate):
+        def body(_, lh):
+            lo_, hi_ = lh
+            mid = jnp.sqrt(lo_ * hi_)
+            ok = StandInReach.is_reachable_kernel(a1, b1, a2, b2, T, rate, mid)
+            return jnp.where(ok, lo_, mid), jnp.where(ok, mid, hi_)
+
+        one = jnp.ones_like(a1 * T)
+        lo_, hi_ = jax.lax.fori_loop(0, 90, body, (1e-12 * one, 1e6 * one))
+        ok = StandInReach.is_reachable_kernel(a1, b1, a2, b2, T, rate, 1e6 * one)
+        return jnp.where(ok, hi_, jnp.inf)
+
+    @staticmethod
+    def min_transfer_time_kernel(a1, b1, a2, b2, rate, accel):
+        return jnp.zeros_like(a1 + b1 + a2 + b2 + rate + accel)
+
+
+def have_reach() -> bool:
+    try:
+        import jaxspline.reach  # noqa: F401
+    except ImportError:
+        return False
+    return True
+
+
+@pytest.fixture
+def reach_kernels(monkeypatch):
+    """Use jaxspline.reach if it exists, else the stand-in."""
+    if not have_reach():
+        monkeypatch.setattr(screen, "_reach", lambda: StandInReach)
+    return screen._reach()
+
+
+def synthetic_options(
+    rng,
+    n_routes=6,
+    per_route=3,
+    c=2,
+    horizon=400.0,
+    dur=(5.0, 20.0),
+    dtype=np.float64,
+    rate=0.05,
+    spread=0.4,
+):
+    """Random RouteOptions: each route has ``per_route`` start options on a window grid."""
+    rows = []
+    centers = np.sort(rng.uniform(0, horizon, n_routes))
+    for r in range(n_routes):
+        base = rng.uniform(-spread, spread, c)
+        slope = rng.uniform(-0.005, 0.005, c)
+        d = rng.uniform(*dur)
+        srate = rng.uniform(-0.5 * rate, 0.5 * rate, c)
+        for t0 in centers[r] + np.linspace(-15, 15, per_route):
+            a0 = base + slope * (t0 - centers[r])
+            rows.append((r, t0, t0 + d, a0, srate, a0 + srate * d, srate, rng.uniform(1, 10)))
+    route, ts, te, sa, sr, ea, er, val = zip(*rows, strict=True)
+    n = len(route)
+    return RouteOptions(
+        route=np.asarray(route, np.int32),
+        t_start=np.asarray(ts, dtype),
+        t_end=np.asarray(te, dtype),
+        start_angle=np.asarray(sa, dtype),
+        start_rate=np.asarray(sr, dtype),
+        end_angle=np.asarray(ea, dtype),
+        end_rate=np.asarray(er, dtype),
+        value=np.asarray(val, dtype),
+        scan_ok=np.ones(n, bool),
+    )
+
+
+LIMITS = AxisLimits(rate=np.array([0.05, 0.06]), accel=np.array([0.004, 0.005]))
+
+
+def brute_candidates(opt, max_gap=None):
+    n = len(opt.route)
+    out = []
+    for i in range(n):
+        for j in range(n):
+            if opt.route[i] == opt.route[j] or not (opt.scan_ok[i] and opt.scan_ok[j]):
+                continue
+            T = float(opt.t_start[j]) - float(opt.t_end[i])
+            if T <= 0 or (max_gap is not None and T > max_gap):
+                continue
+            out.append((i, j))
+    return set(out)
+
+
+def brute_feasible(opt, limits, i, j):
+    T = float(opt.t_start[j]) - float(opt.t_end[i])
+    return bool(
+        np.all(
+            ref_reachable(
+                opt.end_angle[i],
+                opt.end_rate[i],
+                opt.start_angle[j],
+                opt.start_rate[j],
+                T,
+                np.asarray(limits.rate),
+                np.asarray(limits.accel),
+            )
+        )
+    )
+
+
+# ----------------------------------------------------------------------------
+# tests
+# ----------------------------------------------------------------------------
+
+
+def test_candidates_and_verdicts_match_brute_force(reach_kernels):
+    rng = np.random.default_rng(0)
+    agree = total = 0
+    for seed in range(4):
+        rng = np.random.default_rng(seed)
+        opt = synthetic_options(rng, n_routes=8, per_route=3, horizon=300.0)
+        opt = opt._replace(scan_ok=rng.uniform(size=len(opt.route)) > 0.1)
+        tr = screen.screen_transitions(opt, LIMITS, progress=False, chunk_size=64)
+        pairs = list(zip(tr.src.tolist(), tr.dst.tolist(), strict=True))
+        assert set(pairs) == brute_candidates(opt)
+        assert len(pairs) == len(set(pairs)) == tr.n_screened
+        np.testing.assert_allclose(tr.T, opt.t_start[tr.dst] - opt.t_end[tr.src], rtol=1e-15)
+        for k, (i, j) in enumerate(pairs):
+            total += 1
+            agree += bool(tr.feasible[k]) == brute_feasible(opt, LIMITS, i, j)
+        assert tr.feasible.any() and (~tr.feasible).any()
+        # margin sign and effort agree with the verdict
+        assert np.all(tr.margin[tr.feasible] >= -1e-9)
+        assert np.all(tr.margin[~tr.feasible] <= 1e-9)
+        assert np.all(tr.effort[tr.feasible] <= 1 + 1e-6)
+        assert np.all(tr.effort[~tr.feasible] >= 1 - 1e-6)
+        assert np.all(tr.t_min[tr.feasible] <= tr.T[tr.feasible] * (1 + 1e-9))
+    assert agree == total, f"{total - agree} of {total} verdicts differ from the numpy reference"
+
+
+def test_chunking_max_gap_and_order_invariance(reach_kernels):
+    rng = np.random.default_rng(7)
+    opt = synthetic_options(rng, n_routes=10, per_route=4, horizon=400.0)
+    full = screen.screen_transitions(opt, LIMITS, progress=False)
+    small = screen.screen_transitions(opt, LIMITS, progress=False, chunk_size=16)
+    for f in ("src", "dst", "T", "feasible", "margin", "effort", "t_min"):
+        np.testing.assert_array_equal(getattr(full, f), getattr(small, f))
+    gap = screen.screen_transitions(opt, LIMITS, progress=False, max_gap=60.0, chunk_size=32)
+    assert set(zip(gap.src.tolist(), gap.dst.tolist(), strict=True)) == brute_candidates(opt, 60.0)
+    assert np.all(gap.T <= 60.0)
+    # permuting the option table permutes indices, not verdicts
+    perm = rng.permutation(len(opt.route))
+    inv = np.argsort(perm)
+    opt_p = RouteOptions(*(np.asarray(a)[perm] for a in opt))
+    tp = screen.screen_transitions(opt_p, LIMITS, progress=False)
+    a = dict(
+        zip(
+            zip(full.src.tolist(), full.dst.tolist(), strict=True),
+            full.feasible.tolist(),
+            strict=True,
+        )
+    )
+    pairs_p = zip(perm[tp.src].tolist(), perm[tp.dst].tolist(), strict=True)
+    b = dict(zip(pairs_p, tp.feasible.tolist(), strict=True))
+    assert a == b and inv.size == perm.size
+    only = screen.screen_transitions(opt, LIMITS, progress=False, feasible_only=True)
+    assert only.feasible.all() and only.src.size == full.feasible.sum()
+    assert only.n_screened == full.n_screened
+
+
+def test_float32_follows_input_dtype(reach_kernels):
+    rng = np.random.default_rng(3)
+    opt64 = synthetic_options(rng, n_routes=8, per_route=3)
+    opt32 = RouteOptions(*(a.astype(np.float32) if a.dtype == np.float64 else a for a in opt64))
+    t64 = screen.screen_transitions(opt64, LIMITS, progress=False)
+    t32 = screen.screen_transitions(opt32, LIMITS, progress=False)
+    assert t32.margin.dtype == np.float32 and t64.margin.dtype == np.float64
+    np.testing.assert_array_equal(t32.src, t64.src)
+    clear = np.abs(t64.margin) > 1e-4
+    np.testing.assert_array_equal(t32.feasible[clear], t64.feasible[clear])
+    np.testing.assert_allclose(t32.margin[clear], t64.margin[clear], rtol=1e-3, atol=1e-4)
+
+
+def test_screen_sequences_planted(reach_kernels):
+    rng = np.random.default_rng(11)
+    opt = synthetic_options(rng, n_routes=8, per_route=3, horizon=600.0)
+    tr = screen.screen_transitions(opt, LIMITS, progress=False)
+    f_ok = np.flatnonzero(tr.feasible)
+    f_bad = np.flatnonzero(~tr.feasible)
+    i, j = tr.src[f_ok[0]], tr.dst[f_ok[0]]
+    bi, bj = tr.src[f_bad[0]], tr.dst[f_bad[0]]
+    same_route = np.flatnonzero(opt.route == opt.route[i])
+    other = same_route[same_route != i][0]
+    seqs = np.array(
+        [
+            [i, j, -1],  # feasible
+            [bi, bj, -1],  # infeasible transition -> fails at position 1
+            [j, i, -1],  # T <= 0 -> position 1
+            [i, -1, -1],  # single option
+            [-1, -1, -1],  # empty
+            [i, j, other],  # repeated route at position 2 (and/or T <= 0)
+        ]
+    )
+    feas, first, value = screen.screen_sequences(opt, seqs, LIMITS)
+    np.testing.assert_array_equal(feas, [True, False, False, True, True, False])
+    np.testing.assert_array_equal(first, [-1, 1, 1, -1, -1, 2])
+    np.testing.assert_allclose(value[0], opt.value[i] + opt.value[j])
+    assert value[4] == 0
+    opt2 = opt._replace(scan_ok=np.where(np.arange(len(opt.route)) == j, False, True))
+    feas, first, _ = screen.screen_sequences(opt2, seqs[:1], LIMITS)
+    assert not feas[0] and first[0] == 1
+    # batch of random sequences vs a per-row reference built from brute_feasible
+    n = len(opt.route)
+    rows = np.sort(rng.integers(0, n, size=(40, 4)), axis=1)
+    feas, first, _ = screen.screen_sequences(opt, rows, LIMITS)
+    for r, row in enumerate(rows):
+        ref = -1
+        for p in range(len(row)):
+            if opt.route[row[p]] in opt.route[row[:p]] or (
+                p > 0
+                and not (
+                    opt.t_start[row[p]] > opt.t_end[row[p - 1]]
+                    and brute_feasible(opt, LIMITS, row[p - 1], row[p])
+                )
+            ):
+                ref = p
+                break
+        assert first[r] == ref and feas[r] == (ref < 0)
+
+
+def test_value_errors(reach_kernels):
+    rng = np.random.default_rng(1)
+    opt = synthetic_options(rng, n_routes=3, per_route=2)
+    with pytest.raises(ValueError, match="max_gap"):
+        screen.screen_transitions(opt, LIMITS, max_gap=-1.0, progress=False)
+    with pytest.raises(ValueError, match="limits.rate"):
+        screen.screen_transitions(opt, AxisLimits(rate=np.array([0.05, -1.0]), accel=0.01))
+    with pytest.raises(ValueError, match="one per channel"):
+        screen.screen_transitions(opt, AxisLimits(rate=np.ones(3), accel=0.01), progress=False)
+    with pytest.raises(ValueError, match="t_end"):
+        bad = opt._replace(t_end=opt.t_start - 1.0)
+        screen.screen_transitions(bad, LIMITS, progress=False)
+    with pytest.raises(ValueError, match="start_rate"):
+        screen.screen_transitions(opt._replace(start_rate=opt.start_rate[:, :1]), LIMITS)
+    with pytest.raises(ValueError, match="padding"):
+        screen.screen_sequences(opt, np.array([[0, -1, 1]]), LIMITS)
+    with pytest.raises(ValueError, match="sequences"):
+        screen.screen_sequences(opt, np.array([[0, 99]]), LIMITS)
+
+
+def test_empty_and_no_candidates(reach_kernels):
+    rng = np.random.default_rng(2)
+    opt = synthetic_options(rng, n_routes=1, per_route=3)
+    tr = screen.screen_transitions(opt, LIMITS, progress=False)
+    assert tr.src.size == 0 and tr.n_screened == 0
+
+
+_SHARD_SCRIPT = textwrap.dedent(
+    """
+    import json, sys
+    import jax
+    jax.config.update("jax_enable_x64", True)
+    import numpy as np
+    sys.path.insert(0, {tests!r})
+    import test_screen as ts
+    from jaxspline import screen
+    if not ts.have_reach():
+        screen._reach = lambda: ts.StandInReach
+    opt = ts.synthetic_options(np.random.default_rng(5), n_routes=12, per_route=4)
+    tr = screen.screen_transitions(opt, ts.LIMITS, progress=False, chunk_size=64)
+    print(json.dumps({{"ndev": jax.local_device_count(),
+                      "src": tr.src.tolist(), "dst": tr.dst.tolist(),
+                      "feasible": tr.feasible.tolist(), "margin": tr.margin.tolist(),
+                      "effort": tr.effort.tolist()}}))
+    """
+)
+
+
+def _run_sharded(ndev: int) -> dict:
+    env = dict(os.environ)
+    env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={ndev}"
+    env["JAX_PLATFORMS"] = "cpu"
+    script = _SHARD_SCRIPT.format(tests=os.path.dirname(__file__))
+    out = subprocess.run(
+        [sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    return json.loads(out.stdout.strip().splitlines()[-1])
+
+
+def test_sharded_over_four_devices_equals_single_device():
+    four = _run_sharded(4)
+    assert four["ndev"] == 4
+    one = _run_sharded(1)
+    assert one["ndev"] == 1
+    for k in ("src", "dst", "feasible"):
+        assert four[k] == one[k]
+    np.testing.assert_allclose(four["margin"], one["margin"], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(four["effort"], one["effort"], rtol=1e-12)
