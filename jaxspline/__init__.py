@@ -22,12 +22,20 @@ from jaxspline.reach import (  # noqa: E402
 )
 # --- slew (eigen-axis slew profiles; SPEC section 2) ---
 from jaxspline.slew import (
+    KIND_CODES,
+    SlewProfile,
     bang_bang_time,
     bang_bang_time_kernel,
     bang_coast_bang_time,
     bang_coast_bang_time_kernel,
     scurve_time,
+    profile_state,
+    profile_state_kernel,
+    scurve_time,
     scurve_time_kernel,
+    slew_profile,
+    slew_profile_kernel,
+    slew_profile_time,
 )
 # --- flex (flexible-mode residual and simulator) ---
 # --- attitude (quaternion / MRP / rotation matrices) ---
