@@ -1,0 +1,1 @@
+"""jaxspline CPU benchmark harness: ``python -m bench --help``."""

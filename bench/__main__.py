@@ -1,0 +1,263 @@
+"""jaxspline CPU benchmark: ``python -m bench [--quick] [--out DIR]``.
+
+Measures, in one process and on the same inputs, the batched JAX kernels against
+a numpy-vectorized implementation of the same formula, a pure-Python loop and
+Ruckig per call; reports candidates/s after compilation (compile time apart),
+median and spread of repetitions, as fractions of this machine's measured
+streaming limit. Writes ``report.json``, ``throughput.png`` and ``RESULTS.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import platform
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+
+def _parse(argv):
+    p = argparse.ArgumentParser(
+        prog="python -m bench",
+        description=__doc__,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
+    )
+    p.add_argument("--out", default="bench/results", help="output folder (default bench/results)")
+    p.add_argument("--quick", action="store_true", help="small batches only (smoke test, ~1 min)")
+    p.add_argument("--max-batch", type=float, default=1e8, help="largest batch (default 1e8)")
+    p.add_argument("--reps", type=int, default=5, help="repetitions per measurement (default 5)")
+    p.add_argument("--float32", action="store_true", help="float32 only (default: both)")
+    p.add_argument(
+        "--section",
+        action="append",
+        choices=["bandwidth", "kernels", "threads", "devices", "screening"],
+        help="run only these sections (repeatable)",
+    )
+    p.add_argument("--child", help=argparse.SUPPRESS)  # internal: run one measurement, print JSON
+    return p.parse_args(argv)
+
+
+def _jax_setup(x64: bool):
+    import jax
+
+    jax.config.update("jax_enable_x64", x64)
+    return jax
+
+
+# ------------------------------------------------------------------ streaming limit
+def measure_bandwidth(reps: int, nbytes: int = 1 << 30) -> dict:
+    """Memory read bandwidth: a jitted sum over ``nbytes`` of float64 (GB/s)."""
+    jax = _jax_setup(True)
+    import jax.numpy as jnp
+
+    from bench.timing import time_jax
+
+    x = jnp.ones(nbytes // 8, dtype=jnp.float64)
+    t = time_jax(jax.jit(jnp.sum), (x,), n=nbytes, reps=reps)
+    return {
+        "bytes": nbytes,
+        "GBps": t.rate / 1e9,
+        "GBps_lo": t.rate_spread[0] / 1e9,
+        "GBps_hi": t.rate_spread[1] / 1e9,
+        "compile_s": t.compile_s,
+    }
+
+
+# ------------------------------------------------------------------ kernels
+POOL = 1 << 23  # materialized candidates reused when streaming bigger batches
+
+
+def _batch_sizes(max_batch: float, quick: bool) -> list[int]:
+    top = 1e5 if quick else max_batch
+    return [int(10**e) for e in range(3, 9) if 10**e <= top]
+
+
+def bench_kernel(w, dtype: str, sizes: list[int], reps: int, do_baselines: bool) -> dict:
+    """Throughput of one workload over batch sizes, plus baselines at the largest numpy size."""
+    jax = _jax_setup(dtype == "float64")
+    import jax.numpy as jnp
+
+    from bench.timing import time_call, time_jax
+
+    npdt = np.float64 if dtype == "float64" else np.float32
+    fn = jax.jit(jax.vmap(w.jax_kernel))
+    rows = []
+    for n in sizes:
+        if n > w.max_batch:
+            break
+        m = min(n, POOL)
+        inp = w.make_inputs(m, 0)
+        args = tuple(jnp.asarray(inp[k].astype(npdt)) for k in w.args)
+        t = time_jax(fn, args, n=m, reps=reps if n <= POOL else 1)
+        if n > POOL:  # stream: the same materialized pool, n / POOL times
+            passes = n // POOL
+            t = time_call(
+                lambda: [fn(*args) for _ in range(passes)][-1],
+                n=passes * POOL,
+                reps=max(1, reps // 2),
+            )
+        rows.append({"n": n, **t.to_dict()})
+        del args
+    out = {"workload": w.name, "dtype": dtype, "jax": rows}
+    if not do_baselines:
+        return out
+    # baselines on the same inputs (numpy at 1e6, Python/Ruckig on subsamples)
+    n_np = 10**6
+    inp = w.make_inputs(n_np, 0)
+    arrs = [inp[k].astype(npdt) for k in w.args]
+    jargs = tuple(jnp.asarray(a) for a in arrs)
+    jax_out = np.asarray(jax.tree_util.tree_leaves(fn(*jargs))[0])
+    if w.numpy_fn is not None:
+        t = time_call(lambda: w.numpy_fn(*arrs), n=n_np, reps=reps)
+        ref = np.asarray(w.numpy_fn(*arrs))
+        ref = ref[0] if ref.ndim > 1 else ref
+        out["numpy"] = {**t.to_dict(), "agree": _agree(jax_out, ref)}
+    for key, f, m in (("python", w.python_fn, 20000), ("ruckig", w.ruckig_fn, 2000)):
+        if f is None:
+            continue
+        sub = [a[:m].astype(np.float64).tolist() for a in arrs]
+        t0 = time.perf_counter()
+        vals = [f(*c) for c in zip(*sub, strict=True)]
+        dt = time.perf_counter() - t0
+        out[key] = {
+            "n": m,
+            "median_s": dt,
+            "rate": m / dt,
+            "agree": _agree(jax_out[:m], np.asarray(vals, dtype=jax_out.dtype)),
+        }
+    return out
+
+
+def _agree(a, b) -> dict:
+    a, b = np.asarray(a), np.asarray(b)
+    if a.dtype == bool or b.dtype == bool:
+        mism = int(np.sum(a.astype(bool) != b.astype(bool)))
+        return {"n": int(a.size), "mismatches": mism}
+    fin = np.isfinite(a) & np.isfinite(b)
+    dev = (
+        float(np.max(np.abs(a[fin] - b[fin]) / np.maximum(1.0, np.abs(b[fin]))))
+        if fin.any()
+        else 0.0
+    )
+    return {
+        "n": int(a.size),
+        "max_rel_dev": dev,
+        "inf_mismatches": int(np.sum(np.isfinite(a) != np.isfinite(b))),
+    }
+
+
+def _child(spec: str) -> None:
+    """Run one measurement described by JSON ``spec`` and print a JSON line (subprocess use)."""
+    s = json.loads(spec)
+    from bench.cases import workloads
+
+    w = {w.name: w for w in workloads()}[s["workload"]]
+    if s.get("devices", 1) > 1:  # shard the candidate axis over forced host devices
+        jax = _jax_setup(s["dtype"] == "float64")
+        import jax.numpy as jnp
+        from jax.sharding import Mesh, NamedSharding, PartitionSpec
+
+        from bench.timing import time_jax
+
+        mesh = Mesh(np.array(jax.devices()), ("c",))
+        sh = NamedSharding(mesh, PartitionSpec("c"))
+        inp = w.make_inputs(s["n"], 0)
+        args = tuple(jax.device_put(jnp.asarray(inp[k]), sh) for k in w.args)
+        t = time_jax(jax.jit(jax.vmap(w.jax_kernel)), args, n=s["n"], reps=s["reps"])
+        res = {"n": s["n"], "devices": len(jax.devices()), **t.to_dict()}
+    else:
+        res = bench_kernel(w, s["dtype"], [s["n"]], s["reps"], False)["jax"][0]
+    print("RESULT " + json.dumps(res))
+
+
+def _run_child(spec: dict, env_extra: dict | None = None, prefix: list[str] | None = None) -> dict:
+    env = dict(os.environ, **(env_extra or {}))
+    cmd = (prefix or []) + [sys.executable, "-m", "bench", "--child", json.dumps(spec)]
+    out = subprocess.run(cmd, env=env, capture_output=True, text=True, check=True).stdout
+    return json.loads(next(ln for ln in out.splitlines() if ln.startswith("RESULT "))[7:])
+
+
+def bench_threads(reps: int, n: int) -> dict:
+    """Membership throughput pinned to 1 core (taskset) vs both cores; 1 vs 2 forced devices."""
+    spec = {"workload": "is_reachable", "dtype": "float64", "n": n, "reps": reps}
+    res = {"n": n}
+    try:
+        res["1_core"] = _run_child(spec, prefix=["taskset", "-c", "0"])
+    except (OSError, subprocess.CalledProcessError) as exc:
+        res["1_core"] = {"error": str(exc)}
+    res["2_cores"] = _run_child(spec)
+    res["2_devices"] = _run_child(
+        dict(spec, devices=2), {"XLA_FLAGS": "--xla_force_host_platform_device_count=2"}
+    )
+    return res
+
+
+# ------------------------------------------------------------------ end-to-end screening
+def bench_screening(route_counts: list[int], reps: int) -> list[dict]:
+    """End-to-end screening of all transitions of synthetic scenarios vs number of routes."""
+    from bench.scenarios import screening_case
+
+    rows = []
+    for r in route_counts:
+        rows.append(screening_case(r, reps=reps))
+        print(
+            f"  screening {r} routes: {rows[-1]['median_s']:.2f} s "
+            f"({rows[-1]['n_screened']:.3g} candidates)",
+            flush=True,
+        )
+    return rows
+
+
+# ------------------------------------------------------------------ driver
+def main(argv=None) -> int:
+    args = _parse(argv)
+    if args.child:
+        _child(args.child)
+        return 0
+    sections = set(args.section or ["bandwidth", "kernels", "threads", "screening"])
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    report = {
+        "machine": {
+            "python": platform.python_version(),
+            "cpus": os.cpu_count(),
+            "platform": platform.platform(),
+        },
+        "args": vars(args),
+    }
+    import jax
+
+    report["machine"]["jax"] = jax.__version__
+    t_all = time.perf_counter()
+    if "bandwidth" in sections:
+        report["bandwidth"] = measure_bandwidth(args.reps, 1 << (27 if args.quick else 30))
+        print(f"streaming limit: {report['bandwidth']['GBps']:.1f} GB/s (jnp.sum)", flush=True)
+    if "kernels" in sections:
+        from bench.cases import workloads
+
+        sizes = _batch_sizes(args.max_batch, args.quick)
+        dtypes = ["float32"] if args.float32 else ["float64", "float32"]
+        report["kernels"] = []
+        for w in workloads():
+            for dt in dtypes:
+                print(f"kernel {w.name} [{dt}] ...", flush=True)
+                report["kernels"].append(bench_kernel(w, dt, sizes, args.reps, dt == dtypes[0]))
+    if "threads" in sections:
+        report["threads"] = bench_threads(args.reps, 10**5 if args.quick else 10**7)
+    if "screening" in sections:
+        counts = [100, 300] if args.quick else [100, 300, 1000, 2000, 5000]
+        report["screening"] = bench_screening(counts, max(1, args.reps // 2))
+    report["total_s"] = time.perf_counter() - t_all
+    from bench.report import write_outputs
+
+    write_outputs(report, out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,150 @@
+"""Benchmark outputs: JSON report, printed table, log-log throughput plot, RESULTS.md."""
+
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from pathlib import Path
+
+BYTES = {"float64": 8, "float32": 4}
+
+
+def _atomic_write(path: Path, text: str) -> None:
+    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".")
+    with os.fdopen(fd, "w") as f:
+        f.write(text)
+    os.replace(tmp, path)
+
+
+def _limit(report, k) -> float | None:
+    """Streaming limit in candidates/s for a kernel row: bandwidth / bytes moved per candidate."""
+    bw = report.get("bandwidth", {}).get("GBps")
+    if not bw:
+        return None
+    from bench.cases import workloads
+
+    w = {w.name: w for w in workloads()}[k["workload"]]
+    nbytes = len(w.args) * BYTES[k["dtype"]] + w.out_bytes * (
+        1 if w.out_bytes == 1 else BYTES[k["dtype"]] // 8
+    )
+    return bw * 1e9 / nbytes
+
+
+def table(report) -> str:
+    """Markdown table of the headline figures."""
+    lines = []
+    if "bandwidth" in report:
+        lines.append(
+            f"Streaming limit (jnp.sum over {report['bandwidth']['bytes'] / 2**30:.1f} GiB): "
+            f"**{report['bandwidth']['GBps']:.1f} GB/s**\n"
+        )
+    if report.get("kernels"):
+        lines += [
+            "| kernel | dtype | batch | JAX cand/s (median, spread) | compile s | "
+            "% of streaming limit | numpy cand/s | JAX/numpy | Python cand/s | JAX/Python | "
+            "Ruckig cand/s | JAX/Ruckig |",
+            "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        ]
+        for k in report["kernels"]:
+            best = max(k["jax"], key=lambda r: r["rate"])
+            lim = _limit(report, k)
+            cells = [
+                k["workload"],
+                k["dtype"],
+                f"{best['n']:.0e}",
+                f"{best['rate']:.3g} ({best['rate_lo']:.3g}–{best['rate_hi']:.3g})",
+                f"{k['jax'][0]['compile_s']:.2f}",
+                f"{100 * best['rate'] / lim:.0f}%" if lim else "–",
+            ]
+            for key in ("numpy", "python", "ruckig"):
+                b = k.get(key)
+                cells += (
+                    [f"{b['rate']:.3g}", f"{best['rate'] / b['rate']:.0f}×"] if b else ["–", "–"]
+                )
+            lines.append("| " + " | ".join(cells) + " |")
+    if "threads" in report:
+        t = report["threads"]
+        lines.append(
+            f"\nMembership, float64, n = {t['n']:.0e}: "
+            + ", ".join(
+                f"{k.replace('_', ' ')} {v['rate']:.3g}/s"
+                for k, v in t.items()
+                if isinstance(v, dict) and "rate" in v
+            )
+        )
+    if report.get("screening"):
+        lines += [
+            "\n| routes | options | candidates screened | feasible | time after compile (s) | "
+            "candidates/s | compile s |",
+            "|---|---|---|---|---|---|---|",
+        ]
+        for s in report["screening"]:
+            lines.append(
+                f"| {s['routes']} | {s['options']} | {s['n_screened']:.3g} | "
+                f"{s['n_feasible']:.3g} | {s['median_s']:.2f} | "
+                f"{s['n_screened'] / s['median_s']:.3g} | {s['compile_s']:.1f} |"
+            )
+    return "\n".join(lines)
+
+
+def plot(report, path: Path) -> None:
+    """Throughput vs batch size (log-log), one line per kernel and dtype, with limits/baselines."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(9, 6))
+    colors = {}
+    for k in report.get("kernels", []):
+        c = colors.setdefault(k["workload"], f"C{len(colors)}")
+        ns = [r["n"] for r in k["jax"]]
+        ax.plot(
+            ns,
+            [r["rate"] for r in k["jax"]],
+            "-o" if k["dtype"] == "float64" else "--s",
+            color=c,
+            ms=4,
+            label=f"{k['workload']} ({k['dtype']})",
+        )
+        for key, mk in (("numpy", "x"), ("ruckig", "v"), ("python", "^")):
+            if key in k:
+                ax.plot(
+                    [k[key]["n"] if key != "numpy" else 1e6],
+                    [k[key]["rate"]],
+                    mk,
+                    color=c,
+                    ms=8,
+                    label=f"{k['workload']} {key}" if k["workload"] == "is_reachable" else None,
+                )
+    if "bandwidth" in report:
+        lim = report["bandwidth"]["GBps"] * 1e9 / (5 * 8 + 1)
+        ax.axhline(lim, color="k", lw=1, ls=":", label="streaming limit, membership f64")
+    ax.set(
+        xscale="log",
+        yscale="log",
+        xlabel="batch size (candidates)",
+        ylabel="candidates / s (after compilation)",
+        title="jaxspline kernels on CPU (x = numpy, ^ = pure Python, v = Ruckig)",
+    )
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=7, ncol=2)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def write_outputs(report, out: Path) -> None:
+    """Write report.json, throughput.png, RESULTS.md into ``out`` and print the table."""
+    text = table(report)
+    print("\n" + text)
+    _atomic_write(out / "report.json", json.dumps(report, indent=1, default=float))
+    _atomic_write(out / "RESULTS.md", text + "\n")
+    if report.get("kernels"):
+        plot(report, out / "throughput.png")
+    print(
+        f"\nwrote {out}/report.json, RESULTS.md"
+        + (", throughput.png" if report.get("kernels") else "")
+        + f"  (total {report['total_s']:.0f} s)"
+    )
