@@ -28,7 +28,6 @@ from jaxspline.slew import (
     bang_bang_time_kernel,
     bang_coast_bang_time,
     bang_coast_bang_time_kernel,
-    scurve_time,
     profile_state,
     profile_state_kernel,
     scurve_time,
