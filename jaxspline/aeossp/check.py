@@ -1,0 +1,733 @@
+"""Independent checker for aeossp_standard solutions (rules 1-8 and metrics).
+
+This module re-implements the benchmark rules (``RULES.md``) with its own frame
+chain, written to follow the official verifier's chain as closely as possible and
+independently of the solver:
+
+* SGP4 with WGS84 geopotential constants (the official propagator uses the Rust
+  ``sgp4`` crate's ``Constants::from_elements``, which is WGS84) -> TEME.
+* TEME -> Earth-fixed (ITRF, zero polar motion, UT1 = UTC):
+  ``r_ecef = R3(GMST82) r_teme`` (GMST 1982 in seconds of time, Vallado 2006).
+* Earth-fixed -> inertial (GCRF): ``r_gcrf = P(IAU 1976)^T N^T R3(-GAST) r_ecef`` with
+  a truncated IAU 1980 nutation (4 terms, ~0.5" accuracy) and GAST = GMST82 + Δψ cos ε.
+  Frame bias (23 mas) is ignored. The official chain (IAU 2006/2000A, CIO based)
+  differs by < 1" in absolute orientation; rule 7 uses only angles between vectors at
+  nearby instants, which depend on the change of that rotation (Earth rotation) only.
+* Sun: low-precision analytic series (Montenbruck & Gill 2012, §3.3.2), J2000
+  equatorial, TT = UTC + 69.184 s; cylindrical shadow with R = 6378136.3 m.
+* Targets: WGS84 geodetic -> Earth-fixed.
+
+Staging follows the official verifier: an action failing rules 1-4 is not checked
+for geometry; an action failing geometry is not part of the slew chain; an action
+failing overlap or slew is dropped from the chain (the next action is checked
+against the last accepted one); the battery is simulated on the accepted actions.
+Any violation makes the solution invalid (official metrics then are CR = WCR = PC = 0,
+TAT = None); the metrics of the accepted subset are reported as ``accepted_metrics``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections import defaultdict
+from dataclasses import asdict, dataclass, field
+from datetime import UTC, datetime
+from typing import Any
+
+import numpy as np
+from sgp4.api import WGS72, WGS84, Satrec
+
+from jaxspline.aeossp.case import Case, Satellite, Task, format_time, parse_time
+
+__all__ = [
+    "CheckReport",
+    "Violation",
+    "bang_coast_bang_time",
+    "check_solution",
+    "format_report",
+    "frame_difference",
+    "geodetic_to_ecef",
+    "sun_position_gcrf",
+    "Ephemeris",
+]
+
+EPS = 1e-9  # official NUMERICAL_EPS (slew gap, battery, grid alignment)
+OFF_NADIR_TOL_DEG = 1e-6
+R_EARTH_SHADOW_M = 6378136.3  # brahe R_EARTH (GGM05s), used by the official shadow test
+WGS84_A = 6378137.0
+WGS84_F = 1.0 / 298.257223563
+TT_MINUS_UTC_S = 69.184  # 37 leap seconds + 32.184 s (valid since 2017)
+_J2000_UNIX = 946728000.0  # 2000-01-01T12:00:00 UTC as Unix seconds
+_AS2RAD = math.pi / 180.0 / 3600.0
+_EPOCH = datetime(1970, 1, 1, tzinfo=UTC)
+
+
+# --------------------------------------------------------------------------- frames
+def _rot3(angle: np.ndarray) -> np.ndarray:
+    """Passive rotation about z by ``angle`` (rad): stacked (..., 3, 3)."""
+    c, s = np.cos(angle), np.sin(angle)
+    z, o = np.zeros_like(c), np.ones_like(c)
+    return np.stack(
+        [np.stack([c, s, z], -1), np.stack([-s, c, z], -1), np.stack([z, z, o], -1)], -2
+    )
+
+
+def _rot2(angle: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    z, o = np.zeros_like(c), np.ones_like(c)
+    return np.stack(
+        [np.stack([c, z, -s], -1), np.stack([z, o, z], -1), np.stack([s, z, c], -1)], -2
+    )
+
+
+def _rot1(angle: np.ndarray) -> np.ndarray:
+    c, s = np.cos(angle), np.sin(angle)
+    z, o = np.zeros_like(c), np.ones_like(c)
+    return np.stack(
+        [np.stack([o, z, z], -1), np.stack([z, c, s], -1), np.stack([z, -s, c], -1)], -2
+    )
+
+
+def _days_since_j2000(unix_s: np.ndarray) -> np.ndarray:
+    return (np.asarray(unix_s, dtype=float) - _J2000_UNIX) / 86400.0
+
+
+def gmst82(unix_s) -> np.ndarray:
+    """Greenwich mean sidereal time, IAU 1982 (rad, in [0, 2π)), UT1 = UTC.
+
+    ``GMST = 67310.54841 + (876600·3600 + 8640184.812866) T + 0.093104 T² − 6.2e-6 T³``
+    seconds of time, T in Julian centuries UT1 since J2000 (Vallado et al. 2006, AIAA
+    2006-6753, eq. for TEME -> PEF). ``unix_s``: UTC as Unix seconds.
+    """
+    t = _days_since_j2000(unix_s) / 36525.0
+    sec = 67310.54841 + (876600.0 * 3600.0 + 8640184.812866) * t + 0.093104 * t**2 - 6.2e-6 * t**3
+    return np.mod(sec * (math.pi / 180.0) / 240.0, 2.0 * math.pi)
+
+
+def teme_to_ecef(r_teme: np.ndarray, unix_s) -> np.ndarray:
+    """TEME -> Earth-fixed position (zero polar motion): ``R3(GMST82) r`` (same units)."""
+    return np.einsum("...ij,...j->...i", _rot3(gmst82(unix_s)), r_teme)
+
+
+def _nutation(t_tt: np.ndarray):
+    """Mean obliquity ε0, Δψ, Δε (rad): IAU 1980, 4 largest terms (Meeus 1998, ch. 22)."""
+    om = np.radians(125.04452 - 1934.136261 * t_tt)
+    ls = np.radians(280.4665 + 36000.7698 * t_tt)
+    lm = np.radians(218.3165 + 481267.8813 * t_tt)
+    dpsi = (
+        -17.20 * np.sin(om) - 1.32 * np.sin(2 * ls) - 0.23 * np.sin(2 * lm) + 0.21 * np.sin(2 * om)
+    ) * _AS2RAD
+    deps = (
+        9.20 * np.cos(om) + 0.57 * np.cos(2 * ls) + 0.10 * np.cos(2 * lm) - 0.09 * np.cos(2 * om)
+    ) * _AS2RAD
+    eps0 = (84381.448 - 46.8150 * t_tt - 0.00059 * t_tt**2 + 0.001813 * t_tt**3) * _AS2RAD
+    return eps0, dpsi, deps
+
+
+def ecef_to_gcrf_matrix(unix_s) -> np.ndarray:
+    """Rotation Earth-fixed -> inertial (J2000 ≈ GCRF), stacked (..., 3, 3).
+
+    ``M = P^T N^T R3(−GAST)`` with IAU 1976 precession P (ζ, θ, z polynomials, Lieske
+    1977), IAU 1980 nutation N truncated to 4 terms, GAST = GMST82 + Δψ cos ε; zero
+    EOP (UT1 = UTC, no polar motion), TT = UTC + 69.184 s.
+    """
+    unix_s = np.asarray(unix_s, dtype=float)
+    t = _days_since_j2000(unix_s + TT_MINUS_UTC_S) / 36525.0
+    zeta = (2306.2181 * t + 0.30188 * t**2 + 0.017998 * t**3) * _AS2RAD
+    theta = (2004.3109 * t - 0.42665 * t**2 - 0.041833 * t**3) * _AS2RAD
+    zz = (2306.2181 * t + 1.09468 * t**2 + 0.018203 * t**3) * _AS2RAD
+    prec = _rot3(-zz) @ _rot2(theta) @ _rot3(-zeta)  # J2000 -> mean of date
+    eps0, dpsi, deps = _nutation(t)
+    nut = _rot1(-(eps0 + deps)) @ _rot3(-dpsi) @ _rot1(eps0)  # mean -> true of date
+    gast = gmst82(unix_s) + dpsi * np.cos(eps0 + deps)
+    tod_from_ecef = _rot3(-gast)
+    return np.swapaxes(prec, -1, -2) @ np.swapaxes(nut, -1, -2) @ tod_from_ecef
+
+
+def sun_position_gcrf(unix_s) -> np.ndarray:
+    """Sun position (m), J2000 equatorial, low precision (Montenbruck & Gill 2012, p. 70).
+
+    ``M = 2π frac(0.9931267 + 99.9973583 T)``, ``L = 2π frac(0.7859444 + M/2π +
+    (6892 sin M + 72 sin 2M)/1296e3)``, ``r = 149.619e9 − 2.499e9 cos M − 0.021e9 cos 2M``,
+    rotated from the ecliptic by ε = 23.43929111°; T in centuries TT since J2000.
+    """
+    t = _days_since_j2000(np.asarray(unix_s, dtype=float) + TT_MINUS_UTC_S) / 36525.0
+    m = 2 * math.pi * np.mod(0.9931267 + 99.9973583 * t, 1.0)
+    lon = (
+        2
+        * math.pi
+        * np.mod(
+            0.7859444 + m / (2 * math.pi) + (6892.0 * np.sin(m) + 72.0 * np.sin(2 * m)) / 1296.0e3,
+            1.0,
+        )
+    )
+    r = 149.619e9 - 2.499e9 * np.cos(m) - 0.021e9 * np.cos(2 * m)
+    eps = math.radians(23.43929111)
+    x, y = r * np.cos(lon), r * np.sin(lon)
+    return np.stack([x, y * math.cos(eps), y * math.sin(eps)], -1)
+
+
+def sunlit(r_gcrf: np.ndarray, unix_s) -> np.ndarray:
+    """Cylindrical shadow: sunlit unless behind the Earth (r·ŝ < 0) and |r − (r·ŝ)ŝ| < R."""
+    sun = sun_position_gcrf(unix_s)
+    shat = sun / np.linalg.norm(sun, axis=-1, keepdims=True)
+    proj = np.sum(r_gcrf * shat, axis=-1)
+    perp = np.linalg.norm(r_gcrf - proj[..., None] * shat, axis=-1)
+    return ~((proj < 0.0) & (perp < R_EARTH_SHADOW_M))
+
+
+def geodetic_to_ecef(lat_deg, lon_deg, alt_m) -> np.ndarray:
+    """WGS84 geodetic (deg, deg, m) -> Earth-fixed Cartesian (m), shape (..., 3)."""
+    lat, lon = np.radians(lat_deg), np.radians(lon_deg)
+    e2 = WGS84_F * (2.0 - WGS84_F)
+    n = WGS84_A / np.sqrt(1.0 - e2 * np.sin(lat) ** 2)
+    alt = np.asarray(alt_m, dtype=float)
+    return np.stack(
+        [
+            (n + alt) * np.cos(lat) * np.cos(lon),
+            (n + alt) * np.cos(lat) * np.sin(lon),
+            (n * (1.0 - e2) + alt) * np.sin(lat),
+        ],
+        -1,
+    )
+
+
+def angle_deg(u: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """Angle between vectors (deg), ``atan2(|u×v|, u·v)`` (accurate at small angles)."""
+    return np.degrees(np.arctan2(np.linalg.norm(np.cross(u, v), axis=-1), np.sum(u * v, axis=-1)))
+
+
+class Ephemeris:
+    """SGP4 positions of one satellite at times given as seconds from ``horizon_start``.
+
+    ``gravity``: ``"wgs84"`` (official) or ``"wgs72"`` (sgp4's classic default, for the
+    frame-difference study). Positions in metres; TEME, Earth-fixed and GCRF.
+    """
+
+    def __init__(self, sat: Satellite, horizon_start: datetime, gravity: str = "wgs84"):
+        grav = {"wgs84": WGS84, "wgs72": WGS72}[gravity]
+        self.satellite_id = sat.satellite_id
+        self.rec = Satrec.twoline2rv(sat.tle_line1, sat.tle_line2, grav)
+        self.t0_unix = (horizon_start - _EPOCH).total_seconds()
+
+    def unix(self, seconds) -> np.ndarray:
+        """Unix seconds (UTC) of offsets ``seconds`` from ``horizon_start``."""
+        return self.t0_unix + np.asarray(seconds, dtype=float)
+
+    def teme(self, seconds) -> np.ndarray:
+        """TEME position (m), shape (..., 3)."""
+        s = np.atleast_1d(np.asarray(seconds, dtype=float))
+        days = (self.t0_unix + s) / 86400.0
+        jd = np.floor(days) + 2440587.5
+        fr = days - np.floor(days)
+        err, r, _ = self.rec.sgp4_array(jd.ravel(), fr.ravel())
+        if np.any(err):
+            raise ValueError(f"satellite {self.satellite_id}: SGP4 error code {int(err.max())}")
+        return (r * 1000.0).reshape(np.shape(seconds) + (3,))
+
+    def ecef(self, seconds) -> np.ndarray:
+        """Earth-fixed position (m): ``R3(GMST82) r_teme``."""
+        return teme_to_ecef(self.teme(seconds), self.unix(seconds))
+
+    def gcrf(self, seconds) -> np.ndarray:
+        """Inertial (GCRF) position (m) via the Earth-fixed frame (official route)."""
+        m = ecef_to_gcrf_matrix(self.unix(seconds))
+        return np.einsum("...ij,...j->...i", m, self.ecef(seconds))
+
+
+def bang_coast_bang_time(theta_deg: float, rate: float, accel: float) -> float:
+    """Rest-to-rest time (s) for angle θ (deg), max rate v (deg/s), max accel a (deg/s²).
+
+    ``2 sqrt(θ/a)`` if θ <= v²/a else ``2v/a + (θ − v²/a)/v``; 0 for θ <= 1e-9 (RULES.md 7).
+    """
+    theta = max(0.0, float(theta_deg))
+    if theta <= EPS:
+        return 0.0
+    if theta <= rate * rate / accel:
+        return 2.0 * math.sqrt(theta / accel)
+    return 2.0 * rate / accel + (theta - rate * rate / accel) / rate
+
+
+# --------------------------------------------------------------------------- report
+@dataclass(frozen=True)
+class Violation:
+    """One rule violation: rule number (1-8), action index (None = satellite level)."""
+
+    rule: int
+    message: str
+    action_index: int | None = None
+    satellite_id: str | None = None
+    task_id: str | None = None
+    time: str | None = None
+
+    def __str__(self) -> str:
+        where = f"actions[{self.action_index}]" if self.action_index is not None else "satellite"
+        who = "/".join(x for x in (self.satellite_id, self.task_id) if x)
+        at = f" at {self.time}" if self.time else ""
+        return f"rule {self.rule} {where} {who}: {self.message}{at}"
+
+
+@dataclass
+class CheckReport:
+    """Result of ``check_solution``: validity, violations, official metrics, diagnostics."""
+
+    case_id: str
+    valid: bool
+    violations: list[Violation]
+    metrics: dict[str, Any]
+    accepted_metrics: dict[str, Any]
+    n_actions: int
+    n_accepted: int
+    satellites: dict[str, dict[str, Any]] = field(default_factory=dict)
+    maneuvers: list[dict[str, Any]] = field(default_factory=list)
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain JSON-serialisable dictionary."""
+        d = asdict(self)
+        d["violations"] = [asdict(v) for v in self.violations]
+        return d
+
+    def to_json(self, indent: int | None = 2) -> str:
+        """JSON text of ``to_dict()``."""
+        return json.dumps(self.to_dict(), indent=indent)
+
+
+@dataclass
+class _Action:
+    index: int
+    sat: Satellite
+    task: Task
+    start: float  # seconds from horizon_start
+    end: float
+
+
+def _sec(case: Case, text: Any, where: str) -> float:
+    return case.seconds(parse_time(text, where=where))
+
+
+def _structure(case: Case, actions: list, out: list[Violation]) -> list[_Action]:
+    sats, tasks = case.satellite_by_id, case.task_by_id
+    horizon = case.duration_s
+    ok: list[_Action] = []
+    for i, raw in enumerate(actions):
+        errs: list[tuple[int, str]] = []
+        if not isinstance(raw, dict):
+            out.append(Violation(1, f"action is not an object: {raw!r}", i))
+            continue
+        sid, tid = raw.get("satellite_id"), raw.get("task_id")
+        if raw.get("type") != "observation":
+            errs.append((1, f"type must be 'observation', got {raw.get('type')!r}"))
+        if sid not in sats:
+            errs.append((1, f"unknown satellite_id {sid!r}"))
+        if tid not in tasks:
+            errs.append((1, f"unknown task_id {tid!r}"))
+        try:
+            start = _sec(case, raw.get("start_time"), "start_time")
+            end = _sec(case, raw.get("end_time"), "end_time")
+        except ValueError as exc:
+            errs.append((1, f"malformed time: {exc}"))
+            start = end = None
+        if start is not None:
+            if not start < end:
+                errs.append(
+                    (2, f"start_time must be before end_time (start {start:g} s, end {end:g} s)")
+                )
+            if start < 0 or end > horizon:
+                errs.append(
+                    (2, f"outside horizon [0, {horizon:g}] s: start {start:g} s, end {end:g} s")
+                )
+            for name, s in (("start_time", start), ("end_time", end)):
+                k = s / case.action_step_s
+                if abs(k - round(k)) > EPS:
+                    errs.append(
+                        (2, f"{name} {s:g} s is not on the {case.action_step_s:g} s action grid")
+                    )
+        task = tasks.get(tid)
+        sat = sats.get(sid)
+        if task is not None and start is not None:
+            rel, due = case.seconds(task.release_time), case.seconds(task.due_time)
+            if start < rel or end > due:
+                errs.append(
+                    (3, f"outside task window [{rel:g}, {due:g}] s: [{start:g}, {end:g}] s")
+                )
+            dur = end - start
+            if abs(dur - round(dur)) > EPS or round(dur) != task.required_duration_s:
+                errs.append(
+                    (3, f"duration {dur:g} s != required_duration_s {task.required_duration_s:g} s")
+                )
+        if task is not None and sat is not None and sat.sensor_type != task.required_sensor_type:
+            errs.append(
+                (4, f"sensor {sat.sensor_type!r} != required {task.required_sensor_type!r}")
+            )
+        for rule, msg in errs:
+            out.append(
+                Violation(
+                    rule,
+                    msg,
+                    i,
+                    sid if isinstance(sid, str) else None,
+                    tid if isinstance(tid, str) else None,
+                )
+            )
+        if not errs:
+            ok.append(_Action(i, sat, task, start, end))
+    return ok
+
+
+def _sample_times(case: Case, start: float, end: float) -> np.ndarray:
+    step = case.geometry_step_s
+    k0 = math.floor(start / step + EPS) + 1
+    inner = [k * step for k in range(k0, math.ceil(end / step - EPS))]
+    return np.array([start, *[t for t in inner if start < t < end], end])
+
+
+def _geometry(case, acts, ephs, targets, out) -> list[_Action]:
+    ok = []
+    for a in acts:
+        ts = _sample_times(case, a.start, a.end)
+        sat = ephs[a.sat.satellite_id].ecef(ts)
+        tgt = targets[a.task.task_id]
+        up = np.sum((sat - tgt) * tgt, axis=-1) / np.linalg.norm(tgt)
+        off = angle_deg(-sat, tgt - sat)
+        bad_up = np.nonzero(~(up > 0.0))[0]
+        bad_off = np.nonzero(off > a.sat.max_off_nadir_deg + OFF_NADIR_TOL_DEG)[0]
+        sid, tid = a.sat.satellite_id, a.task.task_id
+        if bad_up.size:
+            j = bad_up[0]
+            out.append(
+                Violation(
+                    5,
+                    f"target below the local horizon (elevation term {up[j]:.1f} m)",
+                    a.index,
+                    sid,
+                    tid,
+                    format_time(case.at(ts[j])),
+                )
+            )
+        elif bad_off.size:
+            j = bad_off[0]
+            out.append(
+                Violation(
+                    5,
+                    f"off-nadir {off[j]:.6f} deg > max {a.sat.max_off_nadir_deg:g} deg",
+                    a.index,
+                    sid,
+                    tid,
+                    format_time(case.at(ts[j])),
+                )
+            )
+        else:
+            ok.append(a)
+    return ok
+
+
+def _los_gcrf(eph: Ephemeris, target_ecef: np.ndarray, t: float) -> np.ndarray:
+    m = ecef_to_gcrf_matrix(eph.unix(t))
+    return m @ target_ecef - eph.gcrf(t)
+
+
+def _slew(case, acts, ephs, targets, out):
+    by_sat: dict[str, list[_Action]] = defaultdict(list)
+    for a in acts:
+        by_sat[a.sat.satellite_id].append(a)
+    accepted, windows = {}, {}
+    maneuvers = []
+    for sid, lst in by_sat.items():
+        lst.sort(key=lambda a: (a.start, a.end, a.index))
+        eph, prev, acc, win = ephs[sid], None, [], []
+        for cur in lst:
+            sat, tid = cur.sat, cur.task.task_id
+            if prev is not None and prev.end > cur.start:
+                out.append(
+                    Violation(
+                        6,
+                        f"overlaps actions[{prev.index}] ({prev.task.task_id}), which ends "
+                        f"{prev.end - cur.start:g} s after this start",
+                        cur.index,
+                        sid,
+                        tid,
+                        format_time(case.at(cur.start)),
+                    )
+                )
+                continue
+            to_vec = _los_gcrf(eph, targets[tid], cur.start)
+            if prev is None:
+                from_vec, gap, src = -eph.gcrf(cur.start), cur.start, "nadir"
+            else:
+                from_vec = _los_gcrf(eph, targets[prev.task.task_id], prev.end)
+                gap, src = cur.start - prev.end, prev.task.task_id
+            theta = float(angle_deg(from_vec, to_vec))
+            need = (
+                bang_coast_bang_time(theta, sat.max_slew_rate_deg_s, sat.max_slew_accel_deg_s2)
+                + sat.settling_time_s
+            )
+            if gap + EPS < need:
+                out.append(
+                    Violation(
+                        7,
+                        f"slew {theta:.4f} deg from {src} needs {need:.3f} s "
+                        f"(incl. settle {sat.settling_time_s:g} s), gap {gap:.3f} s",
+                        cur.index,
+                        sid,
+                        tid,
+                        format_time(case.at(cur.start)),
+                    )
+                )
+                continue
+            if need > EPS:
+                ws = round((cur.start - need) * 1e6) / 1e6  # official: datetime, microseconds
+                win.append((ws, cur.start))
+                maneuvers.append(
+                    {
+                        "action_index": cur.index,
+                        "satellite_id": sid,
+                        "from": src,
+                        "to_task_id": tid,
+                        "slew_angle_deg": theta,
+                        "required_gap_s": need,
+                        "available_gap_s": gap,
+                    }
+                )
+            acc.append(cur)
+            prev = cur
+        accepted[sid], windows[sid] = acc, win
+    return accepted, windows, maneuvers
+
+
+def _battery(
+    case, sat: Satellite, eph: Ephemeris, acts: list[_Action], wins, out
+) -> dict[str, Any]:
+    n = int(round(case.duration_s / case.resource_step_s))
+    pts = {min(k * case.resource_step_s, case.duration_s) for k in range(n + 1)} | {
+        0.0,
+        case.duration_s,
+    }
+    for a in acts:
+        pts |= {a.start, a.end}
+    for w in wins:
+        pts |= set(w)
+    pts = np.array(sorted(pts))
+    t0, t1 = pts[:-1], pts[1:]
+    keep = t1 - t0 > 0
+    t0, t1 = t0[keep], t1[keep]
+    mid, dur = 0.5 * (t0 + t1), t1 - t0
+
+    def inside(iv):
+        if not iv:
+            return np.zeros(mid.shape, bool)
+        iv = np.asarray(iv, dtype=float)
+        return np.any((mid[:, None] >= iv[None, :, 0]) & (mid[:, None] < iv[None, :, 1]), axis=1)
+
+    obs = inside([(a.start, a.end) for a in acts])
+    slew = inside(list(wins))
+    load = sat.idle_power_w + obs * sat.imaging_power_w + slew * sat.slew_power_w
+    lit = sunlit(eph.gcrf(mid), eph.unix(mid))
+    charge = np.where(lit, sat.sunlit_charge_power_w, 0.0)
+    batt = sat.initial_battery_wh
+    bmin, tmin, gross, failed = batt, 0.0, 0.0, False
+    for k in range(mid.size):
+        gross += load[k] * dur[k] / 3600.0
+        batt += (charge[k] - load[k]) * dur[k] / 3600.0
+        if batt < -EPS:
+            who = next((a for a in acts if a.start <= mid[k] < a.end), None)
+            out.append(
+                Violation(
+                    8,
+                    f"battery {batt:.3f} Wh < 0 (load {load[k]:g} W, charge {charge[k]:g} W)",
+                    who.index if who else None,
+                    sat.satellite_id,
+                    who.task.task_id if who else None,
+                    format_time(case.at(mid[k])),
+                )
+            )
+            failed = True
+            break
+        batt = min(sat.battery_capacity_wh, batt)
+        if batt < bmin:
+            bmin, tmin = batt, t1[k]
+    return {
+        "n_actions": len(acts),
+        "min_battery_wh": bmin,
+        "min_battery_time": format_time(case.at(tmin)),
+        "final_battery_wh": batt,
+        "gross_consumption_wh": gross,
+        "sunlit_fraction": float(np.sum(dur * lit) / np.sum(dur)),
+        "failed": failed,
+    }
+
+
+def _metrics(case: Case, acts: list[_Action], pc: float) -> dict[str, Any]:
+    first: dict[str, float] = {}
+    for a in acts:
+        tid = a.task.task_id
+        first[tid] = min(first.get(tid, math.inf), a.end)
+    tasks = case.task_by_id
+    total_w = sum(t.weight for t in case.tasks)
+    tat = [e - case.seconds(tasks[tid].release_time) for tid, e in first.items()]
+    return {
+        "CR": len(first) / len(case.tasks) if case.tasks else 0.0,
+        "WCR": sum(tasks[tid].weight for tid in first) / total_w if total_w > 0 else 0.0,
+        "TAT": sum(tat) / len(tat) if tat else None,
+        "PC": pc,
+        "completed_tasks": len(first),
+    }
+
+
+def check_solution(case: Case, solution: dict) -> CheckReport:
+    """Check a solution dict ``{"actions": [...]}`` against every rule of RULES.md.
+
+    Returns a ``CheckReport``: ``valid`` (no violation), the violations (rule, action
+    index, satellite/task, numbers), official ``metrics`` (CR, WCR, TAT [s], PC [Wh];
+    zeros / None when invalid), ``accepted_metrics`` over the actions that passed,
+    per-satellite battery summaries and the maneuver windows. Only satellites that
+    carry actions are propagated for geometry; all are simulated for the battery.
+    """
+    if not isinstance(solution, dict) or not isinstance(solution.get("actions", []), list):
+        raise ValueError("solution: expected an object with an 'actions' list")
+    actions = solution.get("actions", [])
+    out: list[Violation] = []
+    acts = _structure(case, actions, out)
+    ephs = {s.satellite_id: Ephemeris(s, case.horizon_start) for s in case.satellites}
+    used = {a.task.task_id: a.task for a in acts}
+    targets = {
+        tid: geodetic_to_ecef(t.latitude_deg, t.longitude_deg, t.altitude_m)
+        for tid, t in used.items()
+    }
+    acts = _geometry(case, acts, ephs, targets, out)
+    accepted, windows, maneuvers = _slew(case, acts, ephs, targets, out)
+    sats: dict[str, dict[str, Any]] = {}
+    pc = 0.0
+    for sat in case.satellites:
+        sid = sat.satellite_id
+        summary = _battery(case, sat, ephs[sid], accepted.get(sid, []), windows.get(sid, []), out)
+        sats[sid] = summary
+        if not summary["failed"]:
+            pc += summary["gross_consumption_wh"]
+    acc = [a for lst in accepted.values() for a in lst]
+    acc_metrics = _metrics(case, acc, pc)
+    valid = not out
+    metrics = (
+        {k: acc_metrics[k] for k in ("CR", "WCR", "TAT", "PC")}
+        if valid
+        else {"CR": 0.0, "WCR": 0.0, "TAT": None, "PC": 0.0}
+    )
+    out.sort(key=lambda v: (v.action_index if v.action_index is not None else 1 << 30, v.rule))
+    return CheckReport(
+        case.case_id, valid, out, metrics, acc_metrics, len(actions), len(acc), sats, maneuvers
+    )
+
+
+def format_report(report: CheckReport, max_violations: int = 50) -> str:
+    """Readable multi-line text of a ``CheckReport``."""
+    lines = [
+        f"case {report.case_id}: {'VALID' if report.valid else 'INVALID'} "
+        f"({report.n_accepted}/{report.n_actions} actions accepted, "
+        f"{len(report.violations)} violations)"
+    ]
+    m = report.metrics
+    tat = "n/a" if m["TAT"] is None else f"{m['TAT']:.1f} s"
+    lines.append(f"  WCR {m['WCR']:.4f}  CR {m['CR']:.4f}  TAT {tat}  PC {m['PC']:.1f} Wh")
+    if not report.valid:
+        a = report.accepted_metrics
+        lines.append(
+            f"  (accepted subset: WCR {a['WCR']:.4f}  CR {a['CR']:.4f}  "
+            f"completed {a['completed_tasks']})"
+        )
+        counts: dict[int, int] = defaultdict(int)
+        for v in report.violations:
+            counts[v.rule] += 1
+        lines.append(
+            "  violations by rule: " + ", ".join(f"{r}: {c}" for r, c in sorted(counts.items()))
+        )
+        for v in report.violations[:max_violations]:
+            lines.append(f"  - {v}")
+        if len(report.violations) > max_violations:
+            lines.append(f"  ... {len(report.violations) - max_violations} more")
+    low = min(report.satellites.items(), key=lambda kv: kv[1]["min_battery_wh"], default=None)
+    if low is not None:
+        lines.append(
+            f"  lowest battery: {low[0]} {low[1]['min_battery_wh']:.1f} Wh "
+            f"at {low[1]['min_battery_time']}"
+        )
+    return "\n".join(lines)
+
+
+def frame_difference(
+    case: Case, satellite_ids=None, step_s: float = 30.0, max_pairs: int = 4000, seed: int = 0
+) -> dict[str, Any]:
+    """Measure how far a plain "SGP4 TEME + GMST82 rotation" model is from this checker.
+
+    For each satellite (default: all) and every ``step_s`` over the horizon, every task
+    within ``max_off_nadir_deg`` (checker geometry) is a sample. Compared models:
+    ``teme84`` (SGP4 WGS84, Earth-fixed = R3(GMST82) TEME, slews in TEME) and ``teme72``
+    (the same with SGP4's classic WGS72 constants). Reports the max |Δ| of the off-nadir
+    angle (deg), of the slew angle (deg) for random pairs of samples of one satellite
+    1-180 s apart, of the nadir->target angle, and the fraction of resource-grid instants
+    whose sunlit flag differs when the shadow test uses TEME instead of GCRF positions.
+    """
+    rng = np.random.default_rng(seed)
+    chosen = [
+        s for s in case.satellites if satellite_ids is None or s.satellite_id in satellite_ids
+    ]
+    tt = case.task_table()
+    tgt = geodetic_to_ecef(tt["latitude_deg"], tt["longitude_deg"], tt["altitude_m"])
+    ts = np.arange(0.0, case.duration_s + 0.5 * step_s, step_s)
+    res = {
+        "off_nadir": {"teme84": 0.0, "teme72": 0.0},
+        "slew": {"teme84": 0.0, "teme72": 0.0},
+        "nadir_slew": {"teme84": 0.0, "teme72": 0.0},
+    }
+    n_samples = n_pairs = 0
+    sun_flip = sun_total = 0
+    for sat in chosen:
+        e84, e72 = Ephemeris(sat, case.horizon_start), Ephemeris(sat, case.horizon_start, "wgs72")
+        unix = e84.unix(ts)
+        ecef = e84.ecef(ts)
+        mgc = ecef_to_gcrf_matrix(unix)
+        gc = np.einsum("nij,nj->ni", mgc, ecef)
+        t84, t72 = e84.teme(ts), e72.teme(ts)
+        ecef72 = teme_to_ecef(t72, unix)
+        los = tgt[None, :, :] - ecef[:, None, :]
+        off = angle_deg(-ecef[:, None, :], los)
+        up = np.sum((ecef[:, None, :] - tgt[None]) * tgt[None], -1) > 0
+        it, ik = np.nonzero((off <= sat.max_off_nadir_deg) & up)
+        if it.size == 0:
+            continue
+        n_samples += it.size
+        off72 = angle_deg(-ecef72[it], tgt[ik] - ecef72[it])
+        res["off_nadir"]["teme72"] = max(
+            res["off_nadir"]["teme72"], float(np.max(np.abs(off72 - off[it, ik])))
+        )
+        # Earth-fixed is identical in the teme84 model: difference is exactly zero.
+        r3t = np.swapaxes(_rot3(gmst82(unix)), -1, -2)  # Earth-fixed -> TEME
+        los_gc = np.einsum("nij,nj->ni", mgc[it], tgt[ik]) - gc[it]
+        los84 = np.einsum("nij,nj->ni", r3t[it], tgt[ik]) - t84[it]
+        los72 = np.einsum("nij,nj->ni", r3t[it], tgt[ik]) - t72[it]
+        nad = angle_deg(-gc[it], los_gc)
+        res["nadir_slew"]["teme84"] = max(
+            res["nadir_slew"]["teme84"], float(np.max(np.abs(angle_deg(-t84[it], los84) - nad)))
+        )
+        res["nadir_slew"]["teme72"] = max(
+            res["nadir_slew"]["teme72"], float(np.max(np.abs(angle_deg(-t72[it], los72) - nad)))
+        )
+        a = rng.integers(0, it.size, size=8 * max_pairs // max(1, len(chosen)))
+        b = rng.integers(0, it.size, size=a.size)
+        dt = ts[it[b]] - ts[it[a]]
+        sel = (dt > 0) & (dt <= 180.0)
+        a, b = a[sel], b[sel]
+        if a.size:
+            n_pairs += a.size
+            ref = angle_deg(los_gc[a], los_gc[b])
+            res["slew"]["teme84"] = max(
+                res["slew"]["teme84"], float(np.max(np.abs(angle_deg(los84[a], los84[b]) - ref)))
+            )
+            res["slew"]["teme72"] = max(
+                res["slew"]["teme72"], float(np.max(np.abs(angle_deg(los72[a], los72[b]) - ref)))
+            )
+        tr = np.arange(0.0, case.duration_s, case.resource_step_s) + 0.5 * case.resource_step_s
+        ur = e84.unix(tr)
+        sun_flip += int(np.sum(sunlit(e84.gcrf(tr), ur) != sunlit(e84.teme(tr), ur)))
+        sun_total += tr.size
+    res.update(n_samples=n_samples, n_pairs=n_pairs, n_satellites=len(chosen))
+    res["sunlit_flag_mismatch_teme"] = sun_flip / sun_total if sun_total else 0.0
+    return res
