@@ -96,13 +96,15 @@ def bench_kernel(w, dtype: str, sizes: list[int], reps: int, do_baselines: bool)
         t = time_jax(fn, args, n=m, reps=reps if n <= POOL else 1)
         if n > POOL:  # stream: the same materialized pool, n / POOL times
             passes = n // POOL
-            t = time_call(
-                lambda: [fn(*args) for _ in range(passes)][-1],
-                n=passes * POOL,
-                reps=max(1, reps // 2),
-            )
+
+            def stream(args=args, passes=passes):
+                for _ in range(passes):
+                    last = fn(*args)
+                return last
+
+            t = time_call(stream, n=passes * POOL, reps=max(1, reps // 2))
         rows.append({"n": n, **t.to_dict()})
-        del args
+        del args, inp  # free the pool before the next size
     out = {"workload": w.name, "dtype": dtype, "jax": rows}
     if not do_baselines:
         return out

@@ -42,7 +42,7 @@ def _block(x):
 
 
 def time_call(fn, n: int, reps: int = 5, min_time: float = 0.0) -> Timing:
-    """Time ``fn()`` (already compiled/warmed) ``reps`` times; each run repeats until ``min_time``."""
+    """Time ``fn()`` (compiled and warmed) ``reps`` times; a run repeats until ``min_time`` s."""
     _block(fn())
     runs = []
     for _ in range(reps):
