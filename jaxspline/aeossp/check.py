@@ -497,19 +497,13 @@ def _slew(case, acts, ephs, targets, out):
 def _battery(
     case, sat: Satellite, eph: Ephemeris, acts: list[_Action], wins, out
 ) -> dict[str, Any]:
-    n = int(round(case.duration_s / case.resource_step_s))
-    pts = {min(k * case.resource_step_s, case.duration_s) for k in range(n + 1)} | {
-        0.0,
+    grid = np.minimum(
+        np.arange(0.0, case.duration_s + case.resource_step_s, case.resource_step_s),
         case.duration_s,
-    }
-    for a in acts:
-        pts |= {a.start, a.end}
-    for w in wins:
-        pts |= set(w)
-    pts = np.array(sorted(pts))
+    )
+    extra = [x for a in acts for x in (a.start, a.end)] + [x for w in wins for x in w]
+    pts = np.unique(np.concatenate([grid, [0.0, case.duration_s], np.asarray(extra, dtype=float)]))
     t0, t1 = pts[:-1], pts[1:]
-    keep = t1 - t0 > 0
-    t0, t1 = t0[keep], t1[keep]
     mid, dur = 0.5 * (t0 + t1), t1 - t0
 
     def inside(iv):
@@ -525,9 +519,11 @@ def _battery(
     charge = np.where(lit, sat.sunlit_charge_power_w, 0.0)
     batt = sat.initial_battery_wh
     bmin, tmin, gross, failed = batt, 0.0, 0.0, False
-    for k in range(mid.size):
-        gross += load[k] * dur[k] / 3600.0
-        batt += (charge[k] - load[k]) * dur[k] / 3600.0
+    cap = sat.battery_capacity_wh
+    loads, nets = (load * dur / 3600.0).tolist(), ((charge - load) * dur / 3600.0).tolist()
+    for k, (used, net) in enumerate(zip(loads, nets, strict=True)):
+        gross += used
+        batt += net
         if batt < -EPS:
             who = next((a for a in acts if a.start <= mid[k] < a.end), None)
             out.append(
@@ -542,9 +538,10 @@ def _battery(
             )
             failed = True
             break
-        batt = min(sat.battery_capacity_wh, batt)
+        if batt > cap:
+            batt = cap
         if batt < bmin:
-            bmin, tmin = batt, t1[k]
+            bmin, tmin = batt, float(t1[k])
     return {
         "n_actions": len(acts),
         "min_battery_wh": bmin,
