@@ -1,7 +1,93 @@
-"""``jaxspline aeossp solve|check``: the aeossp_standard benchmark adapter."""
+"""``jaxspline aeossp solve|check``: the aeossp_standard benchmark adapter.
+
+``jaxspline aeossp check CASE_DIR solution.json [--json OUT]`` prints the readable
+report and the JSON result (to OUT, or stdout when OUT is ``-``); exit code 0 if the
+solution is valid, 1 if not. ``jaxspline aeossp solve CASE_DIR -o solution.json
+[--time-limit S] [--force]`` runs ``jaxspline.aeossp.solve.solve_case``, writes the
+solution atomically, then checks it (exit code as for ``check``).
+"""
 
 from __future__ import annotations
 
+import sys
+import time
+from pathlib import Path
+
+__all__ = ["register"]
+
+
+def _write_json(text: str, target: str) -> None:
+    if target == "-":
+        print(text)
+        return
+    import os
+    import tempfile
+
+    path = Path(target)
+    directory = path.parent if str(path.parent) else Path(".")
+    directory.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
+    with os.fdopen(fd, "w", encoding="utf-8") as fh:
+        fh.write(text + "\n")
+    os.replace(tmp, path)
+
+
+def _check_and_print(case, solution: dict, json_out: str | None) -> int:
+    from jaxspline.aeossp.check import check_solution, format_report
+
+    t0 = time.perf_counter()
+    report = check_solution(case, solution)
+    print(format_report(report))
+    print(f"  checked in {time.perf_counter() - t0:.1f} s")
+    if json_out:
+        _write_json(report.to_json(), json_out)
+    return 0 if report.valid else 1
+
+
+def _cmd_check(args) -> int:
+    from jaxspline.aeossp.case import load_case, load_solution
+
+    case = load_case(args.case_dir)
+    solution = load_solution(args.solution)
+    return _check_and_print(case, solution, args.json)
+
+
+def _cmd_solve(args) -> int:
+    from jaxspline.aeossp.case import load_case, write_solution
+
+    if args.time_limit <= 0:
+        raise ValueError(f"--time-limit: must be > 0, got {args.time_limit}")
+    out = Path(args.output)
+    if out.exists() and not args.force:
+        raise FileExistsError(f"{out}: exists (use --force to overwrite)")
+    case = load_case(args.case_dir)
+    from jaxspline.aeossp.solve import solve_case
+
+    t0 = time.perf_counter()
+    solution = solve_case(args.case_dir, time_limit=args.time_limit, progress=True)
+    elapsed = time.perf_counter() - t0
+    write_solution(out, solution, force=args.force)
+    n = len(solution.get("actions", [])) if isinstance(solution, dict) else len(solution)
+    print(f"wrote {out} ({n} actions, solved in {elapsed:.1f} s)", file=sys.stderr)
+    sol = solution if isinstance(solution, dict) else {"actions": list(solution)}
+    return _check_and_print(case, sol, args.json)
+
 
 def register(sub) -> None:
-    """Register the ``aeossp`` sub-command (placeholder until the adapter lands)."""
+    """Register ``aeossp check`` and ``aeossp solve`` on the ``jaxspline`` sub-parsers."""
+    p = sub.add_parser("aeossp", help="aeossp_standard benchmark: solve or check a case")
+    asub = p.add_subparsers(dest="aeossp_command", required=True)
+
+    c = asub.add_parser("check", help="check a solution against RULES.md (exit 0 valid, 1 not)")
+    c.add_argument("case_dir", help="case directory with mission/satellites/tasks.yaml")
+    c.add_argument("solution", help="solution JSON file")
+    c.add_argument("--json", metavar="OUT", help="write the JSON result to OUT ('-' = stdout)")
+    c.set_defaults(func=_cmd_check)
+
+    s = asub.add_parser("solve", help="plan a case, write the solution, then check it")
+    s.add_argument("case_dir", help="case directory with mission/satellites/tasks.yaml")
+    s.add_argument("-o", "--output", required=True, help="solution JSON file to write")
+    s.add_argument("--time-limit", type=float, default=60.0, help="seconds (default 60)")
+    s.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    s.add_argument("--json", metavar="OUT", help="write the check result to OUT ('-' = stdout)")
+    s.set_defaults(func=_cmd_solve)
