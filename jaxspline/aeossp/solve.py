@@ -1,0 +1,623 @@
+"""aeossp_standard solver: candidates, greedy sequencing, large-neighbourhood search.
+
+Pipeline (``solve_case``):
+
+1. load the case, propagate every TLE on the 5 s grid (``geometry``), screen the
+   grid-aligned observation candidates (``candidates``);
+2. greedy sequencer: tasks by weight (heaviest first, fewest options first among
+   equals) are inserted into per-satellite timelines at the feasible candidate
+   that consumes the least timeline time (slew in + imaging + slew out minus the
+   slew it replaces), earlier end as tie-break; feasibility = no overlap, slew gap
+   to predecessor and successor (or from nadir at horizon start for a first
+   action), and the conservative battery profile (``battery``);
+3. large-neighbourhood search until the time budget: destroy a window of one
+   satellite's timeline (around a candidate of a random unscheduled task, weight
+   proportional, or at random), force that candidate in, then greedily re-insert the
+   removed tasks anywhere (relocation to other satellites / starts) together with
+   the unscheduled tasks that have candidates in the window; keep the result if
+   (weight, count, -TAT) does not get worse, else undo;
+4. a TAT pass moves each action to the earliest feasible candidate of its task;
+5. an independent internal re-check (geometry at every grid instant, slews,
+   battery, recomputed from scratch) drops anything that fails, so the returned
+   plan is always valid under the internal model.
+
+Safety margins (frame-model differences GCRF/ITRF vs TEME/GMST are ~1e-3 deg and
+~1e-3 s; shadow-timing differences are seconds):
+
+* off-nadir: <= max_off_nadir - 0.05 deg at every grid instant of an action;
+  horizon: sine of the target's elevation seen along the line of sight > 0.02;
+* slew: gap >= t_bcb(theta) + settling + 0.5 s;
+* battery: level >= 10 Wh on a model that charges only when sunlit at the two
+  step ends and one neighbouring instant each side, and counts whole 5 s steps of
+  slewing / imaging load (see ``battery``).
+
+Deterministic for a given ``seed`` and iteration count (``max_iters``); a time
+limit only truncates the search.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+import random
+import sys
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from jaxspline.aeossp.battery import BatteryModel
+from jaxspline.aeossp.candidates import (
+    Candidates,
+    SatParams,
+    build_candidates,
+    los_angle,
+    sat_params,
+)
+from jaxspline.aeossp.geometry import GridGeometry, ecef_to_teme, propagate_grid, target_ecef
+
+__all__ = ["Margins", "solve_case", "verify_plan"]
+
+
+@dataclass(frozen=True)
+class Margins:
+    """Safety margins of the solver (see module docstring)."""
+
+    off_nadir_deg: float = 0.05
+    horizon: float = 0.02
+    gap_s: float = 0.5
+    battery_wh: float = 10.0
+    shadow_guard_steps: int = 1
+
+
+@dataclass
+class _Problem:
+    case: object
+    geo: GridGeometry
+    sp: SatParams
+    cands: Candidates
+    battery: BatteryModel
+    margins: Margins
+    step: float
+    weight: list
+    release: list  # grid seconds
+    c_task: list
+    c_sat: list
+    c_start: list
+    c_end: list
+    c_ls: list
+    c_le: list
+    c_ng: list
+    task_cands: list
+    sat_lo: list  # candidate-id range per satellite (cands sorted by sat, start)
+    sat_hi: list
+    sat_starts: list  # per satellite: starts of its candidates (sorted)
+    rate: list
+    accel: list
+    settle: list
+
+
+def _prepare(case, margins: Margins) -> _Problem:
+    geo = propagate_grid(case)
+    sp = sat_params(case)
+    cands = build_candidates(
+        case,
+        geo,
+        sp,
+        off_nadir_margin_deg=margins.off_nadir_deg,
+        horizon_margin=margins.horizon,
+        gap_margin_s=margins.gap_s,
+    )
+    bat = BatteryModel(geo.sunlit, sp, geo.step_s, margins.battery_wh, margins.shadow_guard_steps)
+    tt = case.task_table()
+    n_t = len(case.tasks)
+    task_cands = [[] for _ in range(n_t)]
+    for ci, t in enumerate(cands.task.tolist()):
+        task_cands[t].append(ci)
+    n_s = len(case.satellites)
+    sat_lo = np.searchsorted(cands.sat, np.arange(n_s), side="left").tolist()
+    sat_hi = np.searchsorted(cands.sat, np.arange(n_s), side="right").tolist()
+    starts = cands.start.tolist()
+    return _Problem(
+        case=case,
+        geo=geo,
+        sp=sp,
+        cands=cands,
+        battery=bat,
+        margins=margins,
+        step=geo.step_s,
+        weight=tt["weight"].tolist(),
+        release=tt["release_s"].tolist(),
+        c_task=cands.task.tolist(),
+        c_sat=cands.sat.tolist(),
+        c_start=starts,
+        c_end=cands.end.tolist(),
+        c_ls=[tuple(v) for v in cands.los_start.tolist()],
+        c_le=[tuple(v) for v in cands.los_end.tolist()],
+        c_ng=cands.nadir_gap.tolist(),
+        task_cands=task_cands,
+        sat_lo=sat_lo,
+        sat_hi=sat_hi,
+        sat_starts=[starts[a:b] for a, b in zip(sat_lo, sat_hi, strict=True)],
+        rate=sp.rate.tolist(),
+        accel=sp.accel.tolist(),
+        settle=sp.settle.tolist(),
+    )
+
+
+@dataclass
+class _Plan:
+    """Mutable per-satellite timelines with an undo log."""
+
+    pb: _Problem
+    tl: list = field(default_factory=list)  # per sat: list of cand ids sorted by start
+    tl_s: list = field(default_factory=list)  # per sat: their starts
+    assigned: list = field(default_factory=list)  # per task: cand id or -1
+    level_min: list = field(default_factory=list)  # per sat: suffix-min of battery level or None
+    W: float = 0.0
+    N: int = 0
+    tat: float = 0.0
+    log: list = field(default_factory=list)
+
+    def __post_init__(self):
+        n_s = len(self.pb.case.satellites)
+        self.tl = [[] for _ in range(n_s)]
+        self.tl_s = [[] for _ in range(n_s)]
+        self.assigned = [-1] * len(self.pb.case.tasks)
+        self.level_min = [None] * n_s
+
+    # ---------------------------------------------------------------- geometry
+    def need(self, i: int, j: int) -> float:
+        """Required gap [s] between the end of candidate i and the start of j (same sat)."""
+        pb = self.pb
+        a, b = pb.c_le[i], pb.c_ls[j]
+        cx = a[1] * b[2] - a[2] * b[1]
+        cy = a[2] * b[0] - a[0] * b[2]
+        cz = a[0] * b[1] - a[1] * b[0]
+        th = math.atan2(
+            math.sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+        )
+        k = pb.c_sat[j]
+        v, acc = pb.rate[k], pb.accel[k]
+        t = 2.0 * math.sqrt(th / acc) if th <= v * v / acc else th / v + v / acc
+        return t + pb.settle[k] + pb.margins.gap_s
+
+    def score(self):
+        return (round(self.W, 9), self.N, -round(self.tat, 6))
+
+    # ---------------------------------------------------------------- battery
+    def _maneuvers(self, k):
+        pb = self.pb
+        tl = self.tl[k]
+        man = []
+        prev = -1
+        for c in tl:
+            man.append(pb.c_ng[c] if prev < 0 else self.need(prev, c))
+            prev = c
+        return man
+
+    def _profile(self, k, extra=None):
+        pb = self.pb
+        tl = list(self.tl[k])
+        if extra is not None:
+            pos = bisect.bisect_left([pb.c_start[c] for c in tl], pb.c_start[extra])
+            tl.insert(pos, extra)
+        man, prev = [], -1
+        for c in tl:
+            man.append(pb.c_ng[c] if prev < 0 else self.need(prev, c))
+            prev = c
+        st = [pb.c_start[c] for c in tl]
+        en = [pb.c_end[c] for c in tl]
+        return pb.battery.profile(k, st, en, man)
+
+    def _suffix_min(self, k):
+        if self.level_min[k] is None:
+            lev = self._profile(k)
+            self.level_min[k] = np.minimum.accumulate(lev[::-1])[::-1]
+        return self.level_min[k]
+
+    # ---------------------------------------------------------------- moves
+    def check(self, c: int):
+        """Feasibility of inserting candidate c: returns consumed time [s] or None."""
+        pb = self.pb
+        k = pb.c_sat[c]
+        if self.assigned[pb.c_task[c]] >= 0:
+            return None
+        s, e = pb.c_start[c], pb.c_end[c]
+        starts = self.tl_s[k]
+        pos = bisect.bisect_left(starts, s)
+        tl = self.tl[k]
+        step = pb.step
+        if pos > 0:
+            p = tl[pos - 1]
+            if pb.c_end[p] > s:
+                return None
+            n_in = self.need(p, c)
+            if (s - pb.c_end[p]) * step < n_in:
+                return None
+        else:
+            p = -1
+            n_in = pb.c_ng[c]
+            if s * step < n_in:
+                return None
+        if pos < len(tl):
+            q = tl[pos]
+            if e > pb.c_start[q]:
+                return None
+            n_out = self.need(c, q)
+            if (pb.c_start[q] - e) * step < n_out:
+                return None
+            n_old = pb.c_ng[q] if p < 0 else self.need(p, q)
+        else:
+            n_out = n_old = 0.0
+        # battery: fast bound, then exact profile
+        smin = self._suffix_min(k)
+        k0 = max(0, int(math.floor(s - n_in / step)))
+        de = (pb.sp.imaging[k] * (e - s) * step + pb.sp.slew[k] * (n_in + n_out + step)) / 3600.0
+        if smin[k0] - de < pb.battery.margin_wh:
+            lev = self._profile(k, extra=c)
+            if lev.min() < pb.battery.margin_wh:
+                return None
+        return n_in + (e - s) * step + n_out - n_old
+
+    def insert(self, c: int):
+        pb = self.pb
+        k = pb.c_sat[c]
+        t = pb.c_task[c]
+        pos = bisect.bisect_left(self.tl_s[k], pb.c_start[c])
+        self.tl[k].insert(pos, c)
+        self.tl_s[k].insert(pos, pb.c_start[c])
+        self.assigned[t] = c
+        self.level_min[k] = None
+        self.W += pb.weight[t]
+        self.N += 1
+        self.tat += pb.c_end[c] * pb.step - pb.release[t]
+        self.log.append(("i", c))
+
+    def remove(self, c: int):
+        pb = self.pb
+        k = pb.c_sat[c]
+        t = pb.c_task[c]
+        pos = self.tl[k].index(c)
+        del self.tl[k][pos]
+        del self.tl_s[k][pos]
+        self.assigned[t] = -1
+        self.level_min[k] = None
+        self.W -= pb.weight[t]
+        self.N -= 1
+        self.tat -= pb.c_end[c] * pb.step - pb.release[t]
+        self.log.append(("r", c))
+
+    def removal_ok(self, k: int) -> bool:
+        """After removals on sat k: every transition and the battery still feasible."""
+        pb = self.pb
+        prev = -1
+        step = pb.step
+        for c in self.tl[k]:
+            if prev < 0:
+                if pb.c_start[c] * step < pb.c_ng[c]:
+                    return False
+            elif (pb.c_start[c] - pb.c_end[prev]) * step < self.need(prev, c):
+                return False
+            prev = c
+        return bool(self._suffix_min(k)[0] >= pb.battery.margin_wh)
+
+    def undo_to(self, mark: int):
+        while len(self.log) > mark:
+            op, c = self.log.pop()
+            if op == "i":
+                self.remove(c)
+            else:
+                self.insert(c)
+            self.log.pop()
+
+    def best_insert(self, t: int, rng=None, tat_w: float = 0.02):
+        """Insert task t at its cheapest feasible candidate; True if inserted."""
+        pb = self.pb
+        best, best_cost = -1, math.inf
+        rel = pb.release[t]
+        for c in pb.task_cands[t]:
+            cost = self.check(c)
+            if cost is None:
+                continue
+            cost += tat_w * (pb.c_end[c] * pb.step - rel)
+            if rng is not None:
+                cost *= 1.0 + 0.3 * rng.random()
+            if cost < best_cost:
+                best, best_cost = c, cost
+        if best >= 0:
+            self.insert(best)
+            return True
+        return False
+
+
+def _greedy(plan: _Plan, deadline: float):
+    pb = plan.pb
+    order = sorted(
+        (t for t in range(len(pb.weight)) if pb.task_cands[t]),
+        key=lambda t: (
+            -pb.weight[t],
+            len({pb.c_sat[c] for c in pb.task_cands[t]}),
+            len(pb.task_cands[t]),
+            t,
+        ),
+    )
+    for i, t in enumerate(order):
+        if i % 64 == 0 and time.monotonic() > deadline:
+            break
+        plan.best_insert(t)
+    plan.log.clear()
+
+
+def _lns(
+    plan: _Plan, deadline: float, rng: random.Random, max_iters: int | None, progress, t0: float
+):
+    pb = plan.pb
+    step = pb.step
+    n_t = len(pb.weight)
+    has = [t for t in range(n_t) if pb.task_cands[t]]
+    it = 0
+    last_print = time.monotonic()
+    accepted = 0
+    un = [t for t in has if plan.assigned[t] < 0]
+    while True:
+        if max_iters is not None and it >= max_iters:
+            break
+        if time.monotonic() > deadline:
+            break
+        it += 1
+        base = plan.score()
+        mark = len(plan.log)
+        forced = -1
+        if un and rng.random() < 0.8:
+            # weight-proportional pick of an unscheduled task
+            ws = [pb.weight[t] for t in un]
+            t = rng.choices(un, weights=ws, k=1)[0]
+            if plan.assigned[t] >= 0:
+                continue
+            c = rng.choice(pb.task_cands[t])
+            k = pb.c_sat[c]
+            rad = rng.choice((30, 60, 90, 150)) / step
+            lo, hi = pb.c_start[c] - rad, pb.c_end[c] + rad
+            forced = c
+        else:
+            k = rng.randrange(len(plan.tl))
+            if not plan.tl[k]:
+                continue
+            c0 = rng.choice(plan.tl[k])
+            rad = rng.choice((60, 120, 240)) / step
+            lo, hi = pb.c_start[c0] - rad, pb.c_end[c0] + rad
+        removed = [c for c in plan.tl[k] if pb.c_end[c] >= lo and pb.c_start[c] <= hi]
+        for c in removed:
+            plan.remove(c)
+        if removed and not plan.removal_ok(k):
+            plan.undo_to(mark)
+            continue
+        if forced >= 0 and plan.check(forced) is not None:
+            plan.insert(forced)
+        # tasks to re-insert: removed ones + unscheduled with candidates in the window on sat k
+        a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], int(lo) - 400 / step)
+        b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], int(hi) + 1)
+        pool = {pb.c_task[c] for c in removed}
+        for c in range(a, b):
+            t = pb.c_task[c]
+            if plan.assigned[t] < 0:
+                pool.add(t)
+        pool = sorted(pool, key=lambda t: (-pb.weight[t] * (1.0 + 0.2 * rng.random()), t))
+        for t in pool:
+            if plan.assigned[t] < 0:
+                plan.best_insert(t, rng=rng)
+        new = plan.score()
+        if new < base:
+            plan.undo_to(mark)
+        else:
+            if new > base:
+                accepted += 1
+                un = [t for t in has if plan.assigned[t] < 0]
+            plan.log.clear()
+        if progress and time.monotonic() - last_print > 5.0:
+            last_print = time.monotonic()
+            tw = sum(pb.weight)
+            print(
+                f"[aeossp] {pb.case.case_id} lns it={it} improved={accepted} "
+                f"WCR={plan.W / tw:.4f} CR={plan.N / n_t:.4f} t={time.monotonic() - t0:.1f}s",
+                file=sys.stderr,
+                flush=True,
+            )
+    return it
+
+
+def _tat_pass(plan: _Plan, deadline: float):
+    pb = plan.pb
+    for t in range(len(pb.weight)):
+        if time.monotonic() > deadline:
+            return
+        c = plan.assigned[t]
+        if c < 0:
+            continue
+        mark = len(plan.log)
+        base = plan.score()
+        k = pb.c_sat[c]
+        plan.remove(c)
+        if not plan.removal_ok(k):
+            plan.undo_to(mark)
+            continue
+        best = -1
+        for c2 in sorted(pb.task_cands[t], key=lambda x: pb.c_end[x]):
+            if pb.c_end[c2] >= pb.c_end[c]:
+                break
+            if plan.check(c2) is not None:
+                best = c2
+                break
+        plan.insert(best if best >= 0 else c)
+        if plan.score() < base:
+            plan.undo_to(mark)
+        plan.log.clear()
+
+
+def verify_plan(case, geo: GridGeometry, sp: SatParams, actions, margins: Margins | None = None):
+    """Independent re-check of a plan under the internal (conservative) model.
+
+    ``actions`` are ``(sat_index, task_index, start_idx, end_idx)`` tuples on the
+    grid of ``geo``. Geometry is re-evaluated at every grid instant of each action
+    with half the solver's margins; slews from the geometry (nadir for a first
+    action) with half the gap margin; battery with :class:`BatteryModel` (margin 0).
+    Returns the list of indices of failing actions (empty = valid).
+    """
+    from jaxspline.slew import bang_coast_bang_time
+
+    m = margins or Margins()
+    tt = case.task_table()
+    tgt = target_ecef(tt["latitude_deg"], tt["longitude_deg"], tt["altitude_m"])
+    step = geo.step_s
+    if not actions:
+        return []
+    A = np.asarray(actions, dtype=np.int64).reshape(-1, 4)
+    k, t, s, e = A.T
+    # geometry at every grid instant of every action (flattened)
+    ln = e - s + 1
+    owner = np.repeat(np.arange(len(A)), ln)
+    inst = s[owner] + (np.arange(ln.sum()) - np.repeat(np.cumsum(ln) - ln, ln))
+    r = geo.sat_ecef[k[owner], inst]
+    p = tgt[t[owner]]
+    d = p - r
+    dn = np.linalg.norm(d, axis=-1)
+    up = np.sum(-d * p / np.linalg.norm(p, axis=-1, keepdims=True), axis=-1) / dn > m.horizon / 2
+    off = los_angle(-r / np.linalg.norm(r, axis=-1, keepdims=True), d / dn[:, None])
+    lim = sp.max_off_nadir[k[owner]] - math.radians(m.off_nadir_deg / 2)
+    geo_ok = np.ones(len(A), dtype=bool)
+    np.logical_and.at(geo_ok, owner, up & (off <= lim) & np.isfinite(off))
+    time_ok = (
+        (s * step >= tt["release_s"][t] - 1e-6)
+        & (e * step <= tt["due_s"][t] + 1e-6)
+        & (np.abs((e - s) * step - tt["duration_s"][t]) < 1e-6)
+        & (tt["infrared"][t] == sp.infrared[k])
+        & (s >= 0)
+        & (e < geo.times_s.shape[0])
+    )
+    bad = set(np.nonzero(~(geo_ok & time_ok))[0].tolist())
+    # slews: all satellites in one batched call
+    order = np.lexsort((s, k))
+    ko, so, eo, to = k[order], s[order], e[order], t[order]
+    first = np.ones(len(A), dtype=bool)
+    first[1:] = ko[1:] != ko[:-1]
+    los_s = ecef_to_teme(tgt[to] - geo.sat_ecef[ko, so], geo.gmst[so])
+    los_e = ecef_to_teme(tgt[to] - geo.sat_ecef[ko, eo], geo.gmst[eo])
+    prev_dir = np.where(first[:, None], -geo.sat_teme[ko, so], np.roll(los_e, 1, axis=0))
+    theta = los_angle(
+        prev_dir / np.linalg.norm(prev_dir, axis=-1, keepdims=True),
+        los_s / np.linalg.norm(los_s, axis=-1, keepdims=True),
+    )
+    t_sl = np.asarray(bang_coast_bang_time(theta, sp.rate[ko], sp.accel[ko]), float) + sp.settle[ko]
+    prev_end = np.where(first, 0, np.roll(eo, 1))
+    avail = (so - prev_end) * step
+    fail = avail < t_sl + m.gap_s / 2
+    bad.update(order[fail].tolist())
+    bm = BatteryModel(geo.sunlit, sp, step, 0.0, m.shadow_guard_steps)
+    for kk in np.unique(ko).tolist():
+        sel = ko == kk
+        lev = bm.profile(kk, so[sel], eo[sel], t_sl[sel] + m.gap_s / 2)
+        if lev.min() < 0.0:
+            # drop the action whose start precedes the first violation most closely
+            kv = int(np.argmax(lev < 0.0))
+            cand = np.nonzero(so[sel] <= kv)[0]
+            j = cand[-1] if cand.size else 0
+            bad.add(int(order[np.nonzero(sel)[0][j]]))
+    return sorted(bad)
+
+
+def solve_case(
+    case_dir,
+    time_limit: float = 60.0,
+    progress: bool = True,
+    seed: int = 0,
+    max_iters: int | None = None,
+    margins: Margins | None = None,
+    return_stats: bool = False,
+):
+    """Solve one aeossp_standard case; returns the solution ``{"actions": [...]}``.
+
+    Args:
+      case_dir: a case directory (or an already loaded ``Case``).
+      time_limit: wall-clock budget [s] including loading and geometry.
+      progress: periodic progress lines on stderr.
+      seed: random seed of the search (deterministic for a seed and ``max_iters``).
+      max_iters: optional cap on search iterations.
+      margins: safety margins (default :class:`Margins`).
+      return_stats: also return a dict of internal statistics.
+    Returns:
+      the solution dict ``{"actions": [...]}`` (observation actions, grid-aligned
+      ISO times); with ``return_stats`` a tuple ``(solution, stats)``.
+    """
+    import jax
+
+    from jaxspline.aeossp.case import format_time, load_case
+
+    jax.config.update("jax_enable_x64", True)
+    t0 = time.monotonic()
+    if time_limit is None or not time_limit > 0:
+        raise ValueError(f"time_limit: must be > 0, got {time_limit!r}")
+    margins = margins or Margins()
+    case = load_case(case_dir) if not hasattr(case_dir, "tasks") else case_dir
+    reserve = min(0.2 * time_limit, max(1.5, 0.04 * time_limit))
+    deadline = t0 + time_limit - reserve
+
+    def say(msg):
+        if progress:
+            print(
+                f"[aeossp] {case.case_id} {msg} t={time.monotonic() - t0:.1f}s",
+                file=sys.stderr,
+                flush=True,
+            )
+
+    pb = _prepare(case, margins)
+    n_with = sum(1 for x in pb.task_cands if x)
+    say(f"{len(pb.cands)} candidates for {n_with}/{len(case.tasks)} tasks")
+    plan = _Plan(pb)
+    _greedy(plan, deadline)
+    tw = sum(pb.weight) or 1.0
+    say(f"greedy WCR={plan.W / tw:.4f} CR={plan.N / max(1, len(case.tasks)):.4f}")
+    rng = random.Random(seed)
+    tat_budget = min(2.0, 0.05 * time_limit)
+    its = _lns(plan, deadline - tat_budget, rng, max_iters, progress, t0)
+    _tat_pass(plan, deadline)
+    say(f"lns {its} iterations: WCR={plan.W / tw:.4f} CR={plan.N / max(1, len(case.tasks)):.4f}")
+
+    acts = [
+        (pb.c_sat[c], pb.c_task[c], pb.c_start[c], pb.c_end[c]) for c in plan.assigned if c >= 0
+    ]
+    dropped = 0
+    for _ in range(10):
+        bad = verify_plan(case, pb.geo, pb.sp, acts, margins)
+        if not bad:
+            break
+        dropped += len(bad)
+        acts = [a for i, a in enumerate(acts) if i not in set(bad)]
+    else:
+        acts = []
+    if dropped:
+        say(f"internal re-check dropped {dropped} actions")
+    acts.sort(key=lambda a: (a[0], a[2]))
+    step = pb.step
+    out = [
+        {
+            "type": "observation",
+            "satellite_id": case.satellites[k].satellite_id,
+            "task_id": case.tasks[t].task_id,
+            "start_time": format_time(case.at(s * step)),
+            "end_time": format_time(case.at(e * step)),
+        }
+        for k, t, s, e in acts
+    ]
+    wsum = sum(pb.weight[a[1]] for a in acts)
+    stats = {
+        "wcr": wsum / tw,
+        "cr": len(acts) / max(1, len(case.tasks)),
+        "n_candidates": len(pb.cands),
+        "lns_iterations": its,
+        "dropped": dropped,
+        "wall_s": time.monotonic() - t0,
+    }
+    say(f"done: {len(out)} actions WCR={stats['wcr']:.4f}")
+    sol = {"actions": out}
+    return (sol, stats) if return_stats else sol
