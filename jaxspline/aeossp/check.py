@@ -49,6 +49,11 @@ __all__ = [
     "geodetic_to_ecef",
     "sun_position_gcrf",
     "Ephemeris",
+    "angle_deg",
+    "ecef_to_gcrf_matrix",
+    "gmst82",
+    "sunlit",
+    "teme_to_ecef",
 ]
 
 EPS = 1e-9  # official NUMERICAL_EPS (slew gap, battery, grid alignment)
