@@ -223,8 +223,11 @@ class _Screener:
         self.program = _chunk_program(_reach())
 
     def padded_size(self, n: int, chunk_size: int) -> int:
-        """Fixed length for a chunk of n: a power of two <= chunk_size, multiple of ndev."""
-        size = min(chunk_size, 1 << max(int(math.ceil(math.log2(max(n, 1)))), 4))
+        """Fixed length for a chunk of n: a power of two (>= 1024) <= chunk_size, multiple of ndev.
+
+        Few distinct lengths means few compilations.
+        """
+        size = min(chunk_size, 1 << max(int(math.ceil(math.log2(max(n, 1)))), 10))
         return int(math.ceil(size / self.ndev) * self.ndev)
 
     def screen(self, src: np.ndarray, dst: np.ndarray, size: int):

@@ -113,6 +113,7 @@ def synthetic_options(
     dtype=np.float64,
     rate=0.05,
     spread=0.4,
+    window=15.0,
 ):
     """Random RouteOptions: each route has ``per_route`` start options on a window grid."""
     rows = []
@@ -122,7 +123,7 @@ def synthetic_options(
         slope = rng.uniform(-0.005, 0.005, c)
         d = rng.uniform(*dur)
         srate = rng.uniform(-0.5 * rate, 0.5 * rate, c)
-        for t0 in centers[r] + np.linspace(-15, 15, per_route):
+        for t0 in centers[r] + np.linspace(-window, window, per_route):
             a0 = base + slope * (t0 - centers[r])
             rows.append((r, t0, t0 + d, a0, srate, a0 + srate * d, srate, rng.uniform(1, 10)))
     route, ts, te, sa, sr, ea, er, val = zip(*rows, strict=True)
