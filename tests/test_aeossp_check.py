@@ -187,10 +187,11 @@ def test_rule1_ids_and_type(setup):
         {**good, "type": "downlink"},
         "not an action",
         {**good, "start_time": "noon"},
+        {**good, "satellite_id": ["sat_001"]},
     ]
     r = check_solution(case, {"actions": [good, *bad]})
     assert not r.valid
-    assert _rules(r) == [(1, 1), (1, 2), (1, 3), (1, 4), (1, 5)]
+    assert _rules(r) == [(1, 1), (1, 2), (1, 3), (1, 4), (1, 5), (1, 6)]
     assert "sat_999" in r.violations[0].message and "task_9999" in r.violations[1].message
     assert r.metrics == {"CR": 0.0, "WCR": 0.0, "TAT": None, "PC": 0.0}
     assert r.accepted_metrics["completed_tasks"] == 1

@@ -320,6 +320,8 @@ def _structure(case: Case, actions: list, out: list[Violation]) -> list[_Action]
             out.append(Violation(1, f"action is not an object: {raw!r}", i))
             continue
         sid, tid = raw.get("satellite_id"), raw.get("task_id")
+        sid = sid if isinstance(sid, str) else repr(sid)
+        tid = tid if isinstance(tid, str) else repr(tid)
         if raw.get("type") != "observation":
             errs.append((1, f"type must be 'observation', got {raw.get('type')!r}"))
         if sid not in sats:
