@@ -436,21 +436,19 @@ _min_peak_accel_v = jax.jit(jnp.vectorize(min_peak_accel_kernel))
 
 def _prepare(limits, need_accel=True, **named):
     """Validate named inputs + limits and return them broadcast in one float dtype."""
-    lim = validate_limits(limits) if need_accel else None
-    for name, x in named.items():
-        if x is None:
-            continue
+    if need_accel:
+        lim = validate_limits(limits)
+        named = dict(named, rate=lim.rate, accel=lim.accel)
+    arrs = {k: as_float_array(k, v) for k, v in named.items()}
+    for name, x in arrs.items():
         if name == "T":
             check_nonnegative("T", x)
-        elif name == "rate":
-            check_positive("rate", x)
+        elif name in ("rate", "accel"):
+            check_positive(name if not need_accel else f"limits.{name}", x)
         else:
             check_finite(name, x)
-    if need_accel:
-        named = dict(named, rate=lim.rate, accel=lim.accel)
-    dt = float_dtype_of(*named.values())
-    arrs = {k: as_float_array(k, v, dt) for k, v in named.items()}
-    return broadcast_named(**arrs)
+    dt = float_dtype_of(*arrs.values())
+    return broadcast_named(**{k: v.astype(dt) for k, v in arrs.items()})
 
 
 def angle_interval(a1, b1, b2, T, limits: AxisLimits):
@@ -491,7 +489,8 @@ def envelopes(a1, b1, b2, T, limits: AxisLimits, t):
 
     See ``envelopes_kernel``; t broadcasts with the other arguments.
     """
-    return _envelopes_v(*_prepare(limits, a1=a1, b1=b1, b2=b2, T=T, t=t))
+    a1, b1, b2, T, t, rate, accel = _prepare(limits, a1=a1, b1=b1, b2=b2, T=T, t=t)
+    return _envelopes_v(a1, b1, b2, T, rate, accel, t)
 
 
 def transfer(a1, b1, a2, b2, T, limits: AxisLimits, t):
@@ -499,7 +498,8 @@ def transfer(a1, b1, a2, b2, T, limits: AxisLimits, t):
 
     Convex combination of the envelopes; see ``transfer_kernel``. +inf when unreachable.
     """
-    return _transfer_v(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T, t=t))
+    a1, b1, a2, b2, T, t, rate, accel = _prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T, t=t)
+    return _transfer_v(a1, b1, a2, b2, T, rate, accel, t)
 
 
 def feasible_durations(a1, b1, a2, b2, limits: AxisLimits):
