@@ -143,6 +143,8 @@ def test_two_valid_observations_and_metrics(setup):
     sol = {"actions": [_obs(setup, "b"), _obs(setup, "a")]}
     r = check_solution(case, sol)
     assert r.valid, format_report(r)
+    assert r.margins["min_off_nadir_slack_deg"] >= 2.0  # the scan kept 2 deg of margin
+    assert r.margins["min_slew_slack_s"] > 0.0
     assert r.metrics["CR"] == pytest.approx(2 / len(case.tasks))
     total_w = sum(t.weight for t in case.tasks)
     assert r.metrics["WCR"] == pytest.approx((ta.weight + tb.weight) / total_w)

@@ -285,6 +285,7 @@ class CheckReport:
     n_accepted: int
     satellites: dict[str, dict[str, Any]] = field(default_factory=dict)
     maneuvers: list[dict[str, Any]] = field(default_factory=list)
+    margins: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         """Plain JSON-serialisable dictionary."""
@@ -304,6 +305,8 @@ class _Action:
     task: Task
     start: float  # seconds from horizon_start
     end: float
+    off_slack: float = math.nan  # deg below max off-nadir (worst sample)
+    slew_slack: float = math.nan  # s of gap beyond slew + settle
 
 
 def _sec(case: Case, text: Any, where: str) -> float:
@@ -424,13 +427,27 @@ def _geometry(case, acts, ephs, targets, out) -> list[_Action]:
                 )
             )
         else:
+            a.off_slack = a.sat.max_off_nadir_deg - float(np.max(off))
             ok.append(a)
     return ok
 
 
-def _los_gcrf(eph: Ephemeris, target_ecef: np.ndarray, t: float) -> np.ndarray:
-    m = ecef_to_gcrf_matrix(eph.unix(t))
-    return m @ target_ecef - eph.gcrf(t)
+class _InertialCache:
+    """GCRF satellite positions and Earth-fixed -> GCRF matrices at given instants (batched)."""
+
+    def __init__(self, eph: Ephemeris, times):
+        ts = np.array(sorted(set(times)), dtype=float)
+        self.index = {t: i for i, t in enumerate(ts.tolist())}
+        unix = eph.unix(ts)
+        self.mat = ecef_to_gcrf_matrix(unix)
+        self.sat = np.einsum("nij,nj->ni", self.mat, eph.ecef(ts))
+
+    def nadir(self, t: float) -> np.ndarray:
+        return -self.sat[self.index[t]]
+
+    def los(self, target_ecef: np.ndarray, t: float) -> np.ndarray:
+        i = self.index[t]
+        return self.mat[i] @ target_ecef - self.sat[i]
 
 
 def _slew(case, acts, ephs, targets, out):
@@ -441,7 +458,8 @@ def _slew(case, acts, ephs, targets, out):
     maneuvers = []
     for sid, lst in by_sat.items():
         lst.sort(key=lambda a: (a.start, a.end, a.index))
-        eph, prev, acc, win = ephs[sid], None, [], []
+        prev, acc, win = None, [], []
+        cache = _InertialCache(ephs[sid], [x for a in lst for x in (a.start, a.end)])
         for cur in lst:
             sat, tid = cur.sat, cur.task.task_id
             if prev is not None and prev.end > cur.start:
@@ -457,11 +475,11 @@ def _slew(case, acts, ephs, targets, out):
                     )
                 )
                 continue
-            to_vec = _los_gcrf(eph, targets[tid], cur.start)
+            to_vec = cache.los(targets[tid], cur.start)
             if prev is None:
-                from_vec, gap, src = -eph.gcrf(cur.start), cur.start, "nadir"
+                from_vec, gap, src = cache.nadir(cur.start), cur.start, "nadir"
             else:
-                from_vec = _los_gcrf(eph, targets[prev.task.task_id], prev.end)
+                from_vec = cache.los(targets[prev.task.task_id], prev.end)
                 gap, src = cur.start - prev.end, prev.task.task_id
             theta = float(angle_deg(from_vec, to_vec))
             need = (
@@ -495,6 +513,7 @@ def _slew(case, acts, ephs, targets, out):
                         "available_gap_s": gap,
                     }
                 )
+            cur.slew_slack = gap - need
             acc.append(cur)
             prev = cur
         accepted[sid], windows[sid] = acc, win
@@ -583,8 +602,8 @@ def check_solution(case: Case, solution: dict) -> CheckReport:
     Returns a ``CheckReport``: ``valid`` (no violation), the violations (rule, action
     index, satellite/task, numbers), official ``metrics`` (CR, WCR, TAT [s], PC [Wh];
     zeros / None when invalid), ``accepted_metrics`` over the actions that passed,
-    per-satellite battery summaries and the maneuver windows. Only satellites that
-    carry actions are propagated for geometry; all are simulated for the battery.
+    per-satellite battery summaries, the maneuver windows and ``margins`` (tightest
+    off-nadir slack [deg], slew-gap slack [s], lowest battery [Wh] over accepted actions).
     """
     if not isinstance(solution, dict) or not isinstance(solution.get("actions", []), list):
         raise ValueError("solution: expected an object with an 'actions' list")
@@ -616,8 +635,22 @@ def check_solution(case: Case, solution: dict) -> CheckReport:
         else {"CR": 0.0, "WCR": 0.0, "TAT": None, "PC": 0.0}
     )
     out.sort(key=lambda v: (v.action_index if v.action_index is not None else 1 << 30, v.rule))
+    margins = {
+        "min_off_nadir_slack_deg": min((a.off_slack for a in acc), default=None),
+        "min_slew_slack_s": min((a.slew_slack for a in acc), default=None),
+        "min_battery_wh": min((v["min_battery_wh"] for v in sats.values()), default=None),
+    }
     return CheckReport(
-        case.case_id, valid, out, metrics, acc_metrics, len(actions), len(acc), sats, maneuvers
+        case.case_id,
+        valid,
+        out,
+        metrics,
+        acc_metrics,
+        len(actions),
+        len(acc),
+        sats,
+        maneuvers,
+        margins,
     )
 
 
@@ -647,6 +680,12 @@ def format_report(report: CheckReport, max_violations: int = 50) -> str:
             lines.append(f"  - {v}")
         if len(report.violations) > max_violations:
             lines.append(f"  ... {len(report.violations) - max_violations} more")
+    mg = report.margins
+    if mg.get("min_off_nadir_slack_deg") is not None:
+        lines.append(
+            f"  tightest margins: off-nadir {mg['min_off_nadir_slack_deg']:.2e} deg, "
+            f"slew gap {mg['min_slew_slack_s']:.3f} s"
+        )
     low = min(report.satellites.items(), key=lambda kv: kv[1]["min_battery_wh"], default=None)
     if low is not None:
         lines.append(
