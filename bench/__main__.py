@@ -109,7 +109,7 @@ def bench_kernel(w, dtype: str, sizes: list[int], reps: int, do_baselines: bool)
     if not do_baselines:
         return out
     # baselines on the same inputs (numpy at 1e6, Python/Ruckig on subsamples)
-    n_np = 10**6
+    n_np = int(min(10**6, w.max_batch))
     inp = w.make_inputs(n_np, 0)
     arrs = [inp[k].astype(npdt) for k in w.args]
     jargs = tuple(jnp.asarray(a) for a in arrs)

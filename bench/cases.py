@@ -35,6 +35,32 @@ def slew_inputs(n: int, seed: int = 0) -> dict[str, np.ndarray]:
     return dict(angle=rng.uniform(0.0, np.deg2rad(60.0), n))
 
 
+def maneuver_inputs(n: int, seed: int = 0) -> dict[str, np.ndarray]:
+    """Random spatial maneuvers: attitudes within 20 deg, small boundary rates, T in 20-60 s."""
+    rng = np.random.default_rng(seed)
+
+    def quat(scale):
+        axis = rng.normal(size=(n, 3))
+        axis /= np.linalg.norm(axis, axis=1, keepdims=True)
+        ang = rng.uniform(0, scale, (n, 1))
+        return np.concatenate([np.cos(ang / 2), np.sin(ang / 2) * axis], axis=1)
+
+    def vec(scale):
+        return rng.uniform(-scale, scale, (n, 3))
+
+    return dict(
+        q0=quat(0.2),
+        w0=vec(0.005),
+        e0=vec(1e-4),
+        j0=np.zeros((n, 3)),
+        q1=quat(0.35),
+        w1=vec(0.005),
+        e1=vec(1e-4),
+        j1=np.zeros((n, 3)),
+        T=rng.uniform(20.0, 60.0, n),
+    )
+
+
 @dataclass
 class Workload:
     """One benchmarked quantity: inputs, the JAX kernel, and its baselines."""
@@ -54,10 +80,14 @@ class Workload:
 
 def workloads() -> list[Workload]:
     """All benchmarked workloads (kernels imported from jaxspline)."""
+    import jaxspline.joins as J
     import jaxspline.reach as R
     import jaxspline.slew as S
     from bench import baselines as B
+    from bench.numpy_port import numpy_module
 
+    NR = numpy_module("jaxspline.reach")  # same formulas, numpy arrays
+    NS = numpy_module("jaxspline.slew")
     b, d = RATE, ACCEL
     ws = [
         Workload(
@@ -85,16 +115,14 @@ def workloads() -> list[Workload]:
             reach_inputs,
             ("a1", "b1", "a2", "b2"),
             lambda a1, b1, a2, b2: R.min_transfer_time_kernel(a1, b1, a2, b2, b, d),
-            numpy_fn=getattr(B, "np_min_transfer_time", None)
-            and (lambda a1, b1, a2, b2: B.np_min_transfer_time(a1, b1, a2, b2, b, d)),
+            numpy_fn=lambda a1, b1, a2, b2: NR.min_transfer_time_kernel(a1, b1, a2, b2, b, d),
         ),
         Workload(
             "min_peak_accel",
             reach_inputs,
             ("a1", "b1", "a2", "b2", "T"),
             lambda a1, b1, a2, b2, T: R.min_peak_accel_kernel(a1, b1, a2, b2, T, b),
-            numpy_fn=getattr(B, "np_min_peak_accel", None)
-            and (lambda a1, b1, a2, b2, T: B.np_min_peak_accel(a1, b1, a2, b2, T, b)),
+            numpy_fn=lambda a1, b1, a2, b2, T: NR.min_peak_accel_kernel(a1, b1, a2, b2, T, b),
         ),
         Workload(
             "bang_coast_bang_time",
@@ -104,6 +132,30 @@ def workloads() -> list[Workload]:
             numpy_fn=lambda angle: B.np_bang_coast_bang_time(angle, b, d),
             python_fn=lambda angle: B.py_bang_coast_bang_time(angle, b, d),
             ruckig_fn=lambda angle: B.ruckig_rest_to_rest_time(angle, b, d),
+        ),
+        Workload(
+            "slew_profile_ABCD",
+            slew_inputs,
+            ("angle",),
+            lambda angle: S.slew_profile_kernel(angle, b, d, b / d, "auto")[5],
+            numpy_fn=lambda angle: NS.slew_profile_kernel(angle, b, d, b / d, "auto")[5],
+            notes="profile kind chosen per candidate (A/C/D), tau = omega/eps for D",
+        ),
+        Workload(
+            "scurve_time",
+            slew_inputs,
+            ("angle",),
+            lambda angle: S.scurve_time_kernel(angle, b, d, JERK),
+            numpy_fn=lambda angle: NS.scurve_time_kernel(angle, b, d, JERK),
+        ),
+        Workload(
+            "maneuver_check_129",
+            maneuver_inputs,
+            ("q0", "w0", "e0", "j0", "q1", "w1", "e1", "j1", "T"),
+            lambda *a: J.maneuver_check_kernel(*a, b, d, JERK, n_samples=129)[3],
+            max_batch=1e4,  # ~60 kB of samples per candidate: the engine streams it in chunks
+            out_bytes=1,
+            notes="degree-7 MRP join + 129-sample |w|,|e|,|e'| check per candidate",
         ),
     ]
     return ws
