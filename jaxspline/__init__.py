@@ -37,6 +37,16 @@ from jaxspline.slew import (
     slew_profile_time,
 )
 # --- flex (flexible-mode residual and simulator) ---
+from jaxspline.flex import (
+    flexible_body_rate,
+    initial_amplitude,
+    min_mode_frequency,
+    mode_rate_kernel,
+    residual_amplitude,
+    settling_time,
+    tau_for_tolerance,
+    tau_for_tolerance_kernel,
+)
 # --- attitude (quaternion / MRP / rotation matrices) ---
 from jaxspline.attitude import (  # noqa: E402
     angular_accel_from_mrp,
