@@ -84,5 +84,19 @@ from jaxspline.joins import (  # noqa: E402
 # --- retarget (minimum-peak-control retargeting) ---
 # --- geometry (orbit, pointing, routes) ---
 # --- engine (screen, sequence, refine, validate, scenario) ---
+from jaxspline.screen import (  # noqa: E402
+    Transitions,
+    screen_pairs,
+    screen_sequences,
+    screen_transitions,
+)
+from jaxspline.sequence import Plan, beam_search, exact_plan, greedy  # noqa: E402
+from jaxspline.refine import (  # noqa: E402
+    LinearRouteModel,
+    RefineResult,
+    refine_plan,
+    try_insert,
+)
+from jaxspline.validate import ValidationReport, validate_plan  # noqa: E402
 
 __version__ = "0.1.0"
