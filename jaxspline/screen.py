@@ -109,7 +109,9 @@ def _reach():
 def options_dtype(options: RouteOptions):
     """Floating dtype the engine computes in: that of ``options.start_angle``."""
     dt = jnp.result_type(options.start_angle)
-    return dt if jnp.issubdtype(dt, jnp.floating) else jnp.result_type(float)
+    if not jnp.issubdtype(dt, jnp.floating):
+        return jnp.result_type(float)
+    return jax.dtypes.canonicalize_dtype(dt)  # float64 -> float32 when x64 is off
 
 
 def validate_options(options: RouteOptions, name: str = "options") -> int:

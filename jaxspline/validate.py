@@ -22,11 +22,8 @@ Units: radians, seconds.
 
 from __future__ import annotations
 
-import functools
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.limits import AxisLimits, validate_limits
@@ -54,16 +51,11 @@ class ValidationReport(NamedTuple):
     peak_accel: np.ndarray
 
 
-@functools.lru_cache(maxsize=1)
-def _transfer_program():
+def _transfer(a1, b1, a2, b2, T, limits, t):
+    """Theorem-1 trajectory (angle, rate, accel) at t: :func:`jaxspline.reach.transfer`."""
     from jaxspline import reach
 
-    return jax.jit(jnp.vectorize(reach.transfer_kernel))
-
-
-def _transfer(a1, b1, a2, b2, T, limits, t):
-    """Theorem-1 trajectory (angle, rate, accel) at t: ``reach.transfer_kernel`` broadcast."""
-    return _transfer_program()(a1, b1, a2, b2, T, limits.rate, limits.accel, t)
+    return reach.transfer(a1, b1, a2, b2, T, limits, t)
 
 
 def validate_plan(

@@ -2,8 +2,6 @@
 
 The exact-T reference here is the SPEC section 1 envelope formula written in
 plain numpy, one candidate at a time, independent of :mod:`jaxspline.reach`.
-Until ``jaxspline.reach`` exists the engine runs on ``StandInReach`` (a tiny
-jnp version of the same formulas, used only by the tests).
 """
 
 from __future__ import annotations
@@ -14,8 +12,6 @@ import subprocess
 import sys
 import textwrap
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import pytest
 
@@ -24,7 +20,7 @@ from jaxspline.limits import AxisLimits
 from jaxspline.options import RouteOptions
 
 # ----------------------------------------------------------------------------
-# stand-in kernels (only while jaxspline.reach has not landed) and references
+# numpy references and synthetic instances
 # ----------------------------------------------------------------------------
 
 
@@ -47,59 +43,9 @@ def ref_reachable(a1, b1, a2, b2, T, b, d, tol=0.0):
     return rate_ok & (lo - tol <= a2) & (a2 <= hi + tol)
 
 
-class StandInReach:
-    """jnp stand-in for the four reach kernels (tests only)."""
-
-    @staticmethod
-    def _parts(a1, b1, a2, b2, T, rate, accel):
-        Ts = jnp.where(T > 0, T, 1.0)
-        hi, lo = _hi_lo(a1, b1, b2, Ts, rate, accel, jnp)
-        rate_gap = jnp.minimum(
-            jnp.minimum(rate - jnp.abs(b1), rate - jnp.abs(b2)), accel * Ts - jnp.abs(b1 - b2)
-        )
-        return hi, lo, rate_gap
-
-    @staticmethod
-    def reach_margin_kernel(a1, b1, a2, b2, T, rate, accel):
-        hi, lo, rate_gap = StandInReach._parts(a1, b1, a2, b2, T, rate, accel)
-        m = jnp.where(rate_gap >= 0, jnp.minimum(hi - a2, a2 - lo), rate_gap)
-        return jnp.where(T > 0, m, -jnp.inf)
-
-    @staticmethod
-    def is_reachable_kernel(a1, b1, a2, b2, T, rate, accel):
-        return StandInReach.reach_margin_kernel(a1, b1, a2, b2, T, rate, accel) >= 0
-
-    @staticmethod
-    def min_peak_accel_kernel(a1, b1, a2, b2, T, rate):
-        def body(_, lh):
-            lo_, hi_ = lh
-            mid = jnp.sqrt(lo_ * hi_)
-            ok = StandInReach.is_reachable_kernel(a1, b1, a2, b2, T, rate, mid)
-            return jnp.where(ok, lo_, mid), jnp.where(ok, mid, hi_)
-
-        one = jnp.ones_like(a1 * T)
-        lo_, hi_ = jax.lax.fori_loop(0, 90, body, (1e-12 * one, 1e6 * one))
-        ok = StandInReach.is_reachable_kernel(a1, b1, a2, b2, T, rate, 1e6 * one)
-        return jnp.where(ok, hi_, jnp.inf)
-
-    @staticmethod
-    def min_transfer_time_kernel(a1, b1, a2, b2, rate, accel):
-        return jnp.zeros_like(a1 + b1 + a2 + b2 + rate + accel)
-
-
-def have_reach() -> bool:
-    try:
-        import jaxspline.reach  # noqa: F401
-    except ImportError:
-        return False
-    return True
-
-
 @pytest.fixture
-def reach_kernels(monkeypatch):
-    """Use jaxspline.reach if it exists, else the stand-in."""
-    if not have_reach():
-        monkeypatch.setattr(screen, "_reach", lambda: StandInReach)
+def reach_kernels():
+    """The kernel module the engine screens with (``jaxspline.reach``)."""
     return screen._reach()
 
 
@@ -331,8 +277,6 @@ _SHARD_SCRIPT = textwrap.dedent(
     sys.path.insert(0, {tests!r})
     import test_screen as ts
     from jaxspline import screen
-    if not ts.have_reach():
-        screen._reach = lambda: ts.StandInReach
     opt = ts.synthetic_options(np.random.default_rng(5), n_routes=12, per_route=4)
     tr = screen.screen_transitions(opt, ts.LIMITS, progress=False, chunk_size=64)
     print(json.dumps({{"ndev": jax.local_device_count(),
