@@ -488,3 +488,27 @@ def test_cli_check_and_solve(setup, tmp_path, monkeypatch, capsys):
     assert calls == [(str(small), 5.0, True)] and json.loads(sol.read_text()) == {"actions": []}
     assert main(["aeossp", "solve", str(small), "-o", str(sol)]) == 2  # exists, no --force
     assert main(["aeossp", "solve", str(small), "-o", str(sol), "--force"]) == 0
+
+
+@pytest.mark.slow
+def test_against_brahe_official_library(setup):
+    """Cross-check with brahe (the official verifier's library), zero EOP, when installed."""
+    brahe = pytest.importorskip("brahe")
+    brahe.set_global_eop_provider_from_static_provider(brahe.StaticEOPProvider.from_zero())
+    case, sat = setup.case, setup.vis
+    eph = Ephemeris(sat, case.horizon_start)
+    prop = brahe.SGPPropagator.from_tle(sat.tle_line1, sat.tle_line2, 5.0)
+    ts = np.arange(0.0, case.duration_s + 1.0, 1800.0)
+    ecef, gcrf = eph.ecef(ts), eph.gcrf(ts)
+    tgt = geodetic_to_ecef(45.0, 10.0, 0.0)
+    for k, t in enumerate(ts):
+        d = case.at(t)
+        ep = brahe.Epoch.from_datetime(
+            d.year, d.month, d.day, d.hour, d.minute, float(d.second), 0.0, brahe.TimeSystem.UTC
+        )
+        assert np.linalg.norm(np.asarray(prop.state_ecef(ep))[:3] - ecef[k]) < 0.05  # m
+        assert np.linalg.norm(np.asarray(prop.state_eci(ep))[:3] - gcrf[k]) < 5.0  # m
+        sun = np.asarray(brahe.sun_position(ep))
+        assert float(angle_deg(sun, sun_position_gcrf(eph.unix(t)))) < 1e-4
+        m = ecef_to_gcrf_matrix(eph.unix(t))
+        assert float(angle_deg(np.asarray(brahe.position_ecef_to_eci(ep, tgt)), m @ tgt)) < 1e-4
