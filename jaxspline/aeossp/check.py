@@ -17,6 +17,11 @@ independently of the solver:
   equatorial, TT = UTC + 69.184 s; cylindrical shadow with R = 6378136.3 m.
 * Targets: WGS84 geodetic -> Earth-fixed.
 
+Measured against brahe 1.8.0 (the official verifier's library, zero EOP) on case_0001
+with a 1505-action solution: off-nadir max |Δ| 1.5e-7 deg, slew angle 3.6e-7 deg,
+sunlit flag 0 of 34560 midpoints; satellite Earth-fixed position 1.2 mm, GCRF 0.9 m,
+Sun direction 0.02".
+
 Staging follows the official verifier: an action failing rules 1-4 is not checked
 for geometry; an action failing geometry is not part of the slew chain; an action
 failing overlap or slew is dropped from the chain (the next action is checked
