@@ -158,37 +158,36 @@ def test_angle_interval_and_envelopes_vs_integration():
 def test_rate_interval_vs_brute_force():
     rng = np.random.default_rng(2)
     n_cases, n_grid = 300, 4001
-    worst = 0.0
-    agree = 0
-    for _ in range(n_cases):
-        b, d = np.exp(rng.uniform(np.log(0.1), np.log(2.0), 2))
-        b1 = rng.choice([rng.uniform(-b, b), b, -b])
-        T = rng.uniform(0.01, 4.0) * b / d
-        corner_lo = max(-b, b1 - d * T)
-        corner_hi = min(b, b1 + d * T)
-        low = float(angle_interval(0.0, b1, corner_lo, T, AxisLimits(b, d))[0])
-        span = float(angle_interval(0.0, b1, corner_hi, T, AxisLimits(b, d))[1])
-        a2 = rng.uniform(low - 0.1 * (span - low), span + 0.1 * (span - low))
-        grid = np.linspace(-b, b, n_grid)
-        lo_g, hi_g = angle_interval(0.0, b1, grid, T, AxisLimits(b, d))
-        member = (_f(lo_g) <= a2) & (a2 <= _f(hi_g))
-        r_lo, r_hi = (float(x) for x in rate_interval(0.0, b1, a2, T, AxisLimits(b, d)))
-        h = grid[1] - grid[0]
-        if not member.any():
-            # empty on the grid: the exact interval can only be thinner than one cell
-            ok = r_lo > r_hi or (r_hi - r_lo) < h
-            agree += ok
-            continue
-        g_lo, g_hi = grid[member][0], grid[member][-1]
-        # grid members lie inside [r_lo, r_hi]; the true ends within one cell
-        dev = max(abs(g_lo - r_lo), abs(g_hi - r_hi)) / h
-        worst = max(worst, dev)
-        agree += dev <= 1.0 + 1e-6
-    print(
-        f"\n[reach] rate_interval vs brute force: {agree}/{n_cases} agree, "
-        f"max end deviation {worst:.3f} grid cells"
+    b, d = np.exp(rng.uniform(np.log(0.1), np.log(2.0), (2, n_cases)))
+    b1 = np.select(
+        [rng.uniform(size=n_cases) < 0.1, rng.uniform(size=n_cases) < 0.1],
+        [b, -b],
+        rng.uniform(-1, 1, n_cases) * b,
     )
-    assert agree == n_cases
+    T = rng.uniform(0.01, 4.0, n_cases) * b / d
+    lim = AxisLimits(b, d)
+    low = _f(angle_interval(0.0, b1, np.maximum(-b, b1 - d * T), T, lim)[0])
+    top = _f(angle_interval(0.0, b1, np.minimum(b, b1 + d * T), T, lim)[1])
+    a2 = low + rng.uniform(-0.1, 1.1, n_cases) * (top - low)
+    grid = np.linspace(-1, 1, n_grid)[None, :] * b[:, None]
+    lo_g, hi_g = angle_interval(0.0, b1[:, None], grid, T[:, None], lim_b(b, d))
+    member = (_f(lo_g) <= a2[:, None]) & (a2[:, None] <= _f(hi_g))
+    r_lo, r_hi = (_f(x) for x in rate_interval(0.0, b1, a2, T, lim))
+    h = grid[:, 1] - grid[:, 0]
+    any_member = member.any(axis=1)
+    # empty on the grid: the exact interval is empty or thinner than one cell
+    empty_ok = (r_lo > r_hi) | (r_hi - r_lo < h)
+    first = grid[np.arange(n_cases), np.argmax(member, axis=1)]
+    last = grid[np.arange(n_cases), n_grid - 1 - np.argmax(member[:, ::-1], axis=1)]
+    # grid members lie inside [r_lo, r_hi]; the true ends within one cell of them
+    dev = np.where(any_member, np.maximum(np.abs(first - r_lo), np.abs(last - r_hi)) / h, 0.0)
+    agree = np.where(any_member, dev <= 1.0 + 1e-6, empty_ok)
+    print(
+        f"\n[reach] rate_interval vs brute force: {agree.sum()}/{n_cases} agree "
+        f"({(~any_member).sum()} empty), max end deviation {dev.max():.3f} grid cells"
+    )
+    assert agree.all()
+    assert (~any_member).sum() > 10 and any_member.sum() > 200
 
 
 def test_rate_interval_ends_are_boundary_points():
@@ -362,14 +361,19 @@ def _cases_matrix(n=64, seed=13):
     return [a1, b1, a2, b2, T, b, d]
 
 
+_JIT_VMAP = {name: jax.jit(jax.vmap(getattr(reach, name))) for name in KERNEL_ARGS}
+# min_transfer_time_kernel is feasible_durations_kernel[0]; skip it in the costly tests
+HEAVY = sorted(set(KERNEL_ARGS) - {"min_transfer_time_kernel"})
+
+
 @pytest.mark.parametrize("name", sorted(KERNEL_ARGS))
 def test_scalar_jit_vmap_agree(name):
     kern = getattr(reach, name)
     cols = KERNEL_ARGS[name](_cases_matrix())
-    batched = jax.jit(jax.vmap(kern))(*(jnp.asarray(c) for c in cols))
+    batched = _JIT_VMAP[name](*(jnp.asarray(c) for c in cols))
     batched = batched if isinstance(batched, tuple) else (batched,)
     jitted = jax.jit(kern)
-    for i in range(0, len(cols[0]), 7):
+    for i in (0, 17, 42):
         s = kern(*(float(c[i]) for c in cols))
         j = jitted(*(float(c[i]) for c in cols))
         s = s if isinstance(s, tuple) else (s,)
@@ -380,12 +384,11 @@ def test_scalar_jit_vmap_agree(name):
             assert np.isfinite(_f(sv)) or _f(sv) in (np.inf, -np.inf) or _f(sv).dtype == bool
 
 
-@pytest.mark.parametrize("name", sorted(KERNEL_ARGS))
+@pytest.mark.parametrize("name", HEAVY)
 def test_float32_follows_dtype_and_matches_float64(name):
-    kern = getattr(reach, name)
-    cols = KERNEL_ARGS[name](_cases_matrix(200, seed=14))
-    out64 = jax.vmap(kern)(*(jnp.asarray(c, jnp.float64) for c in cols))
-    out32 = jax.vmap(kern)(*(jnp.asarray(c, jnp.float32) for c in cols))
+    cols = KERNEL_ARGS[name](_cases_matrix())
+    out64 = _JIT_VMAP[name](*(jnp.asarray(c, jnp.float64) for c in cols))
+    out32 = _JIT_VMAP[name](*(jnp.asarray(c, jnp.float32) for c in cols))
     out64 = out64 if isinstance(out64, tuple) else (out64,)
     out32 = out32 if isinstance(out32, tuple) else (out32,)
     for x64, x32 in zip(out64, out32, strict=True):
@@ -403,7 +406,7 @@ def test_float32_follows_dtype_and_matches_float64(name):
             scale = cols[5]
         else:
             scale = np.abs(x64) + 1e-3
-        err = np.abs(x64 - x32)[both] / np.broadcast_to(scale, x64.shape)[both]
+        err = np.abs(x64[both] - x32[both]) / np.broadcast_to(scale, x64.shape)[both]
         assert np.quantile(err, 0.95) < 1e-4
 
 
@@ -440,21 +443,24 @@ BOUNDARY_CASES = [
 ]
 
 
-@pytest.mark.parametrize("case", BOUNDARY_CASES)
-@pytest.mark.parametrize("name", sorted(KERNEL_ARGS))
-def test_gradients_finite_at_boundaries(name, case):
+@pytest.mark.parametrize("name", HEAVY)
+def test_gradients_finite_at_boundaries(name):
     if name == "is_reachable_kernel":
         return
     kern = getattr(reach, name)
-    args = tuple(jnp.float64(x) for x in KERNEL_ARGS[name](list(case)))
+    cols = KERNEL_ARGS[name](
+        [np.array(c, dtype=np.float64) for c in zip(*BOUNDARY_CASES, strict=True)]
+    )
 
     def total(*a):
         out = kern(*a)
         out = out if isinstance(out, tuple) else (out,)
         return sum(jnp.where(jnp.isfinite(o), o, 0.0) for o in out)
 
-    grads = jax.grad(total, argnums=tuple(range(len(args))))(*args)
-    assert all(np.isfinite(_f(g)) for g in grads), (name, case, grads)
+    grad = jax.vmap(jax.grad(total, argnums=tuple(range(len(cols)))))
+    grads = grad(*(jnp.asarray(c) for c in cols))
+    for g in grads:
+        assert np.all(np.isfinite(_f(g))), (name, g)
 
 
 SMOOTH_POINTS = {
@@ -472,7 +478,7 @@ SMOOTH_POINTS = {
 def test_check_grads_away_from_kinks(name):
     kern = getattr(reach, name)
     args = tuple(jnp.float64(x) for x in SMOOTH_POINTS[name])
-    check_grads(kern, args, order=1, modes=["rev", "fwd"], eps=1e-6, atol=1e-5, rtol=1e-5)
+    check_grads(kern, args, order=1, modes=["rev"], eps=1e-6, atol=1e-5, rtol=1e-5)
 
 
 def test_margin_gradient_points_inward():
