@@ -338,12 +338,13 @@ def slew_profile_kernel(angle, rate, accel, tau, kind: str = "auto"):
     # C
     tau_c_raw = (6.0 * a / b - 7.0 * b) / 5.0
     tau_c = jnp.clip(tau_c_raw, 0.0, b)
-    ok_c = (tau_c_raw >= 0.0) & (tau_c_raw <= b)
+    slack = 64.0 * jnp.finfo(a.dtype).eps * (b + a / b)  # rounding at the range ends
+    ok_c = (tau_c_raw >= -slack) & (tau_c_raw <= b + slack)
     p_c = (tau_c, b - tau_c, 2.0 * b - tau_c, z, ok_c)
     # D
     tau_d = jnp.clip(tau, 0.0, b)
     t1_raw = a / b - 5.0 / 6.0 * tau_d - 7.0 / 6.0 * b
-    p_d = (tau_d, b - tau_d, 2.0 * b - tau_d, jnp.maximum(t1_raw, 0.0), t1_raw >= 0.0)
+    p_d = (tau_d, b - tau_d, 2.0 * b - tau_d, jnp.maximum(t1_raw, 0.0), t1_raw >= -slack)
 
     def pack(code, p):
         t, tt, t0, t1, ok = p
@@ -355,7 +356,8 @@ def slew_profile_kernel(angle, rate, accel, tau, kind: str = "auto"):
         return pack(code, (p_a, p_b, p_c, p_d)[code])
     use_a = a <= thr_b
     use_d = (~use_a) & (t1_raw >= 0.0)
-    out_a, out_c, out_d = pack(0, p_a), pack(2, p_c), pack(3, p_d)
+    # the auto choice always exists (up to rounding): no +inf from the range checks
+    out_a, out_c, out_d = pack(0, p_a), pack(2, p_c[:4] + (True,)), pack(3, p_d[:4] + (True,))
     return tuple(
         jnp.where(use_a, xa, jnp.where(use_d, xd, xc))
         for xa, xc, xd in zip(out_a, out_c, out_d, strict=True)
