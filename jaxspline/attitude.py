@@ -209,14 +209,27 @@ def _mrp_derivs(sig, w, e, j):
 
 
 def _omega_derivs(sig, d1, d2, d3):
-    """ω, ε, ε' from (σ, σ', σ'', σ''')."""
-    w = _omega_from_rate(sig, d1)
+    """ω, ε, ε' from σ and its first three time derivatives [..., 3], closed form.
 
-    def g(s, sd, sdd):
-        return jax.jvp(_omega_from_rate, (s, sd), (sd, sdd))[1]
-
-    e = g(sig, d1, d2)
-    j = jax.jvp(g, (sig, d1, d2), (d1, d2, d3))[1]
+    With p = Λ(σ) = [2g - 1, 2gσ], g = 1/(1 + σ·σ): ω = 2 vec(p̃∘p'),
+    ε = 2 vec(p̃∘p'') (p̃'∘p' = |p'|² is scalar), ε' = 2 vec(p̃'∘p'' + p̃∘p''').
+    A small graph (cheap to compile inside sampled kernels).
+    """
+    u1 = 2.0 * _dot(sig, d1)
+    u2 = 2.0 * (_dot(d1, d1) + _dot(sig, d2))
+    u3 = 2.0 * (3.0 * _dot(d1, d2) + _dot(sig, d3))
+    g0 = 1.0 / (1.0 + _dot(sig, sig))
+    g1 = -u1 * g0**2
+    g2 = -u2 * g0**2 + 2.0 * u1**2 * g0**3
+    g3 = -u3 * g0**2 + 6.0 * u1 * u2 * g0**3 - 6.0 * u1**3 * g0**4
+    p0 = jnp.concatenate([2.0 * g0 - 1.0, 2.0 * g0 * sig], axis=-1)
+    p1 = 2.0 * jnp.concatenate([g1, g1 * sig + g0 * d1], axis=-1)
+    p2 = 2.0 * jnp.concatenate([g2, g2 * sig + 2.0 * g1 * d1 + g0 * d2], axis=-1)
+    p3 = 2.0 * jnp.concatenate([g3, g3 * sig + 3.0 * g2 * d1 + 3.0 * g1 * d2 + g0 * d3], axis=-1)
+    c0, c1 = _qconj(p0), _qconj(p1)
+    w = 2.0 * _qmul(c0, p1)[..., 1:]
+    e = 2.0 * _qmul(c0, p2)[..., 1:]
+    j = 2.0 * (_qmul(c1, p2) + _qmul(c0, p3))[..., 1:]
     return w, e, j
 
 

@@ -399,6 +399,10 @@ def maneuver_check(
         raise ValueError(f"n_samples must be an int >= 2, got {n_samples!r}")
     limits = validate_limits(limits)
     st = _states(q0, w0, e0, j0, q1, w1, e1, j1)
-    lim = [as_float_array(f"limits.{n}", x) for n, x in zip(limits._fields, limits, strict=True)]
-    args = _same(*st, _dur(T), *lim)
+    args = _same(*st, _dur(T))
+    dt = args[0].dtype  # the limits follow the candidate's dtype
+    lim = [
+        as_float_array(f"limits.{n}", x, dt) for n, x in zip(limits._fields, limits, strict=True)
+    ]
+    args = (*args, *lim)
     return ManeuverCheck(*_v_check(n_samples)(*args))
