@@ -359,7 +359,7 @@ def feasible_durations_kernel(a1, b1, a2, b2, rate, accel):
     use_l = lnon & ~(D < e0)
     blo = jnp.where(use_h, h0, jnp.where(use_l, l0, t_min))
     bhi = jnp.where(use_h, h1, jnp.where(use_l, l1, t_min))
-    blo = jnp.maximum(blo, t_min)
+    blo = jnp.where(D == e0, t0, jnp.maximum(blo, t_min))  # isolated T0: block starts there
     none = bhi <= blo
     blo = jnp.where(none, t_min, blo)
     bhi = jnp.where(none, t_min, bhi)
