@@ -126,11 +126,13 @@ def _check(res, label):
     # Ruckig refuses trajectories longer than ~7.6e3 s: those cases are out of its range
     in_range = (res["tm"] < 7000.0) & (res["bhi"] < 7000.0)
     ok_r = np.isfinite(res["r_tmin"]) & np.isfinite(res["r_T"])
-    assert np.all(ok_r | ~in_range)
+    # Ruckig itself occasionally throws on exact edge inputs (e.g. a1 = a2, b1 = b2 = b)
+    n_err = np.sum(~ok_r & in_range)
+    assert n_err <= 0.002 * n
     ok_r &= in_range
     tm, T, r_T, r_tmin = res["tm"], res["T"], res["r_T"], res["r_tmin"]
     # --- min_transfer_time
-    rel = np.abs(tm - r_tmin) / np.maximum(tm, 1e-300 + res["b"] / res["d"] * 1e-9)
+    rel = np.abs(tm - r_tmin) / np.maximum(tm, 1e-6 * res["b"] / res["d"])  # abs near T = 0
     rel = np.where(ok_r, rel, 0.0)
     # D = E0 exactly: T0 is an isolated feasible point before a blocked interval; Ruckig
     # skips it and returns the end of the block (a measure-zero difference)
@@ -149,7 +151,8 @@ def _check(res, label):
     dev_block = np.abs(r_T - res["bhi"]) / res["bhi"]
     dev_block = np.where(inside, dev_block, 0.0)
     print(
-        f"\n[reach/ruckig {label}] n={n} out of Ruckig's range={np.sum(~ok_r)}; "
+        f"\n[reach/ruckig {label}] n={n} out of Ruckig's range={np.sum(~in_range)}, "
+        f"Ruckig errors={n_err}; "
         f"min_transfer_time agree {tmin_agree}/{ok_r.sum()} (rel dev max {rel.max():.2e}, "
         f"99.9% {np.quantile(rel[ok_r], 0.999):.1e}; "
         f"{np.sum(isolated & ok_r)} isolated-T0 cases = Ruckig's block end); "
