@@ -82,6 +82,25 @@ from jaxspline.joins import (  # noqa: E402
     spline7_coeffs,
 )
 # --- retarget (minimum-peak-control retargeting) ---
+from jaxspline.retarget import (  # noqa: E402
+    ARCSEC,
+    AttitudeModel,
+    ChannelControl,
+    DirectResult,
+    RetargetResult,
+    attitude_rhs,
+    body_control,
+    channel_control_eval,
+    channel_state,
+    euler_rates_matrix,
+    min_peak_channel,
+    min_peak_channel_kernel,
+    min_peak_direct,
+    min_peak_linear,
+    min_peak_retarget,
+    orbital_to_body,
+    simulate,
+)
 # --- geometry (orbit, pointing, routes) ---
 # --- engine (screen, sequence, refine, validate, scenario) ---
 from jaxspline.screen import (  # noqa: E402
