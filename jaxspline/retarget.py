@@ -91,7 +91,7 @@ __all__ = [
     "attitude_rhs",
     "simulate",
     "RetargetResult",
-    "retarget",
+    "min_peak_retarget",
     "body_control",
     "DirectResult",
     "min_peak_direct",
@@ -400,7 +400,7 @@ _simulate_jit = jax.jit(_simulate_kernel, static_argnums=5)
 
 
 class RetargetResult(NamedTuple):
-    """Result of :func:`retarget`.
+    """Result of :func:`min_peak_retarget`.
 
     Attributes:
       peak: max_t max_k |u_k(t)| [units of u] of the returned control.
@@ -528,7 +528,7 @@ def _check_model(model):
     check_finite("model.gravity_gradient", model.gravity_gradient)
 
 
-def retarget(
+def min_peak_retarget(
     model: AttitudeModel,
     sigma_a,
     omega_a,
@@ -658,7 +658,7 @@ def min_peak_direct(
     lbfgs_iters=150,
     tol=ARCSEC,
 ):
-    """Direct numerical minimum-peak control (independent reference for :func:`retarget`).
+    """Direct numerical minimum-peak control (independent reference for :func:`min_peak_retarget`).
 
     The control is piecewise constant on ``n_intervals`` equal intervals, parameterised as
     ``u = s·sin(v)`` so that |u_k| <= s exactly (ν = ∞). For a trial bound s the end-state
@@ -668,7 +668,7 @@ def min_peak_direct(
     tol [rad/s]. A failed inner solve counts as infeasible, so ``peak`` errs high.
     Slow (seconds per case): a checking tool, not a kernel. Single case only.
 
-    Args: as :func:`retarget` (unbatched (3,) states, scalar T [s]); peak_hi [units of u]
+    Args: as :func:`min_peak_retarget` (unbatched (3,) states, scalar T [s]); peak_hi [units of u]
       a feasible upper bound (e.g. 2× the linear peak). Returns :class:`DirectResult`.
     """
     import optax

@@ -318,7 +318,7 @@ def test_simulate_matches_reference():
 
 def test_retarget_hits_targets_and_matches_loop():
     sa, wa, sb, wb, T = _nl_cases(6, 10)
-    res = R.retarget(MODEL, sa, wa, sb, wb, T)
+    res = R.min_peak_retarget(MODEL, sa, wa, sb, wb, T)
     assert bool(np.all(res.converged))
     assert np.all(np.asarray(res.iterations) <= 20)
     for i in range(6):
@@ -330,7 +330,7 @@ def test_retarget_hits_targets_and_matches_loop():
         t = np.linspace(0, T[i], 4001)
         u = np.asarray(R.body_control(MODEL, ctrl, jnp.asarray(t)))
         np.testing.assert_allclose(np.max(np.abs(u)), float(res.peak[i]), rtol=1e-12)
-    one = R.retarget(MODEL, sa[2], wa[2], sb[2], wb[2], T[2])
+    one = R.min_peak_retarget(MODEL, sa[2], wa[2], sb[2], wb[2], T[2])
     np.testing.assert_allclose(float(one.peak), float(res.peak[2]), rtol=1e-12)
     assert int(one.iterations) == int(res.iterations[2])
 
@@ -341,12 +341,12 @@ def test_retarget_linear_limit_and_newton():
     model0 = R.AttitudeModel(inertia=np.ones(3), omega0=0.0, gravity_gradient=0.0)
     sa = np.array([0.0, 0.0, 0.0])
     sb = np.array([0.3, 0.0, 0.0])  # pure pitch: N' = I along the way, no coupling
-    res = R.retarget(model0, sa, np.zeros(3), sb, np.zeros(3), 20.0)
+    res = R.min_peak_retarget(model0, sa, np.zeros(3), sb, np.zeros(3), 20.0)
     assert int(res.iterations) == 0
     np.testing.assert_allclose(float(res.peak), 4 * 0.3 / 400, rtol=1e-12)
     sa, wa, sb, wb, T = _nl_cases(1, 11)
-    p = R.retarget(MODEL, sa[0], wa[0], sb[0], wb[0], T[0], method="picard")
-    n = R.retarget(MODEL, sa[0], wa[0], sb[0], wb[0], T[0], method="newton")
+    p = R.min_peak_retarget(MODEL, sa[0], wa[0], sb[0], wb[0], T[0], method="picard")
+    n = R.min_peak_retarget(MODEL, sa[0], wa[0], sb[0], wb[0], T[0], method="newton")
     assert bool(p.converged) and bool(n.converged)
     assert int(n.iterations) <= int(p.iterations)
     np.testing.assert_allclose(float(n.peak), float(p.peak), rtol=1e-4)
@@ -355,8 +355,8 @@ def test_retarget_linear_limit_and_newton():
 def test_retarget_float32():
     sa, wa, sb, wb, T = _nl_cases(2, 12)
     f = [np.asarray(x, np.float32) for x in (sa, wa, sb, wb, T)]
-    r32 = R.retarget(MODEL, *f, tol=2 * AS, rate_tol=2 * AS)
-    r64 = R.retarget(MODEL, sa, wa, sb, wb, T)
+    r32 = R.min_peak_retarget(MODEL, *f, tol=2 * AS, rate_tol=2 * AS)
+    r64 = R.min_peak_retarget(MODEL, sa, wa, sb, wb, T)
     assert r32.peak.dtype == jnp.float32
     np.testing.assert_allclose(np.asarray(r32.peak), np.asarray(r64.peak), rtol=1e-3)
 
@@ -386,14 +386,14 @@ def test_retarget_value_errors(kw, match):
     )
     args.update(kw)
     with pytest.raises(ValueError, match=match):
-        R.retarget(**args)
+        R.min_peak_retarget(**args)
 
 
 @pytest.mark.slow
 def test_direct_optimisation_not_much_better():
     """optax direct min-peak (u = s·sin v, L-BFGS + bisection) vs successive approximations."""
     sa, wa, sb, wb, T = _nl_cases(1, 13)
-    res = R.retarget(MODEL, sa[0], wa[0], sb[0], wb[0], T[0])
+    res = R.min_peak_retarget(MODEL, sa[0], wa[0], sb[0], wb[0], T[0])
     d = R.min_peak_direct(
         MODEL,
         sa[0],
