@@ -67,12 +67,17 @@ __all__ = [
 ]
 
 
+def _weak(x):
+    """Python scalars and weakly typed arrays do not set the result dtype."""
+    return isinstance(x, int | float) or bool(getattr(x, "weak_type", False))
+
+
 def _pos(x):
     return jnp.where(x > 0, x, jnp.ones_like(x))
 
 
 def _prep(**named):
-    dt = float_dtype_of(*named.values())
+    dt = float_dtype_of(*[v for v in named.values() if not _weak(v)])
     return broadcast_named(**{k: as_float_array(k, v, dt) for k, v in named.items()})
 
 
@@ -159,7 +164,9 @@ def tau_for_tolerance_kernel(tolerance, freq, damping, rate, accel, iters: int =
     and ``K = ln(eps/(A nu^3)) - 2 c omega/eps``. h increases on (0, 1/c), so the
     smallest root (the fastest admissible profile D, whose duration grows with
     tau) is found by bisection in log tau on (0, min(omega/eps, 1/c)], followed
-    by one Newton step that carries the exact implicit-function gradient.
+    by one Newton step that carries the exact implicit-function gradient. (For
+    strong damping the root can be astronomically small, ~exp(K): any ramp meets
+    the tolerance.)
     For zeta = 0: ``tau* = eps/(A nu^3)``.
 
     Args:
@@ -182,8 +189,8 @@ def tau_for_tolerance_kernel(tolerance, freq, damping, rate, accel, iters: int =
         return jnp.log(tau) - c * tau - k
 
     exists = h(hi) >= 0.0
-    lo_log = jnp.log(hi) - 80.0
     hi_log = jnp.log(hi)
+    lo_log = jnp.minimum(k, hi_log) - 5.0  # h(exp(k - 5)) < 0: a bracket
 
     def body(_, lh):
         lo, up = lh
@@ -192,8 +199,9 @@ def tau_for_tolerance_kernel(tolerance, freq, damping, rate, accel, iters: int =
         return jnp.where(pos, lo, mid), jnp.where(pos, mid, up)
 
     lo, up = jax.lax.fori_loop(0, iters, body, (lo_log, hi_log))
-    tau0 = jax.lax.stop_gradient(jnp.exp(up))
-    tau1 = tau0 - h(tau0) / (1.0 / tau0 - c)  # Newton step: value ~unchanged, exact gradient
+    tau0 = jax.lax.stop_gradient(jnp.maximum(jnp.exp(up), jnp.finfo(up.dtype).tiny))
+    # one Newton step: value ~unchanged (h concave: never past 0), exact implicit gradient
+    tau1 = jnp.maximum(tau0 - h(tau0) / (1.0 / tau0 - c), 0.5 * tau0)
     return jnp.where(exists, tau1, jnp.full_like(tau1, jnp.inf))
 
 
@@ -332,11 +340,11 @@ def flexible_body_rate(
             raise ValueError(
                 f"inertia_ratio must be < 1 for ratio_of='total', got {inertia_ratio!r}"
             )
-    r = jnp.asarray(inertia_ratio)
+    r = inertia_ratio
     k = r if ratio_of == "body" else r / (1.0 - r)
-    nu, zeta = jnp.asarray(freq), jnp.asarray(damping)
+    nu, zeta = freq, damping
     if freq_convention == "constrained":
-        nu, zeta = nu * jnp.sqrt(1.0 + k), zeta * jnp.sqrt(1.0 + k)
+        nu, zeta = nu * (1.0 + k) ** 0.5, zeta * (1.0 + k) ** 0.5
         if is_concrete(zeta) and (np.asarray(zeta) >= 1).any():
             raise ValueError(f"damping is >= 1 after the constrained->free conversion: {damping!r}")
     args = _prep(
