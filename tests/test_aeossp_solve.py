@@ -218,10 +218,14 @@ def test_solve_small_case_valid_by_checker(small_case):
 def test_solve_deterministic_for_seed(small_case):
     from jaxspline.aeossp.solve import solve_case
 
-    a = solve_case(small_case, time_limit=60.0, progress=False, seed=3, max_iters=150)
-    b = solve_case(small_case, time_limit=60.0, progress=False, seed=3, max_iters=150)
+    kw = dict(time_limit=60.0, progress=False, seed=3, max_iters=150, return_stats=True)
+    # exercise the optional chain moves and the DP repair too
+    kw.update(chain_p=0.5, dp_p=0.5)
+    a, sa = solve_case(small_case, **kw)
+    b, _ = solve_case(small_case, **kw)
     assert a == b
     assert len(a["actions"]) > 0
+    assert sa["dropped"] == 0  # the internal re-check found nothing to drop
 
 
 def test_solve_rejects_bad_time_limit(small_case):

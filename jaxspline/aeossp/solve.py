@@ -11,11 +11,15 @@ Pipeline (``solve_case``):
    to predecessor and successor (or from nadir at horizon start for a first
    action), and the conservative battery profile (``battery``);
 3. large-neighbourhood search until the time budget: destroy a window of one
-   satellite's timeline (around a candidate of a random unscheduled task, weight
-   proportional, or at random), force that candidate in, then greedily re-insert the
-   removed tasks anywhere (relocation to other satellites / starts) together with
-   the unscheduled tasks that have candidates in the window; keep the result if
-   (weight, count, -TAT) does not get worse, else undo;
+   satellite's timeline (80 %: around a candidate of an unscheduled task picked
+   with probability proportional to its weight, that candidate then forced in;
+   20 %: around a random scheduled action), then greedily re-insert the removed
+   tasks anywhere (relocation to other satellites / starts) together with the
+   unscheduled tasks that have candidates in the window, heaviest first with 20 %
+   noise; threshold acceptance on the total weight (a step may lose up to
+   ``temp * U(0,1)`` weight early on, nothing at the end), the best plan is kept.
+   Options: a second window on another satellite of a removed task (chain moves)
+   and an exact-transition beam DP over the window instead of greedy repair;
 4. a TAT pass moves each action to the earliest feasible candidate of its task;
 5. an independent internal re-check (geometry at every grid instant, slews,
    battery, recomputed from scratch) drops anything that fails, so the returned
@@ -59,6 +63,9 @@ from jaxspline.aeossp.geometry import GridGeometry, ecef_to_teme, propagate_grid
 __all__ = ["Margins", "solve_case", "verify_plan"]
 
 
+_PRIO_SLEW_S = 30.0  # typical slew + settling time used in the greedy priority
+
+
 @dataclass(frozen=True)
 class Margins:
     """Safety margins of the solver (see module docstring)."""
@@ -80,6 +87,7 @@ class _Problem:
     margins: Margins
     step: float
     weight: list
+    prio: list  # weight per second of timeline (duration + a typical slew)
     release: list  # grid seconds
     c_task: list
     c_sat: list
@@ -97,7 +105,7 @@ class _Problem:
     settle: list
 
 
-def _prepare(case, margins: Margins) -> _Problem:
+def _prepare(case, margins: Margins, thin: int = 2) -> _Problem:
     geo = propagate_grid(case)
     sp = sat_params(case)
     cands = build_candidates(
@@ -107,6 +115,7 @@ def _prepare(case, margins: Margins) -> _Problem:
         off_nadir_margin_deg=margins.off_nadir_deg,
         horizon_margin=margins.horizon,
         gap_margin_s=margins.gap_s,
+        thin=thin,
     )
     bat = BatteryModel(geo.sunlit, sp, geo.step_s, margins.battery_wh, margins.shadow_guard_steps)
     tt = case.task_table()
@@ -127,6 +136,7 @@ def _prepare(case, margins: Margins) -> _Problem:
         margins=margins,
         step=geo.step_s,
         weight=tt["weight"].tolist(),
+        prio=(tt["weight"] / (tt["duration_s"] + _PRIO_SLEW_S)).tolist(),
         release=tt["release_s"].tolist(),
         c_task=cands.task.tolist(),
         c_sat=cands.sat.tolist(),
@@ -165,10 +175,24 @@ class _Plan:
         self.tl_s = [[] for _ in range(n_s)]
         self.assigned = [-1] * len(self.pb.case.tasks)
         self.level_min = [None] * n_s
+        self.debt = [0.0] * n_s
+        self.cache = {}
+        self.n_c = len(self.pb.cands)
 
     # ---------------------------------------------------------------- geometry
     def need(self, i: int, j: int) -> float:
         """Required gap [s] between the end of candidate i and the start of j (same sat)."""
+        key = i * self.n_c + j
+        v = self.cache.get(key)
+        if v is not None:
+            return v
+        if len(self.cache) > 3_000_000:
+            self.cache.clear()
+        v = self._need(i, j)
+        self.cache[key] = v
+        return v
+
+    def _need(self, i: int, j: int) -> float:
         pb = self.pb
         a, b = pb.c_le[i], pb.c_ls[j]
         cx = a[1] * b[2] - a[2] * b[1]
@@ -186,16 +210,11 @@ class _Plan:
         return (round(self.W, 9), self.N, -round(self.tat, 6))
 
     # ---------------------------------------------------------------- battery
-    def _maneuvers(self, k):
-        pb = self.pb
-        tl = self.tl[k]
-        man = []
-        prev = -1
-        for c in tl:
-            man.append(pb.c_ng[c] if prev < 0 else self.need(prev, c))
-            prev = c
-        return man
-
+    # level_min[k] is the exact suffix minimum of the battery level of a past state of
+    # the timeline and debt[k] an upper bound of the extra load energy [Wh] added since
+    # (imaging + slew of inserted actions, longer maneuvers after removals): the clamped
+    # battery recursion is monotone in its inputs, so level_min - debt is a lower bound
+    # of the current suffix minimum.
     def _profile(self, k, extra=None):
         pb = self.pb
         tl = list(self.tl[k])
@@ -214,7 +233,21 @@ class _Plan:
         if self.level_min[k] is None:
             lev = self._profile(k)
             self.level_min[k] = np.minimum.accumulate(lev[::-1])[::-1]
+            self.debt[k] = 0.0
         return self.level_min[k]
+
+    def _battery_ok(self, k, c, k0, de):
+        smin = self._suffix_min(k)
+        margin = self.pb.battery.margin_wh
+        if smin[k0] - self.debt[k] - de >= margin:
+            return True
+        if self.debt[k] > 0.0:  # refresh the exact profile, then test again
+            self.level_min[k] = None
+            smin = self._suffix_min(k)
+            if smin[k0] - de >= margin:
+                return True
+        lev = self._profile(k, extra=c)
+        return bool(lev.min() >= margin)
 
     # ---------------------------------------------------------------- moves
     def check(self, c: int):
@@ -250,25 +283,30 @@ class _Plan:
             n_old = pb.c_ng[q] if p < 0 else self.need(p, q)
         else:
             n_out = n_old = 0.0
-        # battery: fast bound, then exact profile
-        smin = self._suffix_min(k)
+        # battery: lower bound first, exact profile only when it is tight
         k0 = max(0, int(math.floor(s - n_in / step)))
-        de = (pb.sp.imaging[k] * (e - s) * step + pb.sp.slew[k] * (n_in + n_out + step)) / 3600.0
-        if smin[k0] - de < pb.battery.margin_wh:
-            lev = self._profile(k, extra=c)
-            if lev.min() < pb.battery.margin_wh:
-                return None
+        if not self._battery_ok(k, c, k0, self._energy(k, c, n_in, n_out)):
+            return None
         return n_in + (e - s) * step + n_out - n_old
+
+    def _energy(self, k, c, n_in, n_out):
+        """Upper bound [Wh] of the extra load of inserting c (imaging + both slews)."""
+        pb = self.pb
+        img = pb.sp.imaging[k] * (pb.c_end[c] - pb.c_start[c]) * pb.step
+        return (img + pb.sp.slew[k] * (n_in + n_out + 2.0 * pb.step)) / 3600.0
 
     def insert(self, c: int):
         pb = self.pb
         k = pb.c_sat[c]
         t = pb.c_task[c]
         pos = bisect.bisect_left(self.tl_s[k], pb.c_start[c])
-        self.tl[k].insert(pos, c)
+        tl = self.tl[k]
+        n_in = pb.c_ng[c] if pos == 0 else self.need(tl[pos - 1], c)
+        n_out = self.need(c, tl[pos]) if pos < len(tl) else 0.0
+        self.debt[k] += self._energy(k, c, n_in, n_out)
+        tl.insert(pos, c)
         self.tl_s[k].insert(pos, pb.c_start[c])
         self.assigned[t] = c
-        self.level_min[k] = None
         self.W += pb.weight[t]
         self.N += 1
         self.tat += pb.c_end[c] * pb.step - pb.release[t]
@@ -278,29 +316,45 @@ class _Plan:
         pb = self.pb
         k = pb.c_sat[c]
         t = pb.c_task[c]
-        pos = self.tl[k].index(c)
-        del self.tl[k][pos]
+        tl = self.tl[k]
+        pos = tl.index(c)
+        del tl[pos]
         del self.tl_s[k][pos]
+        if pos < len(tl):  # the successor's maneuver may get longer
+            q = tl[pos]
+            n_new = pb.c_ng[q] if pos == 0 else self.need(tl[pos - 1], q)
+            self.debt[k] += pb.sp.slew[k] * (n_new + 2.0 * pb.step) / 3600.0
         self.assigned[t] = -1
-        self.level_min[k] = None
         self.W -= pb.weight[t]
         self.N -= 1
         self.tat -= pb.c_end[c] * pb.step - pb.release[t]
         self.log.append(("r", c))
 
-    def removal_ok(self, k: int) -> bool:
-        """After removals on sat k: every transition and the battery still feasible."""
+    def removal_ok(self, k: int, pos: int) -> bool:
+        """After removing a contiguous block at index ``pos`` of sat k's timeline: the
+        new transition into ``tl[pos]`` and the battery are still feasible."""
         pb = self.pb
-        prev = -1
-        step = pb.step
-        for c in self.tl[k]:
-            if prev < 0:
-                if pb.c_start[c] * step < pb.c_ng[c]:
+        tl = self.tl[k]
+        if pos < len(tl):
+            q = tl[pos]
+            if pos == 0:
+                if pb.c_start[q] * pb.step < pb.c_ng[q]:
                     return False
-            elif (pb.c_start[c] - pb.c_end[prev]) * step < self.need(prev, c):
+            elif (pb.c_start[q] - pb.c_end[tl[pos - 1]]) * pb.step < self.need(tl[pos - 1], q):
                 return False
-            prev = c
-        return bool(self._suffix_min(k)[0] >= pb.battery.margin_wh)
+        margin = pb.battery.margin_wh
+        if self._suffix_min(k)[0] - self.debt[k] >= margin:
+            return True
+        self.level_min[k] = None
+        return bool(self._suffix_min(k)[0] >= margin)
+
+    def battery_ok(self, k: int) -> bool:
+        """Battery of sat k (current timeline) stays above the margin."""
+        margin = self.pb.battery.margin_wh
+        if self._suffix_min(k)[0] - self.debt[k] >= margin:
+            return True
+        self.level_min[k] = None
+        return bool(self._suffix_min(k)[0] >= margin)
 
     def undo_to(self, mark: int):
         while len(self.log) > mark:
@@ -349,10 +403,110 @@ def _greedy(plan: _Plan, deadline: float):
     plan.log.clear()
 
 
+def _dp_window(plan: _Plan, k: int, lo: float, hi: float, beam: int = 4) -> list:
+    """Best sequence on sat k inside the (emptied) window [lo, hi] by a beam DP.
+
+    Nodes are sat k's candidates with start in [lo, hi] of unscheduled tasks, in start
+    order; a label is (weight sum, task bitmask, parent); a node keeps its ``beam`` best
+    labels with distinct masks, so a task is never used twice on a path. Transitions
+    (incl. the fixed neighbours left and right of the window) are exact slew checks.
+    Returns the chosen candidate ids (time order), without inserting them.
+    """
+    pb = plan.pb
+    step = pb.step
+    tl, starts = plan.tl[k], plan.tl_s[k]
+    pos = bisect.bisect_left(starts, lo)
+    p = tl[pos - 1] if pos > 0 else -1
+    q = tl[pos] if pos < len(tl) else -1
+    t_lo = pb.c_end[p] if p >= 0 else 0
+    t_hi = pb.c_start[q] if q >= 0 else 1 << 60
+    a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], max(lo, t_lo))
+    b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], min(hi, t_hi))
+    assigned, c_task, c_start, c_end = plan.assigned, pb.c_task, pb.c_start, pb.c_end
+    cs = [c for c in range(a, b) if assigned[c_task[c]] < 0 and c_end[c] <= t_hi]
+    if not cs:
+        return []
+    bits: dict[int, int] = {}
+    for c in cs:
+        bits.setdefault(c_task[c], 1 << len(bits))
+    need = plan.need
+    weight = pb.weight
+    labels: list[list] = []
+    best_val, best_ref = 0.0, None
+    for jj, j in enumerate(cs):
+        sj = c_start[j]
+        bj = bits[c_task[j]]
+        wj = weight[c_task[j]] + 1e-4
+        new = []
+        if p < 0:
+            if sj * step >= pb.c_ng[j]:
+                new.append((wj, bj, None))
+        elif (sj - c_end[p]) * step >= need(p, j):
+            new.append((wj, bj, None))
+        for ii in range(jj):
+            li = labels[ii]
+            if not li:
+                continue
+            i = cs[ii]
+            gap = sj - c_end[i]
+            if gap < 0 or gap * step < need(i, j):
+                continue
+            for idx, (v, m, _) in enumerate(li):
+                if not m & bj:
+                    new.append((v + wj, m | bj, (ii, idx)))
+        if len(new) > 1:
+            new.sort(key=lambda x: -x[0])
+            kept, seen = [], set()
+            for lab in new:
+                if lab[1] in seen:
+                    continue
+                seen.add(lab[1])
+                kept.append(lab)
+                if len(kept) >= beam:
+                    break
+            new = kept
+        labels.append(new)
+        if new and (q < 0 or (c_start[q] - c_end[j]) * step >= need(j, q)):
+            if new[0][0] > best_val:
+                best_val, best_ref = new[0][0], (jj, 0)
+    path = []
+    ref = best_ref
+    while ref is not None:
+        jj, idx = ref
+        path.append(cs[jj])
+        ref = labels[jj][idx][2]
+    return path[::-1]
+
+
+def _destroy(plan: _Plan, k: int, lo: float, hi: float):
+    """Remove sat k's actions touching [lo, hi] (grid units); None if that is infeasible."""
+    pb = plan.pb
+    removed = [c for c in plan.tl[k] if pb.c_end[c] >= lo and pb.c_start[c] <= hi]
+    if not removed:
+        return removed
+    pos0 = plan.tl[k].index(removed[0])
+    for c in removed:
+        plan.remove(c)
+    return removed if plan.removal_ok(k, pos0) else None
+
+
 def _lns(
-    plan: _Plan, deadline: float, rng: random.Random, max_iters: int | None, progress, t0: float
+    plan: _Plan,
+    deadline: float,
+    rng: random.Random,
+    max_iters: int | None,
+    progress,
+    t0: float,
+    chain_p: float = 0.5,
+    temp: float = 0.0,
+    dp_p: float = 0.5,
+    beam: int = 4,
 ):
     pb = plan.pb
+    dp_extra = 60.0 / pb.step
+    t_start = time.monotonic()
+    best_key = (plan.W, plan.N)
+    best = list(plan.assigned)
     step = pb.step
     n_t = len(pb.weight)
     has = [t for t in range(n_t) if pb.task_cands[t]]
@@ -387,33 +541,69 @@ def _lns(
             c0 = rng.choice(plan.tl[k])
             rad = rng.choice((60, 120, 240)) / step
             lo, hi = pb.c_start[c0] - rad, pb.c_end[c0] + rad
-        removed = [c for c in plan.tl[k] if pb.c_end[c] >= lo and pb.c_start[c] <= hi]
-        for c in removed:
-            plan.remove(c)
-        if removed and not plan.removal_ok(k):
+        use_dp = rng.random() < dp_p
+        if use_dp:
+            lo, hi = lo - dp_extra, hi + dp_extra
+        windows = [(k, lo, hi)]
+        removed = _destroy(plan, k, lo, hi)
+        if removed is None:
             plan.undo_to(mark)
             continue
-        if forced >= 0 and plan.check(forced) is not None:
+        if removed and rng.random() < chain_p:
+            # chain move: also open a window on another satellite of a removed task
+            r = rng.choice(removed)
+            alt = [c for c in pb.task_cands[pb.c_task[r]] if pb.c_sat[c] != k]
+            if alt:
+                c2 = rng.choice(alt)
+                k2 = pb.c_sat[c2]
+                rad2 = rng.choice((30, 60, 120)) / step
+                lo2, hi2 = pb.c_start[c2] - rad2, pb.c_end[c2] + rad2
+                rem2 = _destroy(plan, k2, lo2, hi2)
+                if rem2 is None:
+                    plan.undo_to(mark)
+                    continue
+                removed = removed + rem2
+                windows.append((k2, lo2, hi2))
+        if use_dp:
+            for c in _dp_window(plan, k, lo, hi, beam):
+                plan.insert(c)
+            if not plan.battery_ok(k):
+                plan.undo_to(mark)
+                continue
+        elif forced >= 0 and plan.check(forced) is not None:
             plan.insert(forced)
-        # tasks to re-insert: removed ones + unscheduled with candidates in the window on sat k
-        a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], int(lo) - 400 / step)
-        b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], int(hi) + 1)
+        # tasks to re-insert: removed ones + unscheduled with candidates in the windows
         pool = {pb.c_task[c] for c in removed}
-        for c in range(a, b):
-            t = pb.c_task[c]
-            if plan.assigned[t] < 0:
-                pool.add(t)
-        pool = sorted(pool, key=lambda t: (-pb.weight[t] * (1.0 + 0.2 * rng.random()), t))
+        for kw, lw, hw in windows:
+            a = pb.sat_lo[kw] + bisect.bisect_left(pb.sat_starts[kw], int(lw) - 400 / step)
+            b = pb.sat_lo[kw] + bisect.bisect_right(pb.sat_starts[kw], int(hw) + 1)
+            for c in range(a, b):
+                t = pb.c_task[c]
+                if plan.assigned[t] < 0:
+                    pool.add(t)
+        pool = sorted(pool, key=lambda t: (-pb.prio[t] * (1.0 + 0.2 * rng.random()), t))
         for t in pool:
             if plan.assigned[t] < 0:
                 plan.best_insert(t, rng=rng)
         new = plan.score()
-        if new < base:
+        if temp > 0.0:
+            if max_iters is not None:
+                frac = it / max_iters
+            else:
+                frac = (time.monotonic() - t_start) / max(1e-9, deadline - t_start)
+            thr = temp * max(0.0, 1.0 - frac)
+            ok = plan.W >= base[0] - thr * rng.random() - 1e-9
+        else:
+            ok = new >= base
+        if not ok:
             plan.undo_to(mark)
         else:
-            if new > base:
-                accepted += 1
+            if new != base:
                 un = [t for t in has if plan.assigned[t] < 0]
+            if (plan.W, plan.N) > best_key:
+                accepted += 1
+                best_key = (plan.W, plan.N)
+                best = list(plan.assigned)
             plan.log.clear()
         if progress and time.monotonic() - last_print > 5.0:
             last_print = time.monotonic()
@@ -424,7 +614,22 @@ def _lns(
                 file=sys.stderr,
                 flush=True,
             )
+    if (plan.W, plan.N) < best_key:
+        _restore(plan, best)
     return it
+
+
+def _restore(plan: _Plan, assigned):
+    """Reset ``plan`` to the given task -> candidate assignment."""
+    pb = plan.pb
+    for k in range(len(plan.tl)):
+        plan.tl[k], plan.tl_s[k] = [], []
+        plan.level_min[k], plan.debt[k] = None, 0.0
+    plan.assigned = [-1] * len(pb.weight)
+    plan.W, plan.N, plan.tat = 0.0, 0, 0.0
+    for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.c_start[c]):
+        plan.insert(c)
+    plan.log.clear()
 
 
 def _tat_pass(plan: _Plan, deadline: float):
@@ -438,8 +643,9 @@ def _tat_pass(plan: _Plan, deadline: float):
         mark = len(plan.log)
         base = plan.score()
         k = pb.c_sat[c]
+        pos0 = plan.tl[k].index(c)
         plan.remove(c)
-        if not plan.removal_ok(k):
+        if not plan.removal_ok(k, pos0):
             plan.undo_to(mark)
             continue
         best = -1
@@ -534,6 +740,11 @@ def solve_case(
     max_iters: int | None = None,
     margins: Margins | None = None,
     return_stats: bool = False,
+    thin: int = 2,
+    chain_p: float = 0.0,
+    temp: float = 1.0,
+    dp_p: float = 0.0,
+    beam: int = 4,
 ):
     """Solve one aeossp_standard case; returns the solution ``{"actions": [...]}``.
 
@@ -545,6 +756,15 @@ def solve_case(
       max_iters: optional cap on search iterations.
       margins: safety margins (default :class:`Margins`).
       return_stats: also return a dict of internal statistics.
+      thin: keep every ``thin``-th start of each run of valid starts (plus its last).
+      chain_p: probability that a search step also opens a window on a second
+        satellite (to relocate a removed task); 0 by default (no gain measured).
+      temp: threshold-acceptance start value [weight units]: a step may lose up to
+        ``temp * U(0,1) * (1 - progress)`` weight; the best plan is kept.
+      dp_p: probability that a step repairs its window by the beam DP
+        :func:`_dp_window` instead of greedy insertion; 0 by default (at 60 s the
+        cheaper greedy repair's extra iterations were worth as much).
+      beam: labels kept per node in the DP.
     Returns:
       the solution dict ``{"actions": [...]}`` (observation actions, grid-aligned
       ISO times); with ``return_stats`` a tuple ``(solution, stats)``.
@@ -559,7 +779,8 @@ def solve_case(
         raise ValueError(f"time_limit: must be > 0, got {time_limit!r}")
     margins = margins or Margins()
     case = load_case(case_dir) if not hasattr(case_dir, "tasks") else case_dir
-    reserve = min(0.2 * time_limit, max(1.5, 0.04 * time_limit))
+    # leave room for process start-up, JSON output and the final re-check
+    reserve = min(0.25 * time_limit, 2.0 + 0.05 * time_limit)
     deadline = t0 + time_limit - reserve
 
     def say(msg):
@@ -570,16 +791,17 @@ def solve_case(
                 flush=True,
             )
 
-    pb = _prepare(case, margins)
+    pb = _prepare(case, margins, thin)
     n_with = sum(1 for x in pb.task_cands if x)
     say(f"{len(pb.cands)} candidates for {n_with}/{len(case.tasks)} tasks")
     plan = _Plan(pb)
     _greedy(plan, deadline)
     tw = sum(pb.weight) or 1.0
+    greedy_wcr = plan.W / tw
     say(f"greedy WCR={plan.W / tw:.4f} CR={plan.N / max(1, len(case.tasks)):.4f}")
     rng = random.Random(seed)
     tat_budget = min(2.0, 0.05 * time_limit)
-    its = _lns(plan, deadline - tat_budget, rng, max_iters, progress, t0)
+    its = _lns(plan, deadline - tat_budget, rng, max_iters, progress, t0, chain_p, temp, dp_p, beam)
     _tat_pass(plan, deadline)
     say(f"lns {its} iterations: WCR={plan.W / tw:.4f} CR={plan.N / max(1, len(case.tasks)):.4f}")
 
@@ -614,6 +836,7 @@ def solve_case(
         "wcr": wsum / tw,
         "cr": len(acts) / max(1, len(case.tasks)),
         "n_candidates": len(pb.cands),
+        "greedy_wcr": greedy_wcr,
         "lns_iterations": its,
         "dropped": dropped,
         "wall_s": time.monotonic() - t0,
