@@ -448,9 +448,9 @@ def test_gradients_finite_at_boundaries(name):
     if name == "is_reachable_kernel":
         return
     kern = getattr(reach, name)
-    cols = KERNEL_ARGS[name](
-        [np.array(c, dtype=np.float64) for c in zip(*BOUNDARY_CASES, strict=True)]
-    )
+    # the boundary table plus random cases (a2 partly outside [lo, hi])
+    table = np.concatenate([np.array(BOUNDARY_CASES).T, np.array(_cases_matrix())], axis=1)
+    cols = KERNEL_ARGS[name](list(table))
 
     def total(*a):
         out = kern(*a)
@@ -517,3 +517,16 @@ def test_value_errors(call, match):
 def test_t_zero_allowed():
     assert bool(is_reachable(0.3, 0.1, 0.3, 0.1, 0.0, LIM))
     assert not bool(is_reachable(0.3, 0.1, 0.3, 0.2, 0.0, LIM))
+
+
+@pytest.mark.slow
+def test_reach_figures(tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    script = Path(__file__).resolve().parents[1] / "scripts" / "reach_figures.py"
+    spec = importlib.util.spec_from_file_location("reach_figures", script)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    paths = mod.make_reach_figures(tmp_path)
+    assert len(paths) == 8 and all(p.stat().st_size > 10_000 for p in paths)
