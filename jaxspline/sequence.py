@@ -104,40 +104,46 @@ def _dp(options: RouteOptions, transitions: Transitions, width, seed, max_states
     parent = [None] * n  # per node: int64 [s, 2] (pred node, pred slot), -1 for a start
     total_states = 0
     best = (-np.inf, -1, -1)
+    # random 64-bit weights: a row hash of the visited set for fast deduplication in
+    # beam mode (collision probability ~ states^2 / 2^64); the exact mode compares rows
+    weights = rng.integers(1, 2**63 - 1, size=nb, dtype=np.uint64)
     for j in nodes:
         r = rdense[j]
         byte, bit = r >> 3, np.uint8(1 << (r & 7))
         preds = src[indptr[j] : indptr[j + 1]]
-        preds = preds[[vals[i] is not None for i in preds]] if preds.size else preds
-        cv = [np.array([value[j]])]
+        preds = [i for i in preds.tolist() if vals[i] is not None]
         start_mask = np.zeros((1, nb), np.uint8)
         start_mask[0, byte] |= bit
-        cm = [start_mask]
-        cp = [np.array([[-1, -1]], np.int64)]
-        for i in preds:
-            free = (masks[i][:, byte] & bit) == 0
-            if not free.any():
-                continue
-            slots = np.flatnonzero(free)
-            cv.append(vals[i][slots] + value[j])
-            m = masks[i][slots].copy()
-            m[:, byte] |= bit
-            cm.append(m)
-            cp.append(np.stack([np.full(slots.size, i), slots], axis=1))
-        v = np.concatenate(cv)
-        m = np.concatenate(cm)
-        p = np.concatenate(cp)
+        if preds:
+            pv = np.concatenate([vals[i] for i in preds])
+            pm = np.concatenate([masks[i] for i in preds])
+            pnode = np.repeat(preds, [vals[i].size for i in preds])
+            pslot = np.concatenate([np.arange(vals[i].size) for i in preds])
+            free = (pm[:, byte] & bit) == 0
+            pm = pm[free]
+            pm[:, byte] |= bit
+            v = np.concatenate([[value[j]], pv[free] + value[j]])
+            m = np.concatenate([start_mask, pm])
+            p = np.concatenate([[[-1, -1]], np.stack([pnode[free], pslot[free]], axis=1)]).astype(
+                np.int64
+            )
+        else:
+            v, m, p = np.array([value[j]]), start_mask, np.array([[-1, -1]], np.int64)
         key = rng.random(v.size)
         # best first: value descending, then the seeded random key
         o = np.lexsort((key, -v))
         v, m, p = v[o], m[o], p[o]
         # dedupe identical visited sets, keeping the first (best) occurrence
         if v.size > 1:
-            _, first = np.unique(m, axis=0, return_index=True)
+            if width is None:
+                _, first = np.unique(m, axis=0, return_index=True)
+            else:
+                h = (m.astype(np.uint64) * weights[None, :]).sum(axis=1, dtype=np.uint64)
+                _, first = np.unique(h, return_index=True)
             first = np.sort(first)
+            if width is not None:
+                first = first[:width]
             v, m, p = v[first], m[first], p[first]
-        if width is not None:
-            v, m, p = v[:width], m[:width], p[:width]
         vals[j], masks[j], parent[j] = v, m, p
         total_states += v.size
         if max_states is not None and total_states > max_states:

@@ -308,3 +308,33 @@ def test_sharded_over_four_devices_equals_single_device():
         assert four[k] == one[k]
     np.testing.assert_allclose(four["margin"], one["margin"], rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(four["effort"], one["effort"], rtol=1e-12)
+
+
+def test_chunk_program_agrees_with_public_reach_functions(reach_kernels):
+    """The engine's jit(vmap) chunk equals the public (vectorized) reach functions per channel."""
+    rng = np.random.default_rng(9)
+    opt = synthetic_options(rng, n_routes=6, per_route=3)
+    tr = screen.screen_transitions(opt, LIMITS, progress=False)
+    i, j = tr.src, tr.dst
+    args = (opt.end_angle[i], opt.end_rate[i], opt.start_angle[j], opt.start_rate[j], tr.T[:, None])
+    lim = AxisLimits(LIMITS.rate[None, :], LIMITS.accel[None, :])
+    margin = np.asarray(reach_kernels.reach_margin(*args, lim)).min(axis=1)
+    ok = np.asarray(reach_kernels.is_reachable(*args, lim)).all(axis=1)
+    eff = (np.asarray(reach_kernels.min_peak_accel(*args, lim.rate)) / lim.accel).max(axis=1)
+    np.testing.assert_array_equal(tr.feasible, ok)
+    np.testing.assert_allclose(tr.margin, margin, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(tr.effort, eff, rtol=1e-12)
+    # one candidate at a time through the scalar kernel
+    k = int(np.argmax(tr.feasible))
+    one = [
+        float(
+            reach_kernels.reach_margin_kernel(
+                *(np.asarray(a)[k].reshape(-1)[c] for a in args[:4]),
+                tr.T[k],
+                LIMITS.rate[c],
+                LIMITS.accel[c],
+            )
+        )
+        for c in range(2)
+    ]
+    assert min(one) == pytest.approx(tr.margin[k], rel=1e-12, abs=1e-15)
