@@ -233,3 +233,23 @@ def test_solve_rejects_bad_time_limit(small_case):
 
     with pytest.raises(ValueError, match="time_limit"):
         solve_case(small_case, time_limit=0.0, progress=False)
+
+
+def test_solve_degenerate_cases(small_case):
+    """No tasks / no matching sensor: an empty, valid plan, well within the limit."""
+    from jaxspline.aeossp.check import check_solution
+    from jaxspline.aeossp.solve import solve_case
+
+    empty = dataclasses.replace(small_case, tasks=())
+    t0 = time.monotonic()
+    sol = solve_case(empty, time_limit=30.0, progress=False)
+    assert sol == {"actions": []}
+    assert time.monotonic() - t0 < 15.0
+    ir_only = dataclasses.replace(
+        small_case,
+        satellites=tuple(s for s in small_case.satellites if s.sensor_type == "infrared"),
+        tasks=tuple(t for t in small_case.tasks if t.required_sensor_type == "visible")[:20],
+    )
+    sol = solve_case(ir_only, time_limit=30.0, progress=False)
+    assert sol == {"actions": []}
+    assert check_solution(ir_only, sol).valid

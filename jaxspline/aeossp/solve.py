@@ -514,6 +514,8 @@ def _lns(
     last_print = time.monotonic()
     accepted = 0
     un = [t for t in has if plan.assigned[t] < 0]
+    if not has:
+        return 0
     while True:
         if max_iters is not None and it >= max_iters:
             break
