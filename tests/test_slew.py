@@ -425,3 +425,16 @@ def test_profile_gradients_finite_at_boundaries():
 def test_profile_value_errors(call, name):
     with pytest.raises(ValueError, match=name):
         call()
+
+
+@pytest.mark.slow
+def test_make_slew_figures(tmp_path):
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "scripts" / "slew_figures.py"
+    spec = importlib.util.spec_from_file_location("slew_figures", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    out = mod.make_slew_figures(tmp_path)
+    assert len(out) == 3 and all(p.exists() and p.stat().st_size > 10_000 for p in out)
