@@ -270,7 +270,9 @@ def gmst(jd_ut1):
     """
     jd = np.asarray(jd_ut1, dtype=np.float64)
     tu = (jd - 2451545.0) / 36525.0
-    sec = 67310.54841 + (876600.0 * 3600.0 + 8640184.812866) * tu + 0.093104 * tu**2 - 6.2e-6 * tu**3
+    sec = (
+        67310.54841 + (876600.0 * 3600.0 + 8640184.812866) * tu + 0.093104 * tu**2 - 6.2e-6 * tu**3
+    )
     return np.mod(np.mod(sec, 86400.0) * (2 * np.pi / 86400.0), 2 * np.pi)
 
 
@@ -369,7 +371,7 @@ def _gravity_j2(r):
 
 
 def tle_orbit(line1: str, line2: str, epoch_jd: float, t_end: float, step: float = 20.0):
-    """Tabulate a TLE with SGP4 on [-step, t_end + step] s from ``epoch_jd`` as a :class:`HermiteOrbit`.
+    """Tabulate a TLE with SGP4 on [-step, t_end + step] s from ``epoch_jd`` (HermiteOrbit).
 
     Knots every ``step`` seconds; knot accelerations from the two-body + J2 field,
     so the interpolant is a differentiable JAX function of t. Interpolation error

@@ -36,7 +36,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline._validate import check_finite, check_positive
-from jaxspline.orbit import OMEGA_EARTH, R_EARTH, _rz, earth_rotation_angle, orbit_state
+from jaxspline.orbit import OMEGA_EARTH, _rz, earth_rotation_angle, orbit_state
 
 __all__ = [
     "Scene",
@@ -119,12 +119,12 @@ def _frame_los(scene: Scene, p, t0, t):
     basis = jnp.stack([x, y, z])
     theta = earth_rotation_angle(scene.gmst0, t)
     rad_g = jnp.linalg.norm(p[:3])
-    delta = p[6] * (t - t0) / R_EARTH
+    delta = p[6] * (t - t0) / rad_g
     g, tan = _aim_point(p, delta)
     g_eci = _rz(-theta, g)
     tan_eci = _rz(-theta, tan)
     g_dot = OMEGA_EARTH * jnp.stack([-g_eci[1], g_eci[0], jnp.zeros_like(g_eci[0])])
-    g_dot = g_dot + tan_eci * (p[6] * rad_g / R_EARTH)
+    g_dot = g_dot + tan_eci * p[6]
     los = basis @ (g_eci - r)
     w = hn / rn**2
     w_x_los = jnp.stack([-w * los[2], jnp.zeros_like(w), w * los[0]])  # (0, -w, 0) x L
@@ -153,7 +153,9 @@ def aim_angles(scene: Scene, p, t0, t):
 
     One candidate (scalars t, t0; p of shape [8] from :func:`aim_params`); the aim
     point moves along its great circle at ground speed p[6] from t0. Branchless in
-    the point/strip switch; differentiable in t and t0.
+    the point/strip switch; differentiable in t and t0. The aim point covers
+    p[6] * (t - t0) metres of arc on the sphere of radius |g0| through the start point
+    (within ~0.2 km of the ellipsoid for a 100 km strip).
     """
 
     los, los_dot, tan_o = _frame_los(scene, p, t0, t)

@@ -30,7 +30,14 @@ import numpy as np
 from jaxspline._validate import check_finite, check_positive
 from jaxspline.limits import AxisLimits
 from jaxspline.options import RouteOptions
-from jaxspline.orbit import OMEGA_EARTH, geodetic_to_ecef, gmst, orbit_state, sun_direction
+from jaxspline.orbit import (
+    OMEGA_EARTH,
+    ecef_to_geodetic,
+    geodetic_to_ecef,
+    gmst,
+    orbit_state,
+    sun_direction,
+)
 from jaxspline.pointing import Scene, aim_state, off_nadir_flat
 
 __all__ = [
@@ -43,6 +50,7 @@ __all__ = [
     "make_route_set",
     "build_route_options",
     "strip_direction",
+    "sample_scans",
 ]
 
 POINT, STRIP = 0, 1
@@ -75,7 +83,7 @@ class RouteSpec(NamedTuple):
 def make_route_spec(
     kind, lat, lon, azimuth=0.0, length=0.0, duration=0.0, value=1.0, t0_lo=-np.inf, t0_hi=np.inf
 ) -> RouteSpec:
-    """Validate and broadcast route fields into a :class:`RouteSpec` (ValueError names the field)."""
+    """Validate and broadcast route fields into a RouteSpec (ValueError names the field)."""
     kind = np.atleast_1d(np.asarray(kind, dtype=np.int64))
     if not np.isin(kind, (POINT, STRIP)).all():
         raise ValueError(f"kind must be 0 (point) or 1 (strip), got {kind.tolist()}")
@@ -91,7 +99,11 @@ def make_route_spec(
     }
     try:
         out = dict(
-            zip(arrs, np.broadcast_arrays(*(np.asarray(v, np.float64) for v in arrs.values()), kind))
+            zip(
+                arrs,
+                np.broadcast_arrays(*(np.asarray(v, np.float64) for v in arrs.values()), kind),
+                strict=False,
+            )
         )
     except ValueError as exc:
         raise ValueError(f"route fields are not broadcastable: {exc}") from exc
@@ -111,7 +123,7 @@ def make_route_spec(
 
 
 def strip_direction(lat, lon, azimuth):
-    """Unit ECEF ground direction at (lat, lon) [rad] for an azimuth [rad] (clockwise from north)."""
+    """Unit ECEF ground direction at (lat, lon) [rad] for an azimuth [rad] (from north, cw)."""
     lat, lon, az = (np.asarray(x, np.float64) for x in (lat, lon, azimuth))
     north = np.stack([-np.sin(lat) * np.cos(lon), -np.sin(lat) * np.sin(lon), np.cos(lat)], -1)
     east = np.stack([-np.sin(lon), np.cos(lon), np.zeros_like(lon)], -1)
@@ -140,6 +152,42 @@ def _sample_kernel(scene, p, t0, t):
 
 
 _sample_batched = jax.jit(jax.vmap(_sample_kernel, in_axes=(None, 0, 0, 0)))
+
+
+def _eval_chunked(scene, p, t0, t, chunk=8192, desc=None):
+    """aim_state at M (p [M, 8], t0 [M], t [M]) in padded chunks (one compiled shape)."""
+    from tqdm.auto import tqdm
+
+    dtype = jnp.result_type(float)
+    m = t.size
+    outs = []
+    it = range(0, m, chunk)
+    if desc is not None:
+        it = tqdm(it, desc=desc, unit="chunk", leave=False)
+    for s in it:
+        e = min(s + chunk, m)
+        pad = chunk - (e - s)
+        args = [
+            np.pad(x[s:e], [(0, pad)] + [(0, 0)] * (x.ndim - 1), mode="edge") for x in (p, t0, t)
+        ]
+        res = _sample_batched(scene, *(jnp.asarray(a, dtype) for a in args))
+        outs.append([np.asarray(x)[: e - s] for x in res])
+    if not outs:
+        z = np.zeros((0, 3))
+        return z, z, z, np.zeros(0)
+    return tuple(np.concatenate([o[k] for o in outs]) for k in range(4))
+
+
+def sample_scans(routes, route, t0, speed, t):
+    """Pointing-law (angle, rate, accel [M, 3], off_nadir [M]) of routes scanned from t0 at t.
+
+    ``route`` [M] route indices, ``t0`` [M] start times [s], ``speed`` [M] strip ground
+    speeds [m/s] (ignored for points), ``t`` [M] sample times [s]. numpy in/out.
+    """
+    route = np.asarray(route, np.int64)
+    p = np.array(routes.params)[route]
+    p[:, 6] = np.where(np.asarray(routes.kind)[route] == STRIP, speed, 0.0)
+    return _eval_chunked(routes.scene, p, np.asarray(t0, np.float64), np.asarray(t, np.float64))
 
 
 class RouteSet(NamedTuple):
@@ -181,7 +229,10 @@ class RouteSet(NamedTuple):
         t1 = t0 + self.duration[route].astype(t0.dtype)
         # one batched evaluation of both ends (one kernel copy in the compiled graph)
         a, r, _, _ = jax.vmap(_sample_kernel, in_axes=(None, 0, 0, 0))(
-            self.scene, jnp.concatenate([p, p]), jnp.concatenate([t0, t0]), jnp.concatenate([t0, t1])
+            self.scene,
+            jnp.concatenate([p, p]),
+            jnp.concatenate([t0, t0]),
+            jnp.concatenate([t0, t1]),
         )
         k = t0.shape[0]
         return t1, a[:k], r[:k], a[k:], r[k:]
@@ -287,15 +338,23 @@ def make_route_set(
     )
 
 
-def _great_circle_end(lat, lon, az, length, radius=6371008.8):
-    """End point and reversed azimuth [rad] of a great-circle arc of ``length`` [m] (sphere)."""
-    u = np.stack([np.cos(lat) * np.cos(lon), np.cos(lat) * np.sin(lon), np.sin(lat)], -1)
+def _great_circle_end(lat, lon, az, length):
+    """End point (geodetic lat, lon [rad]) and reversed azimuth [rad] of a strip of ``length`` [m].
+
+    Same arc as the aim law of :func:`jaxspline.pointing.aim_angles`: the great circle
+    on the sphere through the start point's ECEF position g0, direction = the ground
+    direction made orthogonal to g0; numpy, for geometry and plots.
+    """
+    g0 = np.asarray(geodetic_to_ecef(lat, lon, 0.0))
+    rad = np.linalg.norm(g0, axis=-1, keepdims=True)
+    u = g0 / rad
     d = strip_direction(lat, lon, az)
-    delta = (length / radius)[..., None]
-    e = u * np.cos(delta) + d * np.sin(delta)
+    d = d - np.sum(d * u, -1, keepdims=True) * u
+    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+    delta = np.asarray(length, np.float64)[..., None] / rad
+    e = rad * (u * np.cos(delta) + d * np.sin(delta))
     tan = d * np.cos(delta) - u * np.sin(delta)
-    lat2 = np.arctan2(e[..., 2], np.hypot(e[..., 0], e[..., 1]))
-    lon2 = np.arctan2(e[..., 1], e[..., 0])
+    lat2, lon2, _ = (np.asarray(x) for x in ecef_to_geodetic(e))
     north = np.stack([-np.sin(lat2) * np.cos(lon2), -np.sin(lat2) * np.sin(lon2), np.cos(lat2)], -1)
     east = np.stack([-np.sin(lon2), np.cos(lon2), np.zeros_like(lon2)], -1)
     az2 = np.arctan2(np.sum(-tan * east, -1), np.sum(-tan * north, -1))
@@ -332,8 +391,6 @@ def build_route_options(
       (RouteOptions with N options, OptionInfo). The options keep ``scan_ok == False``
       rows; the caller drops them before screening.
     """
-    from tqdm.auto import tqdm
-
     if n_t0 < 1 or samples < 2:
         raise ValueError(f"n_t0 must be >= 1 and samples >= 2, got n_t0={n_t0}, samples={samples}")
     speeds = np.atleast_1d(np.asarray(scan_speeds, np.float64))
@@ -346,7 +403,9 @@ def build_route_options(
     params = np.asarray(routes.params)
     rows_r, rows_t0, rows_v = [], [], []
     for r in np.nonzero(t0_min <= t0_max)[0]:
-        t0s = np.linspace(t0_min[r], t0_max[r], n_t0) if t0_max[r] > t0_min[r] else t0_min[r:r + 1]
+        t0s = (
+            np.linspace(t0_min[r], t0_max[r], n_t0) if t0_max[r] > t0_min[r] else t0_min[r : r + 1]
+        )
         vs = speeds if kind[r] == STRIP else np.zeros(1)
         rr, tt, vv = np.meshgrid([r], t0s, vs, indexing="ij")
         rows_r.append(rr.ravel())
@@ -368,25 +427,19 @@ def build_route_options(
     n = route.size
     p = params[route].copy()
     p[:, 6] = speed
-    dur = np.where(kind[route] == STRIP, length[route] / np.where(speed > 0, speed, 1.0), duration[route])
+    dur = np.where(
+        kind[route] == STRIP, length[route] / np.where(speed > 0, speed, 1.0), duration[route]
+    )
     frac = np.linspace(0.0, 1.0, samples)
     ts = t0[:, None] + dur[:, None] * frac[None, :]
-    flat_p = np.repeat(p, samples, axis=0)
-    flat_t0 = np.repeat(t0, samples)
-    flat_t = ts.ravel()
-    m = flat_t.size
-    outs = []
-    it = range(0, m, chunk)
-    if progress:
-        it = tqdm(it, desc="route options", unit="chunk", leave=False)
-    for s in it:
-        e = min(s + chunk, m)
-        pad = chunk - (e - s)
-        args = [np.pad(x[s:e], [(0, pad)] + [(0, 0)] * (x.ndim - 1), mode="edge")
-                for x in (flat_p, flat_t0, flat_t)]
-        res = _sample_batched(routes.scene, *(jnp.asarray(a, dtype) for a in args))
-        outs.append([np.asarray(x)[: e - s] for x in res])
-    ang, rate, acc, offn = (np.concatenate([o[k] for o in outs]) for k in range(4))
+    ang, rate, acc, offn = _eval_chunked(
+        routes.scene,
+        np.repeat(p, samples, axis=0),
+        np.repeat(t0, samples),
+        ts.ravel(),
+        chunk,
+        "route options" if progress else None,
+    )
     ang = ang.reshape(n, samples, c)
     rate = rate.reshape(n, samples, c)
     acc = acc.reshape(n, samples, c)
@@ -405,8 +458,14 @@ def build_route_options(
         jd = epoch_jd + t0 / 86400.0
         sun = sun_direction(jd)
         th = gmst(jd)
-        sun_e = np.stack([np.cos(th) * sun[:, 0] + np.sin(th) * sun[:, 1],
-                          -np.sin(th) * sun[:, 0] + np.cos(th) * sun[:, 1], sun[:, 2]], -1)
+        sun_e = np.stack(
+            [
+                np.cos(th) * sun[:, 0] + np.sin(th) * sun[:, 1],
+                -np.sin(th) * sun[:, 0] + np.cos(th) * sun[:, 1],
+                sun[:, 2],
+            ],
+            -1,
+        )
         la, lo = np.asarray(routes.lat)[route], np.asarray(routes.lon)[route]
         up = np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], -1)
         sun_el = np.arcsin(np.clip(np.sum(up * sun_e, -1), -1.0, 1.0))
