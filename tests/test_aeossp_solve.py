@@ -219,8 +219,8 @@ def test_solve_deterministic_for_seed(small_case):
     from jaxspline.aeossp.solve import solve_case
 
     kw = dict(time_limit=60.0, progress=False, seed=3, max_iters=150, return_stats=True)
-    # exercise the optional chain moves and the DP repair too
-    kw.update(chain_p=0.5, dp_p=0.5)
+    # exercise the optional chain moves and the threshold acceptance too
+    kw.update(chain_p=0.5, temp=2.0)
     a, sa = solve_case(small_case, **kw)
     b, _ = solve_case(small_case, **kw)
     assert a == b

@@ -18,15 +18,19 @@ Pipeline (``solve_case``):
    unscheduled tasks that have candidates in the window, heaviest first with 20 %
    noise; threshold acceptance on the total weight (a step may lose up to
    ``temp * U(0,1)`` weight early on, nothing at the end), the best plan is kept.
-   Options: a second window on another satellite of a removed task (chain moves)
-   and an exact-transition beam DP over the window instead of greedy repair;
+   Option: a second window on another satellite of a removed task (chain moves;
+   off by default, no gain measured at 60 s; an exact-transition beam DP window
+   repair was tried too and dropped: 3-10x slower per step, no better at 60 s);
 4. a TAT pass moves each action to the earliest feasible candidate of its task;
 5. an independent internal re-check (geometry at every grid instant, slews,
    battery, recomputed from scratch) drops anything that fails, so the returned
    plan is always valid under the internal model.
 
-Safety margins (frame-model differences GCRF/ITRF vs TEME/GMST are ~1e-3 deg and
-~1e-3 s; shadow-timing differences are seconds):
+Safety margins. Measured with ``check.frame_difference`` (case_0003, 4 satellites,
+7104 samples): this TEME(WGS84 SGP4)/GMST82 model vs the checker's GCRF/ITRF chain
+differs by 0 deg in off-nadir and 7e-8 deg in slew angle; the shadow flag differs
+on 0.5 % of resource instants (Sun-model / frame differences near shadow entry).
+Margins kept (the checker reports the tightest: off-nadir 0.0505 deg, gap 0.527 s):
 
 * off-nadir: <= max_off_nadir - 0.05 deg at every grid instant of an action;
   horizon: sine of the target's elevation seen along the line of sight > 0.02;
@@ -348,14 +352,6 @@ class _Plan:
         self.level_min[k] = None
         return bool(self._suffix_min(k)[0] >= margin)
 
-    def battery_ok(self, k: int) -> bool:
-        """Battery of sat k (current timeline) stays above the margin."""
-        margin = self.pb.battery.margin_wh
-        if self._suffix_min(k)[0] - self.debt[k] >= margin:
-            return True
-        self.level_min[k] = None
-        return bool(self._suffix_min(k)[0] >= margin)
-
     def undo_to(self, mark: int):
         while len(self.log) > mark:
             op, c = self.log.pop()
@@ -403,81 +399,6 @@ def _greedy(plan: _Plan, deadline: float):
     plan.log.clear()
 
 
-def _dp_window(plan: _Plan, k: int, lo: float, hi: float, beam: int = 4) -> list:
-    """Best sequence on sat k inside the (emptied) window [lo, hi] by a beam DP.
-
-    Nodes are sat k's candidates with start in [lo, hi] of unscheduled tasks, in start
-    order; a label is (weight sum, task bitmask, parent); a node keeps its ``beam`` best
-    labels with distinct masks, so a task is never used twice on a path. Transitions
-    (incl. the fixed neighbours left and right of the window) are exact slew checks.
-    Returns the chosen candidate ids (time order), without inserting them.
-    """
-    pb = plan.pb
-    step = pb.step
-    tl, starts = plan.tl[k], plan.tl_s[k]
-    pos = bisect.bisect_left(starts, lo)
-    p = tl[pos - 1] if pos > 0 else -1
-    q = tl[pos] if pos < len(tl) else -1
-    t_lo = pb.c_end[p] if p >= 0 else 0
-    t_hi = pb.c_start[q] if q >= 0 else 1 << 60
-    a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], max(lo, t_lo))
-    b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], min(hi, t_hi))
-    assigned, c_task, c_start, c_end = plan.assigned, pb.c_task, pb.c_start, pb.c_end
-    cs = [c for c in range(a, b) if assigned[c_task[c]] < 0 and c_end[c] <= t_hi]
-    if not cs:
-        return []
-    bits: dict[int, int] = {}
-    for c in cs:
-        bits.setdefault(c_task[c], 1 << len(bits))
-    need = plan.need
-    weight = pb.weight
-    labels: list[list] = []
-    best_val, best_ref = 0.0, None
-    for jj, j in enumerate(cs):
-        sj = c_start[j]
-        bj = bits[c_task[j]]
-        wj = weight[c_task[j]] + 1e-4
-        new = []
-        if p < 0:
-            if sj * step >= pb.c_ng[j]:
-                new.append((wj, bj, None))
-        elif (sj - c_end[p]) * step >= need(p, j):
-            new.append((wj, bj, None))
-        for ii in range(jj):
-            li = labels[ii]
-            if not li:
-                continue
-            i = cs[ii]
-            gap = sj - c_end[i]
-            if gap < 0 or gap * step < need(i, j):
-                continue
-            for idx, (v, m, _) in enumerate(li):
-                if not m & bj:
-                    new.append((v + wj, m | bj, (ii, idx)))
-        if len(new) > 1:
-            new.sort(key=lambda x: -x[0])
-            kept, seen = [], set()
-            for lab in new:
-                if lab[1] in seen:
-                    continue
-                seen.add(lab[1])
-                kept.append(lab)
-                if len(kept) >= beam:
-                    break
-            new = kept
-        labels.append(new)
-        if new and (q < 0 or (c_start[q] - c_end[j]) * step >= need(j, q)):
-            if new[0][0] > best_val:
-                best_val, best_ref = new[0][0], (jj, 0)
-    path = []
-    ref = best_ref
-    while ref is not None:
-        jj, idx = ref
-        path.append(cs[jj])
-        ref = labels[jj][idx][2]
-    return path[::-1]
-
-
 def _destroy(plan: _Plan, k: int, lo: float, hi: float):
     """Remove sat k's actions touching [lo, hi] (grid units); None if that is infeasible."""
     pb = plan.pb
@@ -499,11 +420,8 @@ def _lns(
     t0: float,
     chain_p: float = 0.5,
     temp: float = 0.0,
-    dp_p: float = 0.5,
-    beam: int = 4,
 ):
     pb = plan.pb
-    dp_extra = 60.0 / pb.step
     t_start = time.monotonic()
     best_key = (plan.W, plan.N)
     best = list(plan.assigned)
@@ -543,9 +461,6 @@ def _lns(
             c0 = rng.choice(plan.tl[k])
             rad = rng.choice((60, 120, 240)) / step
             lo, hi = pb.c_start[c0] - rad, pb.c_end[c0] + rad
-        use_dp = rng.random() < dp_p
-        if use_dp:
-            lo, hi = lo - dp_extra, hi + dp_extra
         windows = [(k, lo, hi)]
         removed = _destroy(plan, k, lo, hi)
         if removed is None:
@@ -566,13 +481,7 @@ def _lns(
                     continue
                 removed = removed + rem2
                 windows.append((k2, lo2, hi2))
-        if use_dp:
-            for c in _dp_window(plan, k, lo, hi, beam):
-                plan.insert(c)
-            if not plan.battery_ok(k):
-                plan.undo_to(mark)
-                continue
-        elif forced >= 0 and plan.check(forced) is not None:
+        if forced >= 0 and plan.check(forced) is not None:
             plan.insert(forced)
         # tasks to re-insert: removed ones + unscheduled with candidates in the windows
         pool = {pb.c_task[c] for c in removed}
@@ -745,8 +654,6 @@ def solve_case(
     thin: int = 2,
     chain_p: float = 0.0,
     temp: float = 1.0,
-    dp_p: float = 0.0,
-    beam: int = 4,
 ):
     """Solve one aeossp_standard case; returns the solution ``{"actions": [...]}``.
 
@@ -763,10 +670,6 @@ def solve_case(
         satellite (to relocate a removed task); 0 by default (no gain measured).
       temp: threshold-acceptance start value [weight units]: a step may lose up to
         ``temp * U(0,1) * (1 - progress)`` weight; the best plan is kept.
-      dp_p: probability that a step repairs its window by the beam DP
-        :func:`_dp_window` instead of greedy insertion; 0 by default (at 60 s the
-        cheaper greedy repair's extra iterations were worth as much).
-      beam: labels kept per node in the DP.
     Returns:
       the solution dict ``{"actions": [...]}`` (observation actions, grid-aligned
       ISO times); with ``return_stats`` a tuple ``(solution, stats)``.
@@ -803,7 +706,7 @@ def solve_case(
     say(f"greedy WCR={plan.W / tw:.4f} CR={plan.N / max(1, len(case.tasks)):.4f}")
     rng = random.Random(seed)
     tat_budget = min(2.0, 0.05 * time_limit)
-    its = _lns(plan, deadline - tat_budget, rng, max_iters, progress, t0, chain_p, temp, dp_p, beam)
+    its = _lns(plan, deadline - tat_budget, rng, max_iters, progress, t0, chain_p, temp)
     _tat_pass(plan, deadline)
     say(f"lns {its} iterations: WCR={plan.W / tw:.4f} CR={plan.N / max(1, len(case.tasks)):.4f}")
 
