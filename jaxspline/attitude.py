@@ -193,19 +193,27 @@ def _omega_from_rate(sig, dsig):
 
 
 def _eps_from_mrp(sig, d1, d2):
-    return jax.jvp(_omega_from_rate, (sig, d1), (d1, d2))[1]
+    return _omega_derivs(sig, d1, d2, jnp.zeros_like(d2))[1]
 
 
 def _mrp_derivs(sig, w, e, j):
-    """σ', σ'', σ''' from (σ, ω, ε, ε') by total time derivatives of σ' = ¼B(σ)ω."""
-    d1 = _mrp_rate(sig, w)
+    """σ', σ'', σ''' from (σ, ω, ε, ε') [..., 3]: Leibniz rule on σ' = ¼B(σ)ω.
 
-    def g(s, ww, sd, ee):  # d/dt of _mrp_rate along (sd, ee)
-        return jax.jvp(_mrp_rate, (s, ww), (sd, ee))[1]
-
-    d2 = g(sig, w, d1, e)
-    d3 = jax.jvp(g, (sig, w, d1, e), (d1, e, d2, j))[1]
-    return d1, d2, d3
+    With a = σ·σ, b = σ·ω: σ' = ¼[(1 - a)ω + 2σ×ω + 2σb]; the k-th time
+    derivative of each product is Σ_i C(k, i) (i-th factor)(k-i-th factor).
+    """
+    s = [sig]
+    om = [w, e, j]
+    binom = ((1,), (1, 1), (1, 2, 1))
+    for k in range(3):
+        c = binom[k]
+        a = [sum(c2 * _dot(s[i], s[m - i]) for i, c2 in enumerate(binom[m])) for m in range(k + 1)]
+        b = [sum(c2 * _dot(s[i], om[m - i]) for i, c2 in enumerate(binom[m])) for m in range(k + 1)]
+        t1 = om[k] - sum(c[i] * a[i] * om[k - i] for i in range(k + 1))
+        t2 = 2.0 * sum(c[i] * _cross(s[i], om[k - i]) for i in range(k + 1))
+        t3 = 2.0 * sum(c[i] * s[i] * b[k - i] for i in range(k + 1))
+        s.append(0.25 * (t1 + t2 + t3))
+    return s[1], s[2], s[3]
 
 
 def _omega_derivs(sig, d1, d2, d3):
@@ -374,8 +382,8 @@ def omega_from_mrp_rate(sigma, sigma_dot):
 def angular_accel_from_mrp(sigma, sigma_dot, sigma_ddot):
     """Body angular acceleration ε = dω/dt [rad/s²] from σ, σ' [1/s], σ'' [1/s²].
 
-    ε = ∂ω/∂σ · σ' + ∂ω/∂σ' · σ'' with ω(σ, σ') of ``omega_from_mrp_rate``
-    (forward-mode autodiff, exact).
+    ε = dω/dt along the trajectory, ω(σ, σ') of ``omega_from_mrp_rate``; closed
+    form via the quaternion p = Λ(σ): ε = 2 vec(p̃∘p'') (see ``omega_from_mrp_derivs``).
     """
     a = _common(
         _arr("sigma", sigma, 3), _arr("sigma_dot", sigma_dot, 3), _arr("sigma_ddot", sigma_ddot, 3)
@@ -386,8 +394,8 @@ def angular_accel_from_mrp(sigma, sigma_dot, sigma_ddot):
 def mrp_derivs_from_omega(sigma, omega, eps, eps_dot=None):
     """(σ', σ'', σ''') from σ, ω [rad/s], ε [rad/s²] and ε' [rad/s³] (default 0).
 
-    Total time derivatives of σ' = ¼B(σ)ω (seed eq. 2), computed by nested
-    forward-mode autodiff: σ'' = ¼(B ε + Ḃ ω), σ''' = ¼(B ε' + 2Ḃ ε + B̈ ω).
+    Total time derivatives of σ' = ¼B(σ)ω (seed eq. 2) by the Leibniz rule:
+    σ'' = ¼(B ε + Ḃ ω), σ''' = ¼(B ε' + 2Ḃ ε + B̈ ω).
     """
     sigma = _arr("sigma", sigma, 3)
     omega = _arr("omega", omega, 3)
@@ -399,8 +407,9 @@ def mrp_derivs_from_omega(sigma, omega, eps, eps_dot=None):
 def omega_from_mrp_derivs(sigma, sigma_dot, sigma_ddot, sigma_dddot):
     """(ω, ε, ε') [rad/s, rad/s², rad/s³] from σ and its first three time derivatives.
 
-    The inverse of ``mrp_derivs_from_omega``; ω = B(σ)⁻¹ 4σ' differentiated twice
-    along the trajectory (forward-mode autodiff).
+    The inverse of ``mrp_derivs_from_omega``. Closed form through p = Λ(σ) =
+    [2g - 1, 2gσ], g = 1/(1 + σ·σ): ω = 2 vec(p̃∘p'), ε = 2 vec(p̃∘p''),
+    ε' = 2 vec(p̃'∘p'' + p̃∘p''') (Λ' = ½Λ∘ω differentiated).
     """
     a = _common(
         _arr("sigma", sigma, 3),
