@@ -27,6 +27,12 @@ Two API layers:
   inputs eagerly (ValueError naming the argument), broadcast, and call
   ``jax.jit(jnp.vectorize(kernel))``.
 
+Corrections to the paper (verified by the tests against integration, brute force and
+Ruckig): its eq. (3.2) three-link lower bound reads (b - b1)^2, correctly (b + b1)^2; its
+final algorithm's case 2 should read T <= (2b - |b1 + b2|)/d; its rate-interval root
+selection (section 3, steps 3-7) is garbled and re-derived in ``rate_interval_kernel``;
+feasible durations and the minimum peak acceleration are derived here (see the kernels).
+
 Tolerance: boundary cases computed by floating-point formulas count as
 reachable. With r = 64 * eps(dtype) (1.4e-14 in float64, 7.6e-6 in float32),
 rates are accepted when |b_i| <= b (1 + r) and |b1 - b2| <= dT + 2 r b, angles
