@@ -232,8 +232,12 @@ class _Screener:
         size = min(chunk_size, 1 << max(int(math.ceil(math.log2(max(n, 1)))), 10))
         return int(math.ceil(size / self.ndev) * self.ndev)
 
-    def screen(self, src: np.ndarray, dst: np.ndarray, size: int):
-        """Screen pairs (len <= size), padded to ``size``; returns numpy outputs of len(src)."""
+    def dispatch(self, src: np.ndarray, dst: np.ndarray, size: int):
+        """Start screening pairs (len <= size, padded to ``size``); returns a pending handle.
+
+        JAX dispatch is asynchronous: the host prepares the next chunk while the
+        devices screen this one. ``collect`` waits for the result.
+        """
         n = src.size
         T = self.t_start[dst] - self.t_end[src]
         pad = size - n
@@ -245,9 +249,24 @@ class _Screener:
             jax.device_put(jnp.asarray(d, jnp.int32), self.cand),
             jax.device_put(jnp.asarray(t, self.dtype), self.cand),
         ]
-        out = self.program(*self.table, *self.limits, *args)
+        return (
+            src,
+            dst,
+            T.astype(np.dtype(self.dtype)),
+            self.program(*self.table, *self.limits, *args),
+        )
+
+    @staticmethod
+    def collect(pending):
+        """(src, dst, T, feasible, margin, effort, t_min) as numpy arrays of a dispatched chunk."""
+        src, dst, T, out = pending
+        n = src.size
         feas, margin, effort, tmin = (np.asarray(o)[:n] for o in out)
-        return T.astype(np.dtype(self.dtype)), feas, margin, effort, tmin
+        return src, dst, T, feas, margin, effort, tmin
+
+    def screen(self, src: np.ndarray, dst: np.ndarray, size: int):
+        """Screen pairs synchronously: (T, feasible, margin, effort, t_min) numpy arrays."""
+        return self.collect(self.dispatch(src, dst, size))[2:]
 
 
 # ----------------------------------------------------------------------------
@@ -329,7 +348,14 @@ def screen_transitions(
 
     parts = []
     n_screened = 0
+    pending = None
     from tqdm.auto import tqdm
+
+    def finish(pend):
+        cols = screener.collect(pend)
+        if feasible_only:
+            cols = tuple(a[cols[3]] for a in cols)
+        parts.append(cols)
 
     bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
     for k, g0 in enumerate(range(0, total, chunk_size)):
@@ -345,15 +371,14 @@ def screen_transitions(
         src, dst = src[keep], dst[keep]
         if src.size:
             size = screener.padded_size(g1 - g0, chunk_size)
-            T, feas, margin, effort, tmin = screener.screen(src, dst, size)
+            nxt = screener.dispatch(src, dst, size)  # runs while the previous chunk is collected
             n_screened += src.size
-            if feasible_only:
-                sel = feas
-                src, dst, T, feas, margin, effort, tmin = (
-                    a[sel] for a in (src, dst, T, feas, margin, effort, tmin)
-                )
-            parts.append((src, dst, T, feas, margin, effort, tmin))
+            if pending is not None:
+                finish(pending)
+            pending = nxt
         bar.update(g1 - g0)
+    if pending is not None:
+        finish(pending)
     bar.close()
     if not parts:
         out = _empty(screener.dtype)
