@@ -46,6 +46,7 @@ limit only truncates the search.
 from __future__ import annotations
 
 import bisect
+import itertools
 import math
 import random
 import sys
@@ -58,6 +59,7 @@ from jaxspline.aeossp.battery import BatteryModel
 from jaxspline.aeossp.candidates import (
     Candidates,
     SatParams,
+    bcb_time_np,
     build_candidates,
     los_angle,
     sat_params,
@@ -182,6 +184,7 @@ class _Plan:
         self.debt = [0.0] * n_s
         self.cache = {}
         self.n_c = len(self.pb.cands)
+        self.saved = {}  # sat -> (level_min, debt) before the first change since commit()
 
     # ---------------------------------------------------------------- geometry
     def need(self, i: int, j: int) -> float:
@@ -305,6 +308,8 @@ class _Plan:
         t = pb.c_task[c]
         pos = bisect.bisect_left(self.tl_s[k], pb.c_start[c])
         tl = self.tl[k]
+        if k not in self.saved:
+            self.saved[k] = (self.level_min[k], self.debt[k])
         n_in = pb.c_ng[c] if pos == 0 else self.need(tl[pos - 1], c)
         n_out = self.need(c, tl[pos]) if pos < len(tl) else 0.0
         self.debt[k] += self._energy(k, c, n_in, n_out)
@@ -321,6 +326,8 @@ class _Plan:
         k = pb.c_sat[c]
         t = pb.c_task[c]
         tl = self.tl[k]
+        if k not in self.saved:
+            self.saved[k] = (self.level_min[k], self.debt[k])
         pos = tl.index(c)
         del tl[pos]
         del self.tl_s[k][pos]
@@ -352,7 +359,13 @@ class _Plan:
         self.level_min[k] = None
         return bool(self._suffix_min(k)[0] >= margin)
 
+    def commit(self):
+        """Forget the undo log (the current state becomes the base of the next step)."""
+        self.log.clear()
+        self.saved.clear()
+
     def undo_to(self, mark: int):
+        """Undo the changes logged after ``mark``; at mark 0 the battery bounds come back too."""
         while len(self.log) > mark:
             op, c = self.log.pop()
             if op == "i":
@@ -360,6 +373,10 @@ class _Plan:
             else:
                 self.insert(c)
             self.log.pop()
+        if mark == 0:
+            for k, (lm, debt) in self.saved.items():
+                self.level_min[k], self.debt[k] = lm, debt
+            self.saved.clear()
 
     def best_insert(self, t: int, rng=None, tat_w: float = 0.02):
         """Insert task t at its cheapest feasible candidate; True if inserted."""
@@ -396,16 +413,21 @@ def _greedy(plan: _Plan, deadline: float):
         if i % 64 == 0 and time.monotonic() > deadline:
             break
         plan.best_insert(t)
-    plan.log.clear()
+    plan.commit()
 
 
 def _destroy(plan: _Plan, k: int, lo: float, hi: float):
     """Remove sat k's actions touching [lo, hi] (grid units); None if that is infeasible."""
     pb = plan.pb
-    removed = [c for c in plan.tl[k] if pb.c_end[c] >= lo and pb.c_start[c] <= hi]
+    tl = plan.tl[k]
+    b = bisect.bisect_right(plan.tl_s[k], hi)
+    a = b
+    while a > 0 and pb.c_end[tl[a - 1]] >= lo:
+        a -= 1
+    removed = tl[a:b]
     if not removed:
         return removed
-    pos0 = plan.tl[k].index(removed[0])
+    pos0 = a
     for c in removed:
         plan.remove(c)
     return removed if plan.removal_ok(k, pos0) else None
@@ -432,6 +454,8 @@ def _lns(
     last_print = time.monotonic()
     accepted = 0
     un = [t for t in has if plan.assigned[t] < 0]
+    cw = list(itertools.accumulate(pb.weight[t] for t in un))
+    dirty = False
     if not has:
         return 0
     while True:
@@ -445,8 +469,7 @@ def _lns(
         forced = -1
         if un and rng.random() < 0.8:
             # weight-proportional pick of an unscheduled task
-            ws = [pb.weight[t] for t in un]
-            t = rng.choices(un, weights=ws, k=1)[0]
+            t = rng.choices(un, cum_weights=cw, k=1)[0]
             if plan.assigned[t] >= 0:
                 continue
             c = rng.choice(pb.task_cands[t])
@@ -510,12 +533,16 @@ def _lns(
             plan.undo_to(mark)
         else:
             if new != base:
+                dirty = True
+            if dirty and it % 16 == 0:
                 un = [t for t in has if plan.assigned[t] < 0]
+                cw = list(itertools.accumulate(pb.weight[t] for t in un))
+                dirty = False
             if (plan.W, plan.N) > best_key:
                 accepted += 1
                 best_key = (plan.W, plan.N)
                 best = list(plan.assigned)
-            plan.log.clear()
+            plan.commit()
         if progress and time.monotonic() - last_print > 5.0:
             last_print = time.monotonic()
             tw = sum(pb.weight)
@@ -540,7 +567,7 @@ def _restore(plan: _Plan, assigned):
     plan.W, plan.N, plan.tat = 0.0, 0, 0.0
     for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.c_start[c]):
         plan.insert(c)
-    plan.log.clear()
+    plan.commit()
 
 
 def _tat_pass(plan: _Plan, deadline: float):
@@ -569,7 +596,7 @@ def _tat_pass(plan: _Plan, deadline: float):
         plan.insert(best if best >= 0 else c)
         if plan.score() < base:
             plan.undo_to(mark)
-        plan.log.clear()
+        plan.commit()
 
 
 def verify_plan(case, geo: GridGeometry, sp: SatParams, actions, margins: Margins | None = None):
@@ -581,8 +608,6 @@ def verify_plan(case, geo: GridGeometry, sp: SatParams, actions, margins: Margin
     action) with half the gap margin; battery with :class:`BatteryModel` (margin 0).
     Returns the list of indices of failing actions (empty = valid).
     """
-    from jaxspline.slew import bang_coast_bang_time
-
     m = margins or Margins()
     tt = case.task_table()
     tgt = target_ecef(tt["latitude_deg"], tt["longitude_deg"], tt["altitude_m"])
@@ -625,7 +650,8 @@ def verify_plan(case, geo: GridGeometry, sp: SatParams, actions, margins: Margin
         prev_dir / np.linalg.norm(prev_dir, axis=-1, keepdims=True),
         los_s / np.linalg.norm(los_s, axis=-1, keepdims=True),
     )
-    t_sl = np.asarray(bang_coast_bang_time(theta, sp.rate[ko], sp.accel[ko]), float) + sp.settle[ko]
+    # numpy copy of the library formula (tests check agreement): no JAX compile at the end
+    t_sl = bcb_time_np(theta, sp.rate[ko], sp.accel[ko]) + sp.settle[ko]
     prev_end = np.where(first, 0, np.roll(eo, 1))
     avail = (so - prev_end) * step
     fail = avail < t_sl + m.gap_s / 2
