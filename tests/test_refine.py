@@ -77,6 +77,7 @@ def test_effort_objective_reduces_effort_and_stays_feasible(reach_kernels):  # n
     res = refine.refine_plan(plan, opts, model, LIM, objective="effort", steps=200)
     assert res.ok
     assert res.effort_after.sum() <= res.effort_before.sum() + 1e-12
+    print(f"\neffort before {res.effort_before} after {res.effort_after}, B at {res.t0[1]:.3f} s")
     assert np.all(res.effort_after <= 1 + 1e-9)
     # the symmetric optimum puts B in the middle of [21, 24]
     assert res.t0[1] == pytest.approx(22.5, abs=0.3)

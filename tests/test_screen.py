@@ -176,6 +176,18 @@ def test_chunking_max_gap_and_order_invariance(reach_kernels):
     pairs_p = zip(perm[tp.src].tolist(), perm[tp.dst].tolist(), strict=True)
     b = dict(zip(pairs_p, tp.feasible.tolist(), strict=True))
     assert a == b and inv.size == perm.size
+    # multi-process split: the parts of two processes add up to the whole
+    halves = [
+        screen.screen_transitions(
+            opt, LIMITS, progress=False, chunk_size=16, process_index=k, process_count=2
+        )
+        for k in (0, 1)
+    ]
+    assert sum(h.n_screened for h in halves) == full.n_screened
+    both = sorted(
+        (s_, d_) for h in halves for s_, d_ in zip(h.src.tolist(), h.dst.tolist(), strict=True)
+    )
+    assert both == sorted(zip(full.src.tolist(), full.dst.tolist(), strict=True))
     only = screen.screen_transitions(opt, LIMITS, progress=False, feasible_only=True)
     assert only.feasible.all() and only.src.size == full.feasible.sum()
     assert only.n_screened == full.n_screened
