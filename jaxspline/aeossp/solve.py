@@ -69,9 +69,6 @@ from jaxspline.aeossp.geometry import GridGeometry, ecef_to_teme, propagate_grid
 __all__ = ["Margins", "solve_case", "verify_plan"]
 
 
-_PRIO_SLEW_S = 30.0  # typical slew + settling time used in the greedy priority
-
-
 @dataclass(frozen=True)
 class Margins:
     """Safety margins of the solver (see module docstring)."""
@@ -93,7 +90,6 @@ class _Problem:
     margins: Margins
     step: float
     weight: list
-    prio: list  # weight per second of timeline (duration + a typical slew)
     release: list  # grid seconds
     c_task: list
     c_sat: list
@@ -142,7 +138,6 @@ def _prepare(case, margins: Margins, thin: int = 2) -> _Problem:
         margins=margins,
         step=geo.step_s,
         weight=tt["weight"].tolist(),
-        prio=(tt["weight"] / (tt["duration_s"] + _PRIO_SLEW_S)).tolist(),
         release=tt["release_s"].tolist(),
         c_task=cands.task.tolist(),
         c_sat=cands.sat.tolist(),
@@ -515,7 +510,7 @@ def _lns(
                 t = pb.c_task[c]
                 if plan.assigned[t] < 0:
                     pool.add(t)
-        pool = sorted(pool, key=lambda t: (-pb.prio[t] * (1.0 + 0.2 * rng.random()), t))
+        pool = sorted(pool, key=lambda t: (-pb.weight[t] * (1.0 + 0.2 * rng.random()), t))
         for t in pool:
             if plan.assigned[t] < 0:
                 plan.best_insert(t, rng=rng)
