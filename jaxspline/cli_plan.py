@@ -97,12 +97,19 @@ def run_plan(
     import jax
     import jax.numpy as jnp
 
+    from jaxspline import reach
     from jaxspline import refine as refine_mod
     from jaxspline import screen as screen_mod
     from jaxspline import sequence as seq_mod
     from jaxspline import validate as val_mod
     from jaxspline.limits import AxisLimits
-    from jaxspline.routes import STRIP, build_route_options, make_route_set
+    from jaxspline.routes import (
+        STRIP,
+        build_route_options,
+        exact_states,
+        make_route_set,
+        tabulate_route_model,
+    )
     from jaxspline.scenario import default_scenario, load_scenario
 
     out = Path(outdir)
@@ -169,28 +176,58 @@ def run_plan(
 
     idx = np.asarray(plan.options, np.int64)
     chosen_routes = np.asarray(options.route)[idx]
-    model = routes.with_speeds(chosen_routes, info.speed[idx])
-    win = model.window(jnp.asarray(chosen_routes))
-    windows = (np.asarray(win[0]), np.asarray(win[1]))
+    speed = info.speed[idx]
+    lo_all, hi_all = np.asarray(routes.t0_min), np.asarray(routes.t0_max)
+    windows = (lo_all[chosen_routes], hi_all[chosen_routes])
     t_before = np.asarray(options.t_start)[idx]
     pairs = _pair_lookup(tr, idx[:-1], idx[1:]) if idx.size > 1 else np.zeros(0, np.int64)
     margin_before = np.asarray(tr.margin)[pairs] if pairs.size else np.zeros(0)
     refined = None
+    margin_after = None
     if pl.refine_steps > 0 and idx.size >= 2:
+        # a tabulated (Catmull-Rom in t0) copy of the pointing law keeps the optimizer's
+        # compiled graph small; the refined start times are re-evaluated exactly below
+        model = tabulate_route_model(routes, chosen_routes, speed)
         refined = refine_mod.refine_plan(plan, options, model, limits, steps=pl.refine_steps)
     lap("refine")
 
     steps_plan = _take(options, idx)
     rep_plan = val_mod.validate_plan(steps_plan, limits, windows=windows)
-    use_refined = refined is not None and refined.ok
-    if use_refined:
-        steps = refined.steps
-        report = refined.report
-        margins = np.asarray(refined.margin_after)
-    else:
-        steps = steps_plan
-        report = rep_plan
-        margins = margin_before
+    use_refined = False
+    report, steps, margins = rep_plan, steps_plan, margin_before
+    if refined is not None:
+        t1, sa, sr, ea, er = exact_states(routes, chosen_routes, refined.t0, speed)
+        steps_ref = type(options)(
+            route=chosen_routes,
+            t_start=np.asarray(refined.t0, np.float64),
+            t_end=t1,
+            start_angle=sa,
+            start_rate=sr,
+            end_angle=ea,
+            end_rate=er,
+            value=np.asarray(options.value)[idx],
+            scan_ok=np.ones(idx.size, bool),
+        )
+        steps_ref = type(options)(
+            *(
+                np.asarray(x).astype(np.asarray(y).dtype)
+                for x, y in zip(steps_ref, steps_plan, strict=True)
+            )
+        )
+        rep_ref = val_mod.validate_plan(steps_ref, limits, windows=windows)
+        margin_after = np.asarray(
+            reach.reach_margin(
+                ea[:-1],
+                er[:-1],
+                sa[1:],
+                sr[1:],
+                (np.asarray(refined.t0)[1:] - t1[:-1])[:, None],
+                limits,
+            )
+        ).min(axis=1)
+        if rep_ref.ok and margin_after.min() >= margin_before.min():
+            use_refined = True
+            report, steps, margins = rep_ref, steps_ref, margin_after
     lap("validate")
 
     # ---------------------------------------------------------------- outputs
@@ -198,7 +235,6 @@ def run_plan(
     n_routes = int(sc.routes.kind.size)
     visible = int(np.sum(np.isfinite(np.asarray(routes.t0_min))))
     kind_names = np.where(np.asarray(routes.kind) == STRIP, "strip", "point")
-    speed = info.speed[idx]
     ts, te = np.asarray(steps.t_start, np.float64), np.asarray(steps.t_end, np.float64)
     rows = []
     for k in range(idx.size):
@@ -254,7 +290,10 @@ def run_plan(
             "plan_steps": int(idx.size),
             "refined": bool(use_refined),
             "min_margin_before_deg": float(np.degrees(margin_before.min())) if pairs.size else None,
-            "min_margin_after_deg": float(np.degrees(margins.min())) if pairs.size else None,
+            "min_margin_after_deg": (
+                float(np.degrees(margin_after.min())) if margin_after is not None else None
+            ),
+            "plan_margins_from": "refined" if use_refined else "grid",
             "valid": bool(report.ok),
             "violations": list(report.violations),
             "peak_rate_deg_s": np.degrees(np.asarray(report.peak_rate)).tolist(),

@@ -51,6 +51,9 @@ __all__ = [
     "build_route_options",
     "strip_direction",
     "sample_scans",
+    "exact_states",
+    "TabulatedRouteModel",
+    "tabulate_route_model",
 ]
 
 POINT, STRIP = 0, 1
@@ -154,6 +157,18 @@ def _sample_kernel(scene, p, t0, t):
 _sample_batched = jax.jit(jax.vmap(_sample_kernel, in_axes=(None, 0, 0, 0)))
 
 
+@jax.jit
+def _states_jit(scene, params, duration, route, t0):
+    p = params[route].astype(t0.dtype)
+    t1 = t0 + duration[route].astype(t0.dtype)
+    # one batched evaluation of both ends (one kernel copy in the compiled graph)
+    a, r, _, _ = jax.vmap(_sample_kernel, in_axes=(None, 0, 0, 0))(
+        scene, jnp.concatenate([p, p]), jnp.concatenate([t0, t0]), jnp.concatenate([t0, t1])
+    )
+    k = t0.shape[0]
+    return t1, a[:k], r[:k], a[k:], r[k:]
+
+
 def _eval_chunked(scene, p, t0, t, chunk=8192, desc=None):
     """aim_state at M (p [M, 8], t0 [M], t [M]) in padded chunks (one compiled shape)."""
     from tqdm.auto import tqdm
@@ -221,21 +236,10 @@ class RouteSet(NamedTuple):
         Exact pointing-law states at t0 and t_end = t0 + duration (rad, rad/s);
         jit-able and differentiable in t0 (RouteModel protocol).
         """
-        route = jnp.asarray(route)
         t0 = jnp.asarray(t0)
         if not jnp.issubdtype(t0.dtype, jnp.floating):
             t0 = t0.astype(jnp.result_type(float))
-        p = self.params[route].astype(t0.dtype)
-        t1 = t0 + self.duration[route].astype(t0.dtype)
-        # one batched evaluation of both ends (one kernel copy in the compiled graph)
-        a, r, _, _ = jax.vmap(_sample_kernel, in_axes=(None, 0, 0, 0))(
-            self.scene,
-            jnp.concatenate([p, p]),
-            jnp.concatenate([t0, t0]),
-            jnp.concatenate([t0, t1]),
-        )
-        k = t0.shape[0]
-        return t1, a[:k], r[:k], a[k:], r[k:]
+        return _states_jit(self.scene, self.params, self.duration, jnp.asarray(route), t0)
 
     def window(self, route):
         """(t0_min [K], t0_max [K]) [s] of the given routes."""
@@ -484,3 +488,118 @@ def build_route_options(
     )
     info = OptionInfo(speed, t0, peak_rate, peak_acc, max_off, sun_el)
     return opts, info
+
+
+class TabulatedRouteModel(NamedTuple):
+    """A cheap :class:`jaxspline.options.RouteModel`: states tabulated on a t0 grid.
+
+    For P routes, the boundary states (start/end angle and rate, 12 numbers) are
+    sampled with the exact pointing law at M equally spaced start times over each
+    window and interpolated by Catmull-Rom cubic Hermite pieces (C1 in t0), so
+    ``states`` is a small differentiable graph (fast to compile inside an optimizer).
+    Interpolation error is O(h^3); recompute the final states exactly
+    (:func:`exact_states`) before validating.
+
+    Attributes:
+      row: int [R], table row of each route (0 for routes not tabulated).
+      t_first, step, duration: [P] first knot, knot spacing [s], scan duration [s].
+      knots: [P, M, 12] (start_angle[3], start_rate[3], end_angle[3], end_rate[3]).
+      t0_min, t0_max, val: [R] windows and values (as in :class:`RouteSet`).
+    """
+
+    row: jnp.ndarray
+    t_first: jnp.ndarray
+    step: jnp.ndarray
+    duration: jnp.ndarray
+    knots: jnp.ndarray
+    t0_min: jnp.ndarray
+    t0_max: jnp.ndarray
+    val: jnp.ndarray
+
+    def states(self, route, t0):
+        """(t_end, start_angle, start_rate, end_angle, end_rate), shapes [K] and [K, 3]."""
+        t0 = jnp.asarray(t0)
+        r = self.row[route]
+        m = self.knots.shape[1]
+        step = self.step[r].astype(t0.dtype)
+        u = (t0 - self.t_first[r].astype(t0.dtype)) / step
+        k = jnp.clip(jnp.floor(u), 0, m - 2).astype(jnp.int32)
+        s = (u - k)[:, None]
+        kn = self.knots.astype(t0.dtype)
+        p0 = kn[r, jnp.maximum(k - 1, 0)]
+        p1 = kn[r, k]
+        p2 = kn[r, k + 1]
+        p3 = kn[r, jnp.minimum(k + 2, m - 1)]
+        # Catmull-Rom slopes (one-sided at the table ends), in knot units
+        m1 = jnp.where((k > 0)[:, None], 0.5 * (p2 - p0), p2 - p1)
+        m2 = jnp.where((k < m - 2)[:, None], 0.5 * (p3 - p1), p2 - p1)
+        s2, s3 = s * s, s * s * s
+        y = (
+            (2 * s3 - 3 * s2 + 1) * p1
+            + (s3 - 2 * s2 + s) * m1
+            + (-2 * s3 + 3 * s2) * p2
+            + (s3 - s2) * m2
+        )
+        return t0 + self.duration[r].astype(t0.dtype), y[:, :3], y[:, 3:6], y[:, 6:9], y[:, 9:]
+
+    def window(self, route):
+        """(t0_min [K], t0_max [K]) [s]."""
+        return self.t0_min[route], self.t0_max[route]
+
+    def value(self, route):
+        """Value [K]."""
+        return self.val[route]
+
+
+def exact_states(routes: RouteSet, route, t0, speed):
+    """Exact boundary states of routes started at t0 with strip speeds (numpy, chunked kernel).
+
+    Returns (t_end [K], start_angle, start_rate, end_angle, end_rate [K, 3]).
+    """
+    route = np.asarray(route, np.int64)
+    t0 = np.asarray(t0, np.float64)
+    speed = np.asarray(speed, np.float64)
+    strip = np.asarray(routes.kind)[route] == STRIP
+    dur = np.where(
+        strip,
+        np.asarray(routes.length)[route] / np.where(speed > 0, speed, 1.0),
+        np.asarray(routes.duration)[route],
+    )
+    a, w, _, _ = sample_scans(
+        routes,
+        np.concatenate([route, route]),
+        np.concatenate([t0, t0]),
+        np.concatenate([speed, speed]),
+        np.concatenate([t0, t0 + dur]),
+    )
+    k = route.size
+    return t0 + dur, a[:k], w[:k], a[k:], w[k:]
+
+
+def tabulate_route_model(routes: RouteSet, route, speed, knots: int = 129) -> TabulatedRouteModel:
+    """Tabulate the exact states of ``route`` [P] (strips at ``speed`` [P] m/s) on their windows."""
+    route = np.asarray(route, np.int64)
+    speed = np.broadcast_to(np.asarray(speed, np.float64), route.shape)
+    lo = np.asarray(routes.t0_min)[route]
+    hi = np.asarray(routes.t0_max)[route]
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        raise ValueError("route: every tabulated route needs a non-empty window")
+    width = np.maximum(hi - lo, 1e-6)
+    step = width / (knots - 1)
+    tk = lo[:, None] + step[:, None] * np.arange(knots)[None, :]
+    rr = np.repeat(route, knots)
+    t1, sa, sr, ea, er = exact_states(routes, rr, tk.ravel(), np.repeat(speed, knots))
+    table = np.concatenate([sa, sr, ea, er], axis=1).reshape(route.size, knots, 12)
+    row = np.zeros(np.asarray(routes.kind).shape, np.int64)
+    row[route] = np.arange(route.size)
+    dur = (t1 - tk.ravel()).reshape(route.size, knots)[:, 0]
+    return TabulatedRouteModel(
+        row=jnp.asarray(row),
+        t_first=jnp.asarray(lo),
+        step=jnp.asarray(step),
+        duration=jnp.asarray(dur),
+        knots=jnp.asarray(table),
+        t0_min=routes.t0_min,
+        t0_max=routes.t0_max,
+        val=routes.val,
+    )

@@ -51,10 +51,10 @@ file, radians inside the library)::
 
     [planner]
     beam_width = 16                     # beam search width
-    t0_grid = 8                         # start times per route window
-    scan_speeds_km_s = [4.0, 5.5, 7.0]  # strip ground scan speeds (options)
+    t0_grid = 5                         # start times per route window
+    scan_speeds_km_s = [4.0, 7.0]       # strip ground scan speeds (options)
     refine_steps = 200                  # optax steps of start-time refinement (0 = off)
-    max_gap_s = 60.0                    # longest retarget considered between routes
+    max_gap_s = 30.0                    # longest retarget considered between routes
     scan_samples = 9                    # samples per scan for the scan_ok check
 
 A bad file raises ``ValueError`` naming the field (``routes[3].lat_deg``) and,
@@ -95,10 +95,10 @@ class PlannerOptions:
     """Planner settings (static configuration). Speeds in m/s, times in s."""
 
     beam_width: int = 16
-    t0_grid: int = 8
-    scan_speeds: tuple[float, ...] = (4000.0, 5500.0, 7000.0)
+    t0_grid: int = 5
+    scan_speeds: tuple[float, ...] = (4000.0, 7000.0)
     refine_steps: int = 200
-    max_gap: float = 60.0
+    max_gap: float = 30.0
     scan_samples: int = 9
 
 

@@ -19,6 +19,7 @@ from jaxspline.pointing import (
     Scene,
     aim_angles,
     aim_params,
+    aim_state,
     boresight,
     off_nadir,
     pointing_angles,
@@ -98,24 +99,29 @@ def _fd(f, t, h, order):
     return np.tensordot(c, vals, axes=(0, 0)) / h**order
 
 
+_ANGLES = jax.jit(lambda p, t0, t: aim_angles(SCENE, p, t0, t)[:3])
+_STATE = jax.jit(lambda p, t0, t: aim_state(SCENE, p, t0, t)[:3])
+
+
 @pytest.mark.parametrize("kind", ["point", "strip"])
 def test_autodiff_rates_match_finite_differences(kind):
-    tgt = TARGETS[0]
+    tgt = jnp.asarray(TARGETS[0])
     if kind == "point":
-        p = aim_params(jnp.asarray(tgt))
+        p = aim_params(tgt)
     else:
-        p = aim_params(jnp.asarray(tgt), jnp.asarray([0.1, -0.3, -0.9]), 4000.0)
-    t0 = 250.0
-    f = jax.jit(lambda t: aim_angles(SCENE, p, t0, t)[:3])
-    for t in (255.0, 290.0, 310.0):
-        if kind == "point":
-            _, rate, acc = (np.asarray(x) for x in pointing_state(SCENE, tgt, t))
-        else:
-            from jaxspline.pointing import aim_state
+        p = aim_params(tgt, jnp.asarray([0.1, -0.3, -0.9]), 4000.0)
+    t0 = jnp.asarray(250.0)
 
-            _, rate, acc, _ = (np.asarray(x) for x in aim_state(SCENE, p, t0, jnp.asarray(t)))
+    def f(t):
+        return _ANGLES(p, t0, jnp.asarray(t))
+
+    for t in (255.0, 290.0, 310.0):
+        _, rate, acc = (np.asarray(x) for x in _STATE(p, t0, jnp.asarray(t)))
         np.testing.assert_allclose(rate, _fd(f, t, 0.5, 1), rtol=1e-7, atol=1e-11)
         np.testing.assert_allclose(acc, _fd(f, t, 1.0, 2), rtol=1e-5, atol=1e-10)
+    if kind == "point":  # the public wrapper gives the same derivatives
+        _, r2, a2 = pointing_state(SCENE, TARGETS[0], 290.0)
+        np.testing.assert_allclose(r2, _STATE(p, t0, jnp.asarray(290.0))[1], rtol=1e-12)
 
 
 def test_scalar_jit_vmap_agree():
@@ -136,11 +142,6 @@ def test_float32_follows_dtype():
     assert a32.dtype == jnp.float32
     a64 = pointing_angles(SCENE, TARGETS, 300.0)
     np.testing.assert_allclose(a32, a64, atol=2e-5)
-
-
-def test_gradients_finite():
-    g = jax.grad(lambda t: jnp.sum(pointing_angles(SCENE, TARGETS[0], t)))(300.0)
-    assert np.isfinite(g)
 
 
 def test_visibility_windows_match_dense_sampling():

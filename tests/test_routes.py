@@ -61,24 +61,24 @@ def test_strip_against_the_flight_is_reversed():
 
 
 def test_point_states_match_pointing_and_t0_derivative_is_the_rate():
-    route = jnp.asarray([0, 1, 0, 1])
-    t0 = _mid_t0()[jnp.asarray([0, 1, 0, 1])] + jnp.asarray([0.0, 0.0, 3.0, -2.0])
+    route = jnp.asarray([0, 1, 2, 3])
+    t0 = _mid_t0()
     t1, sa, sr, ea, er = ROUTES.states(route, t0)
     np.testing.assert_allclose(t1, t0 + np.asarray(ROUTES.duration)[np.asarray(route)])
     tgt = np.asarray(geodetic_to_ecef(np.asarray(ROUTES.lat), np.asarray(ROUTES.lon), 0.0))
-    ref = np.asarray(pointing_angles(SCENE, tgt[np.asarray(route)], t0))
-    np.testing.assert_allclose(sa, ref, atol=1e-13)
+    ref = np.asarray(pointing_angles(SCENE, tgt[:2], t0[:2]))
+    np.testing.assert_allclose(sa[:2], ref, atol=1e-13)
     # a tracked point does not depend on t0 except through time: d(start angle)/dt0 = rate
-    jac = jax.jacfwd(lambda x: ROUTES.states(route, x)[1])(t0)
-    d = np.stack([np.asarray(jac)[k, :, k] for k in range(4)])
-    np.testing.assert_allclose(d, sr, rtol=1e-10, atol=1e-14)
+    jac = _jacobian()
+    d = np.stack([jac[k, :3, k] for k in range(2)])
+    np.testing.assert_allclose(d, np.asarray(sr)[:2], rtol=1e-10, atol=1e-14)
 
 
 def test_strip_end_points_at_the_great_circle_end():
-    route = jnp.asarray([2, 3, 2, 3])
-    t0 = _mid_t0()[jnp.asarray([2, 3, 2, 3])]
+    route = jnp.asarray([0, 1, 2, 3])
+    t0 = _mid_t0()
     t1, _, _, ea, _ = ROUTES.states(route, t0)
-    for k, r in enumerate(np.asarray(route)):
+    for k, r in [(2, 2), (3, 3)]:
         # independent numpy great circle on the sphere through the start point
         lat, lon, az = (float(np.asarray(x)[r]) for x in (ROUTES.lat, ROUTES.lon, ROUTES.azimuth))
         g0 = np.asarray(geodetic_to_ecef(lat, lon, 0.0))
@@ -93,17 +93,26 @@ def test_strip_end_points_at_the_great_circle_end():
         np.testing.assert_allclose(np.asarray(ea)[k, :2], ref[:2], atol=1e-11)
 
 
+def _states_flat(x):
+    _, sa, sr, ea, er = ROUTES.states(jnp.asarray([0, 1, 2, 3]), x)
+    return jnp.concatenate([sa, sr, ea, er], axis=1)
+
+
+_JAC = []
+
+
+def _jacobian():
+    if not _JAC:
+        _JAC.append(np.asarray(jax.jit(jax.jacfwd(_states_flat))(_mid_t0())))
+    return _JAC[0]
+
+
 def test_states_gradient_matches_finite_differences():
-    route = jnp.asarray([0, 1, 2, 3])
     t0 = _mid_t0()
-
-    def f(x):
-        _, sa, sr, ea, er = ROUTES.states(route, x)
-        return jnp.concatenate([sa, sr, ea, er], axis=1)
-
-    jac = np.asarray(jax.jacfwd(f)(t0))
+    jac = _jacobian()
     diag = np.stack([jac[k, :, k] for k in range(4)])
     h = 0.05
+    f = _states_flat
     fd = (
         -np.asarray(f(t0 + 2 * h))
         + 8 * np.asarray(f(t0 + h))
@@ -142,6 +151,7 @@ def test_options_grid_scan_ok_and_model_agree():
     # the RouteModel reproduces the table for the chosen speeds
     sel = np.flatnonzero(strip & (info.speed == 4000.0))
     sel = sel[np.unique(route[sel], return_index=True)[1]]  # one option per strip route
+    sel = np.concatenate([sel, sel])  # K = 4, the shape compiled above
     model = ROUTES.with_speeds(route[sel], info.speed[sel])
     t1, sa, sr, ea, er = model.states(jnp.asarray(route[sel]), jnp.asarray(t0[sel]))
     np.testing.assert_allclose(t1, np.asarray(opts.t_end)[sel], rtol=1e-13)
