@@ -102,6 +102,50 @@ from jaxspline.retarget import (  # noqa: E402
     simulate,
 )
 # --- geometry (orbit, pointing, routes) ---
+from jaxspline.orbit import (  # noqa: E402
+    CircularOrbit,
+    HermiteOrbit,
+    circular_orbit,
+    circular_orbit_over,
+    ecef_to_geodetic,
+    geodetic_to_ecef,
+    gmst,
+    julian_date,
+    orbit_position,
+    orbit_state,
+    propagate_tle,
+    sso_inclination,
+    sun_direction,
+    teme_to_ecef,
+    tle_orbit,
+)
+from jaxspline.pointing import (  # noqa: E402
+    Scene,
+    aim_angles,
+    aim_params,
+    aim_state,
+    boresight,
+    off_nadir,
+    pointing_angles,
+    pointing_state,
+    visibility_windows,
+)
+from jaxspline.routes import (  # noqa: E402
+    RouteSet,
+    RouteSpec,
+    TabulatedRouteModel,
+    build_route_options,
+    exact_states,
+    make_route_set,
+    make_route_spec,
+    tabulate_route_model,
+)
+from jaxspline.scenario import (  # noqa: E402
+    PlannerOptions,
+    Scenario,
+    default_scenario,
+    load_scenario,
+)
 # --- engine (screen, sequence, refine, validate, scenario) ---
 from jaxspline.screen import (  # noqa: E402
     Transitions,
