@@ -40,11 +40,12 @@ problem into the linear one with shifted targets; by superposition the shift equ
 end-state mismatch between the nonlinear model and the double integrator under the same
 control, so iteration k re-solves the closed form with targets
 ``c_{k+1} = c_k − (x_true(T; u_k) − x_b)`` (``method="picard"``, the paper's one-step
-iteration) or with a quasi-Newton (good Broyden) step on the same 6-dimensional map
-(``method="broyden"``: starts as the Picard step, then learns the coupling; far fewer
-iterations on large maneuvers). u⁽⁰⁾ is the linear solution (eq. 21). (A full Newton step
-by forward-mode autodiff through the integrator converges in 2–3 iterations but takes
-minutes to compile on a 2-core CPU, so it is not offered.)
+iteration) or with a quasi-Newton step on the same 6-dimensional map
+(``method="broyden"``: forward-difference Jacobian at u⁽⁰⁾ from 6 extra simulations, then
+good-Broyden rank-one updates; far fewer iterations on large maneuvers). u⁽⁰⁾ is the
+linear solution (eq. 21). (A Newton step with the Jacobian by forward-mode autodiff
+through the integrator also converges in 2–3 iterations but takes minutes to compile on a
+2-core CPU, so it is not offered.)
 The iterate at convergence is the minimum-peak control of the linear problem with the
 nonlinear terms frozen along its own trajectory; a direct optimisation
 (:func:`min_peak_direct`) can therefore find a slightly lower peak.
@@ -496,7 +497,13 @@ def _retarget_kernel(
         return z1, r1, Bm, it + 1, ea, er
 
     z0 = target * sc
-    st0 = (z0, (e0 - target) * sc, jnp.eye(6, dtype=T.dtype), jnp.int32(0), ea0, er0)
+    B0 = jnp.eye(6, dtype=T.dtype)
+    if method == "broyden":  # forward-difference Jacobian at u0 (6 simulations, vmapped)
+        h = jnp.sqrt(jnp.finfo(T.dtype).eps)
+        Es = jax.vmap(lambda zz: end(zz / sc)[0])(z0[None, :] + h * jnp.eye(6, dtype=T.dtype))
+        B1 = ((Es - e0[None, :]) * sc[None, :]).T / h
+        B0 = jnp.where(jnp.all(jnp.isfinite(B1)), B1, B0)
+    st0 = (z0, (e0 - target) * sc, B0, jnp.int32(0), ea0, er0)
     z, _, _, it, ea, er = jax.lax.while_loop(cond, body, st0)
     c = z / sc
     ctrl = solve(c)
