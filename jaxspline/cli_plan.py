@@ -68,14 +68,15 @@ def _take(options, idx):
 
 def _pair_lookup(tr, src, dst):
     """Index of each (src, dst) pair in the Transitions table (-1 if absent)."""
+    src = np.atleast_1d(np.asarray(src, np.int64))
+    dst = np.atleast_1d(np.asarray(dst, np.int64))
     key = np.asarray(tr.src, np.int64) * (1 << 32) + np.asarray(tr.dst, np.int64)
-    q = np.asarray(src, np.int64) * (1 << 32) + np.asarray(dst, np.int64)
+    if key.size == 0:
+        return np.full(src.shape, -1, np.int64)
+    q = src * (1 << 32) + dst
     order = np.argsort(key)
-    pos = np.searchsorted(key[order], q)
-    pos = np.clip(pos, 0, max(key.size - 1, 0))
-    hit = key.size > 0 and True
-    out = np.where(hit & (key[order][pos] == q) if key.size else False, order[pos], -1)
-    return np.atleast_1d(out)
+    pos = np.clip(np.searchsorted(key[order], q), 0, key.size - 1)
+    return np.where(key[order][pos] == q, order[pos], -1)
 
 
 def run_plan(
@@ -94,7 +95,6 @@ def run_plan(
     default scenario is used. Raises FileExistsError naming an existing output file
     unless ``force``; ValueError on a bad scenario.
     """
-    import jax
     import jax.numpy as jnp
 
     from jaxspline import reach
@@ -181,7 +181,11 @@ def run_plan(
     windows = (lo_all[chosen_routes], hi_all[chosen_routes])
     t_before = np.asarray(options.t_start)[idx]
     pairs = _pair_lookup(tr, idx[:-1], idx[1:]) if idx.size > 1 else np.zeros(0, np.int64)
-    margin_before = np.asarray(tr.margin)[pairs] if pairs.size else np.zeros(0)
+    margin_before = (
+        np.where(pairs >= 0, np.asarray(tr.margin, np.float64)[pairs], np.nan)
+        if pairs.size
+        else np.zeros(0)
+    )
     refined = None
     margin_after = None
     if pl.refine_steps > 0 and idx.size >= 2:
@@ -333,9 +337,7 @@ def run_plan(
     lap("outputs")
     summary["timings_s"] = timings
     _write_atomic(out / "plan.json", json.dumps(summary, indent=2) + "\n")
-    if progress is not None:
-        _print_summary(summary, out)
-    del jax
+    _print_summary(summary, out)
     return summary
 
 
@@ -372,6 +374,7 @@ def _plots(
         chosen,
         title=f"{sc.name}: {chosen.size} of {rl.size} routes, value {st['plan_value']:g}",
         visible=visible,
+        track_t=t,
     )
     # attitude over the plan: scans from the pointing law, maneuvers from Theorem 1
     ts, te = np.asarray(steps.t_start, np.float64), np.asarray(steps.t_end, np.float64)

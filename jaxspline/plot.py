@@ -52,15 +52,17 @@ def plot_ground_track(
     chosen,
     title="",
     visible=None,
+    track_t=None,
 ):
     """Ground track with candidate routes (grey; invisible ones faint) and chosen ones (numbered).
 
     track_lat/lon [M]: sub-satellite points [rad]; cand_* [R]: route start (and strip end)
     points [rad], cand_kind [R] 0 point / 1 strip; chosen [K] route indices in plan order;
-    visible [R] bool (routes with at least one feasible option).
+    visible [R] bool (routes with at least one feasible option); track_t [M] times [s]
+    of the track points (labelled every 100 s).
     """
     plt = _plt()
-    fig, ax = plt.subplots(figsize=(8, 8))
+    fig, ax = plt.subplots(figsize=(10, 8))
     d = np.degrees
     r = np.arange(len(cand_lat))
     vis = np.ones(len(cand_lat), bool) if visible is None else np.asarray(visible, bool)
@@ -89,6 +91,19 @@ def plot_ground_track(
             )
             first = False
     ax.plot(d(track_lon), d(track_lat), "-", color="tab:blue", lw=1.2, label="ground track")
+    if track_t is not None:
+        track_t = np.asarray(track_t)
+        for tk in np.arange(0.0, track_t[-1] + 1e-9, 100.0):
+            i = int(np.argmin(np.abs(track_t - tk)))
+            ax.plot(d(track_lon[i]), d(track_lat[i]), "^", color="tab:blue", ms=5)
+            ax.annotate(
+                f"t={tk:g} s",
+                (d(track_lon[i]), d(track_lat[i])),
+                xytext=(5, -3),
+                textcoords="offset points",
+                fontsize=7,
+                color="tab:blue",
+            )
     cmap = plt.get_cmap("plasma")
     k = len(chosen)
     for n, i in enumerate(chosen):
@@ -122,7 +137,7 @@ def plot_ground_track(
     ax.set_ylabel("latitude [deg]")
     ax.set_title(title or "ground track and routes")
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower left", fontsize=8)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
     fig.tight_layout()
     save_figure(fig, path)
 
