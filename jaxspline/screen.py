@@ -168,33 +168,47 @@ def _channel_limits(limits: AxisLimits, c: int, dtype):
 # ----------------------------------------------------------------------------
 
 
-def _candidate(reach, a1, b1, a2, b2, T, rate, accel):
-    """One candidate, all channels: (feasible, margin, effort, t_min).
+def _channel(reach, a1, b1, a2, b2, T, rate, accel):
+    """One channel of a batch of candidates: (ok, margin, d*/accel, t_min), each [n].
 
-    a1, b1, a2, b2, rate, accel: [C]; T: scalar [s]. A padded slot has T = 0
-    and comes out infeasible; callers drop padded slots anyway.
+    a1, b1, a2, b2, T: [n] contiguous vectors; rate, accel: scalars of this channel.
+    The reach kernels are elementwise, so applying them to whole [n] vectors is the
+    same arithmetic as vmapping the one-candidate kernel, with unit-stride SIMD.
     """
-    over_c = functools.partial(jax.vmap, in_axes=(0, 0, 0, 0, None, 0, 0))
-    ok = over_c(reach.is_reachable_kernel)(a1, b1, a2, b2, T, rate, accel)
-    m = over_c(reach.reach_margin_kernel)(a1, b1, a2, b2, T, rate, accel)
-    dstar = jax.vmap(reach.min_peak_accel_kernel, in_axes=(0, 0, 0, 0, None, 0))(
-        a1, b1, a2, b2, T, rate
-    )
-    tmin = jax.vmap(reach.min_transfer_time_kernel)(a1, b1, a2, b2, rate, accel)
-    pos = T > 0
-    feasible = jnp.all(ok) & pos
-    margin = jnp.where(pos, jnp.min(m), -jnp.inf)
-    effort = jnp.where(pos, jnp.max(dstar / accel), jnp.inf)
-    return feasible, margin, effort, jnp.max(tmin)
+    ok = reach.is_reachable_kernel(a1, b1, a2, b2, T, rate, accel)
+    m = reach.reach_margin_kernel(a1, b1, a2, b2, T, rate, accel)
+    eff = reach.min_peak_accel_kernel(a1, b1, a2, b2, T, rate) / accel
+    tmin = reach.min_transfer_time_kernel(a1, b1, a2, b2, rate, accel)
+    return ok, m, eff, tmin
 
 
 @functools.lru_cache(maxsize=8)
 def _chunk_program(reach):
+    """jit program screening one chunk: (feasible, margin, effort, t_min), each [n].
+
+    Channel-major layout: the option table arrives transposed ([C, N] per field),
+    the loop over the C channels is a Python loop (C is static) and the reductions
+    over channels are min/max chains, so every operation runs on contiguous [n]
+    candidate vectors. A padded slot has T = 0 and comes out infeasible; callers
+    drop padded slots anyway.
+    """
+
     def run(end_angle, end_rate, start_angle, start_rate, rate, accel, src, dst, T):
-        kern = functools.partial(_candidate, reach)
-        return jax.vmap(kern, in_axes=(0, 0, 0, 0, 0, None, None))(
-            end_angle[src], end_rate[src], start_angle[dst], start_rate[dst], T, rate, accel
-        )
+        outs = []
+        for c in range(end_angle.shape[0]):
+            a1, b1 = end_angle[c][src], end_rate[c][src]
+            a2, b2 = start_angle[c][dst], start_rate[c][dst]
+            outs.append(_channel(reach, a1, b1, a2, b2, T, rate[c], accel[c]))
+        cols = list(zip(*outs, strict=True))
+        ok = functools.reduce(jnp.logical_and, cols[0])
+        m = functools.reduce(jnp.minimum, cols[1])
+        eff = functools.reduce(jnp.maximum, cols[2])
+        tmin = functools.reduce(jnp.maximum, cols[3])
+        pos = T > 0
+        feasible = ok & pos
+        margin = jnp.where(pos, m, -jnp.inf)
+        effort = jnp.where(pos, eff, jnp.inf)
+        return feasible, margin, effort, tmin
 
     return jax.jit(run)
 
@@ -215,8 +229,12 @@ class _Screener:
         rep = NamedSharding(self.mesh, P())
         self.cand = NamedSharding(self.mesh, P("cand"))
         rate, accel = _channel_limits(limits, c, self.dtype)
+        # channel-major [C, N]: each channel's column is one contiguous vector
         self.table = [
-            jax.device_put(jnp.asarray(getattr(options, f), self.dtype), rep)
+            jax.device_put(
+                jnp.asarray(np.ascontiguousarray(np.asarray(getattr(options, f)).T), self.dtype),
+                rep,
+            )
             for f in ("end_angle", "end_rate", "start_angle", "start_rate")
         ]
         self.limits = [jax.device_put(rate, rep), jax.device_put(accel, rep)]
