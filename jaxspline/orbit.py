@@ -351,10 +351,17 @@ def propagate_tle(line1: str, line2: str, jd, fr=0.0):
     """
     from sgp4.api import Satrec, SatrecArray
 
+    for k, line in ((1, line1), (2, line2)):
+        if not isinstance(line, str) or len(line.rstrip()) < 64 or line[:2] != f"{k} ":
+            raise ValueError(
+                f"tle line {k} must be a 69-column TLE line starting '{k} ', got {line!r}"
+            )
     try:
         sat = Satrec.twoline2rv(line1, line2)
     except Exception as exc:  # sgp4 raises ValueError / IndexError on malformed lines
         raise ValueError(f"tle lines could not be parsed: {exc}") from exc
+    if sat.error != 0:
+        raise ValueError(f"tle: SGP4 initialisation error code {sat.error}")
     jd = np.atleast_1d(np.asarray(jd, dtype=np.float64))
     fr = np.broadcast_to(np.asarray(fr, dtype=np.float64), jd.shape)
     shape = jd.shape
