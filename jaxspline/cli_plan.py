@@ -323,14 +323,13 @@ def run_plan(
             out,
             sc,
             routes,
-            model,
             options,
             tr,
             steps,
             speed,
             idx,
             margin_before,
-            margins if use_refined else None,
+            margin_after,
             limits,
             summary,
         )
@@ -341,9 +340,7 @@ def run_plan(
     return summary
 
 
-def _plots(
-    out, sc, routes, model, options, tr, steps, speed, idx, m_before, m_after, limits, summary
-):
+def _plots(out, sc, routes, options, tr, steps, speed, idx, m_before, m_after, limits, summary):
     import jax.numpy as jnp
 
     from jaxspline import plot, reach

@@ -202,6 +202,7 @@ def plot_margins(path, margins, chosen_before=None, chosen_after=None, title="")
     ax.set_ylabel("count")
     ax.set_title(title or "transition margins")
     ax.grid(alpha=0.3)
-    ax.legend(fontsize=8)
+    if ax.get_legend_handles_labels()[0]:
+        ax.legend(fontsize=8)
     fig.tight_layout()
     save_figure(fig, path)

@@ -129,7 +129,8 @@ def _frame_los(scene: Scene, p, t0, t):
     w = hn / rn**2
     w_x_los = jnp.stack([-w * los[2], jnp.zeros_like(w), w * los[0]])  # (0, -w, 0) x L
     los_dot = basis @ (g_dot - v) - w_x_los
-    return los, los_dot, basis @ tan_eci
+    sees = jnp.dot(r - g_eci, g_eci)  # > 0 iff the satellite is above the aim point's horizon
+    return los, los_dot, basis @ tan_eci, sees
 
 
 def _angles_from(n, s):
@@ -151,6 +152,8 @@ def _angles_from(n, s):
 def aim_angles(scene: Scene, p, t0, t):
     """Kernel: [roll, pitch, yaw, off_nadir] [rad] at time t [s] for aim law p [8] started at t0.
 
+    off_nadir is pi when the aim point is below its horizon (seen through the Earth).
+
     One candidate (scalars t, t0; p of shape [8] from :func:`aim_params`); the aim
     point moves along its great circle at ground speed p[6] from t0. Branchless in
     the point/strip switch; differentiable in t and t0. The aim point covers
@@ -158,11 +161,12 @@ def aim_angles(scene: Scene, p, t0, t):
     (within ~0.2 km of the ellipsoid for a 100 km strip).
     """
 
-    los, los_dot, tan_o = _frame_los(scene, p, t0, t)
+    los, los_dot, tan_o, sees = _frame_los(scene, p, t0, t)
     n = los / jnp.linalg.norm(los)
     s = jnp.where(p[7] > 0.5, tan_o, -los_dot)
     ang = _angles_from(n, s)
     offn = jnp.arctan2(jnp.hypot(n[0], n[1]), n[2])
+    offn = jnp.where(sees > 0, offn, jnp.pi)  # behind the Earth: not visible
     return jnp.concatenate([ang, offn[None]])
 
 
@@ -209,7 +213,8 @@ def _offn_kernel(scene, target, t):
     d = g - r
     nadir = -r
     cr = jnp.cross(d, nadir)
-    return jnp.arctan2(jnp.sqrt(jnp.sum(cr * cr)), jnp.dot(d, nadir))
+    offn = jnp.arctan2(jnp.sqrt(jnp.sum(cr * cr)), jnp.dot(d, nadir))
+    return jnp.where(jnp.dot(-d, g) > 0, offn, jnp.pi)  # behind the Earth: pi
 
 
 _offn_batched = jax.jit(jnp.vectorize(_offn_kernel, excluded={0}, signature="(3),()->()"))
@@ -240,7 +245,10 @@ def pointing_angles(scene: Scene, target_ecef, t):
 
 
 def off_nadir(scene: Scene, target_ecef, t):
-    """Off-nadir angle [rad] of the line of sight to a ground point: atan2(|n x z_o|, n . z_o)."""
+    """Off-nadir angle [rad] of the line of sight to a ground point: atan2(|n x z_o|, n . z_o).
+
+    A point below its horizon (satellite behind the Earth: (r - g) . g <= 0) gets pi.
+    """
     target, t = _check_target(target_ecef, t)
     return _offn_batched(scene, target, t)
 

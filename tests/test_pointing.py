@@ -161,6 +161,15 @@ def test_visibility_windows_match_dense_sampling():
             assert float(off_nadir(SCENE, TARGETS[k], t)) == pytest.approx(lim, abs=1e-9)
 
 
+def test_target_behind_the_earth_is_never_visible():
+    # nearly antipodal to the sub-satellite point: the LOS passes through the Earth near nadir
+    far = np.asarray(geodetic_to_ecef(np.radians(-46.0), np.radians(15.0 - 180.0), 0.0))
+    assert float(off_nadir(SCENE, far, 300.0)) == pytest.approx(np.pi)
+    assert visibility_windows(SCENE, far[None], 0.0, 600.0, np.radians(45.0))[0].shape == (0, 2)
+    p = aim_params(jnp.asarray(far))
+    assert float(aim_angles(SCENE, p, 0.0, 300.0)[3]) == pytest.approx(np.pi)
+
+
 def test_value_errors():
     with pytest.raises(ValueError, match="target_ecef"):
         pointing_angles(SCENE, np.zeros(2), 0.0)
