@@ -177,13 +177,14 @@ def _eval(qr, coeffs, T, t):
 
 
 def _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples):
-    qr, coeffs = _plan(q0, w0, e0, j0, q1, w1, e1, j1, T)
-    t = jnp.linspace(0.0, 1.0, n_samples, dtype=coeffs.dtype) * T
-    _, w, e, j = _eval(qr, coeffs, T, t)
-    pw = jnp.max(_att._safe_norm(w))
-    pe = jnp.max(_att._safe_norm(e))
-    pj = jnp.max(_att._safe_norm(j))
-    ok = (pw <= rate) & (pe <= accel) & (pj <= jerk) & jnp.isfinite(pw + pe + pj)
+    good = T > 0  # a non-positive duration is infeasible (+inf peaks), never NaN
+    Ts = jnp.where(good, T, 1.0)
+    qr, coeffs = _plan(q0, w0, e0, j0, q1, w1, e1, j1, Ts)
+    t = jnp.linspace(0.0, 1.0, n_samples, dtype=coeffs.dtype) * Ts
+    _, w, e, j = _eval(qr, coeffs, Ts, t)
+    inf = jnp.asarray(jnp.inf, coeffs.dtype)
+    pw, pe, pj = (jnp.where(good, jnp.max(_att._safe_norm(x)), inf) for x in (w, e, j))
+    ok = good & (pw <= rate) & (pe <= accel) & (pj <= jerk) & jnp.isfinite(pw + pe + pj)
     return pw, pe, pj, ok
 
 
@@ -192,7 +193,7 @@ def maneuver_check_kernel(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, 
 
     Arguments as in ``maneuver_check`` with the limits unpacked (rate [rad/s],
     accel [rad/s²], jerk [rad/s³], 0-d). Returns (peak |ω|, peak |ε|, peak
-    |ε'|, feasible). For the engine: ``jax.jit(jax.vmap(partial(
+    |ε'|, feasible); T <= 0 gives +inf peaks and False. For the engine: ``jax.jit(jax.vmap(partial(
     maneuver_check_kernel, n_samples=N)))``.
     """
     return _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples)
