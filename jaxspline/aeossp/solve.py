@@ -411,6 +411,10 @@ def _greedy(plan: _Plan, deadline: float):
     plan.commit()
 
 
+_RAD_TARGET = (30, 60, 90, 150)  # destroy half-widths [s] around an unscheduled task
+_RAD_RANDOM = (60, 120, 240)  # ... around a random scheduled action
+
+
 def _destroy(plan: _Plan, k: int, lo: float, hi: float):
     """Remove sat k's actions touching [lo, hi] (grid units); None if that is infeasible."""
     pb = plan.pb
@@ -469,7 +473,7 @@ def _lns(
                 continue
             c = rng.choice(pb.task_cands[t])
             k = pb.c_sat[c]
-            rad = rng.choice((30, 60, 90, 150)) / step
+            rad = rng.choice(_RAD_TARGET) / step
             lo, hi = pb.c_start[c] - rad, pb.c_end[c] + rad
             forced = c
         else:
@@ -477,7 +481,7 @@ def _lns(
             if not plan.tl[k]:
                 continue
             c0 = rng.choice(plan.tl[k])
-            rad = rng.choice((60, 120, 240)) / step
+            rad = rng.choice(_RAD_RANDOM) / step
             lo, hi = pb.c_start[c0] - rad, pb.c_end[c0] + rad
         windows = [(k, lo, hi)]
         removed = _destroy(plan, k, lo, hi)
