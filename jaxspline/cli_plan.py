@@ -192,7 +192,14 @@ def run_plan(
         # a tabulated (Catmull-Rom in t0) copy of the pointing law keeps the optimizer's
         # compiled graph small; the refined start times are re-evaluated exactly below
         model = tabulate_route_model(routes, chosen_routes, speed)
-        refined = refine_mod.refine_plan(plan, options, model, limits, steps=pl.refine_steps)
+        refined = refine_mod.refine_plan(
+            plan,
+            options,
+            model,
+            limits,
+            steps=pl.refine_steps,
+            learning_rate=pl.refine_learning_rate,
+        )
     lap("refine")
 
     steps_plan = _take(options, idx)

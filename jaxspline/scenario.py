@@ -54,6 +54,7 @@ file, radians inside the library)::
     t0_grid = 5                         # start times per route window
     scan_speeds_km_s = [4.0, 7.0]       # strip ground scan speeds (options)
     refine_steps = 200                  # optax steps of start-time refinement (0 = off)
+    refine_learning_rate = 0.002        # Adam step, in fractions of each route's window
     max_gap_s = 30.0                    # longest retarget considered between routes
     scan_samples = 9                    # samples per scan for the scan_ok check
 
@@ -98,6 +99,7 @@ class PlannerOptions:
     t0_grid: int = 5
     scan_speeds: tuple[float, ...] = (4000.0, 7000.0)
     refine_steps: int = 200
+    refine_learning_rate: float = 0.002
     max_gap: float = 30.0
     scan_samples: int = 9
 
@@ -179,6 +181,7 @@ _KEYS = {
         "t0_grid",
         "scan_speeds_km_s",
         "refine_steps",
+        "refine_learning_rate",
         "max_gap_s",
         "scan_samples",
     },
@@ -380,6 +383,12 @@ def parse_scenario(data: dict, source: str = "<scenario>", text: str | None = No
             1e3 * _number(ctx, "planner.scan_speeds_km_s", s, positive=True) for s in speeds
         ),
         refine_steps=_int(ctx, "planner.refine_steps", pl.get("refine_steps", d.refine_steps), 0),
+        refine_learning_rate=_number(
+            ctx,
+            "planner.refine_learning_rate",
+            pl.get("refine_learning_rate", d.refine_learning_rate),
+            positive=True,
+        ),
         max_gap=_number(ctx, "planner.max_gap_s", pl.get("max_gap_s", d.max_gap), positive=True),
         scan_samples=_int(ctx, "planner.scan_samples", pl.get("scan_samples", d.scan_samples), 2),
     )
