@@ -710,7 +710,7 @@ def solve_case(
     margins = margins or Margins()
     case = load_case(case_dir) if not hasattr(case_dir, "tasks") else case_dir
     # leave room for process start-up, JSON output and the final re-check
-    reserve = min(0.25 * time_limit, 2.0 + 0.05 * time_limit)
+    reserve = min(0.25 * time_limit, 2.0 + 0.08 * time_limit)
     deadline = t0 + time_limit - reserve
 
     def say(msg):
