@@ -443,6 +443,10 @@ def _plots(out, sc, routes, options, tr, steps, speed, idx, m_before, m_after, l
     )
 
 
+def _fmt(x) -> str:
+    return "n/a" if x is None else f"{x:.4f}"
+
+
 def _print_summary(s: dict, out: Path) -> None:
     st, sc, tm = s["stats"], s["scenario"], s["timings_s"]
     lines = [
@@ -453,8 +457,8 @@ def _print_summary(s: dict, out: Path) -> None:
         f"feasible            {st['candidates_feasible']} ({100 * st['feasible_fraction']:.2f} %)",
         f"plan value          {st['plan_value']:g} (greedy {st['plan_value_greedy']:g}, "
         f"beam[{st['beam_width']}] {st['plan_value_beam']:g}), {st['plan_steps']} routes",
-        f"refined             {st['refined']}; min margin {st['min_margin_before_deg']} -> "
-        f"{st['min_margin_after_deg']} deg",
+        f"refined             {st['refined']}; min transition margin "
+        f"{_fmt(st['min_margin_before_deg'])} -> {_fmt(st['min_margin_after_deg'])} deg",
         f"valid               {st['valid']} ({len(st['violations'])} violations)",
         "wall time [s]       " + ", ".join(f"{k} {v:.2f}" for k, v in tm.items()),
         f"outputs             {out}/ ({', '.join(OUTPUT_FILES)})",
