@@ -250,29 +250,22 @@ class _Screener:
         size = min(chunk_size, 1 << max(int(math.ceil(math.log2(max(n, 1)))), 10))
         return int(math.ceil(size / self.ndev) * self.ndev)
 
-    def dispatch(self, src: np.ndarray, dst: np.ndarray, size: int):
+    def dispatch(self, src: np.ndarray, dst: np.ndarray, size: int, T: np.ndarray | None = None):
         """Start screening pairs (len <= size, padded to ``size``); returns a pending handle.
 
+        ``T`` (float64, optional) is ``t_start[dst] - t_end[src]`` if the caller has it.
         JAX dispatch is asynchronous: the host prepares the next chunk while the
         devices screen this one. ``collect`` waits for the result.
         """
         n = src.size
-        T = self.t_start[dst] - self.t_end[src]
-        pad = size - n
-        s = np.concatenate([src, np.zeros(pad, src.dtype)])
-        d = np.concatenate([dst, np.zeros(pad, dst.dtype)])
-        t = np.concatenate([T, np.zeros(pad)])
-        args = [
-            jax.device_put(jnp.asarray(s, jnp.int32), self.cand),
-            jax.device_put(jnp.asarray(d, jnp.int32), self.cand),
-            jax.device_put(jnp.asarray(t, self.dtype), self.cand),
-        ]
-        return (
-            src,
-            dst,
-            T.astype(np.dtype(self.dtype)),
-            self.program(*self.table, *self.limits, *args),
-        )
+        if T is None:
+            T = self.t_start[dst] - self.t_end[src]
+        s = np.zeros(size, np.int32)
+        d = np.zeros(size, np.int32)
+        t = np.zeros(size, np.dtype(self.dtype))
+        s[:n], d[:n], t[:n] = src, dst, T
+        args = [jax.device_put(a, self.cand) for a in (s, d, t)]
+        return src, dst, t[:n], self.program(*self.table, *self.limits, *args)
 
     @staticmethod
     def collect(pending):
@@ -364,16 +357,12 @@ def screen_transitions(
     if total == 0:
         return _empty(screener.dtype)
 
-    parts = []
+    route_sorted = np.asarray(route)[order]
+    base = lo - starts[:-1]  # destination position of candidate g of source k: base[k] + g
+    sink = _Sink(total, screener.dtype, feasible_only)
     n_screened = 0
     pending = None
     from tqdm.auto import tqdm
-
-    def finish(pend):
-        cols = screener.collect(pend)
-        if feasible_only:
-            cols = tuple(a[cols[3]] for a in cols)
-        parts.append(cols)
 
     bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
     for k, g0 in enumerate(range(0, total, chunk_size)):
@@ -381,28 +370,60 @@ def screen_transitions(
         if k % pc != pi:
             bar.update(g1 - g0)
             continue
-        g = np.arange(g0, g1, dtype=np.int64)
-        s_pos = np.searchsorted(starts, g, side="right") - 1
-        d_pos = lo[s_pos] + (g - starts[s_pos])
-        src, dst = order[s_pos], order[d_pos]
-        keep = route[src] != route[dst]
-        src, dst = src[keep], dst[keep]
+        # sources k0..k1-1 own the candidates g0..g1-1 (runs laid end to end)
+        k0 = int(np.searchsorted(starts, g0, side="right")) - 1
+        k1 = int(np.searchsorted(starts, g1, side="left"))
+        cnt = np.minimum(starts[k0 + 1 : k1 + 1], g1) - np.maximum(starts[k0:k1], g0)
+        d_pos = np.repeat(base[k0:k1], cnt) + np.arange(g0, g1, dtype=np.int64)
+        keep = np.repeat(route_sorted[k0:k1], cnt) != route_sorted[d_pos]
+        src = np.repeat(order[k0:k1], cnt)
+        T = ts_sorted[d_pos] - np.repeat(te_src[k0:k1], cnt)
+        dst = order[d_pos]
+        if not keep.all():
+            src, dst, T = src[keep], dst[keep], T[keep]
         if src.size:
             size = screener.padded_size(g1 - g0, chunk_size)
-            nxt = screener.dispatch(src, dst, size)  # runs while the previous chunk is collected
+            nxt = screener.dispatch(src, dst, size, T)  # runs while the previous chunk is collected
             n_screened += src.size
             if pending is not None:
-                finish(pending)
+                sink.add(screener.collect(pending))
             pending = nxt
         bar.update(g1 - g0)
     if pending is not None:
-        finish(pending)
+        sink.add(screener.collect(pending))
     bar.close()
-    if not parts:
-        out = _empty(screener.dtype)
-        return out._replace(n_screened=n_screened)
-    cols = [np.concatenate(col) for col in zip(*parts, strict=True)]
-    return Transitions(*cols, n_screened=n_screened)
+    return sink.result(n_screened)
+
+
+class _Sink:
+    """Collects screened chunks: into preallocated columns (no final concatenation copy,
+    bounded by the candidate count) or, with ``feasible_only``, as a list of the kept rows."""
+
+    def __init__(self, total: int, dtype, feasible_only: bool):
+        self.feasible_only = feasible_only
+        self.cols_dtype = dtype
+        self.parts = []
+        self.w = 0
+        if not feasible_only:
+            f = np.dtype(dtype)
+            self.cols = [np.empty(total, t) for t in (np.int64, np.int64, f, bool, f, f, f)]
+
+    def add(self, cols):
+        if self.feasible_only:
+            self.parts.append(tuple(a[cols[3]] for a in cols))
+            return
+        n = cols[0].size
+        for buf, a in zip(self.cols, cols, strict=True):
+            buf[self.w : self.w + n] = a
+        self.w += n
+
+    def result(self, n_screened: int) -> Transitions:
+        if not self.feasible_only:
+            return Transitions(*(c[: self.w] for c in self.cols), n_screened=n_screened)
+        if not self.parts:
+            return _empty(self.cols_dtype)._replace(n_screened=n_screened)
+        cols = [np.concatenate(col) for col in zip(*self.parts, strict=True)]
+        return Transitions(*cols, n_screened=n_screened)
 
 
 def screen_pairs(
