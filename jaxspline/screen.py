@@ -15,12 +15,20 @@ Engine layout
   contiguous run of that order (``t_end[i] < t_start[j] <= t_end[i] + max_gap``,
   found by ``searchsorted``). The runs are laid end to end in a virtual index
   space of all pairs which is cut into chunks of ``chunk_size``; a chunk is
-  materialized (numpy, O(chunk_size) memory), same-route pairs are dropped and
-  the rest is padded to a fixed length so one compiled program serves all
-  chunks. N^2 pairs are never held at once.
-* Each chunk is screened by one ``jax.jit`` program (the one-candidate kernel
-  applied over channels and candidates with ``vmap``) that gathers boundary
-  states from the option table on the device.
+  materialized run by run (``np.repeat`` over the sources it covers, O(chunk_size)
+  memory), same-route pairs are dropped and the rest is padded to a fixed length
+  so one compiled program serves all chunks. N^2 pairs are never held at once.
+* Each chunk is screened by one ``jax.jit`` program that gathers boundary states
+  from the option table on the device and applies the elementwise reach kernels
+  to whole candidate vectors, channel by channel: the table is stored
+  channel-major ([C, N] per field), the loop over the C channels is a Python
+  loop (C is static) and the channel reductions are min/max chains, so every
+  operation runs on contiguous [n] vectors (SIMD-friendly on CPU; a vmap over
+  channels inside a vmap over candidates would make C = 2-3 the minor axis and
+  ran ~5x slower).
+* Results are written chunk by chunk into preallocated output columns (no final
+  concatenation copy); with ``feasible_only`` only the kept rows are stored.
+  The output itself takes 49 bytes per candidate (float64).
 * Sharding: the candidate axis of every chunk is split over all local devices
   with a 1-D :class:`jax.sharding.Mesh` and ``NamedSharding(mesh, P("cand"))``;
   the option table is replicated. On CPU, try it with
