@@ -350,3 +350,30 @@ def test_chunk_program_agrees_with_public_reach_functions(reach_kernels):
         for c in range(2)
     ]
     assert min(one) == pytest.approx(tr.margin[k], rel=1e-12, abs=1e-15)
+
+
+def test_tiny_chunks_empty_runs_and_screen_pairs(reach_kernels):
+    """Chunk edges inside runs, sources with empty runs, nothing feasible, pairs path."""
+    rng = np.random.default_rng(13)
+    opt = synthetic_options(rng, n_routes=7, per_route=3, horizon=250.0)
+    # a small max_gap leaves many sources with an empty destination run
+    full = screen.screen_transitions(opt, LIMITS, progress=False, max_gap=25.0)
+    ref = brute_candidates(opt, 25.0)
+    assert set(zip(full.src.tolist(), full.dst.tolist(), strict=True)) == ref
+    assert 0 < full.n_screened < len(brute_candidates(opt))
+    for cs in (1, 5):
+        part = screen.screen_transitions(opt, LIMITS, progress=False, max_gap=25.0, chunk_size=cs)
+        for f in ("src", "dst", "T", "feasible"):
+            np.testing.assert_array_equal(getattr(part, f), getattr(full, f))
+        for f in ("margin", "effort", "t_min"):  # tiny programs compile unvectorized: 1 ulp
+            np.testing.assert_allclose(getattr(part, f), getattr(full, f), rtol=1e-14, atol=1e-17)
+        assert part.n_screened == full.n_screened
+    # the pairs entry point (T formed on the device path) gives the same columns
+    pairs = screen.screen_pairs(opt, LIMITS, full.src, full.dst)
+    for f in ("T", "feasible", "margin", "effort", "t_min"):
+        np.testing.assert_array_equal(getattr(pairs, f), getattr(full, f))
+    # nothing feasible under tiny limits: feasible_only gives typed empty columns
+    tiny = AxisLimits(rate=np.array([1e-6, 1e-6]), accel=np.array([1e-6, 1e-6]))
+    none = screen.screen_transitions(opt, tiny, progress=False, feasible_only=True)
+    assert none.src.size == 0 and none.n_screened == len(brute_candidates(opt))
+    assert none.src.dtype == np.int64 and none.margin.dtype == np.float64
