@@ -377,3 +377,13 @@ def test_tiny_chunks_empty_runs_and_screen_pairs(reach_kernels):
     none = screen.screen_transitions(opt, tiny, progress=False, feasible_only=True)
     assert none.src.size == 0 and none.n_screened == len(brute_candidates(opt))
     assert none.src.dtype == np.int64 and none.margin.dtype == np.float64
+
+
+def test_prefaulted_columns_are_plain_writable_arrays():
+    """Large result columns come from one pre-populated mapping; they behave like np.empty."""
+    for n, dt in ((3_000_000, np.float64), (2_500_000, np.int64), (20_000_000, bool), (10, float)):
+        a = screen._prefaulted(n, dt)
+        assert a.shape == (n,) and a.dtype == np.dtype(dt) and a.flags.writeable
+        a[:] = 1
+        a[-1] = 0
+        assert a[:-1].all() and not a[-1] and a[: n // 2].base is not None
