@@ -176,14 +176,168 @@ def _eval(qr, coeffs, T, t):
     return q, w, e, j
 
 
+# ---- fast sampled check: per-component scalars, one sample per scan step
+# The check never materializes a sample grid: a scan over the n sample times carries the
+# three running maxima, so under vmap every step is a few fused loops over the batch
+# (memory per candidate and compile time do not grow with n).
+def _cdot(a, b):
+    return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+
+
+def _ccross(a, b):
+    return (
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    )
+
+
+def _cmrp_derivs(s, w, e, j):
+    """(σ', σ'', σ''') from (σ, ω, ε, ε') as 3-tuples (formula of attitude._mrp_derivs).
+
+    σ' = ¼[(1 - a0)ω + 2σ×ω + 2σ b0], a0 = σ·σ, b0 = σ·ω, differentiated twice
+    (a1 = 2σ·σ', a2 = 2σ'·σ' + 2σ·σ'', b1 = σ'·ω + σ·ε, b2 = σ''·ω + 2σ'·ε + σ·ε').
+    """
+    a0, b0 = _cdot(s, s), _cdot(s, w)
+    x = _ccross(s, w)
+    d1 = tuple(0.25 * ((1.0 - a0) * w[i] + 2.0 * x[i] + 2.0 * s[i] * b0) for i in range(3))
+    a1, b1 = 2.0 * _cdot(s, d1), _cdot(d1, w) + _cdot(s, e)
+    x1, x2 = _ccross(d1, w), _ccross(s, e)
+    d2 = tuple(
+        0.25
+        * ((1.0 - a0) * e[i] - a1 * w[i] + 2.0 * (x1[i] + x2[i]) + 2.0 * (d1[i] * b0 + s[i] * b1))
+        for i in range(3)
+    )
+    a2 = 2.0 * (_cdot(d1, d1) + _cdot(s, d2))
+    b2 = _cdot(d2, w) + 2.0 * _cdot(d1, e) + _cdot(s, j)
+    y1, y2, y3 = _ccross(d2, w), _ccross(d1, e), _ccross(s, j)
+    d3 = tuple(
+        0.25
+        * (
+            (1.0 - a0) * j[i]
+            - 2.0 * a1 * e[i]
+            - a2 * w[i]
+            + 2.0 * (y1[i] + 2.0 * y2[i] + y3[i])
+            + 2.0 * (d2[i] * b0 + 2.0 * d1[i] * b1 + s[i] * b2)
+        )
+        for i in range(3)
+    )
+    return d1, d2, d3
+
+
+def _cqmul_conj(a, b):
+    """ã∘b for quaternions given as 4-tuples (w, x, y, z)."""
+    av, bv = a[1:], b[1:]
+    x = _ccross(av, bv)
+    return (a[0] * b[0] + _cdot(av, bv), *(a[0] * bv[i] - b[0] * av[i] - x[i] for i in range(3)))
+
+
+def _cnormalize(q):
+    n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]
+    pos = n2 > 0
+    inv = jnp.where(pos, jax.lax.rsqrt(jnp.where(pos, n2, 1.0)), 0.0)
+    # the zero quaternion has no attitude: identity instead of NaN (as attitude._qnormalize)
+    return (jnp.where(pos, q[0] * inv, 1.0), *(q[i] * inv for i in range(1, 4)))
+
+
+def _cchart(q0, q1):
+    """The midpoint chart of ``_chart`` on 4-tuples: (σ0, σ1) as 3-tuples."""
+    q0, q1 = _cnormalize(q0), _cnormalize(q1)
+    sgn = jnp.where(sum(q0[i] * q1[i] for i in range(4)) < 0, -1.0, 1.0)
+    q1 = tuple(sgn * x for x in q1)
+    qr = _cnormalize(tuple(a + b for a, b in zip(q0, q1, strict=True)))
+
+    def mrp(q):
+        d = _cqmul_conj(qr, q)  # unit up to rounding; d_w = qr·q >= 1/sqrt(2)
+        f = jnp.where(d[0] < 0, -1.0, 1.0) / (1.0 + jnp.abs(d[0]))
+        return tuple(f * x for x in d[1:])
+
+    return mrp(q0), mrp(q1)
+
+
+def _horner_derivs(c, tau):
+    """(p, p_τ, p_ττ, p_τττ) at a scalar τ of Σ_k c[i][k] τ^k, each a 3-tuple over i."""
+    out = []
+    for d in range(4):
+        comp = []
+        for i in range(3):
+            acc = None
+            for k in range(7, d - 1, -1):
+                term = c[i][k] * float(np.prod(np.arange(k - d + 1, k + 1))) if d else c[i][k]
+                acc = term if acc is None else acc * tau + term
+            comp.append(acc)
+        out.append(tuple(comp))
+    return out
+
+
+def _rates_sq(s, d1, d2, d3):
+    """|ω|², |ε|², |ε'|² from σ and its first three derivatives (3-tuples), closed form.
+
+    Formula of attitude._omega_derivs: p = Λ(σ) = [2g - 1, 2gσ], g = 1/(1 + σ·σ),
+    ω = 2 vec(p̃∘p'), ε = 2 vec(p̃∘p''), ε' = 2 vec(p̃'∘p'' + p̃∘p'''). With derivatives
+    with respect to τ = t/T the results are T², T⁴, T⁶ times the physical ones.
+    """
+    u1 = 2.0 * _cdot(s, d1)
+    u2 = 2.0 * (_cdot(d1, d1) + _cdot(s, d2))
+    u3 = 2.0 * (3.0 * _cdot(d1, d2) + _cdot(s, d3))
+    g0 = 1.0 / (1.0 + _cdot(s, s))
+    g02 = g0 * g0
+    g1 = -u1 * g02
+    g2 = (2.0 * u1 * u1 * g0 - u2) * g02
+    g3 = (-u3 + (6.0 * u1 * u2 - 6.0 * u1 * u1 * u1 * g0) * g0) * g02
+    p0 = (2.0 * g0 - 1.0, *(2.0 * g0 * s[i] for i in range(3)))
+    p1 = (2.0 * g1, *(2.0 * (g1 * s[i] + g0 * d1[i]) for i in range(3)))
+    p2 = (2.0 * g2, *(2.0 * (g2 * s[i] + 2.0 * g1 * d1[i] + g0 * d2[i]) for i in range(3)))
+    p3 = (
+        2.0 * g3,
+        *(2.0 * (g3 * s[i] + 3.0 * g2 * d1[i] + 3.0 * g1 * d2[i] + g0 * d3[i]) for i in range(3)),
+    )
+    w = _cqmul_conj(p0, p1)[1:]
+    e = _cqmul_conj(p0, p2)[1:]
+    ja, jb = _cqmul_conj(p1, p2)[1:], _cqmul_conj(p0, p3)[1:]
+    j = tuple(a + b for a, b in zip(ja, jb, strict=True))
+    return 4.0 * _cdot(w, w), 4.0 * _cdot(e, e), 4.0 * _cdot(j, j)
+
+
+def _safe_sqrt(x):
+    pos = x > 0
+    return jnp.where(pos, jnp.sqrt(jnp.where(pos, x, 1.0)), 0.0)
+
+
+# the whole join as one constant map: c = _HERMITE @ (p0, p0_τ, p0_ττ, p0_τττ, p1, ..., p1_τττ)
+_HERMITE = _exact_inverse([[_dmono(k, d, e) for k in range(8)] for e in (0, 1) for d in range(4)])
+
+
 def _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples):
+    dt = jnp.result_type(q0, T)
     good = T > 0  # a non-positive duration is infeasible (+inf peaks), never NaN
     Ts = jnp.where(good, T, 1.0)
-    qr, coeffs = _plan(q0, w0, e0, j0, q1, w1, e1, j1, Ts)
-    t = jnp.linspace(0.0, 1.0, n_samples, dtype=coeffs.dtype) * Ts
-    _, w, e, j = _eval(qr, coeffs, Ts, t)
-    inf = jnp.asarray(jnp.inf, coeffs.dtype)
-    pw, pe, pj = (jnp.where(good, jnp.max(_att._safe_norm(x)), inf) for x in (w, e, j))
+    T2 = Ts * Ts
+    qs = (q0, w0, e0, j0, q1, w1, e1, j1)
+    cq = [tuple(x[..., i] for i in range(x.shape[-1])) for x in qs]
+    s0, s1 = _cchart(cq[0], cq[4])
+    da = _cmrp_derivs(s0, *cq[1:4])
+    db = _cmrp_derivs(s1, *cq[5:8])
+    # boundary derivatives with respect to τ = t/T, then the constant Hermite map
+    sc = (Ts, T2, T2 * Ts)
+    H = _HERMITE.tolist()
+    c = []
+    for i in range(3):
+        b = (s0[i], *(sc[k] * da[k][i] for k in range(3)))
+        b = (*b, s1[i], *(sc[k] * db[k][i] for k in range(3)))
+        c.append([sum(H[k][m] * b[m] for m in range(8) if H[k][m] != 0.0) for k in range(8)])
+    tau = jnp.asarray(np.linspace(0.0, 1.0, n_samples), dt)
+    z = jnp.zeros((), dt)
+
+    def step(carry, t):
+        sq = _rates_sq(*_horner_derivs(c, t))
+        return tuple(jnp.maximum(m, x) for m, x in zip(carry, sq, strict=True)), None
+
+    (mw, me, mj), _ = jax.lax.scan(step, (z, z, z), tau)
+    iT = 1.0 / Ts
+    inf = jnp.asarray(jnp.inf, dt)
+    peaks = (_safe_sqrt(mw) * iT, _safe_sqrt(me) * (iT * iT), _safe_sqrt(mj) * (iT * iT * iT))
+    pw, pe, pj = (jnp.where(good, p, inf) for p in peaks)
     ok = good & (pw <= rate) & (pe <= accel) & (pj <= jerk) & jnp.isfinite(pw + pe + pj)
     return pw, pe, pj, ok
 
