@@ -31,6 +31,10 @@ def main(argv=None) -> int:
     ap.add_argument("--solutions", default=None, help="directory for the solution JSON files")
     ap.add_argument("--cases", nargs="*", default=None)
     ap.add_argument("--quiet", action="store_true", help="no solver progress lines")
+    ap.add_argument("--thin", type=int, default=None, help="keep every n-th start")
+    ap.add_argument("--off-nadir-margin", type=float, default=None, help="[deg]")
+    ap.add_argument("--gap-margin", type=float, default=None, help="[s]")
+    ap.add_argument("--dp-share", type=float, default=None, help="share of the search budget for DP")
     args = ap.parse_args(argv)
 
     import jax
@@ -38,7 +42,20 @@ def main(argv=None) -> int:
     jax.config.update("jax_enable_x64", True)
     from jaxspline.aeossp.case import load_case
     from jaxspline.aeossp.check import check_solution
-    from jaxspline.aeossp.solve import solve_case
+    from jaxspline.aeossp.solve import Margins, solve_case
+
+    kw = {}
+    if args.thin is not None:
+        kw["thin"] = args.thin
+    if args.dp_share is not None:
+        kw["dp_share"] = args.dp_share
+    mk = {}
+    if args.off_nadir_margin is not None:
+        mk["off_nadir_deg"] = args.off_nadir_margin
+    if args.gap_margin is not None:
+        mk["gap_s"] = args.gap_margin
+    if mk:
+        kw["margins"] = Margins(**mk)
 
     data = Path(args.data)
     cases = args.cases or sorted(p.name for p in data.iterdir() if p.is_dir())
@@ -46,7 +63,11 @@ def main(argv=None) -> int:
     for name in cases:
         t0 = time.monotonic()
         sol = solve_case(
-            data / name, time_limit=args.time_limit, progress=not args.quiet, seed=args.seed
+            data / name,
+            time_limit=args.time_limit,
+            progress=not args.quiet,
+            seed=args.seed,
+            **kw,
         )
         wall = time.monotonic() - t0
         if args.solutions:

@@ -253,3 +253,42 @@ def test_solve_degenerate_cases(small_case):
     sol = solve_case(ir_only, time_limit=30.0, progress=False)
     assert sol == {"actions": []}
     assert check_solution(ir_only, sol).valid
+
+
+def test_dp_paths_exact_against_brute_force(small_case):
+    """Per-satellite DP optimum == exhaustive search over all subsets of 13 candidates."""
+    from jaxspline.aeossp.solve import Margins, _dp_paths, _dp_prepare, _Plan, _prepare
+
+    pb = _prepare(small_case, Margins())
+    plan = _Plan(pb)
+    d = _dp_prepare(pb)
+    rng = np.random.default_rng(1)
+    k = int(np.argmax(np.diff([pb.sat_lo, pb.sat_hi], axis=0)))
+    lo, hi = pb.sat_lo[k], pb.sat_hi[k]
+    n_pick = 13
+    for trial in range(3):
+        # a dense cluster (near pairs, overlaps) plus a few far candidates
+        a = int(rng.integers(lo, hi - 40))
+        pick = sorted(set(range(a, a + 9)) | set(rng.choice(np.arange(lo, hi), 4).tolist()))
+        pick = pick[:n_pick]
+        w = np.full(len(pb.cands), -1.0)
+        w[pick] = rng.uniform(0.5, 2.0, len(pick))
+        paths, vals = _dp_paths(pb, d, w)
+        best = 0.0
+        for mask in range(1, 1 << len(pick)):
+            seq = sorted((pick[i] for i in range(len(pick)) if mask >> i & 1),
+                         key=lambda c: pb.c_start[c])
+            ok = pb.c_start[seq[0]] * pb.step >= pb.c_ng[seq[0]]
+            for p, q in zip(seq[:-1], seq[1:]):
+                gap = (pb.c_start[q] - pb.c_end[p]) * pb.step
+                ok = ok and pb.c_end[p] <= pb.c_start[q] and gap >= plan.need(p, q)
+                if not ok:
+                    break
+            if ok:
+                best = max(best, float(w[seq].sum()))
+        assert vals[k] == pytest.approx(best, abs=1e-9), trial
+        assert sum(vals) == pytest.approx(best, abs=1e-9)
+        path = paths[k]
+        assert float(w[path].sum()) == pytest.approx(best, abs=1e-9)
+        for p, q in zip(path[:-1], path[1:]):
+            assert (pb.c_start[q] - pb.c_end[p]) * pb.step >= plan.need(p, q)

@@ -393,9 +393,9 @@ class _Plan:
         return False
 
 
-def _greedy(plan: _Plan, deadline: float):
-    pb = plan.pb
-    order = sorted(
+def _greedy_order(pb: _Problem):
+    """Tasks with candidates, heaviest first, fewest satellites / candidates first."""
+    return sorted(
         (t for t in range(len(pb.weight)) if pb.task_cands[t]),
         key=lambda t: (
             -pb.weight[t],
@@ -404,6 +404,10 @@ def _greedy(plan: _Plan, deadline: float):
             t,
         ),
     )
+
+
+def _greedy(plan: _Plan, deadline: float):
+    order = _greedy_order(plan.pb)
     for i, t in enumerate(order):
         if i % 64 == 0 and time.monotonic() > deadline:
             break
@@ -598,6 +602,273 @@ def _tat_pass(plan: _Plan, deadline: float):
         plan.commit()
 
 
+# ---------------------------------------------------------------------------- DP
+@dataclass
+class _DPData:
+    """Precomputed structure of the per-satellite longest-path DP (see ``_dp_paths``).
+
+    Candidates are processed in global start order (``order``); ``groups`` holds, per
+    distinct start step, the slice of ``order`` and the slice of the near-predecessor
+    arrays. A predecessor i of j (same satellite) is *far* if
+    ``s_j - e_i >= far_steps[sat]`` (always slew-compatible, see ``_far_steps``) and
+    *near* otherwise; near compatible pairs are listed explicitly (``pred``/``seg``).
+    """
+
+    order: np.ndarray  # cand ids by start
+    sat: np.ndarray  # per cand
+    groups: list  # (a, b, pa, pb) slices
+    pred: np.ndarray  # near compatible predecessor (cand id), grouped like order
+    seg: np.ndarray  # local index of the successor inside its group
+    first_ok: np.ndarray  # per cand: may be a satellite's first action (nadir gap)
+    absorb: np.ndarray  # cand ids sorted by e + far_steps[sat]
+    absorb_t: np.ndarray  # their e + far_steps[sat]
+    ptr: np.ndarray  # CSR by cand (start order position) into pred
+    far_steps: np.ndarray  # per sat
+    end_sorted: list  # per sat: (ends sorted, cand ids in end order)
+
+
+def _far_steps(pb: _Problem) -> np.ndarray:
+    """Per satellite: a gap [steps] beyond which any two candidates are slew-compatible.
+
+    The angle between two lines of sight inside the off-nadir cone at instants g
+    seconds apart is at most ``2 * max_off_nadir + omega * g`` (omega = the largest
+    inertial rotation rate of the nadir direction on the grid), so the required gap
+    ``t_bcb(theta) + settle + margin`` grows with slope ``omega / rate < 1``; its fixed
+    point (iterated from 0) bounds every required gap. One step is added for safety.
+    """
+    geo = pb.geo
+    r = geo.sat_teme
+    u = r / np.linalg.norm(r, axis=-1, keepdims=True)
+    cosd = np.clip(np.sum(u[:, 1:] * u[:, :-1], axis=-1), -1.0, 1.0)
+    omega = np.nanmax(np.arccos(cosd), axis=1) / pb.step
+    omega = np.where(np.isfinite(omega), omega, np.pi / pb.step)
+    sp = pb.sp
+    g = np.zeros_like(omega)
+    for _ in range(200):
+        th = np.minimum(np.pi, 2.0 * sp.max_off_nadir + omega * g)
+        g = bcb_time_np(th, sp.rate, sp.accel) + sp.settle + pb.margins.gap_s
+    return (np.ceil(g / pb.step) + 1).astype(np.int64)
+
+
+def _need_vec(pb: _Problem, i, j):
+    """Required gaps [s] between the ends of candidates i and the starts of j (arrays)."""
+    c = pb.cands
+    a, b = c.los_end[i], c.los_start[j]
+    th = np.arctan2(np.linalg.norm(np.cross(a, b), axis=-1), np.sum(a * b, axis=-1))
+    k = c.sat[j]
+    return bcb_time_np(th, pb.sp.rate[k], pb.sp.accel[k]) + pb.sp.settle[k] + pb.margins.gap_s
+
+
+def _dp_prepare(pb: _Problem) -> _DPData:
+    c = pb.cands
+    n = len(c)
+    s = np.asarray(c.start, dtype=np.int64)
+    e = np.asarray(c.end, dtype=np.int64)
+    sat = np.asarray(c.sat, dtype=np.int64)
+    fs = _far_steps(pb)
+    order = np.lexsort((sat, s))
+    # near predecessors: same sat, s_j - fs < e_i < s_j, checked exactly
+    end_sorted = []
+    pj, pi = [], []
+    for k in range(len(pb.sat_lo)):
+        lo, hi = pb.sat_lo[k], pb.sat_hi[k]
+        ids = np.arange(lo, hi)
+        eo = ids[np.argsort(e[ids], kind="stable")]
+        es = e[eo]
+        end_sorted.append((es, eo))
+        if len(ids) == 0:
+            continue
+        a = np.searchsorted(es, s[ids] - fs[k], side="right")
+        b = np.searchsorted(es, s[ids], side="left")
+        cnt = np.maximum(b - a, 0)
+        jj = np.repeat(ids, cnt)
+        off = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        ii = eo[np.repeat(a, cnt) + off]
+        pj.append(jj)
+        pi.append(ii)
+    jj = np.concatenate(pj) if pj else np.zeros(0, np.int64)
+    ii = np.concatenate(pi) if pi else np.zeros(0, np.int64)
+    ok = (s[jj] - e[ii]) * pb.step >= _need_vec(pb, ii, jj)
+    jj, ii = jj[ok], ii[ok]
+    rank = np.empty(n, np.int64)
+    rank[order] = np.arange(n)
+    o2 = np.argsort(rank[jj], kind="stable")
+    jj, ii = jj[o2], ii[o2]
+    ptr = np.searchsorted(rank[jj], np.arange(n + 1), side="left")
+    # groups by start step
+    so = s[order]
+    cut = np.flatnonzero(np.diff(so)) + 1
+    bounds = np.concatenate([[0], cut, [n]])
+    groups = []
+    seg = np.empty(len(jj), np.int64)
+    for ga, gb in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True):
+        pa, pz = int(ptr[ga]), int(ptr[gb])
+        seg[pa:pz] = rank[jj[pa:pz]] - ga
+        groups.append((ga, gb, pa, pz))
+    rt = e + fs[sat]
+    ab = np.argsort(rt, kind="stable")
+    first_ok = s * pb.step >= np.asarray(pb.c_ng)
+    return _DPData(
+        order=order,
+        sat=sat,
+        groups=groups,
+        pred=ii,
+        seg=seg,
+        first_ok=first_ok,
+        absorb=ab,
+        absorb_t=rt[ab],
+        ptr=ptr,
+        far_steps=fs,
+        end_sorted=end_sorted,
+    )
+
+
+def _dp_paths(pb: _Problem, d: _DPData, w: np.ndarray):
+    """Exact per-satellite maximum-value sequences for candidate values ``w``.
+
+    ``best[j] = w_j + max(base_j, max over far preds, max over near compatible preds)``
+    with ``base_j = 0`` if j may be the first action (nadir slew fits) else -inf;
+    processed by start step (all predecessors end strictly before). Returns
+    ``(paths, values)``: per satellite the candidate ids of an optimal sequence (in
+    time order) and its value (0 for an empty one). Battery is not modelled here.
+    """
+    n = len(w)
+    n_s = len(pb.sat_lo)
+    best = np.full(n, -np.inf)
+    R = np.full(n_s, -np.inf)
+    base = np.where(d.first_ok, 0.0, -np.inf)
+    order, sat, pred, seg = d.order, d.sat, d.pred, d.seg
+    ab, abt = d.absorb, d.absorb_t
+    ap = 0
+    s_order = np.asarray(pb.cands.start)[order]
+    for ga, gb, pa, pz in d.groups:
+        t = s_order[ga]
+        aq = int(np.searchsorted(abt, t, side="right"))
+        if aq > ap:
+            sl = ab[ap:aq]
+            np.maximum.at(R, sat[sl], best[sl])
+            ap = aq
+        J = order[ga:gb]
+        v = np.maximum(base[J], R[sat[J]])
+        if pz > pa:
+            nv = np.full(gb - ga, -np.inf)
+            np.maximum.at(nv, seg[pa:pz], best[pred[pa:pz]])
+            v = np.maximum(v, nv)
+        best[J] = w[J] + v
+    paths, values = [], []
+    rank = np.empty(n, np.int64)
+    rank[order] = np.arange(n)
+    starts = np.asarray(pb.cands.start)
+    for k in range(n_s):
+        lo, hi = pb.sat_lo[k], pb.sat_hi[k]
+        if hi <= lo:
+            paths.append([])
+            values.append(0.0)
+            continue
+        j = lo + int(np.argmax(best[lo:hi]))
+        if not best[j] > 0.0:
+            paths.append([])
+            values.append(0.0)
+            continue
+        values.append(float(best[j]))
+        es, eo = d.end_sorted[k]
+        path = [j]
+        while True:
+            target = best[j] - w[j]
+            if d.first_ok[j] and target <= 1e-12:
+                break
+            r = rank[j]
+            cand = pred[d.ptr[r] : d.ptr[r + 1]]
+            hit = cand[best[cand] >= target - 1e-9]
+            if hit.size == 0:
+                nf = int(np.searchsorted(es, starts[j] - d.far_steps[k], side="right"))
+                far = eo[:nf]
+                hit = far[best[far] >= target - 1e-9]
+            if hit.size == 0:  # cannot happen; stop defensively
+                break
+            j = int(hit[0])
+            path.append(j)
+        paths.append(path[::-1])
+    return paths, values
+
+
+def _plan_from_paths(plan: _Plan, paths, order_fill, deadline: float):
+    """Feasible plan from DP paths: keep each task once (heaviest first, earliest
+    candidate), every insertion re-checked (slew, battery); then fill greedily."""
+    pb = plan.pb
+    _restore(plan, [])
+    chosen = sorted(
+        (c for p in paths for c in p), key=lambda c: (-pb.weight[pb.c_task[c]], pb.c_start[c])
+    )
+    for c in chosen:
+        if plan.assigned[pb.c_task[c]] < 0 and plan.check(c) is not None:
+            plan.insert(c)
+    for i, t in enumerate(order_fill):
+        if i % 64 == 0 and time.monotonic() > deadline:
+            break
+        if plan.assigned[t] < 0:
+            plan.best_insert(t)
+    plan.commit()
+
+
+def _lagrangian(plan: _Plan, deadline: float, progress, t0: float, start_assigned):
+    """Lagrangian relaxation of "each task at most once" over the satellites.
+
+    Each iteration solves every satellite exactly (``_dp_paths``) with candidate
+    values ``weight - lambda_task``, builds a feasible plan (``_plan_from_paths``),
+    and updates the prices by a Polyak subgradient step
+    ``lambda += mu (UB - LB) / |g|^2 g`` with ``g = takers - 1`` (clamped at 0).
+    Returns ``(best assignment, best key, upper bound, iterations)``.
+    """
+    pb = plan.pb
+    d = _dp_prepare(pb)
+    n_t = len(pb.weight)
+    W = np.asarray(pb.weight, dtype=float)
+    ctask = np.asarray(pb.c_task, dtype=np.int64)
+    lam = np.zeros(n_t)
+    order_fill = _greedy_order(pb)
+    _restore(plan, start_assigned)
+    best_key = (plan.W, plan.N)
+    best = list(start_assigned)
+    ub = math.inf
+    mu, stall = 1.0, 0
+    it = 0
+    while time.monotonic() < deadline:
+        it += 1
+        paths, vals = _dp_paths(pb, d, W[ctask] - lam[ctask])
+        cnt = np.zeros(n_t)
+        for p in paths:
+            np.add.at(cnt, ctask[p], 1.0)
+        bound = float(sum(vals) + lam.sum())
+        if bound < ub - 1e-9:
+            ub, stall = bound, 0
+        else:
+            stall += 1
+            if stall >= 4:
+                mu, stall = mu * 0.5, 0
+        _plan_from_paths(plan, paths, order_fill, deadline)
+        if (plan.W, plan.N) > best_key:
+            best_key = (plan.W, plan.N)
+            best = list(plan.assigned)
+        g = cnt - 1.0
+        g[(lam <= 0.0) & (g < 0.0)] = 0.0
+        gn = float(np.dot(g, g))
+        if gn == 0.0:
+            break
+        lam = np.maximum(0.0, lam + mu * max(ub - best_key[0], 1e-3) / gn * g)
+        if progress:
+            tw = float(W.sum()) or 1.0
+            print(
+                f"[aeossp] {pb.case.case_id} lagr it={it} UB={ub / tw:.4f} "
+                f"cur={plan.W / tw:.4f} best={best_key[0] / tw:.4f} mu={mu:.3g} "
+                f"t={time.monotonic() - t0:.1f}s",
+                file=sys.stderr,
+                flush=True,
+            )
+    _restore(plan, best)
+    return best, best_key, ub, it
+
+
 def verify_plan(case, geo: GridGeometry, sp: SatParams, actions, margins: Margins | None = None):
     """Independent re-check of a plan under the internal (conservative) model.
 
@@ -679,6 +950,7 @@ def solve_case(
     thin: int = 2,
     chain_p: float = 0.0,
     temp: float = 1.0,
+    dp_share: float = 0.0,
 ):
     """Solve one aeossp_standard case; returns the solution ``{"actions": [...]}``.
 
@@ -695,6 +967,8 @@ def solve_case(
         satellite (to relocate a removed task); 0 by default (no gain measured).
       temp: threshold-acceptance start value [weight units]: a step may lose up to
         ``temp * U(0,1) * (1 - progress)`` weight; the best plan is kept.
+      dp_share: share of the search budget (after the greedy) given to the
+        Lagrangian / per-satellite DP phase before the LNS (0 = off).
     Returns:
       the solution dict ``{"actions": [...]}`` (observation actions, grid-aligned
       ISO times); with ``return_stats`` a tuple ``(solution, stats)``.
@@ -731,6 +1005,12 @@ def solve_case(
     say(f"greedy WCR={plan.W / tw:.4f} CR={plan.N / max(1, len(case.tasks)):.4f}")
     rng = random.Random(seed)
     tat_budget = min(2.0, 0.05 * time_limit)
+    lag_its, lag_ub = 0, math.inf
+    if dp_share > 0.0:
+        now = time.monotonic()
+        t_dp = now + dp_share * max(0.0, deadline - tat_budget - now)
+        _, _, lag_ub, lag_its = _lagrangian(plan, t_dp, progress, t0, list(plan.assigned))
+        say(f"lagrangian {lag_its} its: WCR={plan.W / tw:.4f} UB={lag_ub / tw:.4f}")
     its = _lns(plan, deadline - tat_budget, rng, max_iters, progress, t0, chain_p, temp)
     _tat_pass(plan, deadline)
     say(f"lns {its} iterations: WCR={plan.W / tw:.4f} CR={plan.N / max(1, len(case.tasks)):.4f}")
@@ -768,6 +1048,8 @@ def solve_case(
         "n_candidates": len(pb.cands),
         "greedy_wcr": greedy_wcr,
         "lns_iterations": its,
+        "lagrangian_iterations": lag_its,
+        "lagrangian_ub_wcr": lag_ub / tw,
         "dropped": dropped,
         "wall_s": time.monotonic() - t0,
     }
