@@ -34,7 +34,7 @@ def main(argv=None) -> int:
     ap.add_argument("--thin", type=int, default=None, help="keep every n-th start")
     ap.add_argument("--off-nadir-margin", type=float, default=None, help="[deg]")
     ap.add_argument("--gap-margin", type=float, default=None, help="[s]")
-    ap.add_argument("--dp-share", type=float, default=None, help="share of the search budget for DP")
+    ap.add_argument("--dp-share", type=float, default=None, help="search share of the DP phase")
     args = ap.parse_args(argv)
 
     import jax

@@ -276,10 +276,11 @@ def test_dp_paths_exact_against_brute_force(small_case):
         paths, vals = _dp_paths(pb, d, w)
         best = 0.0
         for mask in range(1, 1 << len(pick)):
-            seq = sorted((pick[i] for i in range(len(pick)) if mask >> i & 1),
-                         key=lambda c: pb.c_start[c])
+            seq = sorted(
+                (pick[i] for i in range(len(pick)) if mask >> i & 1), key=lambda c: pb.c_start[c]
+            )
             ok = pb.c_start[seq[0]] * pb.step >= pb.c_ng[seq[0]]
-            for p, q in zip(seq[:-1], seq[1:]):
+            for p, q in zip(seq[:-1], seq[1:], strict=True):
                 gap = (pb.c_start[q] - pb.c_end[p]) * pb.step
                 ok = ok and pb.c_end[p] <= pb.c_start[q] and gap >= plan.need(p, q)
                 if not ok:
@@ -290,5 +291,5 @@ def test_dp_paths_exact_against_brute_force(small_case):
         assert sum(vals) == pytest.approx(best, abs=1e-9)
         path = paths[k]
         assert float(w[path].sum()) == pytest.approx(best, abs=1e-9)
-        for p, q in zip(path[:-1], path[1:]):
+        for p, q in zip(path[:-1], path[1:], strict=True):
             assert (pb.c_start[q] - pb.c_end[p]) * pb.step >= plan.need(p, q)
