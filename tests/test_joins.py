@@ -150,7 +150,7 @@ def test_maneuver_large_rotation_chart():
     m = J.maneuver_plan(q0, z, z, q1, z, z, 60.0)
     s = np.asarray(J.poly_eval(m.coeffs, 60.0, np.linspace(0, 60, 7)[:, None]))
     assert np.linalg.norm(s, axis=-1).max() <= np.tan(np.pi / 8) + 1e-12
-    q, w, _, _ = J.maneuver_eval(m, np.linspace(0, 60, 9))
+    q, w, _, _ = J.maneuver_eval(m, np.linspace(0, 60, 201))  # shape shared with other tests
     assert float(attitude_angle(q[-1], q1)) < 1e-12
     # rest-to-rest about a fixed axis: ω stays along z
     assert np.abs(np.asarray(w)[:, :2]).max() < 1e-15
@@ -167,8 +167,9 @@ def test_maneuver_rates_match_quaternion_integration():
 
     sol = solve_ivp(rhs, (0, T), q0, rtol=1e-11, atol=1e-12, dense_output=True)
     ts = np.linspace(0, T, 9)
-    qm = np.asarray(J.maneuver_eval(m, ts)[0])
-    ang = np.asarray(attitude_angle(qm, sol.sol(ts).T))
+    tg = np.linspace(0, T, 201)  # the grid shape of test_vector_spline_accuracy_converges
+    qm = np.asarray(J.maneuver_eval(m, tg)[0])
+    ang = np.asarray(attitude_angle(qm, sol.sol(tg).T))
     assert ang.max() < 1e-8, ang
     # ε is the derivative of ω, ε' the derivative of ε (central differences)
     h = 1e-3
@@ -198,7 +199,9 @@ def _dense_numpy_peaks(m, n=4001):
 def test_check_vs_dense_numpy_sampling():
     q0, w0, e0, j0, q1, w1, e1, j1, T = _states(3, 3, scale=3.0)
     m = J.maneuver_plan(q0, w0, e0, q1, w1, e1, T, j0=j0, j1=j1)
-    lim = AxisLimits(1.0, 1.0, 1.0)
+    # limits shaped [3] like the per-candidate limits below (and in the kernel test): the
+    # public check is compiled once for the whole module
+    lim = AxisLimits(*(np.ones(3) for _ in range(3)))
     chk = J.maneuver_check(q0, w0, e0, q1, w1, e1, T, lim, j0=j0, j1=j1, n_samples=1025)
     for i in range(3):
         mi = J.Maneuver(m.q_ref[i], m.coeffs[i], m.duration[i])
@@ -222,11 +225,12 @@ def test_kernel_scalar_jit_vmap_agree_and_grads():
     lim = (1.0, 1.0, 1.0)
     kern = functools.partial(J.maneuver_check_kernel, n_samples=1025)
     batched = jax.jit(jax.vmap(kern))(*st, *(np.full(3, x) for x in lim))
-    public = J.maneuver_check(*st[:3], *st[4:7], st[8], AxisLimits(*lim), j0=st[3], j1=st[7],
-                              n_samples=1025)  # fmt: skip
+    public = J.maneuver_check(*st[:3], *st[4:7], st[8], AxisLimits(*(np.full(3, x) for x in lim)),
+                              j0=st[3], j1=st[7], n_samples=1025)  # fmt: skip
     jk = jax.jit(kern)
-    # an infeasible candidate is a value, not NaN or an exception
-    bad = jk(*(a[0] for a in st[:8]), 0.0, *lim)
+    # an infeasible candidate is a value, not NaN or an exception (T typed like st[8][i]:
+    # the same compiled scalar kernel as below)
+    bad = jk(*(a[0] for a in st[:8]), 0.0 * st[8][0], *lim)
     assert np.isinf(bad[0]) and not bool(bad[3])
     for i in range(3):
         one = jk(*(a[i] for a in st), *lim)
