@@ -173,7 +173,7 @@ def _channel_limits(limits: AxisLimits, c: int, dtype):
 
 
 # ----------------------------------------------------------------------------
-# the one-candidate kernel and the compiled chunk program
+# per-channel kernels over candidate vectors and the compiled chunk program
 # ----------------------------------------------------------------------------
 
 
