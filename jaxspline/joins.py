@@ -349,6 +349,15 @@ def maneuver_check_kernel(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, 
     accel [rad/s²], jerk [rad/s³], 0-d). Returns (peak |ω|, peak |ε|, peak
     |ε'|, feasible); T <= 0 gives +inf peaks and False. For the engine: ``jax.jit(jax.vmap(partial(
     maneuver_check_kernel, n_samples=N)))``.
+
+    Computation (per component, no sample grid is materialized): boundary states ->
+    midpoint-chart MRPs σ0, σ1 and their τ-derivatives (τ = t/T) -> join coefficients
+    by one constant exact 8×8 Hermite inverse (eq. 27 of the optimal-conjugation seed)
+    -> a ``lax.scan`` over the n sample times τ_i = i/(n-1): Horner for σ, σ_τ, σ_ττ,
+    σ_τττ, closed-form |ω_τ|², |ε_τ|², |ε'_τ|² (``attitude.omega_from_mrp_derivs``),
+    running maxima -> peaks sqrt(max)·T⁻¹, T⁻², T⁻³. Temporaries are ~0.5 kB per
+    candidate whatever n; batches of ~1e4 candidates per call keep each scan step in
+    cache (``maneuver_check`` chunks larger batches itself).
     """
     return _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples)
 
@@ -367,6 +376,9 @@ def _v_poly(deriv):
 
 
 _v_eval = jax.jit(jnp.vectorize(_eval, signature="(4),(3,8),(),()->(4),(3),(3),(3)"))
+
+
+_CHUNK = 16384  # candidates per call of the public check (~0.5 kB of temporaries each)
 
 
 @functools.lru_cache(maxsize=16)
@@ -548,7 +560,8 @@ def maneuver_check(
     ``n_samples`` (static, >= 2) equally spaced samples on [0, T] including both
     ends. Peaks are sampled maxima (they can miss an interior peak by
     O((T/n)²) relatively). Reference: SPEC §3 (seed vector-spline-guidance-laws,
-    constraints |ω| <= ω_max, |ε| <= ε_max, |ε'| <= jerk_max).
+    constraints |ω| <= ω_max, |ε| <= ε_max, |ε'| <= jerk_max). Batches larger than
+    16384 candidates are checked in chunks of that size (one compile, bounded memory).
     """
     if not isinstance(n_samples, int) or n_samples < 2:
         raise ValueError(f"n_samples must be an int >= 2, got {n_samples!r}")
@@ -560,4 +573,22 @@ def maneuver_check(
         as_float_array(f"limits.{n}", x, dt) for n, x in zip(limits._fields, limits, strict=True)
     ]
     args = (*args, *lim)
-    return ManeuverCheck(*_v_check(n_samples)(*args))
+    f = _v_check(n_samples)
+    cores = (4, 3, 3, 3, 4, 3, 3, 3, 0, 0, 0, 0)  # trailing core length (0 = scalar)
+    lead = [a.shape[: a.ndim - (k > 0)] for a, k in zip(args, cores, strict=True)]
+    batch = jnp.broadcast_shapes(*lead)
+    size = int(np.prod(batch))
+    if size <= _CHUNK:
+        return ManeuverCheck(*f(*args))
+    # large batches in fixed-size chunks (one compile): bounded memory, cache-sized steps
+    flat = [
+        jnp.broadcast_to(a, batch + a.shape[a.ndim - 1 :] if k else batch).reshape(
+            (size, k) if k else (size,)
+        )
+        for a, k in zip(args, cores, strict=True)
+    ]
+    pad = -size % _CHUNK
+    flat = [jnp.concatenate([a, jnp.repeat(a[:1], pad, axis=0)]) if pad else a for a in flat]
+    outs = [f(*(a[i : i + _CHUNK] for a in flat)) for i in range(0, size + pad, _CHUNK)]
+    res = (jnp.concatenate([o[k] for o in outs])[:size].reshape(batch) for k in range(4))
+    return ManeuverCheck(*res)

@@ -220,6 +220,23 @@ def test_check_vs_dense_numpy_sampling():
             assert (np.asarray(c2.feasible) == expect).all()
 
 
+def test_check_chunked_batches_match(monkeypatch):
+    # large batches are checked in fixed-size chunks; chunks of 3 reuse the compiled [3]
+    # check of the tests above, a batch of 5 also exercises the padded last chunk
+    st = [np.concatenate([a, a[:2]]) for a in _states(3, 3, scale=3.0)]
+    lim = AxisLimits(*(np.ones(5) for _ in range(3)))
+    args = (*st[:3], *st[4:7], st[8], lim)
+    kw = dict(j0=st[3], j1=st[7], n_samples=1025)
+    full = J.maneuver_check(*(a[:3] for a in args[:7]), AxisLimits(*(x[:3] for x in lim)),
+                            j0=st[3][:3], j1=st[7][:3], n_samples=1025)  # fmt: skip
+    monkeypatch.setattr(J, "_CHUNK", 3)
+    chunked = J.maneuver_check(*args, **kw)
+    for a, b in zip(chunked, full, strict=True):
+        assert a.shape == (5,)
+        np.testing.assert_array_equal(a[:3], b)
+        np.testing.assert_array_equal(a[3:], b[:2])
+
+
 def test_kernel_scalar_jit_vmap_agree_and_grads():
     st = _states(3, 3, scale=3.0)  # shapes shared with test_check_vs_dense_numpy_sampling
     lim = (1.0, 1.0, 1.0)
