@@ -258,6 +258,25 @@ def test_settling_profiles_a_and_b():
     assert tb_clamped < tb < tb_total
 
 
+def test_settling_of_b_is_phase_sensitive_and_covers_the_papers_17_s():
+    """Profile B's two acceleration steps leave a residual whose size depends on the phase
+    nu*T between them (nu = 4 pi rad/s: 0.1 s of T is 72 deg). Sweeping T by +-0.15 s around
+    the exact 3.350 s moves B's settling between ~10.6 and ~16.6 s; with the paper's habit
+    of rounding T (Ex.4: T = 4.1) and J_mode/J_total = 0.1 the paper's "~17 s" is reached,
+    while A (no steps) stays at ~10.1 s whatever the rounding."""
+    eps, phi = 0.004, math.radians(3.0)
+    t = np.arange(0.0, 40.0, 2e-3)
+    prof_b = slew.slew_profile(phi, W, eps, kind="B")
+    settle = []
+    for T in np.arange(3.20, 3.51, 0.02):
+        p = prof_b._replace(T=np.float64(T), T0=np.float64(2 * T), duration=np.float64(3 * T))
+        r = flex.flexible_body_rate(p, eps, t, 4 * np.pi, 0.01, 0.1, ratio_of="total")
+        settle.append(float(flex.settling_time(t, r, math.radians(0.001))))
+    print(f"B settling over T in [3.20, 3.50] s: {min(settle):.2f} .. {max(settle):.2f} s")
+    assert max(settle) - min(settle) > 4.0  # the phase dominates the figure
+    assert 16.3 < max(settle) < 17.5  # the paper's ~17 s lies inside the band
+
+
 def test_settling_time_function():
     t = jnp.arange(5.0)
     assert float(flex.settling_time(t, jnp.array([1.0, 1.0, 0.0, 0.0, 0.0]), 0.5)) == 2.0
