@@ -75,6 +75,8 @@ class Workload:
     max_batch: float = 1e7  # largest batch for this workload
     out_bytes: int = 8
     notes: str = ""
+    # further numpy baselines, e.g. "numpy_lean": a hand-written formula without the
+    # kernel's tolerance handling (fewer array passes, so a stricter baseline)
     extra: dict = field(default_factory=dict)
 
 
@@ -95,20 +97,24 @@ def workloads() -> list[Workload]:
             reach_inputs,
             ("a1", "b1", "a2", "b2", "T"),
             lambda a1, b1, a2, b2, T: R.is_reachable_kernel(a1, b1, a2, b2, T, b, d),
-            numpy_fn=lambda a1, b1, a2, b2, T: B.np_is_reachable(a1, b1, a2, b2, T, b, d),
+            numpy_fn=lambda a1, b1, a2, b2, T: NR.is_reachable_kernel(a1, b1, a2, b2, T, b, d),
             python_fn=lambda a1, b1, a2, b2, T: B.py_is_reachable(a1, b1, a2, b2, T, b, d),
             ruckig_fn=lambda a1, b1, a2, b2, T: B.ruckig_is_reachable(a1, b1, a2, b2, T, b, d),
             max_batch=1e8,
             out_bytes=1,
+            extra={
+                "numpy_lean": lambda a1, b1, a2, b2, T: B.np_is_reachable(a1, b1, a2, b2, T, b, d)
+            },
         ),
         Workload(
             "angle_interval",
             reach_inputs,
             ("a1", "b1", "b2", "T"),
             lambda a1, b1, b2, T: R.angle_interval_kernel(a1, b1, b2, T, b, d),
-            numpy_fn=lambda a1, b1, b2, T: B.np_angle_interval(a1, b1, b2, T, b, d),
+            numpy_fn=lambda a1, b1, b2, T: NR.angle_interval_kernel(a1, b1, b2, T, b, d),
             max_batch=1e8,
             out_bytes=16,
+            extra={"numpy_lean": lambda a1, b1, b2, T: B.np_angle_interval(a1, b1, b2, T, b, d)},
         ),
         Workload(
             "min_transfer_time",
