@@ -159,7 +159,7 @@ def workloads() -> list[Workload]:
             maneuver_inputs,
             ("q0", "w0", "e0", "j0", "q1", "w1", "e1", "j1", "T"),
             lambda *a: J.maneuver_check_kernel(*a, b, d, JERK, n_samples=129)[3],
-            max_batch=1e4,  # ~60 kB of samples per candidate: the engine streams it in chunks
+            max_batch=1e4,  # best in calls of 1e4-2e4 (maneuver_check chunks at 16384)
             out_bytes=1,
             notes="degree-7 MRP join + 129-sample |w|,|e|,|e'| check per candidate",
         ),
