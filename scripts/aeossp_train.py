@@ -62,11 +62,12 @@ def main(argv=None) -> int:
     rows = []
     for name in cases:
         t0 = time.monotonic()
-        sol = solve_case(
+        sol, st = solve_case(
             data / name,
             time_limit=args.time_limit,
             progress=not args.quiet,
             seed=args.seed,
+            return_stats=True,
             **kw,
         )
         wall = time.monotonic() - t0
@@ -89,7 +90,8 @@ def main(argv=None) -> int:
         tat = float("nan") if row[4] is None else row[4]
         print(
             f"{name}: {row[1]} WCR={row[2]:.4f} CR={row[3]:.4f} TAT={tat:.1f}s "
-            f"PC={row[5]:.1f}Wh actions={row[6]} wall={wall:.1f}s",
+            f"PC={row[5]:.1f}Wh actions={row[6]} wall={wall:.1f}s "
+            f"greedy={st['greedy_wcr']:.4f} lagrangian_UB={st['lagrangian_ub_wcr']:.4f}",
             flush=True,
         )
     n = max(1, len(rows))
