@@ -57,8 +57,9 @@ interpolation error to cover. Margins kept:
 The previous margins (0.05 deg, 0.5 s, every 2nd start) gave mean WCR 0.7657 on the
 10 training cases at 60 s; 0.005 deg, 0.05 s and every start 0.7686 (same load).
 
-Deterministic for a given ``seed`` and iteration count (``max_iters``); a time
-limit only truncates the search.
+Deterministic for a given ``seed`` and iteration counts (``max_iters``, which also
+caps the Lagrangian phase at 10 iterations unless ``dp_iters`` says otherwise); a
+time limit only truncates the search.
 """
 
 from __future__ import annotations
@@ -829,7 +830,9 @@ def _plan_from_paths(plan: _Plan, paths, order_fill, deadline: float):
     plan.commit()
 
 
-def _lagrangian(plan: _Plan, deadline: float, progress, t0: float, start_assigned):
+def _lagrangian(
+    plan: _Plan, deadline: float, progress, t0: float, start_assigned, max_iters: int | None
+):
     """Lagrangian relaxation of "each task at most once" over the satellites.
 
     Each iteration solves every satellite exactly (``_dp_paths``) with candidate
@@ -853,7 +856,7 @@ def _lagrangian(plan: _Plan, deadline: float, progress, t0: float, start_assigne
     ub = math.inf
     mu, stall = 1.0, 0
     it = 0
-    while time.monotonic() < deadline:
+    while time.monotonic() < deadline and (max_iters is None or it < max_iters):
         it += 1
         paths, vals = _dp_paths(pb, d, W[ctask] - lam[ctask])
         cnt = np.zeros(n_t)
@@ -971,6 +974,7 @@ def solve_case(
     chain_p: float = 0.0,
     temp: float = 1.0,
     dp_share: float = 0.3,
+    dp_iters: int | None = None,
 ):
     """Solve one aeossp_standard case; returns the solution ``{"actions": [...]}``.
 
@@ -989,6 +993,8 @@ def solve_case(
         ``temp * U(0,1) * (1 - progress)`` weight; the best plan is kept.
       dp_share: share of the search budget (after the greedy) given to the
         Lagrangian / per-satellite DP phase before the LNS (0 = off).
+      dp_iters: optional cap on Lagrangian iterations (default: none, or 10 when
+        ``max_iters`` is given so that a run is deterministic).
     Returns:
       the solution dict ``{"actions": [...]}`` (observation actions, grid-aligned
       ISO times); with ``return_stats`` a tuple ``(solution, stats)``.
@@ -1029,7 +1035,8 @@ def solve_case(
     if dp_share > 0.0:
         now = time.monotonic()
         t_dp = now + dp_share * max(0.0, deadline - tat_budget - now)
-        _, _, lag_ub, lag_its = _lagrangian(plan, t_dp, progress, t0, list(plan.assigned))
+        cap = dp_iters if dp_iters is not None else (10 if max_iters is not None else None)
+        _, _, lag_ub, lag_its = _lagrangian(plan, t_dp, progress, t0, list(plan.assigned), cap)
         say(f"lagrangian {lag_its} its: WCR={plan.W / tw:.4f} UB={lag_ub / tw:.4f}")
     its = _lns(plan, deadline - tat_budget, rng, max_iters, progress, t0, chain_p, temp)
     _tat_pass(plan, deadline)
