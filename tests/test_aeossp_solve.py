@@ -293,3 +293,22 @@ def test_dp_paths_exact_against_brute_force(small_case):
         assert float(w[path].sum()) == pytest.approx(best, abs=1e-9)
         for p, q in zip(path[:-1], path[1:], strict=True):
             assert (pb.c_start[q] - pb.c_end[p]) * pb.step >= plan.need(p, q)
+
+
+def test_solve_with_satellite_polish_valid_by_checker(small_case):
+    """The optional per-satellite exact re-solve keeps the plan valid (independent checker)."""
+    from jaxspline.aeossp.check import check_solution
+    from jaxspline.aeossp.solve import solve_case
+
+    sol, st = solve_case(
+        small_case,
+        time_limit=30.0,
+        progress=False,
+        max_iters=30,
+        polish_share=0.5,
+        return_stats=True,
+    )
+    rep = check_solution(small_case, sol)
+    assert rep.valid, rep.violations[:3]
+    assert st["dropped"] == 0
+    assert rep.metrics["WCR"] == pytest.approx(st["wcr"])
