@@ -55,7 +55,10 @@ interpolation error to cover. Margins kept:
   slewing / imaging load (see ``battery``; never binding on the training cases).
 
 The previous margins (0.05 deg, 0.5 s, every 2nd start) gave mean WCR 0.7657 on the
-10 training cases at 60 s; 0.005 deg, 0.05 s and every start 0.7686 (same load).
+10 training cases at 60 s; 0.005 deg, 0.05 s and every start 0.7686 (same load);
+with the Lagrangian phase (dp_share 0.3) 0.7725 (0.5: 0.7722). The Lagrangian upper
+bound of the candidate model after ~15-20 iterations averages 0.81 (loose: 64
+iterations bring case_0003 from 0.795 to 0.770, whose plan reaches 0.754).
 
 Deterministic for a given ``seed`` and iteration counts (``max_iters``, which also
 caps the Lagrangian phase at 10 iterations unless ``dp_iters`` says otherwise); a
