@@ -143,6 +143,15 @@ def bench_kernel(w, dtype: str, sizes: list[int], reps: int, do_baselines: bool)
         ref = np.asarray(f(*arrs))
         ref = ref[0] if ref.ndim > 1 else ref
         out[key] = {**t.to_dict(), "agree": _agree(jax_out, ref)}
+    # numpy again on the streamed pool (memory-bound, like the JAX streaming rows); JAX's
+    # figure at the same regime is its largest streamed batch over these very inputs
+    big = [r for r in out["jax"] if r["n"] > CHUNK]
+    if w.numpy_fn is not None and big:
+        pool = w.make_inputs(POOL, 0)
+        parr = [pool[k].astype(npdt) for k in w.args]
+        t = time_call(lambda: w.numpy_fn(*parr), n=POOL, reps=max(1, reps // 2))
+        out["numpy_streamed"] = {**t.to_dict(), "jax_rate": big[-1]["rate"]}
+        del pool, parr
     for key, f, m in (("python", w.python_fn, 20000), ("ruckig", w.ruckig_fn, 2000)):
         if f is None:
             continue
