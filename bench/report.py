@@ -3,18 +3,15 @@
 from __future__ import annotations
 
 import json
-import os
-import tempfile
 from pathlib import Path
 
 BYTES = {"float64": 8, "float32": 4}
 
 
 def _atomic_write(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=path.name + ".")
-    with os.fdopen(fd, "w") as f:
-        f.write(text)
-    os.replace(tmp, path)
+    from jaxspline._io import atomic_write_text
+
+    atomic_write_text(path, text)
 
 
 def _limit(report, k) -> float | None:

@@ -10,12 +10,12 @@ from __future__ import annotations
 import csv
 import io
 import json
-import os
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
+
+from jaxspline._io import atomic_write_text
 
 __all__ = ["register", "run_plan", "OUTPUT_FILES"]
 
@@ -49,17 +49,6 @@ def _main(args) -> int:
         progress=not args.quiet,
     )
     return 0
-
-
-def _write_atomic(path: Path, text: str) -> None:
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8", newline="") as fh:
-            fh.write(text)
-        os.replace(tmp, path)
-    finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
 
 
 def _take(options, idx):
@@ -324,7 +313,7 @@ def run_plan(
                 for k, v in row.items()
             }
         )
-    _write_atomic(out / "plan.csv", buf.getvalue())
+    atomic_write_text(out / "plan.csv", buf.getvalue())
     if plots:
         _plots(
             out,
@@ -342,7 +331,7 @@ def run_plan(
         )
     lap("outputs")
     summary["timings_s"] = timings
-    _write_atomic(out / "plan.json", json.dumps(summary, indent=2) + "\n")
+    atomic_write_text(out / "plan.json", json.dumps(summary, indent=2) + "\n")
     _print_summary(summary, out)
     return summary
 

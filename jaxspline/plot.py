@@ -6,11 +6,9 @@ atomically (temporary file in the same directory, then ``os.replace``).
 
 from __future__ import annotations
 
-import os
-import tempfile
-from pathlib import Path
-
 import numpy as np
+
+from jaxspline._io import atomic_path
 
 __all__ = ["plot_ground_track", "plot_attitude", "plot_margins", "save_figure"]
 
@@ -28,15 +26,10 @@ def _plt():
 
 def save_figure(fig, path) -> None:
     """Save ``fig`` to ``path`` atomically (temp file in the same directory + os.replace)."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=path.name + ".", suffix=".tmp.png", dir=path.parent)
-    os.close(fd)
     try:
-        fig.savefig(tmp, dpi=110)
-        os.replace(tmp, path)
+        with atomic_path(path, suffix=".tmp.png") as tmp:
+            fig.savefig(tmp, dpi=110)
     finally:
-        if os.path.exists(tmp):
-            os.remove(tmp)
         _plt().close(fig)
 
 

@@ -12,7 +12,6 @@ from __future__ import annotations
 import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from pathlib import Path
@@ -20,6 +19,8 @@ from typing import Any
 
 import numpy as np
 import yaml
+
+from jaxspline._io import atomic_write_text, refuse_overwrite
 
 __all__ = [
     "Case",
@@ -339,21 +340,8 @@ def write_solution(path: str | os.PathLike, actions, force: bool = False) -> Pat
     key. Refuses to overwrite an existing file unless ``force`` (``FileExistsError``).
     """
     path = Path(path)
-    if path.exists() and not force:
-        raise FileExistsError(f"{path}: exists (use --force to overwrite)")
+    refuse_overwrite(path, force)
     data = dict(actions) if isinstance(actions, dict) else {"actions": list(actions)}
     if not isinstance(data.get("actions"), list):
         raise ValueError("actions: expected a list of action objects")
-    directory = path.parent if str(path.parent) else Path(".")
-    directory.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            json.dump(data, fh, indent=2)
-            fh.write("\n")
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
+    return atomic_write_text(path, json.dumps(data, indent=2) + "\n")

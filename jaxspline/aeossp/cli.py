@@ -20,16 +20,9 @@ def _write_json(text: str, target: str) -> None:
     if target == "-":
         print(text)
         return
-    import os
-    import tempfile
+    from jaxspline._io import atomic_write_text
 
-    path = Path(target)
-    directory = path.parent if str(path.parent) else Path(".")
-    directory.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=directory)
-    with os.fdopen(fd, "w", encoding="utf-8") as fh:
-        fh.write(text + "\n")
-    os.replace(tmp, path)
+    atomic_write_text(Path(target), text + "\n")
 
 
 def _check_and_print(case, solution: dict, json_out: str | None) -> int:
