@@ -12,8 +12,17 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["is_concrete", "as_float_array", "check_positive", "check_nonnegative",
-           "check_finite", "broadcast_named", "float_dtype_of"]
+__all__ = [
+    "is_concrete",
+    "as_float_array",
+    "check_positive",
+    "check_nonnegative",
+    "check_finite",
+    "broadcast_named",
+    "float_dtype_of",
+    "is_weak",
+    "cast_broadcast",
+]
 
 
 def is_concrete(x) -> bool:
@@ -88,3 +97,18 @@ def broadcast_named(**arrays):
         desc = ", ".join(f"{k}{s}" for k, s in shapes.items())
         raise ValueError(f"arguments are not broadcastable: {desc}") from exc
     return tuple(jnp.broadcast_to(v, shape) for v in arrays.values())
+
+
+def is_weak(x) -> bool:
+    """Python scalars and weakly typed arrays, which do not set a result dtype."""
+    return isinstance(x, int | float) or bool(getattr(x, "weak_type", False))
+
+
+def cast_broadcast(**named):
+    """Cast named inputs to one float dtype and broadcast them (named errors on failure).
+
+    The dtype is set by the non-weak inputs (JAX's default float when all are
+    Python scalars), so float32 arrays stay float32 next to Python constants.
+    """
+    dt = float_dtype_of(*[v for v in named.values() if not is_weak(v)])
+    return broadcast_named(**{k: as_float_array(k, v, dt) for k, v in named.items()})

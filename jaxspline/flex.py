@@ -45,15 +45,13 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline._validate import (
-    as_float_array,
-    broadcast_named,
+    cast_broadcast,
     check_finite,
     check_nonnegative,
     check_positive,
-    float_dtype_of,
     is_concrete,
 )
-from jaxspline.slew import SlewProfile, profile_state_kernel
+from jaxspline.slew import SlewProfile, _pos, profile_state_kernel
 
 __all__ = [
     "initial_amplitude",
@@ -67,18 +65,7 @@ __all__ = [
 ]
 
 
-def _weak(x):
-    """Python scalars and weakly typed arrays do not set the result dtype."""
-    return isinstance(x, int | float) or bool(getattr(x, "weak_type", False))
-
-
-def _pos(x):
-    return jnp.where(x > 0, x, jnp.ones_like(x))
-
-
-def _prep(**named):
-    dt = float_dtype_of(*[v for v in named.values() if not _weak(v)])
-    return broadcast_named(**{k: as_float_array(k, v, dt) for k, v in named.items()})
+_prep = cast_broadcast
 
 
 # ----------------------------------------------------------------------------

@@ -25,12 +25,10 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline._validate import (
-    as_float_array,
-    broadcast_named,
+    cast_broadcast,
     check_finite,
     check_nonnegative,
     check_positive,
-    float_dtype_of,
     is_concrete,
 )
 
@@ -61,17 +59,7 @@ def _pos(x):
     return jnp.where(x > 0, x, jnp.ones_like(x))
 
 
-def _weak(x):
-    """Python scalars and weakly typed arrays do not set the result dtype."""
-    return isinstance(x, int | float) or bool(getattr(x, "weak_type", False))
-
-
-def _prep(**named):
-    """Cast named inputs to one common float dtype (set by the non-weak inputs; the
-    default float if all are Python scalars) and broadcast them."""
-    dt = float_dtype_of(*[v for v in named.values() if not _weak(v)])
-    arrs = {k: as_float_array(k, v, dt) for k, v in named.items()}
-    return broadcast_named(**arrs)
+_prep = cast_broadcast
 
 
 # ----------------------------------------------------------------------------
