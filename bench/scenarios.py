@@ -19,27 +19,14 @@ def screening_case(n_routes: int, reps: int = 2) -> dict:
 
     jax.config.update("jax_enable_x64", True)
     from jaxspline.limits import AxisLimits
-    from jaxspline.routes import build_route_options, make_route_set
     from jaxspline.scenario import default_scenario
     from jaxspline.screen import screen_transitions
 
     sc = default_scenario(count=n_routes)
     pl = sc.planner
     t0 = time.perf_counter()
-    routes = make_route_set(
-        sc.scene(), sc.routes, 0.0, sc.duration, sc.max_off_nadir, nominal_speed=max(pl.scan_speeds)
-    )
-    opts, _ = build_route_options(
-        routes,
-        sc.limits,
-        sc.max_off_nadir,
-        n_t0=pl.t0_grid,
-        scan_speeds=pl.scan_speeds,
-        samples=pl.scan_samples,
-        epoch_jd=sc.epoch_jd,
-        sun_elevation_min=sc.sun_elevation_min,
-        progress=False,
-    )
+    routes = sc.route_set()
+    opts, _ = sc.route_options(routes)
     geometry_s = time.perf_counter() - t0
     keep = np.flatnonzero(np.asarray(opts.scan_ok))
     opts = type(opts)(*(jnp.asarray(np.asarray(x)[keep]) for x in opts))

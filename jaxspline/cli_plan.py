@@ -94,9 +94,7 @@ def run_plan(
     from jaxspline.limits import AxisLimits
     from jaxspline.routes import (
         STRIP,
-        build_route_options,
         exact_states,
-        make_route_set,
         tabulate_route_model,
     )
     from jaxspline.scenario import default_scenario, load_scenario
@@ -129,22 +127,9 @@ def run_plan(
     dtype = jnp.result_type(float)
     lap("scenario")
 
-    scene = sc.scene()
-    routes = make_route_set(
-        scene, sc.routes, 0.0, sc.duration, sc.max_off_nadir, nominal_speed=max(pl.scan_speeds)
-    )
+    routes = sc.route_set()
     lap("windows")
-    opts_all, info_all = build_route_options(
-        routes,
-        sc.limits,
-        sc.max_off_nadir,
-        n_t0=pl.t0_grid,
-        scan_speeds=pl.scan_speeds,
-        samples=pl.scan_samples,
-        epoch_jd=sc.epoch_jd,
-        sun_elevation_min=sc.sun_elevation_min,
-        progress=progress,
-    )
+    opts_all, info_all = sc.route_options(routes, progress=progress)
     keep = np.flatnonzero(np.asarray(opts_all.scan_ok))
     options = _take(opts_all, keep)
     info = type(info_all)(*(np.asarray(x)[keep] for x in info_all))

@@ -138,6 +138,40 @@ class Scenario:
 
         return Scene(self.orbit, jnp.asarray(self.gmst0))
 
+    def route_set(self):
+        """The scenario's routes with their visibility windows (:class:`RouteSet`)."""
+        from jaxspline.routes import make_route_set
+
+        return make_route_set(
+            self.scene(),
+            self.routes,
+            0.0,
+            self.duration,
+            self.max_off_nadir,
+            nominal_speed=max(self.planner.scan_speeds),
+        )
+
+    def route_options(self, routes, progress: bool = False):
+        """All start options of ``routes`` under this scenario's planner settings.
+
+        Returns ``(RouteOptions, OptionInfo)`` for every option (``scan_ok`` marks the
+        feasible ones), as :func:`jaxspline.routes.build_route_options`.
+        """
+        from jaxspline.routes import build_route_options
+
+        pl = self.planner
+        return build_route_options(
+            routes,
+            self.limits,
+            self.max_off_nadir,
+            n_t0=pl.t0_grid,
+            scan_speeds=pl.scan_speeds,
+            samples=pl.scan_samples,
+            epoch_jd=self.epoch_jd,
+            sun_elevation_min=self.sun_elevation_min,
+            progress=progress,
+        )
+
 
 _KEYS = {
     "scenario": {"name", "epoch", "duration_s"},
