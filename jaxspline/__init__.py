@@ -102,21 +102,23 @@ from jaxspline.retarget import (  # noqa: E402
     simulate,
 )
 # --- geometry (orbit, pointing, routes) ---
+from jaxspline.frames import (  # noqa: E402
+    ecef_to_geodetic,
+    geodetic_to_ecef,
+    gmst,
+    julian_date,
+    sun_direction,
+    teme_to_ecef,
+)
 from jaxspline.orbit import (  # noqa: E402
     CircularOrbit,
     HermiteOrbit,
     circular_orbit,
     circular_orbit_over,
-    ecef_to_geodetic,
-    geodetic_to_ecef,
-    gmst,
-    julian_date,
     orbit_position,
     orbit_state,
     propagate_tle,
     sso_inclination,
-    sun_direction,
-    teme_to_ecef,
     tle_orbit,
 )
 from jaxspline.pointing import (  # noqa: E402

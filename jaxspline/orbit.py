@@ -1,36 +1,41 @@
-"""Orbit geometry: circular (J2-drifting) orbits, TLE propagation, Earth rotation, Sun.
+"""Orbit models: circular (J2-drifting) orbits, TLE propagation (SGP4), tabulated orbits.
 
-Frames. ``ECI`` here is the true-equator, mean-equinox frame of SGP4 (TEME). The
-circular orbit model is expressed in the same frame. Earth-fixed coordinates are
-obtained by one rotation about z by the Greenwich mean sidereal time (IAU 1982),
-i.e. TEME -> pseudo-Earth-fixed; polar motion (< 15 m on the ground) and UT1 - UTC
-(< 0.9 s, < 0.4 km of Earth rotation at the equator) are ignored. This is the
-usual accuracy class of SGP4 itself (~1 km).
+Positions are in ECI = TEME (the frame of SGP4; see :mod:`jaxspline.frames` for the
+Earth-fixed rotation, WGS84 and the Sun). Two models serve the pointing kernels:
+
+* :class:`CircularOrbit` - analytic circular orbit with secular J2 nodal regression;
+* :class:`HermiteOrbit` - a table of (r, v, a) at equally spaced knots, interpolated by
+  quintic Hermite pieces (C2 in t). It is exact at the knots, so a table whose knots
+  lie on a scenario's geometry grid reproduces SGP4 there to the last bit. A table
+  may hold several satellites (``r`` of shape [S, M, 3]); kernels then take the
+  satellite index ``sat`` (:func:`orbit_state`).
+
+:func:`tabulate_orbits` builds one table for a whole constellation (TLEs through the
+``sgp4`` package's vectorized ``SatrecArray``, circular orbits analytically).
 
 Units: metres, seconds, radians. Times ``t`` are seconds from a scenario epoch,
 whose Julian date (UTC) is carried separately.
 
 References: vector-spline paper (seeds/vector-spline-guidance-laws, example data:
-600 km Sun-synchronous orbit); Vallado, *Fundamentals of Astrodynamics* (GMST,
-J2 nodal regression, WGS84); Astronomical Almanac low-precision Sun formula.
+600 km Sun-synchronous orbit); Vallado, *Fundamentals of Astrodynamics* (J2 nodal
+regression, SSO inclination).
 """
 
 from __future__ import annotations
 
-import datetime as _dt
+import math
 from typing import NamedTuple
 
+import jax
 import jax.numpy as jnp
 import numpy as np
 
 from jaxspline._validate import check_finite, check_positive
+from jaxspline.frames import OMEGA_EARTH, R_EARTH, jd_split
 
 __all__ = [
     "MU_EARTH",
-    "R_EARTH",
     "J2_EARTH",
-    "WGS84_F",
-    "OMEGA_EARTH",
     "CircularOrbit",
     "HermiteOrbit",
     "sso_inclination",
@@ -38,25 +43,16 @@ __all__ = [
     "circular_orbit_over",
     "orbit_position",
     "orbit_state",
-    "julian_date",
-    "gmst",
-    "earth_rotation_angle",
-    "teme_to_ecef",
-    "geodetic_to_ecef",
-    "ecef_to_geodetic",
     "propagate_tle",
     "tle_orbit",
-    "sun_direction",
+    "OrbitTable",
+    "tabulate_orbits",
 ]
 
-MU_EARTH = 3.986004418e14  # m^3/s^2
-R_EARTH = 6378137.0  # m, WGS84 equatorial radius
+MU_EARTH = 3.986004418e14  # m^3/s^2 (WGS84)
 J2_EARTH = 1.08262668e-3
-WGS84_F = 1.0 / 298.257223563
-WGS84_E2 = WGS84_F * (2.0 - WGS84_F)
-OMEGA_EARTH = 7.292115146706979e-5  # rad/s, GMST rate (sidereal day 86164.0905 s)
 _TROPICAL_YEAR = 365.2421897 * 86400.0  # s
-_JD_UNIX0 = 2440587.5
+_KM = 1e3
 
 
 class CircularOrbit(NamedTuple):
@@ -191,7 +187,7 @@ def _circular_velocity(orb: CircularOrbit, t):
     return orb.radius * (orb.mean_motion * du + orb.raan_rate * dw)
 
 
-def _hermite_basis(orb: HermiteOrbit, t, deriv: bool):
+def _hermite_basis(orb: HermiteOrbit, t, deriv: bool, sat=None):
     t = jnp.asarray(t)
     h = orb.t[1] - orb.t[0]
     k = jnp.clip(jnp.floor((t - orb.t[0]) / h).astype(jnp.int32), 0, orb.t.shape[0] - 2)
@@ -216,157 +212,95 @@ def _hermite_basis(orb: HermiteOrbit, t, deriv: bool):
             (-4 * s3 + 7 * s4 - 3 * s5) * h,
             (0.5 * s3 - s4 + 0.5 * s5) * h**2,
         )
-    return (
-        b[0] * orb.r[k]
-        + b[1] * orb.v[k]
-        + b[2] * orb.a[k]
-        + b[3] * orb.r[k + 1]
-        + b[4] * orb.v[k + 1]
-        + b[5] * orb.a[k + 1]
-    )
+    if sat is None:
+        r0, v0, a0, r1, v1, a1 = (
+            orb.r[k],
+            orb.v[k],
+            orb.a[k],
+            orb.r[k + 1],
+            orb.v[k + 1],
+            orb.a[k + 1],
+        )
+    else:
+        r0, v0, a0 = orb.r[sat, k], orb.v[sat, k], orb.a[sat, k]
+        r1, v1, a1 = orb.r[sat, k + 1], orb.v[sat, k + 1], orb.a[sat, k + 1]
+    return b[0] * r0 + b[1] * v0 + b[2] * a0 + b[3] * r1 + b[4] * v1 + b[5] * a1
 
 
-def orbit_position(orbit, t):
-    """Satellite position [..., 3] [m] in ECI (TEME) at time(s) t [s]; differentiable in t."""
+def orbit_position(orbit, t, sat=None):
+    """Satellite position [..., 3] [m] in ECI (TEME) at time(s) t [s]; differentiable in t.
+
+    ``sat`` selects the satellite of a multi-satellite :class:`HermiteOrbit` (int,
+    broadcastable with t); None for a single orbit.
+    """
     if isinstance(orbit, HermiteOrbit):
-        return _hermite_basis(orbit, t, False)
+        return _hermite_basis(orbit, t, False, sat)
     if isinstance(orbit, CircularOrbit):
         return _circular_position(orbit, t)
     raise ValueError(f"orbit must be a CircularOrbit or HermiteOrbit, got {type(orbit).__name__}")
 
 
-def orbit_state(orbit, t):
+def orbit_state(orbit, t, sat=None):
     """(position [..., 3] [m], velocity [..., 3] [m/s]) in ECI at time(s) t [s].
 
     The velocity is the analytic time derivative of :func:`orbit_position` (so that
-    pointing kernels need no nested autodiff for it); differentiable in t.
+    pointing kernels need no nested autodiff for it); differentiable in t. ``sat`` as
+    in :func:`orbit_position`.
     """
     if isinstance(orbit, HermiteOrbit):
-        return _hermite_basis(orbit, t, False), _hermite_basis(orbit, t, True)
+        return _hermite_basis(orbit, t, False, sat), _hermite_basis(orbit, t, True, sat)
     if isinstance(orbit, CircularOrbit):
         return _circular_position(orbit, t), _circular_velocity(orbit, t)
     raise ValueError(f"orbit must be a CircularOrbit or HermiteOrbit, got {type(orbit).__name__}")
 
 
-def julian_date(when) -> float:
-    """Julian date (UTC) of a datetime or ISO-8601 string (naive = UTC)."""
-    if isinstance(when, str):
-        try:
-            when = _dt.datetime.fromisoformat(when.strip())
-        except ValueError as exc:
-            raise ValueError(f"epoch must be an ISO-8601 date-time, got {when!r}") from exc
-    if not isinstance(when, _dt.datetime):
-        raise ValueError(f"epoch must be a datetime or ISO string, got {when!r}")
-    if when.tzinfo is None:
-        when = when.replace(tzinfo=_dt.UTC)
-    return _JD_UNIX0 + when.timestamp() / 86400.0
+_GRAVITY_MODELS = ("wgs72", "wgs84")
 
 
-def gmst(jd_ut1):
-    """Greenwich mean sidereal time [rad] in [0, 2 pi) at Julian date(s) (UT1; UTC used).
+def _parse_tle(line1: str, line2: str, who: str = "tle", gravity: str = "wgs84"):
+    """``Satrec`` of two TLE lines; ValueError naming ``who`` if malformed.
 
-    IAU 1982: GMST[s] = 67310.54841 + (876600 h + 8640184.812866) T + 0.093104 T^2
-    - 6.2e-6 T^3, T = (JD - 2451545) / 36525 (Vallado eq. 3-47).
+    ``gravity`` picks SGP4's geopotential constants: "wgs84" (default, as the aeossp
+    benchmark's propagator) or "wgs72" (the constants of Vallado's verification set).
     """
-    jd = np.asarray(jd_ut1, dtype=np.float64)
-    tu = (jd - 2451545.0) / 36525.0
-    sec = (
-        67310.54841 + (876600.0 * 3600.0 + 8640184.812866) * tu + 0.093104 * tu**2 - 6.2e-6 * tu**3
-    )
-    return np.mod(np.mod(sec, 86400.0) * (2 * np.pi / 86400.0), 2 * np.pi)
+    from sgp4.api import WGS72, WGS84, Satrec
+
+    if gravity not in _GRAVITY_MODELS:
+        raise ValueError(f"gravity must be one of {_GRAVITY_MODELS}, got {gravity!r}")
+
+    for k, line in ((1, line1), (2, line2)):
+        if not isinstance(line, str) or len(line.rstrip()) < 64 or line[:2] != f"{k} ":
+            raise ValueError(
+                f"{who} line {k} must be a 69-column TLE line starting '{k} ', got {line!r}"
+            )
+    try:
+        sat = Satrec.twoline2rv(line1, line2, WGS84 if gravity == "wgs84" else WGS72)
+    except Exception as exc:  # sgp4 raises ValueError / IndexError on malformed lines
+        raise ValueError(f"{who} lines could not be parsed: {exc}") from exc
+    if sat.error != 0:
+        raise ValueError(f"{who}: SGP4 initialisation error code {sat.error}")
+    return sat
 
 
-def earth_rotation_angle(gmst0, t):
-    """Earth rotation angle theta(t) = gmst0 + w_E t [rad] (JAX; t [s] from the epoch)."""
-    return gmst0 + OMEGA_EARTH * t
-
-
-def _rz(theta, x):
-    """Coordinates of x in a frame rotated by +theta about z: (c x + s y, -s x + c y, z)."""
-    c, s = jnp.cos(theta), jnp.sin(theta)
-    return jnp.stack([c * x[..., 0] + s * x[..., 1], -s * x[..., 0] + c * x[..., 1], x[..., 2]], -1)
-
-
-def teme_to_ecef(r, theta, v=None):
-    """Rotate TEME position (and velocity) to Earth-fixed by the Earth rotation angle theta.
-
-    r_ecef = Rz(theta) r; v_ecef = Rz(theta) v - w_E z x r_ecef. Polar motion ignored.
-    Arrays [..., 3]; theta broadcastable to r[..., 0]. Returns r_ecef or (r_ecef, v_ecef).
-    """
-    r_e = _rz(theta, jnp.asarray(r))
-    if v is None:
-        return r_e
-    v_e = _rz(theta, jnp.asarray(v))
-    w_x_r = jnp.stack([-r_e[..., 1], r_e[..., 0], jnp.zeros_like(r_e[..., 0])], -1) * OMEGA_EARTH
-    return r_e, v_e - w_x_r
-
-
-def geodetic_to_ecef(lat, lon, h=0.0):
-    """WGS84 geodetic latitude, longitude [rad] and height [m] -> ECEF [..., 3] [m].
-
-    N = a / sqrt(1 - e^2 sin^2 lat); x = (N + h) cos lat cos lon, y = (N + h) cos lat sin lon,
-    z = (N (1 - e^2) + h) sin lat.
-    """
-    lat, lon, h = jnp.asarray(lat), jnp.asarray(lon), jnp.asarray(h)
-    sl = jnp.sin(lat)
-    n = R_EARTH / jnp.sqrt(1.0 - WGS84_E2 * sl**2)
-    return jnp.stack(
-        [
-            (n + h) * jnp.cos(lat) * jnp.cos(lon),
-            (n + h) * jnp.cos(lat) * jnp.sin(lon),
-            (n * (1.0 - WGS84_E2) + h) * sl,
-        ],
-        -1,
-    )
-
-
-def ecef_to_geodetic(r):
-    """ECEF [..., 3] [m] -> WGS84 (lat [rad], lon [rad], h [m]) by 5 fixed-point iterations.
-
-    Accurate to < 1 mm for heights below 1000 km (used for ground tracks and plots).
-    """
-    r = jnp.asarray(r)
-    x, y, z = r[..., 0], r[..., 1], r[..., 2]
-    p = jnp.hypot(x, y)
-    lon = jnp.arctan2(y, x)
-    lat = jnp.arctan2(z, p * (1.0 - WGS84_E2))
-    for _ in range(5):
-        n = R_EARTH / jnp.sqrt(1.0 - WGS84_E2 * jnp.sin(lat) ** 2)
-        h = p / jnp.maximum(jnp.cos(lat), 1e-12) - n
-        lat = jnp.arctan2(z, p * (1.0 - WGS84_E2 * n / (n + h)))
-    n = R_EARTH / jnp.sqrt(1.0 - WGS84_E2 * jnp.sin(lat) ** 2)
-    h = p * jnp.cos(lat) + z * jnp.sin(lat) - n * (1.0 - WGS84_E2 * jnp.sin(lat) ** 2)
-    return lat, lon, h
-
-
-def propagate_tle(line1: str, line2: str, jd, fr=0.0):
+def propagate_tle(line1: str, line2: str, jd, fr=0.0, gravity: str = "wgs84"):
     """Propagate one TLE with SGP4 (vectorized ``SatrecArray.sgp4``) on numpy arrays.
 
     Args:
       line1, line2: the two TLE lines.
       jd, fr: Julian date split into integer-ish and fractional parts (arrays, UTC).
+      gravity: geopotential constants, "wgs84" (default) or "wgs72".
     Returns:
       (r [..., 3] [m], v [..., 3] [m/s], error [...] int) in TEME; error != 0 marks
       SGP4 failures (decayed orbit, etc.), as in the ``sgp4`` package.
     """
-    from sgp4.api import Satrec, SatrecArray
+    from sgp4.api import SatrecArray
 
-    for k, line in ((1, line1), (2, line2)):
-        if not isinstance(line, str) or len(line.rstrip()) < 64 or line[:2] != f"{k} ":
-            raise ValueError(
-                f"tle line {k} must be a 69-column TLE line starting '{k} ', got {line!r}"
-            )
-    try:
-        sat = Satrec.twoline2rv(line1, line2)
-    except Exception as exc:  # sgp4 raises ValueError / IndexError on malformed lines
-        raise ValueError(f"tle lines could not be parsed: {exc}") from exc
-    if sat.error != 0:
-        raise ValueError(f"tle: SGP4 initialisation error code {sat.error}")
+    sat = _parse_tle(line1, line2, gravity=gravity)
     jd = np.atleast_1d(np.asarray(jd, dtype=np.float64))
     fr = np.broadcast_to(np.asarray(fr, dtype=np.float64), jd.shape)
     shape = jd.shape
     e, r, v = SatrecArray([sat]).sgp4(jd.ravel(), np.ascontiguousarray(fr.ravel()))
-    return r[0].reshape(*shape, 3) * 1e3, v[0].reshape(*shape, 3) * 1e3, e[0].reshape(shape)
+    return r[0].reshape(*shape, 3) * _KM, v[0].reshape(*shape, 3) * _KM, e[0].reshape(shape)
 
 
 def _gravity_j2(r):
@@ -378,7 +312,7 @@ def _gravity_j2(r):
 
 
 def tle_orbit(line1: str, line2: str, epoch_jd: float, t_end: float, step: float = 20.0):
-    """Tabulate a TLE with SGP4 on [-step, t_end + step] s from ``epoch_jd`` (HermiteOrbit).
+    """Tabulate one TLE with SGP4 on [-step, t_end + step] s from ``epoch_jd`` (HermiteOrbit).
 
     Knots every ``step`` seconds; knot accelerations from the two-body + J2 field,
     so the interpolant is a differentiable JAX function of t. Interpolation error
@@ -388,27 +322,96 @@ def tle_orbit(line1: str, line2: str, epoch_jd: float, t_end: float, step: float
     check_positive("step", step)
     m = int(np.ceil(t_end / step)) + 3
     t = -step + step * np.arange(m)
-    jd = np.full(m, float(np.floor(epoch_jd)))
-    fr = (epoch_jd - jd) + t / 86400.0
+    jd, fr = jd_split(epoch_jd, t)
     r, v, err = propagate_tle(line1, line2, jd, fr)
     if np.any(err != 0):
         raise ValueError(f"tle: SGP4 error code {int(err[err != 0][0])} within the scenario span")
     return HermiteOrbit(*(jnp.asarray(x) for x in (t, r, v, _gravity_j2(r))))
 
 
-def sun_direction(jd):
-    """Unit vector to the Sun [..., 3] in the mean-equator-of-date frame (~0.01 deg).
+def _circular_table(orb: CircularOrbit, t):
+    """(r, v, a) [M, 3] of a circular orbit at knots t [M]; a = dv/dt by forward autodiff."""
+    tj = jnp.asarray(t, jnp.float64)
+    r = _circular_position(orb, tj)
+    v, a = jax.jvp(lambda x: _circular_velocity(orb, x), (tj,), (jnp.ones_like(tj),))
+    return np.asarray(r), np.asarray(v), np.asarray(a)
 
-    Astronomical Almanac low-precision formula: n = JD - 2451545, L = 280.460 +
-    0.9856474 n, g = 357.528 + 0.9856003 n (deg), ecliptic longitude
-    lambda = L + 1.915 sin g + 0.020 sin 2g, obliquity eps = 23.439 - 4e-7 n;
-    s = (cos lambda, cos eps sin lambda, sin eps sin lambda). Valid 1950-2050.
-    numpy float64 (a Julian date needs float64; not a JAX kernel).
+
+class OrbitTable(NamedTuple):
+    """A constellation tabulated on common knots (the output of :func:`tabulate_orbits`).
+
+    Attributes:
+      orbit: :class:`HermiteOrbit` with r, v, a of shape [S, M, 3] (knot times t [M]).
+      ok: bool [S, M], SGP4 returned without error at the knot (always True for
+        circular orbits); positions at failed knots are copied from the nearest good
+        knot so that the table stays finite, and callers must not use times whose
+        bracketing knots are not both ok (see :meth:`usable`).
     """
-    n = np.asarray(jd, dtype=np.float64) - 2451545.0
-    g = np.radians(np.mod(357.528 + 0.9856003 * n, 360.0))
-    lam = np.radians(
-        np.mod(280.460 + 0.9856474 * n, 360.0) + 1.915 * np.sin(g) + 0.020 * np.sin(2 * g)
-    )
-    eps = np.radians(23.439 - 4e-7 * n)
-    return np.stack([np.cos(lam), np.cos(eps) * np.sin(lam), np.sin(eps) * np.sin(lam)], -1)
+
+    orbit: HermiteOrbit
+    ok: np.ndarray
+
+    def usable(self, sat, t):
+        """True where time t [s] of satellite ``sat`` lies between two good knots (numpy)."""
+        tk = np.asarray(self.orbit.t)
+        h = tk[1] - tk[0]
+        k = np.clip(
+            np.floor((np.asarray(t, np.float64) - tk[0]) / h).astype(np.int64), 0, tk.size - 2
+        )
+        return self.ok[sat, k] & self.ok[sat, k + 1]
+
+
+def tabulate_orbits(sources, epoch_jd: float, t_end: float, step: float) -> OrbitTable:
+    """One :class:`HermiteOrbit` table for S satellites, knots ``t_k = k step`` for k = -1..n+1.
+
+    Args:
+      sources: list of S orbit sources, each a :class:`CircularOrbit` or a pair of TLE
+        lines ``(line1, line2)`` (propagated with SGP4, WGS84 constants, all TLEs in one
+        vectorized ``SatrecArray`` call).
+      epoch_jd: Julian date (UTC) of t = 0.
+      t_end: last time [s] the table must cover.
+      step: knot spacing [s]; put it on the scenario's geometry grid so that every grid
+        instant is a knot (then positions there are SGP4's own values).
+    Returns:
+      :class:`OrbitTable`. Raises ValueError naming the satellite for a malformed TLE.
+    """
+    check_positive("t_end", t_end)
+    check_positive("step", step)
+    n = int(math.ceil(t_end / step - 1e-9)) + 1
+    t = step * np.arange(-1, n + 1, dtype=np.float64)
+    m, s_count = t.size, len(sources)
+    r = np.zeros((s_count, m, 3))
+    v = np.zeros((s_count, m, 3))
+    ok = np.ones((s_count, m), bool)
+    tle_idx = [i for i, src in enumerate(sources) if not isinstance(src, CircularOrbit)]
+    for i, src in enumerate(sources):
+        if isinstance(src, CircularOrbit):
+            r[i], v[i], _ = _circular_table(src, t)
+    if tle_idx:
+        from sgp4.api import SatrecArray
+
+        sats = [_parse_tle(*sources[i], who=f"satellite {i}: tle") for i in tle_idx]
+        jd, fr = jd_split(epoch_jd, t)
+        err, rr, vv = SatrecArray(sats).sgp4(jd, fr)
+        good = (err == 0) & np.all(np.isfinite(rr), axis=-1)
+        for row, i in enumerate(tle_idx):
+            g = good[row]
+            if not g.any():
+                raise ValueError(f"satellite {i}: SGP4 fails over the whole horizon (decayed?)")
+            near = _nearest_good(g)
+            r[i], v[i], ok[i] = rr[row][near] * _KM, vv[row][near] * _KM, g
+    a = _gravity_j2(r)
+    for i, src in enumerate(sources):
+        if isinstance(src, CircularOrbit):
+            a[i] = _circular_table(src, t)[2]
+    return OrbitTable(HermiteOrbit(*(jnp.asarray(x) for x in (t, r, v, a))), ok)
+
+
+def _nearest_good(good: np.ndarray) -> np.ndarray:
+    """Index of the nearest True entry of ``good`` for every position."""
+    idx = np.flatnonzero(good)
+    pos = np.clip(np.searchsorted(idx, np.arange(good.size)), 0, idx.size - 1)
+    left = idx[np.maximum(pos - 1, 0)]
+    right = idx[pos]
+    here = np.arange(good.size)
+    return np.where(np.abs(here - left) <= np.abs(right - here), left, right)

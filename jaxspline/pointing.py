@@ -36,7 +36,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline._validate import check_finite, check_positive
-from jaxspline.orbit import OMEGA_EARTH, _rz, earth_rotation_angle, orbit_state
+from jaxspline.frames import OMEGA_EARTH, earth_rotation_angle, rot_z
+from jaxspline.orbit import orbit_state
 
 __all__ = [
     "Scene",
@@ -44,6 +45,7 @@ __all__ = [
     "aim_params",
     "aim_angles",
     "aim_state",
+    "aim_geometry",
     "pointing_angles",
     "pointing_state",
     "off_nadir",
@@ -59,8 +61,10 @@ class Scene(NamedTuple):
     """The pointing geometry of one scenario (a pytree).
 
     Attributes:
-      orbit: a ``CircularOrbit`` or ``HermiteOrbit`` (jaxspline.orbit).
-      gmst0: Earth rotation angle at t = 0 [rad] (``orbit.gmst(epoch_jd)``).
+      orbit: a ``CircularOrbit`` or ``HermiteOrbit`` (jaxspline.orbit); a
+        multi-satellite HermiteOrbit ([S, M, 3] tables) needs the ``sat`` argument of
+        the kernels.
+      gmst0: Earth rotation angle at t = 0 [rad] (``frames.gmst`` of the epoch).
     """
 
     orbit: object
@@ -97,19 +101,22 @@ def _aim_point(p, delta):
     rad = jnp.linalg.norm(g0)
     u = g0 / rad
     d = d - jnp.dot(d, u) * u
-    d = d / jnp.linalg.norm(d)
+    dn2 = jnp.dot(d, d)
+    # a point target's dummy direction (+z) is parallel to u at a pole: any unit d works
+    d = jnp.where(dn2 > 0, d, jnp.array([1.0, 0.0, 0.0], d.dtype))
+    d = d / jnp.sqrt(jnp.where(dn2 > 0, dn2, 1.0))
     c, s = jnp.cos(delta), jnp.sin(delta)
     return rad * (u * c + d * s), d * c - u * s
 
 
-def _frame_los(scene: Scene, p, t0, t):
+def _frame_los(scene: Scene, p, t0, t, sat=None):
     """LOS L [3] [m], its rate L' [3] [m/s] and the strip tangent [3], all in the orbital frame.
 
     L = B (g - r); L' = B (g' - v) - W x L, with B the orbital-frame basis (rows),
     g' = w_E z x g + (ground speed) * tangent (ECI), and W = (0, -|r x v| / |r|^2, 0)
     the orbital frame's angular velocity in its own axes (exact for Keplerian motion).
     """
-    r, v = orbit_state(scene.orbit, t)
+    r, v = orbit_state(scene.orbit, t, sat)
     rn = jnp.linalg.norm(r)
     z = -r / rn
     h = jnp.cross(r, v)
@@ -121,8 +128,8 @@ def _frame_los(scene: Scene, p, t0, t):
     rad_g = jnp.linalg.norm(p[:3])
     delta = p[6] * (t - t0) / rad_g
     g, tan = _aim_point(p, delta)
-    g_eci = _rz(-theta, g)
-    tan_eci = _rz(-theta, tan)
+    g_eci = rot_z(-theta, g)
+    tan_eci = rot_z(-theta, tan)
     g_dot = OMEGA_EARTH * jnp.stack([-g_eci[1], g_eci[0], jnp.zeros_like(g_eci[0])])
     g_dot = g_dot + tan_eci * p[6]
     los = basis @ (g_eci - r)
@@ -149,7 +156,7 @@ def _angles_from(n, s):
     return jnp.stack([roll, pitch, yaw])
 
 
-def aim_angles(scene: Scene, p, t0, t):
+def aim_angles(scene: Scene, p, t0, t, sat=None):
     """Kernel: [roll, pitch, yaw, off_nadir] [rad] at time t [s] for aim law p [8] started at t0.
 
     off_nadir is pi when the aim point is below its horizon (seen through the Earth).
@@ -158,10 +165,11 @@ def aim_angles(scene: Scene, p, t0, t):
     point moves along its great circle at ground speed p[6] from t0. Branchless in
     the point/strip switch; differentiable in t and t0. The aim point covers
     p[6] * (t - t0) metres of arc on the sphere of radius |g0| through the start point
-    (within ~0.2 km of the ellipsoid for a 100 km strip).
+    (within ~0.2 km of the ellipsoid for a 100 km strip). ``sat``: satellite index of a
+    multi-satellite orbit table (None for one orbit).
     """
 
-    los, los_dot, tan_o, sees = _frame_los(scene, p, t0, t)
+    los, los_dot, tan_o, sees = _frame_los(scene, p, t0, t, sat)
     n = los / jnp.linalg.norm(los)
     s = jnp.where(p[7] > 0.5, tan_o, -los_dot)
     ang = _angles_from(n, s)
@@ -170,7 +178,7 @@ def aim_angles(scene: Scene, p, t0, t):
     return jnp.concatenate([ang, offn[None]])
 
 
-def aim_state(scene: Scene, p, t0, t):
+def aim_state(scene: Scene, p, t0, t, sat=None):
     """Kernel: (angle, rate, accel), each [3] (roll, pitch, yaw), plus off-nadir, at time t.
 
     rate = d(angle)/dt and accel = d^2(angle)/dt^2 with t0 fixed, by nested
@@ -179,13 +187,37 @@ def aim_state(scene: Scene, p, t0, t):
     """
 
     def f(tt):
-        return aim_angles(scene, p, t0, tt)
+        return aim_angles(scene, p, t0, tt, sat)
 
     def f1(tt):
         return jax.jvp(f, (tt,), (jnp.ones_like(tt),))
 
     (a, r), (_, acc) = jax.jvp(f1, (t,), (jnp.ones_like(t),))
     return a[:3], r[:3], acc[:3], a[3]
+
+
+def aim_geometry(scene: Scene, p, t0, t, sat=None):
+    """Kernel: imaging geometry of aim law p at time t, without attitude angles.
+
+    Returns ``(off_nadir, elevation_sine, los, nadir)``: the off-nadir angle [rad]
+    ``atan2(|d x n|, d . n)`` between the line of sight ``d = g - r`` and nadir
+    ``n = -r``; the sine of the aim point's geocentric elevation
+    ``(r - g) . g / (|r - g| |g|)`` (> 0 iff the satellite is above the aim point's
+    horizon, aeossp RULES.md rule 5); and the unit line of sight and unit nadir [3]
+    in ECI (TEME). This is what rest-to-rest eigen-axis slews need (the angle between
+    two lines of sight); one candidate, no autodiff, cheap.
+    """
+    r, _ = orbit_state(scene.orbit, t, sat)
+    theta = earth_rotation_angle(scene.gmst0, t)
+    g, _ = _aim_point(p, p[6] * (t - t0) / jnp.linalg.norm(p[:3]))
+    g_eci = rot_z(-theta, g)
+    d = g_eci - r
+    dn = jnp.linalg.norm(d)
+    rn = jnp.linalg.norm(r)
+    cr = jnp.cross(d, -r)
+    offn = jnp.arctan2(jnp.linalg.norm(cr), jnp.dot(d, -r))
+    elev = jnp.dot(-d, g_eci) / (dn * jnp.linalg.norm(g_eci))
+    return offn, elev, d / dn, -r / rn
 
 
 def _as_t(t, like):
@@ -209,7 +241,7 @@ def _point_state_kernel(scene, target, t):
 
 def _offn_kernel(scene, target, t):
     r, _ = orbit_state(scene.orbit, t)
-    g = _rz(-earth_rotation_angle(scene.gmst0, t), target)
+    g = rot_z(-earth_rotation_angle(scene.gmst0, t), target)
     d = g - r
     nadir = -r
     cr = jnp.cross(d, nadir)

@@ -28,16 +28,16 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline._validate import check_finite, check_positive
-from jaxspline.limits import AxisLimits
-from jaxspline.options import RouteOptions
-from jaxspline.orbit import (
+from jaxspline.frames import (
     OMEGA_EARTH,
     ecef_to_geodetic,
     geodetic_to_ecef,
     gmst,
-    orbit_state,
     sun_direction,
 )
+from jaxspline.limits import AxisLimits
+from jaxspline.options import RouteOptions
+from jaxspline.orbit import orbit_state
 from jaxspline.pointing import Scene, aim_state, off_nadir_flat
 
 __all__ = [

@@ -5,16 +5,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxspline.orbit import (
-    OMEGA_EARTH,
-    circular_orbit,
-    circular_orbit_over,
-    geodetic_to_ecef,
-    gmst,
-    julian_date,
-    orbit_position,
-    orbit_state,
-)
+from jaxspline.frames import OMEGA_EARTH, geodetic_to_ecef, gmst, julian_date
+from jaxspline.orbit import circular_orbit, circular_orbit_over, orbit_position, orbit_state
 from jaxspline.pointing import (
     Scene,
     aim_angles,

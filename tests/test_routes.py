@@ -5,9 +5,10 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
+from jaxspline.frames import geodetic_to_ecef, gmst, julian_date
 from jaxspline.limits import AxisLimits
 from jaxspline.options import RouteOptions
-from jaxspline.orbit import circular_orbit_over, geodetic_to_ecef, gmst, julian_date
+from jaxspline.orbit import circular_orbit_over
 from jaxspline.pointing import Scene, off_nadir, pointing_angles
 from jaxspline.routes import (
     POINT,

@@ -17,7 +17,7 @@ import pytest
 
 from jaxspline import screen
 from jaxspline.limits import AxisLimits
-from jaxspline.options import RouteOptions
+from jaxspline.options import RouteOptions, take_options
 
 # ----------------------------------------------------------------------------
 # numpy references and synthetic instances
@@ -164,7 +164,7 @@ def test_chunking_max_gap_and_order_invariance(reach_kernels):
     # permuting the option table permutes indices, not verdicts
     perm = rng.permutation(len(opt.route))
     inv = np.argsort(perm)
-    opt_p = RouteOptions(*(np.asarray(a)[perm] for a in opt))
+    opt_p = take_options(opt, perm)
     tp = screen.screen_transitions(opt_p, LIMITS, progress=False)
     a = dict(
         zip(
@@ -196,7 +196,9 @@ def test_chunking_max_gap_and_order_invariance(reach_kernels):
 def test_float32_follows_input_dtype(reach_kernels):
     rng = np.random.default_rng(3)
     opt64 = synthetic_options(rng, n_routes=8, per_route=3)
-    opt32 = RouteOptions(*(a.astype(np.float32) if a.dtype == np.float64 else a for a in opt64))
+    opt32 = RouteOptions(
+        *(a.astype(np.float32) if a is not None and a.dtype == np.float64 else a for a in opt64)
+    )
     t64 = screen.screen_transitions(opt64, LIMITS, progress=False)
     t32 = screen.screen_transitions(opt32, LIMITS, progress=False)
     assert t32.margin.dtype == np.float32 and t64.margin.dtype == np.float64

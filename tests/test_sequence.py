@@ -7,7 +7,7 @@ import pytest
 from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
 from jaxspline import screen, sequence
-from jaxspline.options import RouteOptions
+from jaxspline.options import RouteOptions, take_options
 from jaxspline.validate import validate_plan
 
 
@@ -34,7 +34,7 @@ def brute_force(opt: RouteOptions, tr) -> float:
 
 
 def steps_of(opt: RouteOptions, idx) -> RouteOptions:
-    return RouteOptions(*(np.asarray(a)[idx] for a in opt))
+    return take_options(opt, idx)
 
 
 def check_plan(opt, tr, plan):

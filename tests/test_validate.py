@@ -8,11 +8,11 @@ from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
 from jaxspline import screen, sequence, validate
 from jaxspline.limits import AxisLimits
-from jaxspline.options import RouteOptions
+from jaxspline.options import RouteOptions, take_options
 
 
 def steps_of(opt, idx):
-    return RouteOptions(*(np.asarray(a)[idx].copy() for a in opt))
+    return take_options(opt, idx)
 
 
 @pytest.fixture
@@ -34,7 +34,9 @@ def test_good_plan_passes(good_plan):
     assert np.all(rep.peak_accel <= LIMITS.accel * (1 + 1e-9))
     assert np.all(rep.peak_accel > 0)
     # float32 plan passes with float32 tolerances
-    s32 = RouteOptions(*(a.astype(np.float32) if a.dtype == np.float64 else a for a in steps))
+    s32 = RouteOptions(
+        *(a.astype(np.float32) if a is not None and a.dtype == np.float64 else a for a in steps)
+    )
     assert validate.validate_plan(s32, LIMITS).ok
     # a single step and the empty plan are valid
     assert validate.validate_plan(steps_of(opt, plan.options[:1]), LIMITS).ok
