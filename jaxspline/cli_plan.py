@@ -52,7 +52,7 @@ def _main(args) -> int:
 
 
 def _take(options, idx):
-    return type(options)(*(np.asarray(x)[idx] for x in options))
+    return take_options(options, idx)
 
 
 def _pair_lookup(tr, src, dst):
@@ -325,7 +325,8 @@ def _plots(out, sc, routes, options, tr, steps, speed, idx, m_before, m_after, l
     import jax.numpy as jnp
 
     from jaxspline import plot, reach
-    from jaxspline.orbit import ecef_to_geodetic, orbit_position, teme_to_ecef
+    from jaxspline.frames import ecef_to_geodetic, teme_to_ecef
+    from jaxspline.orbit import orbit_position
     from jaxspline.routes import _great_circle_end, sample_scans
 
     # ground track

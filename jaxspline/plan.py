@@ -1,0 +1,273 @@
+"""The planning pipeline: one entry point for the CLI, the benchmark and the aeossp adapter.
+
+``plan(scenario) -> PlanResult`` runs, in float64 (inside ``jax.enable_x64``, the
+process-wide setting is left alone):
+
+1. **orbits** - every satellite on common ephemeris knots (SGP4 for TLEs), the Sun
+   and the Earth's shadow at the knots;
+2. **windows** - every visibility window of every target over the horizon
+   (:mod:`jaxspline.windows`);
+3. **options** - the valid (target, satellite, start) options on the action grid
+   with their boundary states (:mod:`jaxspline.opportunities`);
+4. **screening** - per satellite, every option pair closer than the always-feasible
+   gap through the satellite's maneuver model (:mod:`jaxspline.models`);
+5. **search** - greedy, Lagrangian/DP bound, exact search on tiny instances, LNS
+   (:mod:`jaxspline.search`) until the time limit;
+6. **check** - an independent re-check without margins (:mod:`jaxspline.plan_check`);
+   failing observations are dropped, so the returned plan is valid under it.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+
+import jax
+import numpy as np
+
+from jaxspline.frames import gmst, in_shadow, jd_split, sun_direction
+from jaxspline.mission import Scenario
+from jaxspline.models import (
+    REST_TO_REST,
+    far_gap,
+    first_requirements,
+    pair_requirements,
+    slew_table,
+)
+from jaxspline.opportunities import _aim_laws, build_opportunities, nadir_rate
+from jaxspline.orbit import tabulate_orbits
+from jaxspline.plan_check import check_plan
+from jaxspline.pointing import Scene
+from jaxspline.result import Observations, PlanResult
+from jaxspline.search import BatteryModel, Problem, solve
+from jaxspline.windows import visibility_windows_all
+
+__all__ = ["plan"]
+
+_RESERVE_SHARE = 0.08  # share of the time limit kept for the final check and output
+_RESERVE_MIN = 1.0  # [s]
+_NEAR_SLACK = 1e-6  # [s] near pairs reach this far past the always-feasible gap
+_PAIR_BLOCK = 1 << 20  # option pairs per screening block
+_MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
+
+
+class _Clock:
+    """Stage timings and progress lines on stderr."""
+
+    def __init__(self, name: str, progress: bool):
+        self.t0 = time.monotonic()
+        self.last = self.t0
+        self.name = name
+        self.progress = progress
+        self.timings = {}
+
+    def lap(self, stage: str, msg: str = ""):
+        now = time.monotonic()
+        self.timings[stage] = round(now - self.last, 3)
+        self.last = now
+        self.say(stage, msg)
+
+    def say(self, stage: str, msg: str):
+        if self.progress:
+            print(
+                f"[plan {self.name}] {stage:9s} {msg}  ({time.monotonic() - self.t0:5.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
+
+
+def plan(
+    scenario: Scenario,
+    *,
+    time_limit: float | None = None,
+    seed: int = 0,
+    progress: bool = True,
+    max_iters: int | None = None,
+) -> PlanResult:
+    """Plan a scenario: the best observations found within ``time_limit`` seconds.
+
+    Args:
+      scenario: a :class:`jaxspline.mission.Scenario`.
+      time_limit: wall-clock budget [s] for the whole call (default
+        ``scenario.planner.default_time_limit``).
+      seed: random seed of the search (runs are deterministic for a seed and
+        ``max_iters``; a time limit only truncates the search).
+      progress: stage lines on stderr.
+      max_iters: optional cap on search iterations (reproducible runs).
+    Returns:
+      :class:`jaxspline.result.PlanResult`.
+    """
+    if not isinstance(scenario, Scenario):
+        raise ValueError(f"scenario must be a jaxspline Scenario, got {type(scenario).__name__}")
+    limit = scenario.planner.default_time_limit if time_limit is None else time_limit
+    if not (isinstance(limit, int | float) and math.isfinite(limit) and limit > 0):
+        raise ValueError(f"time_limit must be a number > 0, got {time_limit!r}")
+    with jax.enable_x64(True):
+        return _plan(scenario, float(limit), int(seed), bool(progress), max_iters)
+
+
+def _orbits(sc: Scenario):
+    pc = sc.planner
+    table = tabulate_orbits(
+        [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, pc.geometry_step
+    )
+    scene = Scene(table.orbit, np.float64(gmst(sc.epoch_jd)))
+    t = np.asarray(table.orbit.t)
+    knots = (t >= -1e-9) & (t <= sc.duration + pc.geometry_step + 1e-9)
+    jd, fr = jd_split(sc.epoch_jd, t[knots])
+    sun = sun_direction(jd, fr)
+    r = np.asarray(table.orbit.r)[:, knots]
+    n = int(math.ceil(sc.duration / pc.geometry_step - 1e-9)) + 1
+    sunlit = ~in_shadow(r, sun[None])[:, :n]
+    return table, scene, sunlit
+
+
+def _near_pairs(sc, opp, tables, far):
+    """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need."""
+    o = opp.options
+    src_all, dst_all, need_all = [], [], []
+    for k, sat in enumerate(sc.satellites):
+        ids = np.flatnonzero(o.sat == k)
+        if ids.size == 0:
+            continue
+        s, e = o.t_start[ids], o.t_end[ids]
+        eo = ids[np.argsort(e, kind="stable")]
+        es = o.t_end[eo]
+        a = np.searchsorted(es, s - far[k] - _NEAR_SLACK, side="right")
+        b = np.searchsorted(es, s, side="left")
+        cnt = np.maximum(b - a, 0)
+        total = int(cnt.sum())
+        for c0 in range(0, ids.size, max(1, ids.size * _PAIR_BLOCK // max(total, 1))):
+            sl = slice(c0, c0 + max(1, ids.size * _PAIR_BLOCK // max(total, 1)))
+            cc = cnt[sl]
+            jj = np.repeat(ids[sl], cc)
+            off = np.arange(cc.sum()) - np.repeat(np.cumsum(cc) - cc, cc)
+            ii = eo[np.repeat(a[sl], cc) + off]
+            need = pair_requirements(sat, o, ii, jj, tables[k])
+            ok = np.isfinite(need)
+            src_all.append(ii[ok])
+            dst_all.append(jj[ok])
+            need_all.append(need[ok])
+    if not src_all:
+        z = np.zeros(0, np.int64)
+        return z, z, np.zeros(0)
+    return np.concatenate(src_all), np.concatenate(dst_all), np.concatenate(need_all)
+
+
+def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> PlanResult:
+    clock = _Clock(sc.name, progress)
+    deadline = clock.t0 + limit
+    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
+    pc = sc.planner
+    sats = sc.satellites
+    table, scene, sunlit = _orbits(sc)
+    clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
+    ref, _ = _aim_laws(sc)
+    tg = sc.targets
+    sensors = np.array([s.sensor for s in sats])
+    allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
+    limit_k = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
+    windows = visibility_windows_all(
+        scene, table.ok, ref, allowed, limit_k, pc.margins.horizon, tg.t_lo, tg.t_hi, sc.duration
+    )
+    clock.lap(
+        "windows", f"{len(windows)} windows for {len(np.unique(windows.target))}/{len(tg)} targets"
+    )
+    opp = build_opportunities(sc, scene, table.usable, windows)
+    clock.lap("options", f"{len(opp)} options")
+    o = opp.options
+    tables = [slew_table(s, pc.margins.gap) if s.model in REST_TO_REST else None for s in sats]
+    omega = nadir_rate(scene)
+    far = np.zeros(len(sats))
+    first = np.full(len(opp), np.inf)
+    for k, s in enumerate(sats):
+        ids = np.flatnonzero(o.sat == k)
+        far[k] = far_gap(s, o, ids, float(omega[k]), tables[k])
+        first[ids] = first_requirements(s, o, ids, tables[k])
+    near = _near_pairs(sc, opp, tables, far)
+    clock.lap(
+        "screening",
+        f"{near[0].size} feasible near pairs; far gaps "
+        + ", ".join(f"{g:.0f}" for g in far)
+        + " s",
+    )
+    battery = BatteryModel(
+        sunlit,
+        [s.power for s in sats],
+        pc.geometry_step,
+        pc.margins.battery_wh,
+        pc.margins.shadow_guard,
+    )
+    pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.duration, tg.value)
+    res = solve(
+        pb,
+        deadline - reserve,
+        seed=seed,
+        lagrangian_share=pc.lagrangian_share,
+        exact_max_options=pc.exact_max_options,
+        max_iters=max_iters,
+        report=clock.say,
+    )
+    tl = res.timeline
+    clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
+    chosen = [c for c in tl.assigned if c >= 0]
+    dropped = 0
+    for _ in range(_MAX_DROP_ROUNDS):
+        bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
+        if not bad:
+            break
+        dropped += len(bad)
+        chosen = [c for c in chosen if c not in set(bad)]
+    else:
+        chosen = []
+        bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
+    clock.lap("check", f"{len(chosen)} observations valid, {dropped} dropped")
+    idx = np.asarray(det.get("order", np.zeros(0, np.int64)), np.int64)
+    obs = Observations(
+        sat=np.asarray(o.sat)[idx],
+        target=np.asarray(o.route)[idx],
+        start=np.asarray(o.t_start)[idx],
+        end=np.asarray(o.t_end)[idx],
+        maneuver=det["maneuver"],
+        slack=det["slack"],
+        value=np.asarray(tg.value)[np.asarray(o.route)[idx]],
+        speed=opp.speed[idx],
+    )
+    value = float(np.sum(obs.value))
+    bound = float(res.bound) if math.isfinite(res.bound) else value
+    bat = {}
+    for k, s in enumerate(sats):
+        if battery.has(k):
+            m = obs.sat == k
+            lev = battery.profile(k, obs.start[m], obs.end[m], obs.maneuver[m])
+            bat[s.name] = (np.arange(lev.size) * battery.dt, lev)
+    report = {
+        "valid": not det["violations"],
+        "checked": len(obs),
+        "dropped": dropped,
+        "violations": det["violations"],
+        "min_slack_s": float(obs.slack.min()) if len(obs) else None,
+        "min_battery_wh": det["battery_min"],
+    }
+    stats = {
+        "windows": len(windows),
+        "options": len(opp),
+        "near_pairs": int(near[0].size),
+        "far_gap_s": far.tolist(),
+        "bound_status": res.bound_status,
+        "exact": res.exact,
+        **res.stats,
+    }
+    return PlanResult(
+        scenario=sc,
+        observations=obs,
+        value=value,
+        bound=max(bound, value),
+        gap=max(bound, value) - value,
+        bound_converged=res.bound_status in ("optimal", "converged"),
+        report=report,
+        stats=stats,
+        timings=clock.timings,
+        battery=bat,
+    )
