@@ -2,8 +2,8 @@
 
 Public names are re-exported here from small private-by-convention modules, one
 concern each (see README "Architecture"). The library never enables float64 on
-import; call ``jax.config.update("jax_enable_x64", True)`` for double precision
-(the CLI, tests and benchmarks do).
+import or globally: :func:`plan` runs inside ``jax.enable_x64(True)``; for the kernels,
+use that context manager (or ``jax.config.update("jax_enable_x64", True)``) yourself.
 """
 
 from jaxspline.limits import AxisLimits, validate_limits
@@ -142,12 +142,21 @@ from jaxspline.routes import (  # noqa: E402
     make_route_spec,
     tabulate_route_model,
 )
-from jaxspline.scenario import (  # noqa: E402
-    PlannerOptions,
+# --- planning (mission types, the pipeline, its result, scenario files) ---
+from jaxspline.mission import (  # noqa: E402
+    MODELS,
+    FlexMode,
+    Margins,
+    PlannerConfig,
+    Power,
+    Satellite,
     Scenario,
-    default_scenario,
-    load_scenario,
+    Targets,
+    make_targets,
 )
+from jaxspline.planner import Prepared, build_problem, plan  # noqa: E402
+from jaxspline.result import Observations, PlanResult  # noqa: E402
+from jaxspline.scenario import default_scenario, load_scenario, load_targets_csv  # noqa: E402
 # --- engine (screen, sequence, refine, validate, scenario) ---
 from jaxspline.screen import (  # noqa: E402
     Transitions,
@@ -165,6 +174,20 @@ from jaxspline.refine import (  # noqa: E402
 from jaxspline.validate import ValidationReport, validate_plan  # noqa: E402
 
 __all__ = [
+    "MODELS",
+    "FlexMode",
+    "Margins",
+    "PlannerConfig",
+    "Power",
+    "Satellite",
+    "Targets",
+    "make_targets",
+    "Prepared",
+    "build_problem",
+    "plan",
+    "Observations",
+    "PlanResult",
+    "load_targets_csv",
     "aim_angles",
     "aim_params",
     "aim_state",
@@ -241,7 +264,6 @@ __all__ = [
     "orbit_state",
     "orbital_to_body",
     "Plan",
-    "PlannerOptions",
     "pointing_angles",
     "pointing_state",
     "poly_eval",

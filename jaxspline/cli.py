@@ -8,12 +8,6 @@ import sys
 __all__ = ["main"]
 
 
-def _enable_x64(float32: bool) -> None:
-    import jax
-
-    jax.config.update("jax_enable_x64", not float32)
-
-
 # Each module registers its own sub-commands with ``register(subparsers)``; the module
 # sets ``func(args) -> int`` on its parsers. Imported lazily to keep start-up fast.
 _SUBCOMMAND_MODULES = ("jaxspline.cli_plan", "jaxspline.aeossp.cli")
@@ -34,7 +28,6 @@ def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``jaxspline`` console script; returns the exit code."""
     parser = build_parser()
     args = parser.parse_args(argv)
-    _enable_x64(getattr(args, "float32", False))
     try:
         return int(args.func(args) or 0)
     except (ValueError, FileExistsError, FileNotFoundError) as exc:

@@ -42,6 +42,7 @@ from jaxspline.limits import AxisLimits
 __all__ = ["SlewTable", "far_gap", "first_requirements", "pair_requirements", "slew_table"]
 
 _TABLE_SIZE = 1 << 16  # points of a slew table
+_PAD = 1 << 12  # batch sizes are padded to multiples of this (few compiled shapes)
 _FAR_SAFETY = 1.0 + 1e-9  # relative safety of the per-channel far gap
 _FIXED_POINT_ITERS = 200  # iterations of the rest-to-rest far-gap fixed point
 REST_TO_REST = ("eigen_axis", "flexible")
@@ -158,13 +159,20 @@ def first_requirements(sat, options, idx, table: SlewTable | None = None):
         return np.where(t0 >= t_req, t_req, np.inf)
     from jaxspline.reach import is_reachable, min_transfer_time
 
-    a2 = np.asarray(options.start_angle)[idx]
-    b2 = np.asarray(options.start_rate)[idx]
+    n = idx.size
+    pad = -n % _PAD
+    a2 = _pad(np.asarray(options.start_angle)[idx], pad)
+    b2 = _pad(np.asarray(options.start_rate)[idx], pad)
     zero = np.zeros_like(a2)
-    T = np.broadcast_to(t0[:, None], a2.shape)
-    ok = np.asarray(is_reachable(zero, zero, a2, b2, T, sat.limits)).all(-1) & (t0 > 0)
-    tmin = np.asarray(min_transfer_time(zero, zero, a2, b2, sat.limits)).max(-1)
+    T = np.broadcast_to(_pad(t0, pad)[:, None], a2.shape)
+    ok = np.asarray(is_reachable(zero, zero, a2, b2, T, sat.limits)).all(-1)[:n] & (t0 > 0)
+    tmin = np.asarray(min_transfer_time(zero, zero, a2, b2, sat.limits)).max(-1)[:n]
     return np.where(ok, np.minimum(tmin, t0), np.inf)
+
+
+def _pad(x, pad: int):
+    """x with its last row repeated ``pad`` times (leading axis)."""
+    return np.concatenate([x, np.repeat(x[-1:], pad, 0)]) if pad else x
 
 
 def far_gap(sat, options, idx, nadir_rate: float, table: SlewTable | None = None) -> float:

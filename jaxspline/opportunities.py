@@ -43,7 +43,7 @@ from jaxspline.windows import Windows
 
 __all__ = ["Opportunities", "build_opportunities"]
 
-_CHUNK = 1 << 14  # candidates per compiled evaluation (padded)
+_CHUNK = 1 << 13  # candidates per compiled evaluation (padded)
 _GRID_TOL = 1e-6  # [s] a time within this of a knot is on the knot
 _LIMIT_TOL = 1e-9  # relative tolerance of the scan's rate / acceleration test
 
@@ -83,9 +83,9 @@ _state_v = jax.jit(jax.vmap(_state, in_axes=(None, 0, 0, 0, 0)))
 def evaluate(fn, scene: Scene, sat, p, t0, t):
     """Apply a vmapped kernel ``fn(scene, sat, p, t0, t)`` in padded chunks (numpy out).
 
-    Chunks are padded to a power of two (at most :data:`_CHUNK`) by repeating the last
-    row, so a few compiled shapes serve every call. Returns a list of arrays, or None
-    when there is nothing to evaluate.
+    Every chunk is padded to :data:`_CHUNK` rows by repeating the last row, so one
+    compiled shape serves every call (compilation, not evaluation, dominates small
+    batches). Returns a list of arrays, or None when there is nothing to evaluate.
     """
     n = int(np.shape(sat)[0])
     if n == 0:
@@ -94,7 +94,7 @@ def evaluate(fn, scene: Scene, sat, p, t0, t):
     for a in range(0, n, _CHUNK):
         b = min(n, a + _CHUNK)
         m = b - a
-        size = min(_CHUNK, 1 << (m - 1).bit_length())
+        size = _CHUNK
         args = []
         for x in (sat, p, t0, t):
             x = np.asarray(x)[a:b]

@@ -130,7 +130,7 @@ def solve_case(
     max_iters: int | None = None,
 ):
     """Plan one case through :func:`jaxspline.plan`; returns ``(solution, result)``."""
-    from jaxspline.plan import plan
+    from jaxspline.planner import plan
 
     case = load_case(case_dir) if isinstance(case_dir, str | Path) else case_dir
     sc = case_scenario(case, time_limit=time_limit)

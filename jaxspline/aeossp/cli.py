@@ -3,8 +3,9 @@
 ``jaxspline aeossp check CASE_DIR solution.json [--json OUT]`` prints the readable
 report and the JSON result (to OUT, or stdout when OUT is ``-``); exit code 0 if the
 solution is valid, 1 if not. ``jaxspline aeossp solve CASE_DIR -o solution.json
-[--time-limit S] [--force]`` runs ``jaxspline.aeossp.solve.solve_case``, writes the
-solution atomically, then checks it (exit code as for ``check``).
+[--time-limit S] [--seed N] [--force]`` plans the case through :func:`jaxspline.plan`
+(:mod:`jaxspline.aeossp.adapter`), prints the plan's bound and gap, writes the solution
+atomically, then checks it with the independent checker (exit code as for ``check``).
 """
 
 from __future__ import annotations
@@ -54,16 +55,20 @@ def _cmd_solve(args) -> int:
     if out.exists() and not args.force:
         raise FileExistsError(f"{out}: exists (use --force to overwrite)")
     case = load_case(args.case_dir)
-    from jaxspline.aeossp.solve import solve_case
+    from jaxspline.aeossp.adapter import solve_case
 
     t0 = time.perf_counter()
-    solution = solve_case(args.case_dir, time_limit=args.time_limit, progress=True)
+    solution, result = solve_case(case, time_limit=args.time_limit, seed=args.seed)
     elapsed = time.perf_counter() - t0
     write_solution(out, solution, force=args.force)
-    n = len(solution.get("actions", [])) if isinstance(solution, dict) else len(solution)
-    print(f"wrote {out} ({n} actions, solved in {elapsed:.1f} s)", file=sys.stderr)
-    sol = solution if isinstance(solution, dict) else {"actions": list(solution)}
-    return _check_and_print(case, sol, args.json)
+    tw = result.total_value or 1.0
+    print(
+        f"wrote {out} ({len(solution['actions'])} actions, planned in {elapsed:.1f} s): "
+        f"WCR {result.value / tw:.4f}, bound {result.bound / tw:.4f} "
+        f"({result.stats['bound_status']}), gap {result.gap / tw:.4f}",
+        file=sys.stderr,
+    )
+    return _check_and_print(case, solution, args.json)
 
 
 def register(sub) -> None:
@@ -81,6 +86,7 @@ def register(sub) -> None:
     s.add_argument("case_dir", help="case directory with mission/satellites/tasks.yaml")
     s.add_argument("-o", "--output", required=True, help="solution JSON file to write")
     s.add_argument("--time-limit", type=float, default=60.0, help="seconds (default 60)")
+    s.add_argument("--seed", type=int, default=0, help="search seed (default 0)")
     s.add_argument("--force", action="store_true", help="overwrite an existing output file")
     s.add_argument("--json", metavar="OUT", help="write the check result to OUT ('-' = stdout)")
     s.set_defaults(func=_cmd_solve)

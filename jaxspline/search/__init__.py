@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from jaxspline.search.battery import BatteryModel
 from jaxspline.search.exact import exact_search
-from jaxspline.search.lagrangian import BoundResult, dp_paths, dp_prepare, lagrangian
+from jaxspline.search.lagrangian import BoundResult, dp_paths, dp_prepare, lagrangian, upper_bound
 from jaxspline.search.lns import earliest_pass, greedy, greedy_order, lns
 from jaxspline.search.problem import Problem
 from jaxspline.search.timeline import Timeline
@@ -37,6 +37,7 @@ __all__ = [
     "lagrangian",
     "lns",
     "solve",
+    "upper_bound",
 ]
 
 _EARLIEST_SHARE = 0.05  # share of the budget reserved for the earliest-start pass

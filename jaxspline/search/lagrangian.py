@@ -32,7 +32,7 @@ from jaxspline.search.lns import greedy
 from jaxspline.search.problem import Problem
 from jaxspline.search.timeline import Timeline
 
-__all__ = ["BoundResult", "DPData", "dp_paths", "dp_prepare", "lagrangian"]
+__all__ = ["BoundResult", "DPData", "dp_paths", "dp_prepare", "lagrangian", "upper_bound"]
 
 _STALL_ITERS = 4  # iterations without a better bound before the step halves
 _MU_MIN = 1e-4  # the iteration stops (stalled) below this step factor
@@ -182,50 +182,96 @@ class BoundResult:
     status: str
 
 
-def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report=None):
-    """Projected-subgradient Lagrangian phase (see module docstring); returns BoundResult.
+class _Prices:
+    """Projected Polyak subgradient iteration on the task prices (shared by both users).
 
-    Polyak steps ``lam += mu (UB - LB) / |g|^2 g`` with ``g = takers - 1``, projected
-    on ``[0, w]``; ``mu`` halves after :data:`_STALL_ITERS` iterations without a
-    better bound. ``tl`` ends at the best plan found (or its start state).
+    ``lam += mu (UB - target) / |g|^2 g`` with ``g = takers - 1``, projected on
+    ``[0, w]``; after :data:`_STALL_ITERS` iterations without a better bound ``mu``
+    halves and the prices restart from the best ones seen.
+    """
+
+    def __init__(self, pb: Problem):
+        self.pb = pb
+        self.d = dp_prepare(pb)
+        self.W = np.asarray(pb.weight, np.float64)
+        self.ctask = np.asarray(pb.c_task, np.int64)
+        self.lam = np.zeros(self.W.size)
+        self.best_lam = self.lam.copy()
+        self.ub, self.mu, self.stall, self.it = math.inf, 1.0, 0, 0
+
+    def solve_dp(self):
+        """DP paths at the current prices; updates the bound. Returns the paths."""
+        self.it += 1
+        paths, vals = dp_paths(self.pb, self.d, self.W[self.ctask] - self.lam[self.ctask])
+        bound = float(sum(vals) + self.lam.sum())
+        if bound < self.ub - _GAP_TOL:
+            self.ub, self.best_lam, self.stall = bound, self.lam.copy(), 0
+        else:
+            self.stall += 1
+        self.paths = paths
+        return paths
+
+    def step(self, target: float) -> bool:
+        """Move the prices toward ``target``; False when the iteration has converged."""
+        if self.stall >= _STALL_ITERS:
+            self.mu, self.stall, self.lam = self.mu * 0.5, 0, self.best_lam.copy()
+            return self.mu >= _MU_MIN
+        cnt = np.zeros(self.W.size)
+        for p in self.paths:
+            np.add.at(cnt, self.ctask[p], 1.0)
+        g = cnt - 1.0
+        lam, W = self.lam, self.W
+        g[((lam <= 0.0) & (g < 0.0)) | ((lam >= W) & (g > 0.0))] = 0.0
+        gn = float(np.dot(g, g))
+        if gn == 0.0 or self.mu < _MU_MIN:
+            return False
+        self.lam = np.clip(lam + self.mu * max(self.ub - target, 1e-3) / gn * g, 0.0, W)
+        return True
+
+
+def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report=None):
+    """Lagrangian phase with repaired plans (see module docstring); returns BoundResult.
+
+    The step target is the best repaired plan's value; ``tl`` ends at the best plan.
     """
     pb = tl.pb
     best = list(tl.assigned)
     best_w = tl.W
     if pb.n_options == 0:
         return BoundResult(best, 0.0, 0, "optimal")
-    d = dp_prepare(pb)
-    W = np.asarray(pb.weight, np.float64)
-    ctask = np.asarray(pb.c_task, np.int64)
-    lam = np.zeros(W.size)
-    ub, mu, stall, it, status = math.inf, 1.0, 0, 0, "time"
-    while time.monotonic() < deadline and (max_iters is None or it < max_iters):
-        it += 1
-        paths, vals = dp_paths(pb, d, W[ctask] - lam[ctask])
-        cnt = np.zeros(W.size)
-        for p in paths:
-            np.add.at(cnt, ctask[p], 1.0)
-        bound = float(sum(vals) + lam.sum())
-        if bound < ub - _GAP_TOL:
-            ub, stall = bound, 0
-        else:
-            stall += 1
-            if stall >= _STALL_ITERS:
-                mu, stall = mu * 0.5, 0
+    pr = _Prices(pb)
+    status = "time"
+    while time.monotonic() < deadline and (max_iters is None or pr.it < max_iters):
+        paths = pr.solve_dp()
         _plan_from_paths(tl, paths, order_fill, deadline)
         if tl.W > best_w:
             best_w, best = tl.W, list(tl.assigned)
-        if ub - best_w <= _GAP_TOL * max(1.0, ub):
+        if pr.ub - best_w <= _GAP_TOL * max(1.0, pr.ub):
             status = "optimal"
             break
-        g = cnt - 1.0
-        g[((lam <= 0.0) & (g < 0.0)) | ((lam >= W) & (g > 0.0))] = 0.0
-        gn = float(np.dot(g, g))
-        if gn == 0.0 or mu < _MU_MIN:
+        if not pr.step(best_w):
             status = "converged"
             break
-        lam = np.clip(lam + mu * max(ub - best_w, 1e-3) / gn * g, 0.0, W)
         if report is not None:
-            report(it, ub, best_w)
+            report(pr.it, pr.ub, best_w)
     tl.restore(best)
-    return BoundResult(best, ub, it, status)
+    return BoundResult(best, pr.ub, pr.it, status)
+
+
+def upper_bound(pb: Problem, target: float, deadline: float, max_iters=None) -> BoundResult:
+    """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
+
+    ``target`` is a value some plan reaches (it sets the step size only; any value
+    gives a valid bound). Status "converged" or "time" (cap / deadline reached).
+    Deterministic for a given ``max_iters``.
+    """
+    if pb.n_options == 0:
+        return BoundResult([], 0.0, 0, "optimal")
+    pr = _Prices(pb)
+    status = "time"
+    while time.monotonic() < deadline and (max_iters is None or pr.it < max_iters):
+        pr.solve_dp()
+        if not pr.step(target):
+            status = "converged"
+            break
+    return BoundResult([], pr.ub, pr.it, status)

@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+from typing import NamedTuple
 
 import jax
 import numpy as np
@@ -43,7 +44,7 @@ from jaxspline.result import Observations, PlanResult
 from jaxspline.search import BatteryModel, Problem, solve
 from jaxspline.windows import visibility_windows_all
 
-__all__ = ["plan"]
+__all__ = ["Prepared", "build_problem", "plan"]
 
 _RESERVE_SHARE = 0.08  # share of the time limit kept for the final check and output
 _RESERVE_MIN = 1.0  # [s]
@@ -155,51 +156,98 @@ def _near_pairs(sc, opp, tables, far):
     return np.concatenate(src_all), np.concatenate(dst_all), np.concatenate(need_all)
 
 
+class Prepared(NamedTuple):
+    """Everything the search needs, from :func:`build_problem`.
+
+    Attributes:
+      problem: :class:`jaxspline.search.Problem`.
+      opportunities: :class:`jaxspline.opportunities.Opportunities` (option ids of the
+        problem index them).
+      windows: :class:`jaxspline.windows.Windows`.
+      scene: the multi-satellite :class:`jaxspline.pointing.Scene`.
+      orbits: :class:`jaxspline.orbit.OrbitTable`.
+      battery: :class:`jaxspline.search.BatteryModel`.
+      far: [S] always-feasible gaps [s].
+    """
+
+    problem: Problem
+    opportunities: object
+    windows: object
+    scene: Scene
+    orbits: object
+    battery: BatteryModel
+    far: np.ndarray
+
+
+def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) -> Prepared:
+    """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search."""
+    sc = scenario
+    clock = _clock or _Clock(sc.name, progress)
+    with jax.enable_x64(True):
+        pc = sc.planner
+        sats = sc.satellites
+        table, scene, sunlit = _orbits(sc)
+        clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
+        ref, _ = _aim_laws(sc)
+        tg = sc.targets
+        sensors = np.array([s.sensor for s in sats])
+        allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
+        limit_k = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
+        windows = visibility_windows_all(
+            scene,
+            table.ok,
+            ref,
+            allowed,
+            limit_k,
+            pc.margins.horizon,
+            tg.t_lo,
+            tg.t_hi,
+            sc.duration,
+        )
+        clock.lap(
+            "windows",
+            f"{len(windows)} windows for {len(np.unique(windows.target))}/{len(tg)} targets",
+        )
+        opp = build_opportunities(sc, scene, table.usable, windows)
+        clock.lap("options", f"{len(opp)} options")
+        o = opp.options
+        tables = [slew_table(s, pc.margins.gap) if s.model in REST_TO_REST else None for s in sats]
+        omega = nadir_rate(scene)
+        far = np.zeros(len(sats))
+        first = np.full(len(opp), np.inf)
+        for k, s in enumerate(sats):
+            ids = np.flatnonzero(o.sat == k)
+            far[k] = far_gap(s, o, ids, float(omega[k]), tables[k])
+            first[ids] = first_requirements(s, o, ids, tables[k])
+        near = _near_pairs(sc, opp, tables, far)
+        clock.lap(
+            "screening",
+            f"{near[0].size} feasible near pairs; far gaps "
+            + ", ".join(f"{g:.0f}" for g in far)
+            + " s",
+        )
+        battery = BatteryModel(
+            sunlit,
+            [s.power for s in sats],
+            pc.geometry_step,
+            pc.margins.battery_wh,
+            pc.margins.shadow_guard,
+        )
+        pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.duration, tg.value)
+    return Prepared(pb, opp, windows, scene, table, battery, far)
+
+
 def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> PlanResult:
     clock = _Clock(sc.name, progress)
     deadline = clock.t0 + limit
     reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
     pc = sc.planner
     sats = sc.satellites
-    table, scene, sunlit = _orbits(sc)
-    clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
-    ref, _ = _aim_laws(sc)
     tg = sc.targets
-    sensors = np.array([s.sensor for s in sats])
-    allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
-    limit_k = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
-    windows = visibility_windows_all(
-        scene, table.ok, ref, allowed, limit_k, pc.margins.horizon, tg.t_lo, tg.t_hi, sc.duration
-    )
-    clock.lap(
-        "windows", f"{len(windows)} windows for {len(np.unique(windows.target))}/{len(tg)} targets"
-    )
-    opp = build_opportunities(sc, scene, table.usable, windows)
-    clock.lap("options", f"{len(opp)} options")
+    prep = build_problem(sc, _clock=clock)
+    pb, opp, windows, scene, table, battery, far = prep
     o = opp.options
-    tables = [slew_table(s, pc.margins.gap) if s.model in REST_TO_REST else None for s in sats]
-    omega = nadir_rate(scene)
-    far = np.zeros(len(sats))
-    first = np.full(len(opp), np.inf)
-    for k, s in enumerate(sats):
-        ids = np.flatnonzero(o.sat == k)
-        far[k] = far_gap(s, o, ids, float(omega[k]), tables[k])
-        first[ids] = first_requirements(s, o, ids, tables[k])
-    near = _near_pairs(sc, opp, tables, far)
-    clock.lap(
-        "screening",
-        f"{near[0].size} feasible near pairs; far gaps "
-        + ", ".join(f"{g:.0f}" for g in far)
-        + " s",
-    )
-    battery = BatteryModel(
-        sunlit,
-        [s.power for s in sats],
-        pc.geometry_step,
-        pc.margins.battery_wh,
-        pc.margins.shadow_guard,
-    )
-    pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.duration, tg.value)
+    near = (pb.near_src,)
     res = solve(
         pb,
         deadline - reserve,
