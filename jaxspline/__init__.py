@@ -20,6 +20,7 @@ from jaxspline.reach import (  # noqa: E402
     reach_margin,
     transfer,
 )
+
 # --- slew (eigen-axis slew profiles; SPEC section 2) ---
 from jaxspline.slew import (
     KIND_CODES,
@@ -36,6 +37,7 @@ from jaxspline.slew import (
     slew_profile_kernel,
     slew_profile_time,
 )
+
 # --- flex (flexible-mode residual and simulator) ---
 from jaxspline.flex import (
     flexible_body_rate,
@@ -47,6 +49,7 @@ from jaxspline.flex import (
     tau_for_tolerance,
     tau_for_tolerance_kernel,
 )
+
 # --- attitude (quaternion / MRP / rotation matrices) ---
 from jaxspline.attitude import (  # noqa: E402
     angular_accel_from_mrp,
@@ -68,6 +71,7 @@ from jaxspline.attitude import (  # noqa: E402
     quat_to_dcm,
     quat_to_mrp,
 )
+
 # --- joins (degree-7 joins, vector spline, spatial maneuvers) ---
 from jaxspline.joins import (  # noqa: E402
     Maneuver,
@@ -81,6 +85,7 @@ from jaxspline.joins import (  # noqa: E402
     poly_eval,
     spline7_coeffs,
 )
+
 # --- retarget (minimum-peak-control retargeting) ---
 from jaxspline.retarget import (  # noqa: E402
     ARCSEC,
@@ -101,6 +106,7 @@ from jaxspline.retarget import (  # noqa: E402
     orbital_to_body,
     simulate,
 )
+
 # --- geometry (orbit, pointing, routes) ---
 from jaxspline.frames import (  # noqa: E402
     ecef_to_geodetic,
@@ -142,6 +148,7 @@ from jaxspline.routes import (  # noqa: E402
     make_route_spec,
     tabulate_route_model,
 )
+
 # --- planning (mission types, the pipeline, its result, scenario files) ---
 from jaxspline.mission import (  # noqa: E402
     MODELS,
@@ -157,6 +164,7 @@ from jaxspline.mission import (  # noqa: E402
 from jaxspline.planner import Prepared, build_problem, plan  # noqa: E402
 from jaxspline.result import Observations, PlanResult  # noqa: E402
 from jaxspline.scenario import default_scenario, load_scenario, load_targets_csv  # noqa: E402
+
 # --- engine (screen, sequence, refine, validate, scenario) ---
 from jaxspline.screen import (  # noqa: E402
     Transitions,

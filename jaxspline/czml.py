@@ -95,9 +95,10 @@ def satellite_tracks(scenario, step: float):
     t = np.arange(0.0, duration, step)
     t = np.append(t[t < duration - 1e-9 * step], duration)
     sats = scenario.satellites
-    table = tabulate_orbits([s.orbit for s in sats], scenario.epoch_jd, duration, step)
-    idx = np.arange(len(sats))[:, None]
-    r_teme = np.asarray(_orbit_position(table.orbit, t[None, :], sat=idx), np.float64)
+    with jax.enable_x64(True):  # metre-level positions need float64 (global config untouched)
+        table = tabulate_orbits([s.orbit for s in sats], scenario.epoch_jd, duration, step)
+        idx = np.arange(len(sats))[:, None]
+        r_teme = np.asarray(_orbit_position(table.orbit, t[None, :], sat=idx), np.float64)
     theta = earth_rotation_angle(float(gmst(scenario.epoch_jd)), t)
     r = teme_to_ecef(r_teme, theta)
     ok = np.stack([table.usable(k, t) for k in range(len(sats))]) & np.all(np.isfinite(r), -1)

@@ -46,7 +46,7 @@ from jaxspline.windows import visibility_windows_all
 
 __all__ = ["Prepared", "build_problem", "plan"]
 
-_RESERVE_SHARE = 0.08  # share of the time limit kept for the final check and output
+_RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
 _RESERVE_MIN = 1.0  # [s]
 _NEAR_SLACK = 1e-6  # [s] near pairs reach this far past the always-feasible gap
 _PAIR_BLOCK = 1 << 20  # option pairs per screening block
@@ -283,7 +283,9 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
         speed=opp.speed[idx],
     )
     value = float(np.sum(obs.value))
-    bound = float(res.bound) if math.isfinite(res.bound) else value
+    # every plan images only targets that have an option: their total bounds any plan
+    reachable = float(np.sum(np.asarray(tg.value)[np.unique(np.asarray(o.route))]))
+    bound = min(float(res.bound), reachable)
     bat = {}
     for k, s in enumerate(sats):
         if battery.has(k):

@@ -1,4 +1,4 @@
-"""Planning scenarios from files: the TOML/CSV schema, loading with named errors, the default.
+"""Planning scenarios from files: the TOML schema, loading with named errors, the default.
 
 A scenario file is TOML; angles are degrees in the file and radians in the
 :class:`jaxspline.mission.Scenario` it becomes; times are seconds from the epoch.
@@ -87,12 +87,10 @@ Only ``[scenario]``, at least one satellite and at least one target are required
     lagrangian_share = 0.3              # search budget share of the Lagrangian phase
     time_limit_s = 30.0                 # default search budget [s]
 
-CSV targets (``targets_csv``, ``[targets_file]``, :func:`load_targets_csv`): a header
-row with the columns ``name,lat_deg,lon_deg,priority`` (required) and optionally
-``kind,alt_m,duration_s,length_km,azimuth_deg,window_lo_s,window_hi_s,sensor``, same
-meanings and units as in ``[[targets]]``; an empty cell takes the default. A bad cell
-raises e.g. ``cities.csv row 17, column 'lat_deg': must be within [-90, 90], got '95.2'``
-(row = line number in the file).
+The target sections (``targets_csv``, ``[[targets]]``/``[[routes]]``,
+``[targets_file]``, ``[random_targets]``) are read by :mod:`jaxspline.targets_io`,
+whose docstring lists the CSV columns with their units and how random targets are
+drawn; :func:`load_targets_csv` is re-exported here.
 
 :func:`default_scenario` loads the packaged ``data/default.toml``: six satellites over
 six hours with about 1500 city targets (``data/cities.csv``, made by
@@ -101,32 +99,36 @@ six hours with about 1500 city targets (``data/cities.csv``, made by
 
 from __future__ import annotations
 
-import csv
 import datetime as _dt
 import importlib.resources
 import math
-import re
 import tomllib
 from pathlib import Path
 
 import numpy as np
 
+from jaxspline._fields import (
+    FieldContext,
+    field_bool,
+    field_int,
+    field_number,
+    field_str,
+    field_table,
+    field_tables,
+)
 from jaxspline.frames import gmst, jd_split, julian_date
 from jaxspline.limits import AxisLimits
 from jaxspline.mission import (
     MODELS,
-    POINT,
-    STRIP,
     FlexMode,
     Margins,
     PlannerConfig,
     Power,
     Satellite,
     Scenario,
-    Targets,
-    make_targets,
 )
 from jaxspline.orbit import circular_orbit, circular_orbit_over, propagate_tle
+from jaxspline.targets_io import TARGET_SECTIONS, load_targets_csv, scenario_targets
 
 __all__ = [
     "DEFAULT_SCENARIO_PATH",
@@ -148,15 +150,6 @@ DEFAULT_ACCEL_DEG_S2 = 1.0
 DEFAULT_OFF_NADIR_DEG = 45.0
 MAX_OFF_NADIR_DEG = 80.0
 DEFAULT_SENSOR = "visible"
-DEFAULT_POINT_DURATION_S = 10.0
-DEFAULT_STRIP_FRACTION = 0.2
-DEFAULT_RANDOM_DURATION_S = (10.0, 30.0)
-DEFAULT_RANDOM_LENGTH_KM = (20.0, 60.0)
-DEFAULT_RANDOM_PRIORITY = (1, 10)
-LAT_RANGE_DEG = (-90.0, 90.0)
-LON_RANGE_DEG = (-180.0, 180.0)
-LAND_SAMPLE_ROUNDS = 200  # rejection-sampling batches before giving up on a region
-LAND_BATCH_MIN = 1024
 
 _ORBIT_KEYS = ("altitude_km", "inclination_deg", "raan_deg", "arg_lat_deg", "over")
 _SAT_MODEL_KEYS = (
@@ -170,174 +163,12 @@ _KEYS = {
         "over": "lat_deg lon_deg t_s descending",
         "flex": "freq_hz damping tolerance_deg",
         "power": "capacity_wh initial_wh idle_w imaging_w slew_w charge_w",
-        "target": "kind name lat_deg lon_deg alt_m duration_s length_km azimuth_deg priority "
-        "window_s sensor",
-        "targets_file": "path",
-        "random_targets": "seed count lat_deg lon_deg land_only strip_fraction duration_s "
-        "length_km azimuth_deg priority",
         "planner": "time_step_s geometry_step_s scan_speeds_km_s sun_elevation_min_deg "
         "off_nadir_margin_deg horizon_margin gap_margin_s battery_margin_wh shadow_guard_steps "
         "exact_max_options lagrangian_share time_limit_s",
     }.items()
 }
-_TOP = frozenset(
-    "scenario satellites satellite targets routes targets_csv targets_file random_targets "
-    "planner".split()
-)
-CSV_REQUIRED = ("name", "lat_deg", "lon_deg", "priority")
-CSV_OPTIONAL = tuple(
-    "kind alt_m duration_s length_km azimuth_deg window_lo_s window_hi_s sensor".split()
-)
-_KINDS = {"point": POINT, "strip": STRIP}
-_IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
-
-
-class _Ctx:
-    """Error helper: names the field and, when the raw text is known, its TOML line."""
-
-    def __init__(self, source: str, text: str | None):
-        self.source = source
-        self.lines = text.splitlines() if text is not None else None
-
-    def _find(self, pattern: re.Pattern, start: int, stop_at_header: bool) -> int | None:
-        for i in range(start, len(self.lines)):
-            if stop_at_header and i > start and re.match(r"^\s*\[", self.lines[i]):
-                return None
-            if pattern.search(self.lines[i]):
-                return i
-        return None
-
-    def line_of(self, field: str) -> int | None:
-        """1-based TOML line of ``field`` (``table[index].key...``), or None."""
-        if self.lines is None:
-            return None
-        parts = re.findall(_IDENT + r"|\[\d+\]", field)
-        if not parts:
-            return None
-        table = parts[0]
-        index = int(parts[1][1:-1]) if len(parts) > 1 and parts[1].startswith("[") else None
-        keys = [p for p in parts[1:] if not p.startswith("[")]
-        if len(parts) == 1:  # a top-level key before the first header, or a table header
-            top = re.compile(r"^\s*" + re.escape(table) + r"\s*=")
-            for i, ln in enumerate(self.lines):
-                if re.match(r"^\s*\[", ln):
-                    break
-                if top.search(ln):
-                    return i + 1
-        header = re.compile(r"^\s*\[\[?\s*" + re.escape(table) + r"\s*\]\]?\s*(#.*)?$")
-        start, seen = None, -1
-        for i, ln in enumerate(self.lines):
-            if header.match(ln):
-                seen += 1
-                if index is None or seen == index:
-                    start = i
-                    break
-        if start is None:
-            return None
-        if not keys:
-            return start + 1
-        for key in reversed(keys):  # a missing inner key: the line of its parent
-            pat = re.compile(r"(^|[{,])\s*" + re.escape(key) + r"\s*=")
-            found = self._find(pat, start, True)
-            if found is not None:
-                return found + 1
-        return start + 1
-
-    def error(self, field: str, msg: str) -> ValueError:
-        """A ValueError ``source: field (line N): msg``."""
-        line = self.line_of(field)
-        where = f" (line {line})" if line is not None else ""
-        return ValueError(f"{self.source}: {field}{where}: {msg}")
-
-
-_REQUIRED = object()
-
-
-def _num(
-    raw, err, *, default=_REQUIRED, text=False, positive=False, nonneg=False, lo=None, hi=None
-):
-    """``raw`` as a checked float; ``err(msg)`` builds the error; ``text`` parses strings."""
-    if raw is None:
-        if default is _REQUIRED:
-            raise err("missing")
-        return default
-    if text and isinstance(raw, str):
-        try:
-            v = float(raw)
-        except ValueError:
-            raise err(f"must be a number, got {raw!r}") from None
-    elif isinstance(raw, bool) or not isinstance(raw, int | float):
-        raise err(f"must be a number, got {raw!r}")
-    else:
-        v = float(raw)
-    if not math.isfinite(v):
-        raise err(f"must be finite, got {raw!r}")
-    if positive and v <= 0:
-        raise err(f"must be > 0, got {raw!r}")
-    if nonneg and v < 0:
-        raise err(f"must be >= 0, got {raw!r}")
-    if lo is not None and hi is not None and not lo <= v <= hi:
-        raise err(f"must be within [{lo:g}, {hi:g}], got {raw!r}")
-    if hi is not None and lo is None and v > hi:
-        raise err(f"must be <= {hi:g}, got {raw!r}")
-    return v
-
-
-def _number(ctx, field, value, **kw) -> float:
-    return _num(value, lambda m: ctx.error(field, m), **kw)
-
-
-def _int(ctx, field, value, minimum=0) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise ctx.error(field, f"must be an integer, got {value!r}")
-    if value < minimum:
-        raise ctx.error(field, f"must be >= {minimum}, got {value!r}")
-    return int(value)
-
-
-def _bool(ctx, field, value) -> bool:
-    if not isinstance(value, bool):
-        raise ctx.error(field, f"must be true or false, got {value!r}")
-    return value
-
-
-def _str(ctx, field, value, allow_empty=True) -> str:
-    if not isinstance(value, str) or (not allow_empty and not value.strip()):
-        raise ctx.error(
-            field, f"must be a {'' if allow_empty else 'non-empty '}string, got {value!r}"
-        )
-    return value
-
-
-def _pair(ctx, field, value, **kw) -> tuple[float, float]:
-    if not isinstance(value, list) or len(value) != 2:
-        raise ctx.error(field, f"must be a list [lo, hi], got {value!r}")
-    lo, hi = (_number(ctx, field, v, **kw) for v in value)
-    if lo > hi:
-        raise ctx.error(field, f"needs lo <= hi, got {value!r}")
-    return lo, hi
-
-
-def _table(ctx, field, tab, keys) -> dict:
-    if not isinstance(tab, dict):
-        raise ctx.error(field, f"must be a table, got {tab!r}")
-    unknown = sorted(set(tab) - keys)
-    if unknown:
-        raise ctx.error(f"{field}.{unknown[0]}", f"unknown key (allowed: {sorted(keys)})")
-    return tab
-
-
-def _tables(ctx, data, name, alias) -> list[tuple[str, dict]]:
-    """(field label, table) of each entry of array ``name`` or its alias (one table or many)."""
-    if name in data and alias in data:
-        raise ctx.error(alias, f"give either [[{name}]] or its alias [{alias}], not both")
-    key = name if name in data else alias
-    items = data.get(key, [])
-    if isinstance(items, dict):
-        return [(key, items)]
-    if not isinstance(items, list):
-        raise ctx.error(key, f"must be an array of tables [[{key}]], got {items!r}")
-    return [(f"{key}[{i}]", it) for i, it in enumerate(items)]
+_TOP = frozenset("scenario satellites satellite planner".split()) | TARGET_SECTIONS
 
 
 # --- satellites ---
@@ -359,22 +190,24 @@ def _orbit(ctx, f, sat, epoch_jd, duration):
             raise ctx.error(f"{f}.tle", f"SGP4 error code {int(err[0])} at the epoch")
         return (tle[0], tle[1])
     alt = sat.get("altitude_km", DEFAULT_ALTITUDE_KM)
-    alt = _number(ctx, f"{f}.altitude_km", alt, lo=ALTITUDE_RANGE_KM[0], hi=ALTITUDE_RANGE_KM[1])
+    alt = field_number(
+        ctx, f"{f}.altitude_km", alt, lo=ALTITUDE_RANGE_KM[0], hi=ALTITUDE_RANGE_KM[1]
+    )
     inc = sat.get("inclination_deg")
     if inc is not None:
-        inc = math.radians(_number(ctx, f"{f}.inclination_deg", inc, lo=0.0, hi=180.0))
+        inc = math.radians(field_number(ctx, f"{f}.inclination_deg", inc, lo=0.0, hi=180.0))
     if "over" not in sat:
-        raan = _number(ctx, f"{f}.raan_deg", sat.get("raan_deg", 0.0))
-        u0 = _number(ctx, f"{f}.arg_lat_deg", sat.get("arg_lat_deg", 0.0))
+        raan = field_number(ctx, f"{f}.raan_deg", sat.get("raan_deg", 0.0))
+        u0 = field_number(ctx, f"{f}.arg_lat_deg", sat.get("arg_lat_deg", 0.0))
         return circular_orbit(1e3 * alt, inc, math.radians(raan), math.radians(u0))
     clash = [k for k in ("raan_deg", "arg_lat_deg") if k in sat]
     if clash:
         raise ctx.error(f"{f}.{clash[0]}", "cannot be combined with over (it places the orbit)")
-    ov = _table(ctx, f"{f}.over", sat["over"], _KEYS["over"])
-    lat = _number(ctx, f"{f}.over.lat_deg", ov.get("lat_deg", 0.0), lo=-90.0, hi=90.0)
-    lon = _number(ctx, f"{f}.over.lon_deg", ov.get("lon_deg", 0.0))
-    t_over = _number(ctx, f"{f}.over.t_s", ov.get("t_s", duration / 2))
-    desc = _bool(ctx, f"{f}.over.descending", ov.get("descending", True))
+    ov = field_table(ctx, f"{f}.over", sat["over"], _KEYS["over"])
+    lat = field_number(ctx, f"{f}.over.lat_deg", ov.get("lat_deg", 0.0), lo=-90.0, hi=90.0)
+    lon = field_number(ctx, f"{f}.over.lon_deg", ov.get("lon_deg", 0.0))
+    t_over = field_number(ctx, f"{f}.over.t_s", ov.get("t_s", duration / 2))
+    desc = field_bool(ctx, f"{f}.over.descending", ov.get("descending", True))
     gmst0 = float(gmst(*jd_split(epoch_jd, 0.0)))
     try:
         return circular_orbit_over(
@@ -388,45 +221,45 @@ def _rate(ctx, field, value, model):
     if model != "per_channel":
         if isinstance(value, list):
             raise ctx.error(field, f"must be one number for model {model!r}, got {value!r}")
-        return math.radians(_number(ctx, field, value, positive=True))
+        return math.radians(field_number(ctx, field, value, positive=True))
     if isinstance(value, list):
         if len(value) != 3:
             raise ctx.error(field, f"must be one number or 3 (roll, pitch, yaw), got {value!r}")
-        vals = [_number(ctx, field, v, positive=True) for v in value]
+        vals = [field_number(ctx, field, v, positive=True) for v in value]
     else:
-        vals = [_number(ctx, field, value, positive=True)] * 3
+        vals = [field_number(ctx, field, value, positive=True)] * 3
     return np.radians(np.asarray(vals))
 
 
 def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
-    sat = _table(ctx, f, sat, _KEYS["satellite"])
-    name = _str(ctx, f"{f}.name", sat.get("name", default_name), allow_empty=False)
+    sat = field_table(ctx, f, sat, _KEYS["satellite"])
+    name = field_str(ctx, f"{f}.name", sat.get("name", default_name), allow_empty=False)
     orbit = _orbit(ctx, f, sat, epoch_jd, duration)
     model = sat.get("model", "per_channel")
     if model not in MODELS:
         raise ctx.error(f"{f}.model", f"must be one of {MODELS}, got {model!r}")
     rate = _rate(ctx, f"{f}.rate_deg_s", sat.get("rate_deg_s", DEFAULT_RATE_DEG_S), model)
     accel = _rate(ctx, f"{f}.accel_deg_s2", sat.get("accel_deg_s2", DEFAULT_ACCEL_DEG_S2), model)
-    off = _number(
+    off = field_number(
         ctx,
         f"{f}.off_nadir_max_deg",
         sat.get("off_nadir_max_deg", DEFAULT_OFF_NADIR_DEG),
         positive=True,
         hi=MAX_OFF_NADIR_DEG,
     )
-    sensor = _str(ctx, f"{f}.sensor", sat.get("sensor", DEFAULT_SENSOR), allow_empty=False)
-    settle = _number(ctx, f"{f}.settle_s", sat.get("settle_s", 0.0), nonneg=True)
+    sensor = field_str(ctx, f"{f}.sensor", sat.get("sensor", DEFAULT_SENSOR), allow_empty=False)
+    settle = field_number(ctx, f"{f}.settle_s", sat.get("settle_s", 0.0), nonneg=True)
     flex = None
     if "flex" in sat:
         if model != "flexible":
             raise ctx.error(f"{f}.flex", f"only used by model 'flexible' (model is {model!r})")
-        fx = _table(ctx, f"{f}.flex", sat["flex"], _KEYS["flex"])
-        freq_hz = _number(ctx, f"{f}.flex.freq_hz", fx.get("freq_hz"), positive=True)
+        fx = field_table(ctx, f"{f}.flex", sat["flex"], _KEYS["flex"])
+        freq_hz = field_number(ctx, f"{f}.flex.freq_hz", fx.get("freq_hz"), positive=True)
         kw = {"freq": 2 * math.pi * freq_hz}
         if "damping" in fx:
-            kw["damping"] = _number(ctx, f"{f}.flex.damping", fx["damping"], nonneg=True)
+            kw["damping"] = field_number(ctx, f"{f}.flex.damping", fx["damping"], nonneg=True)
         if "tolerance_deg" in fx:
-            tol = _number(ctx, f"{f}.flex.tolerance_deg", fx["tolerance_deg"], positive=True)
+            tol = field_number(ctx, f"{f}.flex.tolerance_deg", fx["tolerance_deg"], positive=True)
             kw["tolerance"] = math.radians(tol)
         flex = FlexMode(**kw)
     elif model == "flexible":
@@ -436,8 +269,8 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
         )
     power = None
     if "power" in sat:
-        pw = _table(ctx, f"{f}.power", sat["power"], _KEYS["power"])
-        vals = {k: _number(ctx, f"{f}.power.{k}", v, nonneg=True) for k, v in pw.items()}
+        pw = field_table(ctx, f"{f}.power", sat["power"], _KEYS["power"])
+        vals = {k: field_number(ctx, f"{f}.power.{k}", v, nonneg=True) for k, v in pw.items()}
         if "capacity_wh" not in vals:
             raise ctx.error(f"{f}.power.capacity_wh", "missing (required in a power table)")
         vals.setdefault("initial_wh", vals["capacity_wh"])
@@ -452,263 +285,42 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
         raise ctx.error(f, str(exc)) from None
 
 
-# --- targets ---
-
-
-def _target_row(get, err, default_name, text=False) -> tuple:
-    """One target from ``get(column) -> raw or None``; ``err(column)(msg)`` builds errors.
-
-    Columns as in the CSV format. Returns (name, kind, lat, lon, alt, duration, length,
-    azimuth, priority, t_lo, t_hi, sensor) in degrees, metres, seconds.
-    """
-
-    def num(col, **kw):
-        return _num(get(col), err(col), text=text, **kw)
-
-    def string(col, default):
-        raw = get(col)
-        if raw is None:
-            return default
-        if not isinstance(raw, str):
-            raise err(col)(f"must be a string, got {raw!r}")
-        return raw.strip()
-
-    name = string("name", default_name) or default_name
-    kind = string("kind", "point")
-    if kind not in _KINDS:
-        raise err("kind")(f"must be 'point' or 'strip', got {kind!r}")
-    lat = num("lat_deg", lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
-    lon = num("lon_deg", lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
-    alt = num("alt_m", default=0.0)
-    prio = num("priority", default=1.0, positive=True)
-    if kind == "strip":
-        if get("duration_s") is not None:
-            raise err("duration_s")("a strip has no duration_s (it is length / scan speed)")
-        length = 1e3 * num("length_km", positive=True)
-        az = num("azimuth_deg", default=0.0)
-        dur = 0.0
-    else:
-        for col in ("length_km", "azimuth_deg"):
-            if get(col) is not None:
-                raise err(col)("a point has no length_km / azimuth_deg (use kind 'strip')")
-        dur, length, az = num("duration_s", default=DEFAULT_POINT_DURATION_S, positive=True), 0, 0
-    t_lo = num("window_lo_s", default=-np.inf)
-    t_hi = num("window_hi_s", default=np.inf)
-    if t_hi < t_lo:
-        raise err("window_hi_s")(f"window needs lo <= hi, got [{t_lo:g}, {t_hi:g}]")
-    if t_hi < t_lo + dur:
-        raise err("window_hi_s")(
-            f"window [{t_lo:g}, {t_hi:g}] s is shorter than the imaging time {dur:g} s"
-        )
-    sensor = string("sensor", "")
-    return (name, _KINDS[kind], lat, lon, alt, dur, length, az, prio, t_lo, t_hi, sensor)
-
-
-def _targets_from_rows(rows) -> Targets:
-    cols = list(zip(*rows, strict=True))
-    num = [np.asarray(c, np.float64) for c in cols[2:11]]
-    lat, lon, alt, dur, length, az, prio, t_lo, t_hi = num
-    return make_targets(
-        np.asarray(cols[1], np.int64),
-        np.radians(lat),
-        np.radians(lon),
-        alt=alt,
-        duration=dur,
-        length=length,
-        azimuth=np.radians(az),
-        value=prio,
-        t_lo=t_lo,
-        t_hi=t_hi,
-        sensor=np.asarray(cols[11], dtype=object),
-        name=np.asarray(cols[0], dtype=str),
-    )
-
-
-def _toml_targets(ctx, items) -> Targets | None:
-    rows = []
-    for i, (f, rt) in enumerate(items):
-        rt = dict(_table(ctx, f, rt, _KEYS["target"]))
-        if "window_s" in rt:
-            win = rt.pop("window_s")
-            if not isinstance(win, list) or len(win) != 2:
-                raise ctx.error(f"{f}.window_s", f"must be a list [lo, hi], got {win!r}")
-            rt["window_lo_s"], rt["window_hi_s"] = win
-
-        def err(col, f=f):
-            key = "window_s" if col.startswith("window_") else col
-            return lambda m: ctx.error(f"{f}.{key}", m)
-
-        rows.append(_target_row(rt.get, err, f"target_{i + 1}"))
-    return _targets_from_rows(rows) if rows else None
-
-
-def load_targets_csv(path) -> Targets:
-    """Targets from a CSV file (columns in the module docstring; angles in degrees).
-
-    Raises FileNotFoundError for a missing file and ValueError naming the file, the
-    row (line number) and the column for bad content.
-    """
-    path = Path(path)
-    label = path.name
-    try:
-        f = path.open(newline="", encoding="utf-8-sig")
-    except FileNotFoundError:
-        raise FileNotFoundError(f"targets CSV not found: {path}") from None
-    rows = []
-    with f:
-        reader = csv.reader(f)
-        header = [h.strip() for h in next(reader, [])]
-        allowed = CSV_REQUIRED + CSV_OPTIONAL
-        for h in header:
-            if h not in allowed:
-                raise ValueError(
-                    f"{label} row 1, column {h!r}: unknown column (allowed: {allowed})"
-                )
-            if header.count(h) > 1:
-                raise ValueError(f"{label} row 1, column {h!r}: appears twice")
-        for h in CSV_REQUIRED:
-            if h not in header:
-                raise ValueError(f"{label} row 1, column {h!r}: missing (required: {CSV_REQUIRED})")
-        for cells in reader:
-            line = reader.line_num
-            if not any(c.strip() for c in cells):
-                continue
-            if len(cells) != len(header):
-                raise ValueError(
-                    f"{label} row {line}: {len(cells)} cells, the header has {len(header)}"
-                )
-            rec = {h: (c.strip() or None) for h, c in zip(header, cells, strict=True)}
-            if rec["name"] is None:
-                raise ValueError(f"{label} row {line}, column 'name': must not be empty")
-
-            def err(col, line=line):
-                return lambda m: ValueError(f"{label} row {line}, column {col!r}: {m}")
-
-            rows.append(_target_row(rec.get, err, f"row_{line}", text=True))
-    if not rows:
-        raise ValueError(f"{label}: no target rows (a header row and at least one target)")
-    return _targets_from_rows(rows)
-
-
-def _land_positions(ctx, rng, count, lat, lon):
-    """``count`` uniform (lat, lon) [deg] in the box, rejecting sea (global_land_mask)."""
-    from global_land_mask import globe
-
-    batch = max(4 * count, LAND_BATCH_MIN)
-    got_lat, got_lon, have = [], [], 0
-    for _ in range(LAND_SAMPLE_ROUNDS):
-        la, lo = rng.uniform(*lat, batch), rng.uniform(*lon, batch)
-        keep = np.asarray(globe.is_land(la, lo), bool)
-        got_lat.append(la[keep])
-        got_lon.append(lo[keep])
-        have += int(keep.sum())
-        if have >= count:
-            return np.concatenate(got_lat)[:count], np.concatenate(got_lon)[:count]
-    raise ctx.error(
-        "random_targets.land_only",
-        f"found only {have} land points in {LAND_SAMPLE_ROUNDS * batch} draws in "
-        f"lat {list(lat)}, lon {list(lon)} deg; widen the region or set land_only = false",
-    )
-
-
-def _random_targets(ctx, rt) -> Targets:
-    f = "random_targets"
-    rt = _table(ctx, f, rt, _KEYS[f])
-    seed = _int(ctx, f"{f}.seed", rt.get("seed", 0))
-    if "count" not in rt:
-        raise ctx.error(f"{f}.count", "missing (how many targets to generate)")
-    count = _int(ctx, f"{f}.count", rt["count"], 1)
-
-    def pair(key, default, **kw):
-        return _pair(ctx, f"{f}.{key}", rt.get(key, list(default)), **kw)
-
-    lat = pair("lat_deg", LAT_RANGE_DEG, lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
-    lon = pair("lon_deg", LON_RANGE_DEG, lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
-    land = _bool(ctx, f"{f}.land_only", rt.get("land_only", False))
-    frac = rt.get("strip_fraction", DEFAULT_STRIP_FRACTION)
-    frac = _number(ctx, f"{f}.strip_fraction", frac, lo=0.0, hi=1.0)
-    dur = pair("duration_s", DEFAULT_RANDOM_DURATION_S, positive=True)
-    length = pair("length_km", DEFAULT_RANDOM_LENGTH_KM, positive=True)
-    az = pair("azimuth_deg", (0.0, 360.0))
-    prio = rt.get("priority", list(DEFAULT_RANDOM_PRIORITY))
-    if not isinstance(prio, list) or len(prio) != 2:
-        raise ctx.error(f"{f}.priority", f"must be a list [lo, hi] of integers, got {prio!r}")
-    p_lo, p_hi = (_int(ctx, f"{f}.priority", p, 1) for p in prio)
-    if p_lo > p_hi:
-        raise ctx.error(f"{f}.priority", f"needs lo <= hi, got {prio!r}")
-    rng = np.random.default_rng(seed)
-    if land:
-        la, lo = _land_positions(ctx, rng, count, lat, lon)
-    else:
-        la, lo = rng.uniform(*lat, count), rng.uniform(*lon, count)
-    kind = np.where(rng.random(count) < frac, STRIP, POINT)
-    return make_targets(
-        kind,
-        np.radians(la),
-        np.radians(lo),
-        duration=rng.uniform(*dur, count),
-        length=1e3 * rng.uniform(*length, count),
-        azimuth=np.radians(rng.uniform(*az, count)),
-        value=rng.integers(p_lo, p_hi + 1, count).astype(np.float64),
-        name=np.array([f"random_{i + 1:04d}" for i in range(count)]),
-    )
-
-
-def _csv_paths(ctx, data, base_dir) -> list[Path]:
-    """The target CSV files named by ``targets_csv`` and ``[targets_file]``, resolved."""
-    out = []
-    sources = [("targets_csv", data.get("targets_csv"))]
-    if "targets_file" in data:
-        tf = _table(ctx, "targets_file", data["targets_file"], _KEYS["targets_file"])
-        sources.append(("targets_file.path", tf.get("path")))
-        if "path" not in tf:
-            raise ctx.error("targets_file.path", "missing (the CSV file)")
-    for field, value in sources:
-        if value is None:
-            continue
-        for p in value if isinstance(value, list) else [value]:
-            p = Path(_str(ctx, field, p, allow_empty=False))
-            if not p.is_absolute() and base_dir is not None:
-                p = Path(base_dir) / p
-            if not p.is_file():
-                raise ctx.error(field, f"targets CSV not found: {p}")
-            out.append(p)
-    return out
-
-
-# --- planner, scenario ---
+# --- planner, scenario (targets: jaxspline.targets_io) ---
 
 
 def _planner(ctx, pl) -> PlannerConfig:
-    pl = _table(ctx, "planner", pl, _KEYS["planner"])
+    pl = field_table(ctx, "planner", pl, _KEYS["planner"])
     d, dm = PlannerConfig(), Margins()
 
     def num(key, default, **kw):
-        return _number(ctx, f"planner.{key}", pl.get(key, default), **kw)
+        return field_number(ctx, f"planner.{key}", pl.get(key, default), **kw)
 
     speeds = pl.get("scan_speeds_km_s", [s / 1e3 for s in d.scan_speeds])
     if not isinstance(speeds, list) or not speeds:
         raise ctx.error("planner.scan_speeds_km_s", f"must be a non-empty list, got {speeds!r}")
     sun = pl.get("sun_elevation_min_deg")
     if sun is not None:
-        sun = math.radians(_number(ctx, "planner.sun_elevation_min_deg", sun, lo=-90.0, hi=90.0))
+        sun = math.radians(
+            field_number(ctx, "planner.sun_elevation_min_deg", sun, lo=-90.0, hi=90.0)
+        )
     margins = Margins(
         off_nadir=math.radians(num("off_nadir_margin_deg", dm.off_nadir, nonneg=True)),
         horizon=num("horizon_margin", dm.horizon, lo=0.0, hi=1.0),
         gap=num("gap_margin_s", dm.gap, nonneg=True),
         battery_wh=num("battery_margin_wh", dm.battery_wh, nonneg=True),
-        shadow_guard=_int(ctx, "planner.shadow_guard_steps", pl.get("shadow_guard_steps", 0)),
+        shadow_guard=field_int(ctx, "planner.shadow_guard_steps", pl.get("shadow_guard_steps", 0)),
     )
     try:
         return PlannerConfig(
             time_step=num("time_step_s", d.time_step, positive=True),
             geometry_step=num("geometry_step_s", d.geometry_step, positive=True),
             scan_speeds=tuple(
-                1e3 * _number(ctx, "planner.scan_speeds_km_s", s, positive=True) for s in speeds
+                1e3 * field_number(ctx, "planner.scan_speeds_km_s", s, positive=True)
+                for s in speeds
             ),
             sun_elevation_min=sun,
             margins=margins,
-            exact_max_options=_int(
+            exact_max_options=field_int(
                 ctx, "planner.exact_max_options", pl.get("exact_max_options", d.exact_max_options)
             ),
             lagrangian_share=num("lagrangian_share", d.lagrangian_share, lo=0.0, hi=0.99),
@@ -739,7 +351,7 @@ def parse_scenario(
     that relative CSV paths start from (None: the working directory). Raises
     ValueError naming the field.
     """
-    ctx = _Ctx(source, text)
+    ctx = FieldContext(source, text)
     if not isinstance(data, dict):
         raise ValueError(f"{source}: a scenario must be a table, got {type(data).__name__}")
     unknown = sorted(set(data) - _TOP)
@@ -747,19 +359,19 @@ def parse_scenario(
         raise ctx.error(unknown[0], f"unknown section or key (allowed: {sorted(_TOP)})")
     if "scenario" not in data:
         raise ctx.error("scenario", "missing section [scenario] (epoch, duration_s)")
-    sc = _table(ctx, "scenario", data["scenario"], _KEYS["scenario"])
-    name = _str(ctx, "scenario.name", sc.get("name", Path(source).stem))
+    sc = field_table(ctx, "scenario", data["scenario"], _KEYS["scenario"])
+    name = field_str(ctx, "scenario.name", sc.get("name", Path(source).stem))
     epoch = _epoch(ctx, sc.get("epoch"))
     if ("duration_s" in sc) == ("duration_h" in sc):
         raise ctx.error("scenario.duration_s", "give exactly one of duration_s, duration_h")
     if "duration_s" in sc:
-        duration = _number(ctx, "scenario.duration_s", sc["duration_s"], positive=True)
+        duration = field_number(ctx, "scenario.duration_s", sc["duration_s"], positive=True)
     else:
-        hours = _number(ctx, "scenario.duration_h", sc["duration_h"], positive=True)
+        hours = field_number(ctx, "scenario.duration_h", sc["duration_h"], positive=True)
         duration = SECONDS_PER_HOUR * hours
     epoch_jd = julian_date(epoch)
 
-    sat_items = _tables(ctx, data, "satellites", "satellite")
+    sat_items = field_tables(ctx, data, "satellites", "satellite")
     if not sat_items:
         raise ctx.error("satellites", "missing: give at least one [[satellites]] table")
     sats, names = [], {}
@@ -772,20 +384,7 @@ def parse_scenario(
         names[s.name] = f
         sats.append(s)
 
-    parts = []
-    explicit = _toml_targets(ctx, _tables(ctx, data, "targets", "routes"))
-    if explicit is not None:
-        parts.append(explicit)
-    parts += [load_targets_csv(p) for p in _csv_paths(ctx, data, base_dir)]
-    if "random_targets" in data:
-        parts.append(_random_targets(ctx, data["random_targets"]))
-    if not parts:
-        raise ctx.error(
-            "targets", "no targets: give [[targets]], targets_csv and/or [random_targets]"
-        )
-    targets = parts[0]
-    for more in parts[1:]:
-        targets = targets.concat(more)
+    targets = scenario_targets(ctx, data, base_dir)
 
     planner = _planner(ctx, data.get("planner", {}))
     return Scenario(name, epoch, duration, tuple(sats), targets, planner)

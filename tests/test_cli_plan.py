@@ -1,110 +1,209 @@
-"""``jaxspline plan`` end to end on a small scenario: outputs, refusal to overwrite, errors."""
+"""``jaxspline plan`` end to end on a small scenario: outputs, bound and gap, overwrite rules.
 
+The scenario (written below): 30 minutes over central Europe, a TLE eigen-axis
+satellite (ascending pass near t = 1320 s) and a circular per-channel one placed over
+46 N 15 E at t = 900 s, 30 random point targets and 2 strips under both tracks.
+
+The planning budget counts JIT compilation, which takes 10-25 s here (more on a busy
+machine). So the module fixture first runs ``--no-plots`` with a 3 s budget (the plan
+may be empty; it compiles the kernels and its three files are checked), then the
+plain command with the scenario's 15 s budget, which then goes to the search. Later
+runs reuse the compiled kernels with a 3 s budget.
+"""
+
+import csv
+import datetime as dt
 import json
 
-import numpy as np
 import pytest
 
 from jaxspline.cli import main
 from jaxspline.cli_plan import OUTPUT_FILES
 
-SMALL = """
+EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)
+DURATION_S = 1800.0
+SMALL = f"""
 [scenario]
-name = "small"
-epoch = "2026-06-21T10:00:00Z"
-duration_s = 400.0
+name = "cli-small"
+epoch = "{EPOCH:%Y-%m-%dT%H:%M:%SZ}"
+duration_s = {DURATION_S}
 
-[satellite]
-over = { lat_deg = 46.0, lon_deg = 15.0, t_s = 200.0 }
+[[satellites]]
+name = "eo-tle"
+tle = [
+  "1 44622U 19066A   26103.98739708  .00000848  00000+0  11127-3 0  9997",
+  "2 44622  98.0448  57.1255 0005574   1.4726 358.6503 14.82916452352865",
+]
+model = "eigen_axis"
+rate_deg_s = 1.8
+accel_deg_s2 = 0.4
+settle_s = 2.0
+off_nadir_max_deg = 30.0
+
+[[satellites]]
+name = "eo-agile"
+over = {{ lat_deg = 46.0, lon_deg = 15.0, t_s = 900.0, descending = true }}
+model = "per_channel"
+rate_deg_s = [3.0, 3.0, 2.0]
+accel_deg_s2 = [1.5, 1.5, 1.0]
 off_nadir_max_deg = 40.0
-rate_deg_s = 2.0
-accel_deg_s2 = 1.0
 
-[[routes]]
+[[targets]]
 kind = "strip"
-lat_deg = 46.8
-lon_deg = 15.6
-azimuth_deg = 190.0
+name = "strip-east"
+lat_deg = 46.62
+lon_deg = 14.31
+azimuth_deg = 95.0
+length_km = 40.0
+priority = 10
+
+[[targets]]
+kind = "strip"
+name = "strip-south"
+lat_deg = 45.5
+lon_deg = 13.0
+azimuth_deg = 180.0
 length_km = 30.0
-priority = 9
+priority = 8
 
 [random_targets]
-seed = 2
-count = 10
-lat_deg = [44.0, 48.0]
-lon_deg = [13.5, 16.5]
+seed = 3
+count = 30
+lat_deg = [43.0, 49.0]
+lon_deg = [11.0, 17.0]
 strip_fraction = 0.0
+duration_s = [10.0, 20.0]
+priority = [1, 10]
 
 [planner]
-beam_width = 4
-t0_grid = 3
-scan_speeds_km_s = [6.0]
-refine_steps = 20
-max_gap_s = 40.0
+time_step_s = 10.0
+geometry_step_s = 10.0
+scan_speeds_km_s = [4.0, 7.0]
+time_limit_s = 15.0
 """
+N_TARGETS = 32
+QUICK = ["--time-limit", "3", "--quiet"]  # later runs: kernels already compiled
 
 
 @pytest.fixture(scope="module")
-def small_run(tmp_path_factory):
+def runs(tmp_path_factory):
     d = tmp_path_factory.mktemp("plan")
     scen = d / "small.toml"
-    scen.write_text(SMALL)
+    scen.write_text(SMALL, encoding="utf-8")
+    no_plots = d / "no_plots"
+    code_no_plots = main(["plan", str(scen), "-o", str(no_plots), "--no-plots", *QUICK])
     out = d / "out"
-    code = main(["plan", str(scen), "-o", str(out), "--quiet"])
-    return code, scen, out
+    code = main(["plan", str(scen), "-o", str(out)])
+    return {"scen": scen, "out": out, "code": code, "no_plots": (code_no_plots, no_plots)}
 
 
-def test_plan_writes_valid_outputs(small_run):
-    code, _, out = small_run
+def _snapshot(out):
+    return {n: ((out / n).read_bytes(), (out / n).stat().st_mtime_ns) for n in OUTPUT_FILES}
+
+
+def test_plan_writes_all_outputs(runs):
+    code, out = runs["code"], runs["out"]
     assert code == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES)  # no temporaries
     for name in OUTPUT_FILES:
         assert (out / name).stat().st_size > 0, name
-    summary = json.loads((out / "plan.json").read_text())
-    st = summary["stats"]
-    assert summary["scenario"]["routes"] == 11
-    assert st["valid"] is True and st["violations"] == []
-    assert st["plan_steps"] == len(summary["plan"]) >= 2
-    assert st["plan_value"] == pytest.approx(sum(r["value"] for r in summary["plan"]))
-    assert 0.0 < st["feasible_fraction"] <= 1.0
-    assert st["candidates_screened"] >= st["candidates_feasible"] > 0
-    assert set(summary["timings_s"]) >= {"options", "screen", "sequence", "refine", "validate"}
-    steps = summary["plan"]
-    ts = np.array([r["t_start_s"] for r in steps])
-    te = np.array([r["t_end_s"] for r in steps])
-    assert np.all(ts[1:] > te[:-1])  # time order, no overlap
-    assert len({r["route"] for r in steps}) == len(steps)  # each route at most once
-    for r in steps:
-        lo, hi = r["window_s"]
-        assert lo - 1e-6 <= r["t_start_s"] <= hi + 1e-6
-    rows = (out / "plan.csv").read_text().strip().splitlines()
-    assert len(rows) == 1 + len(steps)
-    assert rows[0].startswith("step,route,kind")
+    assert json.loads((out / "plan.czml").read_text())[0]["id"] == "document"
 
 
-def test_plan_refuses_to_overwrite(small_run, capsys):
-    _, scen, out = small_run
-    before = (out / "plan.json").read_text()
-    code = main(["plan", str(scen), "-o", str(out), "--quiet", "--no-plots"])
-    assert code == 2
+def test_plan_json_summary_bound_and_gap(runs):
+    out = runs["out"]
+    doc = json.loads((out / "plan.json").read_text())
+    s, obs = doc["summary"], doc["observations"]
+    assert s["valid"] is True
+    assert doc["report"]["violations"] == [] and doc["report"]["checked"] == len(obs)
+    assert (s["satellites"], s["targets"], s["observations"]) == (2, N_TARGETS, len(obs))
+    assert s["bound"] >= s["value"] > 0
+    assert s["gap"] == pytest.approx(s["bound"] - s["value"], abs=1e-9)
+    assert s["value"] == pytest.approx(sum(o["value"] for o in obs))
+    assert s["value"] <= s["total_value"]
+    assert set(doc["timings_s"]) >= {"orbits", "windows", "options", "screening", "search"}
+    assert {o["satellite"] for o in obs} == {"eo-tle", "eo-agile"}  # both tracks cross targets
+
+
+def test_plan_observations_in_horizon_once_each(runs):
+    out = runs["out"]
+    obs = json.loads((out / "plan.json").read_text())["observations"]
+    assert len({o["target"] for o in obs}) == len(obs)  # each target imaged at most once
+    for o in obs:
+        assert 0.0 <= o["start_s"] < o["end_s"] <= DURATION_S, o
+        assert o["slack_s"] >= 0.0 and o["maneuver_s"] >= 0.0, o
+        start = dt.datetime.strptime(o["start_utc"], "%Y-%m-%dT%H:%M:%S.%fZ")
+        offset = (start.replace(tzinfo=dt.UTC) - EPOCH).total_seconds()
+        assert offset == pytest.approx(o["start_s"], abs=1e-5), o
+    for sat in ("eo-tle", "eo-agile"):  # one observation at a time per satellite
+        mine = sorted((o["start_s"], o["end_s"]) for o in obs if o["satellite"] == sat)
+        assert all(s1 >= e0 for (_, e0), (s1, _) in zip(mine, mine[1:], strict=False))
+
+
+def test_plan_csv_matches_json(runs):
+    out = runs["out"]
+    obs = json.loads((out / "plan.json").read_text())["observations"]
+    with (out / "plan.csv").open(newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    assert len(rows) == len(obs) > 0
+    for row, o in zip(rows, obs, strict=True):
+        assert list(row) == list(o)
+        for key, value in o.items():
+            if isinstance(value, str):
+                assert row[key] == value, key
+            else:
+                assert float(row[key]) == value, key
+
+
+def test_plan_refuses_to_overwrite(runs, capsys):
+    scen, out = runs["scen"], runs["out"]
+    before = _snapshot(out)
+    capsys.readouterr()
+    assert main(["plan", str(scen), "-o", str(out), *QUICK]) == 2
     err = capsys.readouterr().err
     assert "plan.json" in err and "--force" in err
-    assert (out / "plan.json").read_text() == before
+    assert _snapshot(out) == before  # bytes and modification times unchanged
 
 
-def test_plan_force_overwrites_and_beam_width(small_run):
-    _, scen, out = small_run
-    code = main(
-        ["plan", str(scen), "-o", str(out), "--quiet", "--no-plots", "--force", "--beam-width", "1"]
-    )
+def test_plan_force_overwrites(runs):
+    scen, out = runs["scen"], runs["out"]
+    before = {n: (out / n).stat().st_mtime_ns for n in OUTPUT_FILES}
+    assert main(["plan", str(scen), "-o", str(out), "--force", *QUICK]) == 0
+    for name in OUTPUT_FILES:
+        assert (out / name).stat().st_mtime_ns > before[name], name
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES)
+    assert json.loads((out / "plan.json").read_text())["summary"]["valid"] is True
+
+
+def test_plan_no_plots_writes_data_files_only(runs):
+    code, out = runs["no_plots"]
     assert code == 0
-    summary = json.loads((out / "plan.json").read_text())
-    assert summary["stats"]["beam_width"] == 1
-    assert not list(out.glob("*.tmp"))  # atomic writes leave no temporaries
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES[:3])
+    assert json.loads((out / "plan.json").read_text())["summary"]["valid"] is True
 
 
-def test_plan_bad_scenario_exit_code(tmp_path, capsys):
+@pytest.mark.parametrize(
+    "old, new, field",
+    [
+        ("[planner]\n", "[planner]\nbeam_width = 4\n", "planner.beam_width"),
+        ("[planner]\n", "[planer]\n", "planer"),
+    ],
+    ids=["unknown-key", "unknown-section"],
+)
+def test_plan_bad_scenario_names_the_key(tmp_path, capsys, old, new, field):
+    assert SMALL.count(old) == 1
+    text = SMALL.replace(old, new)
+    line = text.splitlines().index(new.splitlines()[-1]) + 1
     bad = tmp_path / "bad.toml"
-    bad.write_text("[satellite]\nrate_deg_s = [1, 2]\n[random_targets]\n")
-    assert main(["plan", str(bad), "-o", str(tmp_path / "o")]) == 2
-    assert "satellite.rate_deg_s" in capsys.readouterr().err
-    assert main(["plan", str(tmp_path / "missing.toml"), "-o", str(tmp_path / "o")]) == 2
+    bad.write_text(text, encoding="utf-8")
+    out = tmp_path / "out"
+    assert main(["plan", str(bad), "-o", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert f"{field} (line {line}): unknown" in err, err
+    assert not out.exists()  # nothing written
+
+
+def test_plan_missing_scenario_file(tmp_path, capsys):
+    missing = tmp_path / "missing.toml"
+    assert main(["plan", str(missing), "-o", str(tmp_path / "out")]) == 2
+    assert "scenario file not found" in capsys.readouterr().err

@@ -58,7 +58,7 @@ def test_default_scenario_satellites(default):
     np.testing.assert_allclose(np.degrees(pc.limits.accel), [1.5, 1.5, 1.0])
     fl = next(s for s in sats if s.model == "flexible")
     assert fl.flex.freq == pytest.approx(2 * math.pi * 0.5)
-    assert fl.flex.tolerance == pytest.approx(math.radians(1e-4))
+    assert fl.flex.tolerance == pytest.approx(math.radians(0.006))
     assert np.degrees(fl.off_nadir_max) == pytest.approx(25.0)
     pl = default.planner
     assert (pl.time_step, pl.geometry_step, pl.scan_speeds) == (10.0, 10.0, (7000.0,))

@@ -1,0 +1,346 @@
+"""Targets from scenario files: CSV rows, ``[[targets]]`` tables, ``[random_targets]``.
+
+The TOML schema of the target sections is documented with the rest of the scenario
+file in :mod:`jaxspline.scenario`; this module reads them. Angles are degrees in the
+files and radians in the :class:`jaxspline.mission.Targets` they become; lengths in
+the files are km (strip length) and m (altitude); times are seconds from the scenario
+epoch. Every error is a ``ValueError`` naming the source, the field and the value.
+
+CSV targets (``targets_csv``, ``[targets_file]``, :func:`load_targets_csv`): UTF-8
+text (a byte-order mark is accepted), a header row, then one target per row, columns
+in any order; blank rows are skipped and an empty cell takes the default. Unknown or
+repeated columns are errors. The columns:
+
+================  =====  ==================================================================
+column            unit   meaning
+================  =====  ==================================================================
+``name``          -      target name (column and cell required)
+``lat_deg``       deg    geodetic latitude in [-90, 90] (required)
+``lon_deg``       deg    longitude in [-180, 180] (required)
+``priority``      -      value if imaged, > 0 (column required; an empty cell means 1)
+``kind``          -      ``point`` (default) or ``strip``
+``alt_m``         m      height above the WGS84 ellipsoid (default 0)
+``duration_s``    s      point: imaging time (default 10); must be empty for a strip
+``length_km``     km     strip: length (required for a strip); must be empty for a point
+``azimuth_deg``   deg    strip: direction at the start, clockwise from north (default 0);
+                         must be empty for a point
+``window_lo_s``   s      imaging starts at or after this time from the epoch (default: none)
+``window_hi_s``   s      imaging ends at or before this time from the epoch (default: none);
+                         needs ``window_hi_s - window_lo_s >=`` the point's imaging time
+``sensor``        -      required sensor type (empty = any sensor, the default)
+================  =====  ==================================================================
+
+A bad cell raises e.g. ``cities.csv row 17, column 'lat_deg': must be within [-90, 90],
+got '95.2'`` (row = line number in the file, the header is row 1); a missing file
+raises ``FileNotFoundError``.
+
+``[[targets]]`` (alias ``[[routes]]``) tables take the same keys, except that the
+window is one key ``window_s = [lo, hi]``. ``[random_targets]`` draws, with numpy's
+``default_rng(seed)``, positions uniform in latitude and longitude over the box (not
+uniform in area), then kinds, point durations, strip lengths, azimuths and integer
+priorities; with ``land_only`` the positions are rejection-sampled against
+``global_land_mask`` in batches of ``max(4 count, 1024)`` draws, at most 200 batches.
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from jaxspline._fields import (
+    check_float,
+    field_bool,
+    field_int,
+    field_number,
+    field_pair,
+    field_str,
+    field_table,
+    field_tables,
+)
+from jaxspline.mission import POINT, STRIP, Targets, make_targets
+
+__all__ = [
+    "CSV_OPTIONAL",
+    "CSV_REQUIRED",
+    "TARGET_SECTIONS",
+    "load_targets_csv",
+    "scenario_targets",
+]
+
+DEFAULT_POINT_DURATION_S = 10.0
+DEFAULT_STRIP_FRACTION = 0.2
+DEFAULT_RANDOM_DURATION_S = (10.0, 30.0)
+DEFAULT_RANDOM_LENGTH_KM = (20.0, 60.0)
+DEFAULT_RANDOM_PRIORITY = (1, 10)
+LAT_RANGE_DEG = (-90.0, 90.0)
+LON_RANGE_DEG = (-180.0, 180.0)
+LAND_SAMPLE_ROUNDS = 200  # rejection-sampling batches before giving up on a region
+LAND_BATCH_MIN = 1024
+
+#: Top-level keys and sections of a scenario file that this module reads.
+TARGET_SECTIONS = frozenset("targets routes targets_csv targets_file random_targets".split())
+CSV_REQUIRED = ("name", "lat_deg", "lon_deg", "priority")
+CSV_OPTIONAL = tuple(
+    "kind alt_m duration_s length_km azimuth_deg window_lo_s window_hi_s sensor".split()
+)
+_KEYS = {
+    "target": frozenset(
+        "kind name lat_deg lon_deg alt_m duration_s length_km azimuth_deg priority "
+        "window_s sensor".split()
+    ),
+    "targets_file": frozenset(["path"]),
+    "random_targets": frozenset(
+        "seed count lat_deg lon_deg land_only strip_fraction duration_s "
+        "length_km azimuth_deg priority".split()
+    ),
+}
+_KINDS = {"point": POINT, "strip": STRIP}
+
+
+def scenario_targets(ctx, data: dict, base_dir=None) -> Targets:
+    """All targets of a parsed scenario table ``data``, in the order they are read.
+
+    First the ``[[targets]]`` (or ``[[routes]]``) tables, then the CSV files of
+    ``targets_csv`` and ``[targets_file]`` (relative paths start from ``base_dir``;
+    None: the working directory), then ``[random_targets]``. ``ctx`` is the
+    :class:`jaxspline._fields.FieldContext` of the file. Raises ValueError naming the
+    field, also when the file gives no targets at all.
+    """
+    parts = []
+    explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"))
+    if explicit is not None:
+        parts.append(explicit)
+    parts += [load_targets_csv(p) for p in _csv_paths(ctx, data, base_dir)]
+    if "random_targets" in data:
+        parts.append(_random_targets(ctx, data["random_targets"]))
+    if not parts:
+        raise ctx.error(
+            "targets", "no targets: give [[targets]], targets_csv and/or [random_targets]"
+        )
+    targets = parts[0]
+    for more in parts[1:]:
+        targets = targets.concat(more)
+    return targets
+
+
+def _target_row(get, err, default_name, text=False) -> tuple:
+    """One target from ``get(column) -> raw or None``; ``err(column)(msg)`` builds errors.
+
+    Columns as in the CSV format. Returns (name, kind, lat, lon, alt, duration, length,
+    azimuth, priority, t_lo, t_hi, sensor) in degrees, metres, seconds.
+    """
+
+    def num(col, **kw):
+        return check_float(get(col), err(col), text=text, **kw)
+
+    def string(col, default):
+        raw = get(col)
+        if raw is None:
+            return default
+        if not isinstance(raw, str):
+            raise err(col)(f"must be a string, got {raw!r}")
+        return raw.strip()
+
+    name = string("name", default_name) or default_name
+    kind = string("kind", "point")
+    if kind not in _KINDS:
+        raise err("kind")(f"must be 'point' or 'strip', got {kind!r}")
+    lat = num("lat_deg", lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
+    lon = num("lon_deg", lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
+    alt = num("alt_m", default=0.0)
+    prio = num("priority", default=1.0, positive=True)
+    if kind == "strip":
+        if get("duration_s") is not None:
+            raise err("duration_s")("a strip has no duration_s (it is length / scan speed)")
+        length = 1e3 * num("length_km", positive=True)
+        az = num("azimuth_deg", default=0.0)
+        dur = 0.0
+    else:
+        for col in ("length_km", "azimuth_deg"):
+            if get(col) is not None:
+                raise err(col)("a point has no length_km / azimuth_deg (use kind 'strip')")
+        dur, length, az = num("duration_s", default=DEFAULT_POINT_DURATION_S, positive=True), 0, 0
+    t_lo = num("window_lo_s", default=-np.inf)
+    t_hi = num("window_hi_s", default=np.inf)
+    if t_hi < t_lo:
+        raise err("window_hi_s")(f"window needs lo <= hi, got [{t_lo:g}, {t_hi:g}]")
+    if t_hi < t_lo + dur:
+        raise err("window_hi_s")(
+            f"window [{t_lo:g}, {t_hi:g}] s is shorter than the imaging time {dur:g} s"
+        )
+    sensor = string("sensor", "")
+    return (name, _KINDS[kind], lat, lon, alt, dur, length, az, prio, t_lo, t_hi, sensor)
+
+
+def _targets_from_rows(rows) -> Targets:
+    cols = list(zip(*rows, strict=True))
+    num = [np.asarray(c, np.float64) for c in cols[2:11]]
+    lat, lon, alt, dur, length, az, prio, t_lo, t_hi = num
+    return make_targets(
+        np.asarray(cols[1], np.int64),
+        np.radians(lat),
+        np.radians(lon),
+        alt=alt,
+        duration=dur,
+        length=length,
+        azimuth=np.radians(az),
+        value=prio,
+        t_lo=t_lo,
+        t_hi=t_hi,
+        sensor=np.asarray(cols[11], dtype=object),
+        name=np.asarray(cols[0], dtype=str),
+    )
+
+
+def _toml_targets(ctx, items) -> Targets | None:
+    rows = []
+    for i, (f, rt) in enumerate(items):
+        rt = dict(field_table(ctx, f, rt, _KEYS["target"]))
+        if "window_s" in rt:
+            win = rt.pop("window_s")
+            if not isinstance(win, list) or len(win) != 2:
+                raise ctx.error(f"{f}.window_s", f"must be a list [lo, hi], got {win!r}")
+            rt["window_lo_s"], rt["window_hi_s"] = win
+
+        def err(col, f=f):
+            key = "window_s" if col.startswith("window_") else col
+            return lambda m: ctx.error(f"{f}.{key}", m)
+
+        rows.append(_target_row(rt.get, err, f"target_{i + 1}"))
+    return _targets_from_rows(rows) if rows else None
+
+
+def load_targets_csv(path) -> Targets:
+    """Targets from a CSV file (columns and units: module docstring; angles in degrees).
+
+    Raises FileNotFoundError for a missing file and ValueError naming the file, the
+    row (line number) and the column for bad content.
+    """
+    path = Path(path)
+    label = path.name
+    try:
+        f = path.open(newline="", encoding="utf-8-sig")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"targets CSV not found: {path}") from None
+    rows = []
+    with f:
+        reader = csv.reader(f)
+        header = [h.strip() for h in next(reader, [])]
+        allowed = CSV_REQUIRED + CSV_OPTIONAL
+        for h in header:
+            if h not in allowed:
+                raise ValueError(
+                    f"{label} row 1, column {h!r}: unknown column (allowed: {allowed})"
+                )
+            if header.count(h) > 1:
+                raise ValueError(f"{label} row 1, column {h!r}: appears twice")
+        for h in CSV_REQUIRED:
+            if h not in header:
+                raise ValueError(f"{label} row 1, column {h!r}: missing (required: {CSV_REQUIRED})")
+        for cells in reader:
+            line = reader.line_num
+            if not any(c.strip() for c in cells):
+                continue
+            if len(cells) != len(header):
+                raise ValueError(
+                    f"{label} row {line}: {len(cells)} cells, the header has {len(header)}"
+                )
+            rec = {h: (c.strip() or None) for h, c in zip(header, cells, strict=True)}
+            if rec["name"] is None:
+                raise ValueError(f"{label} row {line}, column 'name': must not be empty")
+
+            def err(col, line=line):
+                return lambda m: ValueError(f"{label} row {line}, column {col!r}: {m}")
+
+            rows.append(_target_row(rec.get, err, f"row_{line}", text=True))
+    if not rows:
+        raise ValueError(f"{label}: no target rows (a header row and at least one target)")
+    return _targets_from_rows(rows)
+
+
+def _land_positions(ctx, rng, count, lat, lon):
+    """``count`` uniform (lat, lon) [deg] in the box, rejecting sea (global_land_mask)."""
+    from global_land_mask import globe
+
+    batch = max(4 * count, LAND_BATCH_MIN)
+    got_lat, got_lon, have = [], [], 0
+    for _ in range(LAND_SAMPLE_ROUNDS):
+        la, lo = rng.uniform(*lat, batch), rng.uniform(*lon, batch)
+        keep = np.asarray(globe.is_land(la, lo), bool)
+        got_lat.append(la[keep])
+        got_lon.append(lo[keep])
+        have += int(keep.sum())
+        if have >= count:
+            return np.concatenate(got_lat)[:count], np.concatenate(got_lon)[:count]
+    raise ctx.error(
+        "random_targets.land_only",
+        f"found only {have} land points in {LAND_SAMPLE_ROUNDS * batch} draws in "
+        f"lat {list(lat)}, lon {list(lon)} deg; widen the region or set land_only = false",
+    )
+
+
+def _random_targets(ctx, rt) -> Targets:
+    f = "random_targets"
+    rt = field_table(ctx, f, rt, _KEYS[f])
+    seed = field_int(ctx, f"{f}.seed", rt.get("seed", 0))
+    if "count" not in rt:
+        raise ctx.error(f"{f}.count", "missing (how many targets to generate)")
+    count = field_int(ctx, f"{f}.count", rt["count"], 1)
+
+    def pair(key, default, **kw):
+        return field_pair(ctx, f"{f}.{key}", rt.get(key, list(default)), **kw)
+
+    lat = pair("lat_deg", LAT_RANGE_DEG, lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
+    lon = pair("lon_deg", LON_RANGE_DEG, lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
+    land = field_bool(ctx, f"{f}.land_only", rt.get("land_only", False))
+    frac = rt.get("strip_fraction", DEFAULT_STRIP_FRACTION)
+    frac = field_number(ctx, f"{f}.strip_fraction", frac, lo=0.0, hi=1.0)
+    dur = pair("duration_s", DEFAULT_RANDOM_DURATION_S, positive=True)
+    length = pair("length_km", DEFAULT_RANDOM_LENGTH_KM, positive=True)
+    az = pair("azimuth_deg", (0.0, 360.0))
+    prio = rt.get("priority", list(DEFAULT_RANDOM_PRIORITY))
+    if not isinstance(prio, list) or len(prio) != 2:
+        raise ctx.error(f"{f}.priority", f"must be a list [lo, hi] of integers, got {prio!r}")
+    p_lo, p_hi = (field_int(ctx, f"{f}.priority", p, 1) for p in prio)
+    if p_lo > p_hi:
+        raise ctx.error(f"{f}.priority", f"needs lo <= hi, got {prio!r}")
+    rng = np.random.default_rng(seed)
+    if land:
+        la, lo = _land_positions(ctx, rng, count, lat, lon)
+    else:
+        la, lo = rng.uniform(*lat, count), rng.uniform(*lon, count)
+    kind = np.where(rng.random(count) < frac, STRIP, POINT)
+    return make_targets(
+        kind,
+        np.radians(la),
+        np.radians(lo),
+        duration=rng.uniform(*dur, count),
+        length=1e3 * rng.uniform(*length, count),
+        azimuth=np.radians(rng.uniform(*az, count)),
+        value=rng.integers(p_lo, p_hi + 1, count).astype(np.float64),
+        name=np.array([f"random_{i + 1:04d}" for i in range(count)]),
+    )
+
+
+def _csv_paths(ctx, data, base_dir) -> list[Path]:
+    """The target CSV files named by ``targets_csv`` and ``[targets_file]``, resolved."""
+    out = []
+    sources = [("targets_csv", data.get("targets_csv"))]
+    if "targets_file" in data:
+        tf = field_table(ctx, "targets_file", data["targets_file"], _KEYS["targets_file"])
+        sources.append(("targets_file.path", tf.get("path")))
+        if "path" not in tf:
+            raise ctx.error("targets_file.path", "missing (the CSV file)")
+    for field, value in sources:
+        if value is None:
+            continue
+        for p in value if isinstance(value, list) else [value]:
+            p = Path(field_str(ctx, field, p, allow_empty=False))
+            if not p.is_absolute() and base_dir is not None:
+                p = Path(base_dir) / p
+            if not p.is_file():
+                raise ctx.error(field, f"targets CSV not found: {p}")
+            out.append(p)
+    return out
