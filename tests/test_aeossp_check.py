@@ -474,20 +474,36 @@ def test_cli_check_and_solve(setup, tmp_path, monkeypatch, capsys):
     assert "rule 1" in capsys.readouterr().out
     assert main(["aeossp", "check", str(tmp_path / "missing"), str(bad)]) == 2
 
-    fake = types.ModuleType("jaxspline.aeossp.solve")
+    # stand-in for the adapter: solve_case(case, time_limit=, seed=) -> (solution, result)
+    fake = types.ModuleType("jaxspline.aeossp.adapter")
     calls = []
 
-    def solve_case(case_dir, time_limit=60.0, progress=False):
-        calls.append((case_dir, time_limit, progress))
-        return {"actions": []}
+    def solve_case(case, time_limit=60.0, seed=0, **kw):
+        calls.append((case, time_limit, seed, kw))
+        result = types.SimpleNamespace(
+            value=3.0, bound=4.0, gap=1.0, total_value=8.0, stats={"bound_status": "converged"}
+        )
+        return {"actions": []}, result
 
     fake.solve_case = solve_case
-    monkeypatch.setitem(sys.modules, "jaxspline.aeossp.solve", fake)
+    monkeypatch.setitem(sys.modules, "jaxspline.aeossp.adapter", fake)
+    capsys.readouterr()
     sol = tmp_path / "sol.json"
     assert main(["aeossp", "solve", str(small), "-o", str(sol), "--time-limit", "5"]) == 0
-    assert calls == [(str(small), 5.0, True)] and json.loads(sol.read_text()) == {"actions": []}
+    assert len(calls) == 1
+    case, limit, seed, kw = calls[0]
+    assert isinstance(case, Case) and case.case_id == load_case(small).case_id
+    assert (limit, seed, kw) == (5.0, 0, {})
+    assert json.loads(sol.read_text()) == {"actions": []}
+    err = capsys.readouterr().err
+    assert "WCR 0.3750" in err and "bound 0.5000 (converged)" in err and "gap 0.1250" in err
     assert main(["aeossp", "solve", str(small), "-o", str(sol)]) == 2  # exists, no --force
-    assert main(["aeossp", "solve", str(small), "-o", str(sol), "--force"]) == 0
+    assert len(calls) == 1  # refused before planning
+    assert main(["aeossp", "solve", str(small), "-o", str(sol), "--force", "--seed", "7"]) == 0
+    assert calls[-1][1:] == (60.0, 7, {})
+    bad_limit = ["aeossp", "solve", str(small), "-o", str(tmp_path / "x.json")]
+    assert main([*bad_limit, "--time-limit", "0"]) == 2
+    assert "--time-limit" in capsys.readouterr().err and len(calls) == 2
 
 
 @pytest.mark.slow
