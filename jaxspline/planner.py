@@ -62,6 +62,8 @@ class _Clock:
         self.name = name
         self.progress = progress
         self.timings = {}
+        self.bar = None
+        self.bar_t0 = self.t0
 
     def lap(self, stage: str, msg: str = ""):
         now = time.monotonic()
@@ -69,7 +71,27 @@ class _Clock:
         self.last = now
         self.say(stage, msg)
 
+    def search_bar(self, seconds: float):
+        """A progress bar over the search budget (None without progress)."""
+        if not self.progress:
+            return None
+        from tqdm import tqdm
+
+        return tqdm(
+            total=round(max(seconds, 0.0), 1),
+            desc=f"[plan {self.name}] search",
+            unit="s",
+            bar_format="{desc} {bar} {n:.0f}/{total:.0f} s {postfix}",
+            file=sys.stderr,
+            leave=False,
+        )
+
     def say(self, stage: str, msg: str):
+        bar = getattr(self, "bar", None)
+        if bar is not None:
+            bar.n = round(min(time.monotonic() - self.bar_t0, bar.total), 1)
+            bar.set_postfix_str(f"{stage}: {msg}", refresh=True)
+            return
         if self.progress:
             print(
                 f"[plan {self.name}] {stage:9s} {msg}  ({time.monotonic() - self.t0:5.1f} s)",
@@ -247,16 +269,22 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     prep = build_problem(sc, _clock=clock)
     pb, opp, windows, scene, table, battery, far = prep
     o = opp.options
-    near = (pb.near_src,)
-    res = solve(
-        pb,
-        deadline - reserve,
-        seed=seed,
-        lagrangian_share=pc.lagrangian_share,
-        exact_max_options=pc.exact_max_options,
-        max_iters=max_iters,
-        report=clock.say,
-    )
+    clock.bar = clock.search_bar(deadline - reserve - time.monotonic())
+    clock.bar_t0 = time.monotonic()
+    try:
+        res = solve(
+            pb,
+            deadline - reserve,
+            seed=seed,
+            lagrangian_share=pc.lagrangian_share,
+            exact_max_options=pc.exact_max_options,
+            max_iters=max_iters,
+            report=clock.say,
+        )
+    finally:
+        if clock.bar is not None:
+            clock.bar.close()
+        clock.bar = None
     tl = res.timeline
     clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
     chosen = [c for c in tl.assigned if c >= 0]
@@ -303,7 +331,7 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     stats = {
         "windows": len(windows),
         "options": len(opp),
-        "near_pairs": int(near[0].size),
+        "near_pairs": int(pb.near_src.size),
         "far_gap_s": far.tolist(),
         "bound_status": res.bound_status,
         "exact": res.exact,
