@@ -48,7 +48,7 @@ __all__ = ["Prepared", "build_problem", "plan"]
 
 _RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
 _RESERVE_MIN = 1.0  # [s]
-_NEAR_SLACK = 1e-6  # [s] near pairs reach this far past the always-feasible gap
+_NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _PAIR_BLOCK = 1 << 20  # option pairs per screening block
 _MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
 
@@ -146,8 +146,12 @@ def _orbits(sc: Scenario):
     return table, scene, sunlit
 
 
-def _near_pairs(sc, opp, tables, far):
-    """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need."""
+def _near_pairs(sc, opp, tables, far, slack):
+    """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need.
+
+    The slack (the shortest observation) lets the DP process a block of starts that
+    wide at once (:func:`jaxspline.search.dp_prepare`).
+    """
     o = opp.options
     src_all, dst_all, need_all = [], [], []
     for k, sat in enumerate(sc.satellites):
@@ -157,7 +161,7 @@ def _near_pairs(sc, opp, tables, far):
         s, e = o.t_start[ids], o.t_end[ids]
         eo = ids[np.argsort(e, kind="stable")]
         es = o.t_end[eo]
-        a = np.searchsorted(es, s - far[k] - _NEAR_SLACK, side="right")
+        a = np.searchsorted(es, s - far[k] - slack, side="right")
         b = np.searchsorted(es, s, side="left")
         cnt = np.maximum(b - a, 0)
         total = int(cnt.sum())
@@ -241,7 +245,8 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
             ids = np.flatnonzero(o.sat == k)
             far[k] = far_gap(s, o, ids, float(omega[k]), tables[k])
             first[ids] = first_requirements(s, o, ids, tables[k])
-        near = _near_pairs(sc, opp, tables, far)
+        slack = float(np.min(o.t_end - o.t_start)) if len(opp) else 0.0
+        near = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK)
         clock.lap(
             "screening",
             f"{near[0].size} feasible near pairs; far gaps "
@@ -256,6 +261,7 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
             pc.margins.shadow_guard,
         )
         pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.duration, tg.value)
+        pb.near_slack = slack
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
 

@@ -2,7 +2,7 @@
 
 :func:`solve` runs the stages on a :class:`Problem` until a deadline:
 
-1. greedy construction (:func:`greedy`);
+1. greedy construction (:func:`greedy`; always completed, even past the deadline);
 2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
    task prices, repaired plans, and the upper bound (:func:`lagrangian`);
 3. exact branch and bound when the instance is tiny (``exact_max_options``);
@@ -12,6 +12,7 @@
 
 from __future__ import annotations
 
+import math
 import random
 import time
 from dataclasses import dataclass
@@ -42,6 +43,7 @@ __all__ = [
 
 _EARLIEST_SHARE = 0.05  # share of the budget reserved for the earliest-start pass
 _EARLIEST_MAX = 2.0  # ... at most this many seconds
+_EXACT_SHARE = 0.5  # share of the remaining budget the exact search may use
 
 
 @dataclass
@@ -83,7 +85,7 @@ def solve(
     order = greedy_order(tl)
     now = time.monotonic()
     tail = min(_EARLIEST_MAX, _EARLIEST_SHARE * max(0.0, deadline - now))
-    greedy(tl, deadline - tail, order)
+    greedy(tl, math.inf, order)  # always complete: a plan even when the budget is spent
     stats = {"greedy_value": tl.W}
     say("greedy", f"value {tl.W:.6g}")
     t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())
@@ -100,7 +102,9 @@ def solve(
     if pb.n_options <= exact_max_options:
         start = list(tl.assigned)
         tl.restore([])
-        value, exact = exact_search(tl, deadline - tail)
+        # at most half of what is left: a search that cannot finish still leaves the LNS time
+        t_exact = time.monotonic() + _EXACT_SHARE * max(0.0, deadline - tail - time.monotonic())
+        value, exact = exact_search(tl, t_exact)
         if value < sum(pb.weight[t] for t, c in enumerate(start) if c >= 0):
             tl.restore(start)
         stats["exact_proven"] = exact

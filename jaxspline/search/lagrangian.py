@@ -16,8 +16,9 @@ each term is ``>= w_t`` if ``n_t >= 1`` and ``>= 0`` otherwise: UB >= the plan's
 Prices are therefore kept in ``[0, w_t]`` (projected subgradient), which makes UB an
 upper bound of every plan of the candidate model, repeats included.
 
-Each iteration also repairs the DP paths into a feasible plan (each task once,
-heaviest first, re-checked insertion incl. battery, then greedy fill).
+Every :data:`_REPAIR_EVERY`-th iteration also repairs the DP paths into a feasible
+plan (each task once, heaviest first, re-checked insertion incl. battery, then greedy
+fill); its value is the step target.
 """
 
 from __future__ import annotations
@@ -38,16 +39,21 @@ _STALL_ITERS = 4  # iterations without a better bound before the step halves
 _MU_MIN = 1e-4  # the iteration stops (stalled) below this step factor
 _GAP_TOL = 1e-9  # bound - best plan below this: optimal
 _PATH_TOL = 1e-9  # tolerance of the path back-tracking
+_REPAIR_EVERY = 4  # DP iterations per repaired plan (a repair costs ~2 block DPs)
 
 
 @dataclass
 class DPData:
     """Structure of the per-satellite longest-path DP (see :func:`dp_paths`).
 
-    Options are processed in start order (``order``), grouped by equal starts
-    (``groups``: slices of ``order`` and of the near-predecessor arrays ``pred`` /
-    ``seg``). ``absorb`` lists options by ``end + far[sat]``, the time from which they
-    are far predecessors of everything.
+    Options are processed in start order (``order``) in blocks of starts at most
+    ``width`` apart (``groups``: slices of ``order`` and of the near-predecessor arrays
+    ``pred`` / ``seg``). With ``width`` <= the shortest observation, a predecessor of
+    any option of a block starts before the block, so a block is one vectorized step;
+    with ``width`` <= ``near_slack``, a far predecessor that only becomes far inside
+    the block (``end + far`` between the block's first start and the option's start)
+    is among the near pairs. ``absorb`` lists options by ``end + far[sat]``, the time
+    from which they are far predecessors of everything.
     """
 
     order: np.ndarray
@@ -77,8 +83,13 @@ def dp_prepare(pb: Problem) -> DPData:
     jj, ii = jj[o2], ii[o2]
     ptr = np.searchsorted(rank[jj], np.arange(n + 1), side="left")
     so = s[order]
-    cut = np.flatnonzero(np.diff(so)) + 1
-    bounds = np.concatenate([[0], cut, [n]]).astype(np.int64)
+    width = min(float(np.min(e - s)), pb.near_slack) if n else 0.0
+    bounds = [0]
+    while bounds[-1] < n:
+        b0 = bounds[-1]
+        b1 = int(np.searchsorted(so, so[b0] + width, side="right"))
+        bounds.append(max(b1, int(np.searchsorted(so, so[b0], side="right"))))
+    bounds = np.asarray(bounds, np.int64)
     groups = []
     seg = np.empty(len(jj), np.int64)
     for ga, gb in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True):
@@ -243,9 +254,10 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     status = "time"
     while time.monotonic() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
-        _plan_from_paths(tl, paths, order_fill, deadline)
-        if tl.W > best_w:
-            best_w, best = tl.W, list(tl.assigned)
+        if (pr.it - 1) % _REPAIR_EVERY == 0:
+            _plan_from_paths(tl, paths, order_fill, deadline)
+            if tl.W > best_w:
+                best_w, best = tl.W, list(tl.assigned)
         if pr.ub - best_w <= _GAP_TOL * max(1.0, pr.ub):
             status = "optimal"
             break

@@ -42,6 +42,8 @@ class Problem:
       sat_lo, sat_hi: option id range per satellite (options sorted by sat, start).
       sat_starts: per satellite the sorted starts of its options.
       horizon: planning horizon [s].
+      near_slack: the near pairs include every feasible pair with gap < far + this [s]
+        (at least the shortest observation: the DP's block width, see ``dp_prepare``).
     """
 
     n_sats: int
@@ -65,6 +67,7 @@ class Problem:
     sat_hi: list
     sat_starts: list
     horizon: float
+    near_slack: float = 0.0
 
     @property
     def n_options(self) -> int:
