@@ -306,6 +306,8 @@ class PlannerConfig:
       exact_max_options: instances with at most this many options are solved exactly
         (branch and bound over the per-satellite timelines).
       lagrangian_share: share of the search budget for the Lagrangian / DP phase.
+      refine_steps: optax steps of start-time refinement of per-channel satellites'
+        sequences (:mod:`jaxspline.refine_starts`; 0 = off).
       default_time_limit: search budget [s] when :func:`plan` gets no time limit.
     """
 
@@ -316,6 +318,7 @@ class PlannerConfig:
     margins: Margins = Margins()
     exact_max_options: int = 60
     lagrangian_share: float = 0.3
+    refine_steps: int = 100
     default_time_limit: float = 30.0
 
     def __post_init__(self):
@@ -327,6 +330,8 @@ class PlannerConfig:
                 f"planner.time_step={self.time_step!r} must be a multiple of "
                 f"planner.geometry_step={self.geometry_step!r}"
             )
+        if int(self.refine_steps) < 0:
+            raise ValueError(f"planner.refine_steps must be >= 0, got {self.refine_steps!r}")
         if int(self.exact_max_options) < 0:
             raise ValueError(
                 f"planner.exact_max_options must be >= 0, got {self.exact_max_options!r}"

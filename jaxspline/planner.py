@@ -40,6 +40,7 @@ from jaxspline.opportunities import _aim_laws, build_opportunities, nadir_rate
 from jaxspline.orbit import tabulate_orbits
 from jaxspline.plan_check import check_plan
 from jaxspline.pointing import Scene
+from jaxspline.refine_starts import refine_starts
 from jaxspline.result import Observations, PlanResult
 from jaxspline.search import BatteryModel, Problem, solve
 from jaxspline.windows import visibility_windows_all
@@ -48,6 +49,7 @@ __all__ = ["Prepared", "build_problem", "plan"]
 
 _RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
 _RESERVE_MIN = 1.0  # [s]
+_REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _PAIR_BLOCK = 1 << 20  # option pairs per screening block
 _MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
@@ -268,9 +270,10 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
 def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> PlanResult:
     clock = _Clock(sc.name, progress)
     deadline = clock.t0 + limit
-    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
     pc = sc.planner
     sats = sc.satellites
+    refining = pc.refine_steps > 0 and any(s.model == "per_channel" for s in sats)
+    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit) + refining * _REFINE_SHARE * limit
     tg = sc.targets
     prep = build_problem(sc, _clock=clock)
     pb, opp, windows, scene, table, battery, far = prep
@@ -294,6 +297,17 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     tl = res.timeline
     clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
     chosen = [c for c in tl.assigned if c >= 0]
+    refined = {}
+    if refining:
+        opp_r, refined = refine_starts(sc, scene, opp, chosen, int(pc.refine_steps))
+        kept = (
+            opp_r is not opp and not check_plan(sc, scene, table.usable, opp_r, chosen, battery)[0]
+        )
+        if kept:
+            opp, o = opp_r, opp_r.options
+        for v in refined.values():
+            v["kept"] = bool(kept)
+        clock.lap("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
     dropped = 0
     for _ in range(_MAX_DROP_ROUNDS):
         bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
@@ -340,6 +354,7 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
         "near_pairs": int(pb.near_src.size),
         "far_gap_s": far.tolist(),
         "bound_status": res.bound_status,
+        "refined": refined,
         "exact": res.exact,
         **res.stats,
     }

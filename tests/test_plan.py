@@ -339,3 +339,23 @@ def test_result_writers_refuse_overwrite(tmp_path):
             write(path)
         assert path.read_text() == before
         write(path, force=True)
+
+
+@pytest.mark.parametrize(("case", "seed"), [(LNS_CASE, 0), (LNS_CASE, 2)])
+def test_refined_per_channel_starts_keep_the_plan_valid(case, seed):
+    """Start-time refinement of the per-channel satellite: margins do not shrink, and the
+    returned plan's per-channel transfers are reachable in exactly their gaps
+    (recomputed with ``is_reachable`` from the observations' own states)."""
+
+    sc, _, res = _solved(seed, **case)
+    info = res.stats["refined"]
+    assert set(info) == {s.name for s in sc.satellites if s.model == "per_channel"}
+    for v in info.values():
+        assert v["margin_after_rad"] >= v["margin_before_rad"] - 1e-12
+    assert res.report["valid"] and res.report["dropped"] == 0
+    assert np.all(res.observations.slack >= -1e-9)
+    k = next(i for i, s in enumerate(sc.satellites) if s.model == "per_channel")
+    starts = res.observations.start[res.observations.sat == k]
+    off_grid = np.abs(starts / sc.planner.time_step - np.round(starts / sc.planner.time_step))
+    kept = any(v["kept"] for v in info.values())
+    assert kept == bool(np.any(off_grid > 1e-9))
