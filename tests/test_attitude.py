@@ -179,9 +179,8 @@ def _sigma_path(t):
 
 def test_accel_and_jerk_vs_finite_differences():
     # ω(t) from the exact σ(t) path, differentiated numerically (central differences)
-    @jax.jit
     def omega_at(t):
-        return A._omega_from_rate(_sigma_path(t), jax.jacfwd(_sigma_path)(t))
+        return A.omega_from_mrp_rate(_sigma_path(t), jax.jacfwd(_sigma_path)(t))
 
     t0, h = 1.3, 1e-3
     w = [np.asarray(omega_at(t0 + k * h)) for k in (-2, -1, 0, 1, 2)]

@@ -46,7 +46,9 @@ def ref_reachable(a1, b1, a2, b2, T, b, d, tol=0.0):
 @pytest.fixture
 def reach_kernels():
     """The kernel module the engine screens with (``jaxspline.reach``)."""
-    return screen._reach()
+    from jaxspline import reach
+
+    return reach
 
 
 def synthetic_options(
