@@ -44,6 +44,7 @@ __all__ = [
     "geodetic_to_ecef",
     "ecef_to_geodetic",
     "sun_direction",
+    "angle_between",
     "in_shadow",
     "sun_elevation",
 ]
@@ -202,6 +203,15 @@ def sun_direction(jd, fr=0.0):
     lam = mean_lon + np.radians(1.914666471 * np.sin(m) + 0.019994643 * np.sin(2.0 * m))
     eps = np.radians(23.439291 - 0.0130042 * t)
     return np.stack([np.cos(lam), np.cos(eps) * np.sin(lam), np.sin(eps) * np.sin(lam)], axis=-1)
+
+
+def angle_between(u, v):
+    """Angle [rad] between vectors u and v [..., 3]: ``atan2(|u x v|, u . v)`` (generic).
+
+    Accurate near 0 and pi, unlike ``arccos`` of the normalized dot product.
+    """
+    xp = _xp(u, v)
+    return xp.arctan2(xp.linalg.norm(xp.cross(u, v), axis=-1), xp.sum(u * v, axis=-1))
 
 
 def in_shadow(r_sat, sun_hat, radius=R_EARTH):

@@ -37,6 +37,8 @@ from typing import NamedTuple
 
 import numpy as np
 
+from jaxspline._arrays import pad_rows
+from jaxspline.frames import angle_between
 from jaxspline.limits import AxisLimits
 
 __all__ = ["SlewTable", "far_gap", "first_requirements", "pair_requirements", "slew_table"]
@@ -112,9 +114,10 @@ def slew_table(sat, gap_margin: float = 0.0, size: int = _TABLE_SIZE) -> SlewTab
     return SlewTable(np.maximum.accumulate(t), size)
 
 
-def _angle(u, v):
-    cr = np.cross(u, v)
-    return np.arctan2(np.linalg.norm(cr, axis=-1), np.sum(u * v, axis=-1))
+def _rest_to_rest(table: SlewTable, frm, i, to, j, available):
+    """Table time of the slew from direction ``frm[i]`` to ``to[j]``; inf if over ``available``."""
+    t_req = table(angle_between(np.asarray(frm)[i], np.asarray(to)[j]))
+    return np.where(available >= t_req, t_req, np.inf)
 
 
 def pair_requirements(sat, options, src, dst, table: SlewTable | None = None):
@@ -133,9 +136,7 @@ def pair_requirements(sat, options, src, dst, table: SlewTable | None = None):
     if src.size == 0:
         return np.zeros(0)
     if sat.model in REST_TO_REST:
-        theta = _angle(np.asarray(options.end_los)[src], np.asarray(options.start_los)[dst])
-        t_req = table(theta)
-        return np.where(T >= t_req, t_req, np.inf)
+        return _rest_to_rest(table, options.end_los, src, options.start_los, dst, T)
     from jaxspline.screen import screen_pairs
 
     tr = screen_pairs(options, sat.limits, src, dst)
@@ -154,25 +155,18 @@ def first_requirements(sat, options, idx, table: SlewTable | None = None):
     if idx.size == 0:
         return np.zeros(0)
     if sat.model in REST_TO_REST:
-        theta = _angle(np.asarray(options.start_nadir)[idx], np.asarray(options.start_los)[idx])
-        t_req = table(theta)
-        return np.where(t0 >= t_req, t_req, np.inf)
+        return _rest_to_rest(table, options.start_nadir, idx, options.start_los, idx, t0)
     from jaxspline.reach import is_reachable, min_transfer_time
 
     n = idx.size
-    pad = -n % _PAD
-    a2 = _pad(np.asarray(options.start_angle)[idx], pad)
-    b2 = _pad(np.asarray(options.start_rate)[idx], pad)
+    size = -(-n // _PAD) * _PAD
+    a2 = pad_rows(np.asarray(options.start_angle)[idx], size)
+    b2 = pad_rows(np.asarray(options.start_rate)[idx], size)
     zero = np.zeros_like(a2)
-    T = np.broadcast_to(_pad(t0, pad)[:, None], a2.shape)
+    T = np.broadcast_to(pad_rows(t0, size)[:, None], a2.shape)
     ok = np.asarray(is_reachable(zero, zero, a2, b2, T, sat.limits)).all(-1)[:n] & (t0 > 0)
     tmin = np.asarray(min_transfer_time(zero, zero, a2, b2, sat.limits)).max(-1)[:n]
     return np.where(ok, np.minimum(tmin, t0), np.inf)
-
-
-def _pad(x, pad: int):
-    """x with its last row repeated ``pad`` times (leading axis)."""
-    return np.concatenate([x, np.repeat(x[-1:], pad, 0)]) if pad else x
 
 
 def far_gap(sat, options, idx, nadir_rate: float, table: SlewTable | None = None) -> float:

@@ -21,13 +21,13 @@ nadir at the start (rest-to-rest models), in the :class:`RouteOptions` contract.
 
 from __future__ import annotations
 
-import math
 from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxspline._arrays import pad_rows, ragged_positions
 from jaxspline.frames import (
     earth_rotation_angle,
     geodetic_to_ecef,
@@ -37,15 +37,24 @@ from jaxspline.frames import (
 )
 from jaxspline.mission import STRIP, Scenario
 from jaxspline.options import RouteOptions
-from jaxspline.pointing import Scene, aim_geometry, aim_params, aim_state
+from jaxspline.pointing import Scene, _aim_point, aim_geometry, aim_params, aim_state
 from jaxspline.routes import strip_direction
 from jaxspline.windows import Windows
 
-__all__ = ["Opportunities", "build_opportunities"]
+__all__ = [
+    "Opportunities",
+    "build_opportunities",
+    "evaluate",
+    "nadir_rate",
+    "observation_samples",
+    "reference_points",
+]
 
 _CHUNK = 1 << 13  # candidates per compiled evaluation (padded)
 _GRID_TOL = 1e-6  # [s] a time within this of a knot is on the knot
+_KNOT_TOL = 1e-6  # [steps] knots this close to a start / end are left to that sample
 _LIMIT_TOL = 1e-9  # relative tolerance of the scan's rate / acceleration test
+_NADIR_RATE_SAFETY = 1e-6  # relative excess of the nadir turn rate over the knots' maximum
 
 
 class Opportunities(NamedTuple):
@@ -67,8 +76,7 @@ class Opportunities(NamedTuple):
 
 
 def _geometry(scene, sat, p, t0, t):
-    offn, elev, los, nadir = aim_geometry(scene, p, t0, t, sat)
-    return offn, elev, los, nadir
+    return aim_geometry(scene, p, t0, t, sat)
 
 
 def _state(scene, sat, p, t0, t):
@@ -93,37 +101,67 @@ def evaluate(fn, scene: Scene, sat, p, t0, t):
     outs = []
     for a in range(0, n, _CHUNK):
         b = min(n, a + _CHUNK)
-        m = b - a
-        size = _CHUNK
-        args = []
-        for x in (sat, p, t0, t):
-            x = np.asarray(x)[a:b]
-            args.append(jnp.asarray(np.concatenate([x, np.repeat(x[-1:], size - m, 0)])))
-        outs.append([np.asarray(r)[:m] for r in fn(scene, *args)])
+        args = [jnp.asarray(pad_rows(np.asarray(x)[a:b], _CHUNK)) for x in (sat, p, t0, t)]
+        outs.append([np.asarray(r)[: b - a] for r in fn(scene, *args)])
     return [np.concatenate(col) for col in zip(*outs, strict=True)]
 
 
 def _aim_laws(sc: Scenario):
-    """Per target and scan speed: aim law [8], duration [s], reference point (ECEF)."""
+    """Per scan speed: (speed [m/s], aim laws [R, 8], durations [R] [s])."""
     tg = sc.targets
     g0 = np.asarray(geodetic_to_ecef(tg.lat, tg.lon, tg.alt))
     d = strip_direction(tg.lat, tg.lon, tg.azimuth)
-    rad = np.linalg.norm(g0, axis=-1, keepdims=True)
-    u = g0 / rad
-    dd = d - np.sum(d * u, -1, keepdims=True) * u
-    dd /= np.maximum(np.linalg.norm(dd, axis=-1, keepdims=True), 1e-300)
-    half = (tg.length / 2.0)[:, None] / rad
-    mid = rad * (u * np.cos(half) + dd * np.sin(half))
-    ref = np.where((tg.kind == STRIP)[:, None], mid, g0)
+    is_strip = tg.kind == STRIP
+    p_point = np.asarray(aim_params(g0))
     laws = []
     for speed in sc.planner.scan_speeds:
-        is_strip = tg.kind == STRIP
-        p = np.asarray(aim_params(g0, d, speed))
-        p_pt = np.asarray(aim_params(g0))
-        p = np.where(is_strip[:, None], p, p_pt)
-        dur = np.where(is_strip, tg.length / speed, tg.duration)
-        laws.append((float(speed), p, dur))
-    return ref, laws
+        p = np.where(is_strip[:, None], np.asarray(aim_params(g0, d, speed)), p_point)
+        laws.append((float(speed), p, np.where(is_strip, tg.length / speed, tg.duration)))
+    return laws
+
+
+def reference_points(sc: Scenario) -> np.ndarray:
+    """Earth-fixed [R, 3] point whose visibility windows a target's options come from.
+
+    A point target itself; a strip's midpoint, on the same great circle as its scan
+    (:func:`jaxspline.pointing.aim_params`, half the strip's length along it).
+    """
+    tg = sc.targets
+    _, p, _ = _aim_laws(sc)[0]
+    half = (tg.length / 2.0) / np.linalg.norm(p[:, :3], axis=-1)
+    mid = np.asarray(jax.vmap(_aim_point)(jnp.asarray(p), jnp.asarray(half))[0])
+    return np.where((tg.kind == STRIP)[:, None], mid, p[:, :3])
+
+
+def observation_samples(t0, t1, step: float, tol: float = _KNOT_TOL):
+    """Sample instants of observations [t0, t1]: start, every knot ``k step`` inside, end.
+
+    Knots within ``tol`` steps of the start or end are left to the start / end sample.
+    Returns ``(owner, t)``: the observation index and the time of every sample.
+    """
+    t0, t1 = np.asarray(t0, np.float64), np.asarray(t1, np.float64)
+    k0 = np.floor(t0 / step + tol).astype(np.int64) + 1
+    k1 = np.ceil(t1 / step - tol).astype(np.int64) - 1
+    cnt = np.maximum(k1 - k0 + 1, 0) + 2
+    owner, pos = ragged_positions(cnt)
+    t = np.where(
+        pos == 0,
+        t0[owner],
+        np.where(pos == cnt[owner] - 1, t1[owner], (k0[owner] + pos - 1) * step),
+    )
+    return owner, t
+
+
+def _limit_table(sats, name: str) -> np.ndarray:
+    """[S, 3] per-channel limit ``name`` of per-channel satellites (inf for the others)."""
+    return np.stack(
+        [
+            np.broadcast_to(getattr(s.limits, name), (3,))
+            if s.model == "per_channel"
+            else np.full(3, np.inf)
+            for s in sats
+        ]
+    )
 
 
 def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) -> Opportunities:
@@ -138,17 +176,15 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     pc = sc.planner
     step, gstep = pc.time_step, pc.geometry_step
     tg = sc.targets
-    _, laws = _aim_laws(sc)
+    laws = _aim_laws(sc)
     sats = sc.satellites
     limit = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
     per_ch = np.array([s.model == "per_channel" for s in sats])
     cols = {k: [] for k in ("sat", "target", "t0", "speed", "law")}
+    strip = tg.kind[windows.target] == STRIP
     for li, (speed, _, dur_all) in enumerate(laws):
-        strip = tg.kind[windows.target] == STRIP
-        if li > 0:  # points have one option per start, whatever the speed
-            keep = strip
-        else:
-            keep = np.ones(len(windows), bool)
+        # points have one option per start, whatever the speed
+        keep = strip if li > 0 else np.ones(len(windows), bool)
         w_sat, w_tgt = windows.sat[keep], windows.target[keep]
         dur = dur_all[w_tgt]
         half = np.where(strip[keep], dur / 2.0, 0.0)
@@ -157,9 +193,7 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
         hi = np.minimum(hi, sc.duration) - dur
         k_lo = np.ceil(np.maximum(lo, 0.0) / step - 1e-9).astype(np.int64)
         k_hi = np.floor(hi / step + 1e-9).astype(np.int64)
-        cnt = np.maximum(k_hi - k_lo + 1, 0)
-        wi = np.repeat(np.arange(cnt.size), cnt)
-        off = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        wi, off = ragged_positions(np.maximum(k_hi - k_lo + 1, 0))
         cols["sat"].append(w_sat[wi])
         cols["target"].append(w_tgt[wi])
         cols["t0"].append((k_lo[wi] + off) * step)
@@ -171,14 +205,8 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
         np.stack([sat, tgt, np.round(t0 / step).astype(np.int64), law]), axis=1, return_index=True
     )[1]
     sat, tgt, t0, speed, law = sat[key], tgt[key], t0[key], speed[key], law[key]
-    params = (
-        np.stack([laws[law_i][1][r] for law_i, r in zip(law.tolist(), tgt.tolist(), strict=True)])
-        if sat.size
-        else np.zeros((0, 8))
-    )
-    dur = np.array([laws[a][2][r] for a, r in zip(law.tolist(), tgt.tolist(), strict=True)])
-    t1 = t0 + dur
-    ok = sat.size > 0 and True
+    params = np.stack([lw[1] for lw in laws])[law, tgt]
+    t1 = t0 + np.stack([lw[2] for lw in laws])[law, tgt]
     n = sat.size
     ok = np.ones(n, bool)
     # samples: start, every knot inside, end (points on knots: window already exact)
@@ -188,17 +216,7 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     need = (tg.kind[tgt] == STRIP) | ~on_knots | per_ch[sat]
     idx = np.flatnonzero(need)
     if idx.size:
-        k0 = np.floor(t0[idx] / gstep + _GRID_TOL).astype(np.int64) + 1
-        k1 = np.ceil(t1[idx] / gstep - _GRID_TOL).astype(np.int64) - 1
-        inner = np.maximum(k1 - k0 + 1, 0)
-        cnt = inner + 2
-        owner = np.repeat(np.arange(idx.size), cnt)
-        pos = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-        ts = np.where(
-            pos == 0,
-            t0[idx][owner],
-            np.where(pos == cnt[owner] - 1, t1[idx][owner], (k0[owner] + pos - 1) * gstep),
-        )
+        owner, ts = observation_samples(t0[idx], t1[idx], gstep)
         o = idx[owner]
         offn, elev, _, _ = evaluate(_geometry_v, scene, sat[o], params[o], t0[o], ts)
         good = (offn <= limit[sat[o]]) & (elev > pc.margins.horizon) & table_ok(sat[o], ts)
@@ -207,34 +225,18 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
             res = evaluate(_state_v, scene, sat[o][pcm], params[o][pcm], t0[o][pcm], ts[pcm])
             if res is not None:
                 _, rate, acc = res
-                rl = np.stack(
-                    [
-                        np.broadcast_to(sats[s].limits.rate, (3,))
-                        if per_ch[s]
-                        else np.full(3, np.inf)
-                        for s in range(len(sats))
-                    ]
-                )
-                al = np.stack(
-                    [
-                        np.broadcast_to(sats[s].limits.accel, (3,))
-                        if per_ch[s]
-                        else np.full(3, np.inf)
-                        for s in range(len(sats))
-                    ]
-                )
+                rl, al = _limit_table(sats, "rate"), _limit_table(sats, "accel")
                 ks = sat[o][pcm]
                 fly = np.all(np.abs(rate) <= rl[ks] * (1 + _LIMIT_TOL), -1) & np.all(
                     np.abs(acc) <= al[ks] * (1 + _LIMIT_TOL), -1
                 )
-                g2 = good[pcm]
-                good[pcm] = g2 & fly & np.isfinite(rate).all(-1)
+                good[pcm] &= fly & np.isfinite(rate).all(-1)
         bad = np.zeros(idx.size, bool)
         np.logical_or.at(bad, owner, ~good)
         ok[idx] = ~bad
     if pc.sun_elevation_min is not None and n:
         jd = sc.epoch_jd + t0 / 86400.0
-        sun_e = rot_z(earth_rotation_angle(_gmst0(sc), t0), sun_direction(jd))
+        sun_e = rot_z(earth_rotation_angle(float(scene.gmst0), t0), sun_direction(jd))
         el = sun_elevation(tg.lat[tgt], tg.lon[tgt], sun_e)
         ok &= el >= pc.sun_elevation_min
     sel = np.flatnonzero(ok)
@@ -242,12 +244,6 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     order = np.lexsort((tgt, t0, sat))
     sat, tgt, t0, t1, speed, params = (x[order] for x in (sat, tgt, t0, t1, speed, params))
     return Opportunities(_states(sc, scene, sat, tgt, t0, t1, params, per_ch), speed, params)
-
-
-def _gmst0(sc: Scenario) -> float:
-    from jaxspline.frames import gmst
-
-    return float(gmst(sc.epoch_jd))
 
 
 def _states(sc, scene, sat, tgt, t0, t1, params, per_ch) -> RouteOptions:
@@ -285,4 +281,4 @@ def nadir_rate(scene: Scene) -> np.ndarray:
     r = np.asarray(scene.orbit.r)
     v = np.asarray(scene.orbit.v)
     rate = np.linalg.norm(np.cross(r, v), axis=-1) / np.sum(r * r, axis=-1)
-    return rate.max(axis=1) * (1.0 + 1e-6) + math.ulp(1.0)
+    return rate.max(axis=1) * (1.0 + _NADIR_RATE_SAFETY)

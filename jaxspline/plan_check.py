@@ -22,9 +22,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from jaxspline._arrays import pad_rows
+from jaxspline.frames import angle_between
 from jaxspline.mission import Scenario
 from jaxspline.models import REST_TO_REST, slew_time
-from jaxspline.opportunities import _geometry_v, evaluate
+from jaxspline.opportunities import _geometry_v, evaluate, observation_samples
 from jaxspline.options import RouteOptions, take_options
 from jaxspline.reach import min_transfer_time
 from jaxspline.validate import validate_plan
@@ -32,17 +34,15 @@ from jaxspline.validate import validate_plan
 __all__ = ["check_plan"]
 
 _SAMPLES = 201  # Theorem-1 samples per per-channel maneuver
-
-
-def _angle(u, v):
-    return np.arctan2(np.linalg.norm(np.cross(u, v), axis=-1), np.sum(u * v, axis=-1))
+_PAD = 1 << 10  # kernel batches are padded to multiples of this (few compiled shapes)
 
 
 def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
     """Re-check the options ``chosen`` (ids into ``opp``); returns (bad ids, details).
 
     ``details`` holds the per-observation required maneuver time and slack [s] (exact
-    kernels), the battery minimum per satellite and human-readable violations.
+    kernels), the battery profile and minimum of every powered satellite that has
+    observations, and human-readable violations.
     """
     o = opp.options
     chosen = np.asarray(sorted(chosen, key=lambda c: (o.sat[c], o.t_start[c])), np.int64)
@@ -51,22 +51,14 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
     man = np.zeros(n)
     slack = np.zeros(n)
     if n == 0:
-        return [], {"maneuver": man, "slack": slack, "violations": viol, "battery_min": {}}
+        empty = {"maneuver": man, "slack": slack, "violations": viol}
+        return [], {**empty, "battery_min": {}, "battery": {}, "order": chosen}
     sat, tgt = o.sat[chosen], o.route[chosen]
     t0, t1 = o.t_start[chosen], o.t_end[chosen]
     tg = sc.targets
     step = sc.planner.geometry_step
     # --- geometry at every sample
-    k0 = np.floor(t0 / step).astype(np.int64) + 1
-    k1 = np.ceil(t1 / step).astype(np.int64) - 1
-    cnt = np.maximum(k1 - k0 + 1, 0) + 2
-    owner = np.repeat(np.arange(n), cnt)
-    pos = np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt)
-    ts = np.where(
-        pos == 0,
-        t0[owner],
-        np.where(pos == cnt[owner] - 1, t1[owner], (k0[owner] + pos - 1) * step),
-    )
+    owner, ts = observation_samples(t0, t1, step, tol=0.0)
     offn, elev, _, _ = evaluate(
         _geometry_v, scene, sat[owner], opp.params[chosen][owner], t0[owner], ts
     )
@@ -93,14 +85,14 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
     first[1:] = sat[1:] != sat[:-1]
     prev = np.where(first, chosen, np.roll(chosen, 1))
     gap = np.where(first, t0, t0 - np.roll(t1, 1))
-    bat_min = {}
+    bat_min, levels = {}, {}
     for k, s in enumerate(sc.satellites):
         m = np.flatnonzero(sat == k)
         if m.size == 0:
             continue
         if s.model in REST_TO_REST:
             frm = np.where(first[m, None], o.start_nadir[chosen[m]], o.end_los[prev[m]])
-            th = _angle(frm, o.start_los[chosen[m]])
+            th = angle_between(frm, o.start_los[chosen[m]])
             need = slew_time(s, th)
             man[m], slack[m] = need, gap[m] - need
             for i in m[gap[m] < need]:
@@ -125,16 +117,17 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
                 for v in rep.violations:
                     viol.append(f"{s.name}: {v}")
                 bad.update(int(c) for c in chosen[m])
+            size = -(-m.size // _PAD) * _PAD  # few compiled shapes across checks
             frm_a = np.where(first[m, None], 0.0, o.end_angle[prev[m]])
             frm_b = np.where(first[m, None], 0.0, o.end_rate[prev[m]])
-            tmin = np.asarray(
-                min_transfer_time(
-                    frm_a, frm_b, o.start_angle[chosen[m]], o.start_rate[chosen[m]], s.limits
-                )
-            ).max(-1)
+            args = (frm_a, frm_b, o.start_angle[chosen[m]], o.start_rate[chosen[m]])
+            tmin = np.asarray(min_transfer_time(*(pad_rows(x, size) for x in args), s.limits)).max(
+                -1
+            )[: m.size]
             man[m], slack[m] = np.minimum(tmin, gap[m]), gap[m] - np.minimum(tmin, gap[m])
         if battery.has(k):
             lev = battery.profile(k, t0[m], t1[m], man[m])
+            levels[s.name] = lev
             bat_min[s.name] = float(lev.min())
             if lev.min() < 0.0:
                 kv = int(np.argmax(lev < 0.0))
@@ -147,6 +140,7 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
         "slack": slack,
         "violations": viol,
         "battery_min": bat_min,
+        "battery": levels,
         "order": chosen,
     }
     return sorted(bad), details

@@ -27,6 +27,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
+from jaxspline._arrays import ragged_positions
 from jaxspline.frames import gmst, in_shadow, jd_split, sun_direction
 from jaxspline.mission import Scenario
 from jaxspline.models import (
@@ -36,7 +37,7 @@ from jaxspline.models import (
     pair_requirements,
     slew_table,
 )
-from jaxspline.opportunities import _aim_laws, build_opportunities, nadir_rate
+from jaxspline.opportunities import build_opportunities, nadir_rate, reference_points
 from jaxspline.orbit import tabulate_orbits
 from jaxspline.plan_check import check_plan
 from jaxspline.pointing import Scene
@@ -166,13 +167,12 @@ def _near_pairs(sc, opp, tables, far, slack):
         a = np.searchsorted(es, s - far[k] - slack, side="right")
         b = np.searchsorted(es, s, side="left")
         cnt = np.maximum(b - a, 0)
-        total = int(cnt.sum())
-        for c0 in range(0, ids.size, max(1, ids.size * _PAIR_BLOCK // max(total, 1))):
-            sl = slice(c0, c0 + max(1, ids.size * _PAIR_BLOCK // max(total, 1)))
-            cc = cnt[sl]
-            jj = np.repeat(ids[sl], cc)
-            off = np.arange(cc.sum()) - np.repeat(np.cumsum(cc) - cc, cc)
-            ii = eo[np.repeat(a[sl], cc) + off]
+        rows = max(1, ids.size * _PAIR_BLOCK // max(int(cnt.sum()), 1))  # ~_PAIR_BLOCK pairs
+        for c0 in range(0, ids.size, rows):
+            sl = slice(c0, c0 + rows)
+            owner, off = ragged_positions(cnt[sl])
+            jj = ids[sl][owner]
+            ii = eo[a[sl][owner] + off]
             need = pair_requirements(sat, o, ii, jj, tables[k])
             ok = np.isfinite(need)
             src_all.append(ii[ok])
@@ -216,7 +216,7 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
         sats = sc.satellites
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
-        ref, _ = _aim_laws(sc)
+        ref = reference_points(sc)
         tg = sc.targets
         sensors = np.array([s.sensor for s in sats])
         allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
@@ -261,7 +261,7 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
             pc.margins.battery_wh,
             pc.margins.shadow_guard,
         )
-        pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.duration, tg.value)
+        pb = Problem.build(opp, sats, first, near, far, tables, battery, tg.value)
         pb.near_slack = slack
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
@@ -296,29 +296,34 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     tl = res.timeline
     clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
     chosen = [c for c in tl.assigned if c >= 0]
-    refined = {}
+    refined, det = {}, None
     if refining:
         opp_r, refined = refine_starts(sc, scene, opp, chosen, int(pc.refine_steps))
-        kept = (
-            opp_r is not opp and not check_plan(sc, scene, table.usable, opp_r, chosen, battery)[0]
-        )
-        if kept:
-            opp, o = opp_r, opp_r.options
+        kept = False
+        if opp_r is not opp:
+            bad, det = check_plan(sc, scene, table.usable, opp_r, chosen, battery)
+            kept = not bad
+            if kept:
+                opp, o = opp_r, opp_r.options
+            else:
+                det = None
         for v in refined.values():
-            v["kept"] = bool(kept)
+            v["kept"] = kept
         clock.lap("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
     dropped = 0
     for _ in range(_MAX_DROP_ROUNDS):
-        bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
+        if det is None:
+            bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
         if not bad:
             break
         dropped += len(bad)
         chosen = [c for c in chosen if c not in set(bad)]
+        det = None
     else:
         chosen = []
         bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
     clock.lap("check", f"{len(chosen)} observations valid, {dropped} dropped")
-    idx = np.asarray(det.get("order", np.zeros(0, np.int64)), np.int64)
+    idx = np.asarray(det["order"], np.int64)
     obs = Observations(
         sat=np.asarray(o.sat)[idx],
         target=np.asarray(o.route)[idx],
@@ -336,8 +341,9 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     bat = {}
     for k, s in enumerate(sats):
         if battery.has(k):
-            m = obs.sat == k
-            lev = battery.profile(k, obs.start[m], obs.end[m], obs.maneuver[m])
+            lev = det["battery"].get(s.name)
+            if lev is None:  # no observations: the idle profile
+                lev = battery.profile(k, [], [], [])
             bat[s.name] = (np.arange(lev.size) * battery.dt, lev)
     report = {
         "valid": not det["violations"],

@@ -13,8 +13,7 @@ knots of the orbit table are compared with all targets in blocks. A coarse pass 
 the cone's ground radius widened by the ground track's motion over half a stride (so
 no visible knot is dropped); only those are evaluated exactly at every knot. Runs of
 consecutive visible knots give the windows at knot resolution (exact on a geometry
-grid: the knots ARE the grid instants). With ``refine=True`` each edge is then moved
-to the crossing itself by bisection between its two knots (free start times).
+grid: the knots ARE the grid instants).
 
 Units: metres, seconds, radians.
 """
@@ -24,18 +23,15 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.frames import earth_rotation_angle, rot_z
-from jaxspline.pointing import Scene, aim_geometry
+from jaxspline.frames import angle_between, earth_rotation_angle, rot_z
+from jaxspline.pointing import Scene
 
 __all__ = ["Windows", "visibility_windows_all"]
 
 _COARSE = 12  # knots per coarse step of the pre-screen
 _SAFETY_ANGLE = math.radians(0.5)  # extra Earth-central angle of the pre-screen [rad]
-_BISECTIONS = 40  # edge refinement steps (knot step / 2^40: sub-picosecond)
 _BLOCK = 512  # targets per pre-screen block
 
 
@@ -44,8 +40,8 @@ class Windows(NamedTuple):
 
     Attributes:
       sat, target: int indices into ``scenario.satellites`` / ``scenario.targets``.
-      lo, hi: first and last visible instant [s] (the reference point is visible on
-        all of [lo, hi]; at knot resolution unless refined).
+      lo, hi: first and last visible knot [s] (the reference point is visible at
+        every knot of [lo, hi]).
     """
 
     sat: np.ndarray
@@ -57,15 +53,6 @@ class Windows(NamedTuple):
         return int(self.sat.shape[0])
 
 
-def _point_geometry(scene, sat, g, t):
-    p = jnp.concatenate([g, jnp.zeros(5, g.dtype)])
-    offn, elev, _, _ = aim_geometry(scene, p, t, t, sat)
-    return offn, elev
-
-
-_geometry_batched = jax.jit(jax.vmap(_point_geometry, in_axes=(None, 0, 0, 0)))
-
-
 def _visible(offn, elev, limit, horizon):
     return (elev > horizon) & (offn <= limit)
 
@@ -74,8 +61,7 @@ def _exact_numpy(r_e, g):
     """(off_nadir, elevation_sine) of Earth-fixed points g seen from r_e (numpy, [..., 3])."""
     d = g - r_e
     dn = np.linalg.norm(d, axis=-1)
-    cr = np.cross(d, -r_e)
-    offn = np.arctan2(np.linalg.norm(cr, axis=-1), np.sum(d * -r_e, axis=-1))
+    offn = angle_between(d, -r_e)
     elev = np.sum(-d * g, axis=-1) / (dn * np.linalg.norm(g, axis=-1))
     return offn, elev
 
@@ -90,7 +76,6 @@ def visibility_windows_all(
     t_lo: np.ndarray,
     t_hi: np.ndarray,
     duration: float,
-    refine: bool = False,
 ) -> Windows:
     """All visibility windows of R points from S satellites of a tabulated ``scene``.
 
@@ -103,7 +88,6 @@ def visibility_windows_all(
       horizon: the elevation sine must exceed this.
       t_lo, t_hi: [R] target windows [s] (-inf/+inf: free).
       duration: horizon end [s] (windows lie in [0, duration]).
-      refine: move window edges to the crossings by bisection.
     Returns:
       :class:`Windows`.
     """
@@ -169,38 +153,5 @@ def visibility_windows_all(
         return Windows(z.astype(np.int64), z.astype(np.int64), z, z)
     w = Windows(*(np.concatenate(out[k]) for k in ("sat", "target", "lo", "hi")))
     w = Windows(w.sat.astype(np.int64), w.target.astype(np.int64), w.lo, w.hi)
-    if refine:
-        w = _refine_edges(scene, w, g, off_nadir_limit, horizon, step, lo_t, hi_t)
     order = np.lexsort((w.lo, w.target, w.sat))
     return Windows(*(x[order] for x in w))
-
-
-def _refine_edges(scene, w: Windows, g, limit, horizon, step, lo_t, hi_t) -> Windows:
-    """Move each window edge to the visibility crossing between its knot and the next one out.
-
-    An edge already at the target window or horizon boundary stays. Bisection keeps
-    the invariant "inner end visible, outer end not", so [lo, hi] stays visible.
-    """
-    lo_in, hi_in = w.lo.copy(), w.hi.copy()
-    lo_out = np.maximum(w.lo - step, lo_t[w.target])
-    hi_out = np.minimum(w.hi + step, hi_t[w.target])
-    dt = jnp.result_type(float)
-    sat = jnp.asarray(np.concatenate([w.sat, w.sat]))
-    pts = jnp.asarray(np.concatenate([g[w.target], g[w.target]]), dt)
-    lim = np.concatenate([limit[w.sat], limit[w.sat]])
-    inner = np.concatenate([lo_in, hi_in])
-    outer = np.concatenate([lo_out, hi_out])
-    offn, elev = (np.asarray(x) for x in _geometry_batched(scene, sat, pts, jnp.asarray(outer, dt)))
-    moving = (outer != inner) & ~_visible(offn, elev, lim, horizon)
-    # edges whose outer point is visible (target-window clip) already sit at the boundary
-    inner = np.where(moving | (outer == inner), inner, outer)
-    for _ in range(_BISECTIONS):
-        mid = 0.5 * (inner + outer)
-        offn, elev = (
-            np.asarray(x) for x in _geometry_batched(scene, sat, pts, jnp.asarray(mid, dt))
-        )
-        vis = _visible(offn, elev, lim, horizon)
-        inner = np.where(moving & vis, mid, inner)
-        outer = np.where(moving & ~vis, mid, outer)
-    n = len(w)
-    return Windows(w.sat, w.target, inner[:n], inner[n:])

@@ -52,7 +52,6 @@ class BatteryModel:
         ok = np.ones((lit.shape[0], n), bool)
         for off in range(-guard, guard + 2):
             ok &= lit[:, np.clip(np.arange(n) + off, 0, n)]
-        self.lit_step = ok
         h = self.dt / 3600.0
         self.base = np.zeros((len(self.powers), n))
         for k, p in enumerate(self.powers):

@@ -41,7 +41,6 @@ class Problem:
       task_cands: per task its option ids.
       sat_lo, sat_hi: option id range per satellite (options sorted by sat, start).
       sat_starts: per satellite the sorted starts of its options.
-      horizon: planning horizon [s].
       near_slack: the near pairs include every feasible pair with gap < far + this [s]
         (at least the shortest observation: the DP's block width, see ``dp_prepare``).
     """
@@ -66,7 +65,6 @@ class Problem:
     sat_lo: list
     sat_hi: list
     sat_starts: list
-    horizon: float
     near_slack: float = 0.0
 
     @property
@@ -92,17 +90,8 @@ class Problem:
             return self.far[k]
         return self.near.get(i * len(self.c_task) + j, math.inf)
 
-    def need_vec(self, i, j) -> np.ndarray:
-        """:meth:`need` for arrays of option ids (numpy)."""
-        return np.array(
-            [
-                self.need(a, b)
-                for a, b in zip(np.asarray(i).tolist(), np.asarray(j).tolist(), strict=True)
-            ]
-        )
-
     @classmethod
-    def build(cls, opp, sats, first, near_pairs, far, tables, battery, horizon, weights):
+    def build(cls, opp, sats, first, near_pairs, far, tables, battery, weights):
         """Assemble from numpy data.
 
         Args:
@@ -113,7 +102,6 @@ class Problem:
           far: [S] always-feasible gaps.
           tables: per satellite SlewTable or None.
           battery: :class:`BatteryModel`.
-          horizon: planning horizon [s].
           weights: per target value.
         """
         o = opp.options
@@ -153,5 +141,4 @@ class Problem:
             sat_lo=lo,
             sat_hi=hi,
             sat_starts=[starts[a:b] for a, b in zip(lo, hi, strict=True)],
-            horizon=float(horizon),
         )

@@ -80,10 +80,6 @@ class Timeline:
             prev = c
         return pb.battery.profile(k, [pb.c_start[c] for c in tl], [pb.c_end[c] for c in tl], man)
 
-    def battery_profile(self, k):
-        """Battery level [Wh] of satellite k at the grid instants (None: no power model)."""
-        return self._profile(k) if self.pb.battery.has(k) else None
-
     def _suffix_min(self, k):
         if self.level_min[k] is None:
             lev = self._profile(k)
