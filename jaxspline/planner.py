@@ -252,7 +252,7 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
         clock.lap(
             "screening",
             f"{near[0].size} feasible near pairs; far gaps "
-            f"{far.min(initial=0.0):.0f}-{far.max(initial=0.0):.0f} s",
+            f"{far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s",
         )
         battery = BatteryModel(
             sunlit,
