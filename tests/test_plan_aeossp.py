@@ -34,7 +34,7 @@ from jaxspline.frames import (
 from jaxspline.limits import AxisLimits
 from jaxspline.mission import POINT, PlannerConfig, Satellite, Scenario, make_targets
 from jaxspline.orbit import circular_orbit_over, orbit_position
-from jaxspline.search import BatteryModel, dp_paths, dp_prepare
+from jaxspline.search import BatteryModel, dp_paths, dp_prepare, mip_bound
 
 DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="aeossp training data not available")
@@ -471,3 +471,19 @@ def test_bound_covers_plans_with_repeats(make, seed):
     assert res.stats["exact"]
     assert res.value == pytest.approx(without, abs=1e-9)
     assert res.bound >= with_rep - 1e-9
+
+
+@pytest.mark.parametrize(
+    "make, seed",
+    [(_bridge_scenario, s) for s in range(3)] + [(_random_scenario, s) for s in range(4)],
+)
+def test_mip_bound_is_the_optimum_with_repeats(make, seed):
+    """The chain-network 0/1 program (far pairs through waiting chains, repeats counted
+    once) solved to optimality == the enumerated best plan with repeats."""
+    pytest.importorskip("scipy.optimize")
+    pb = build_problem(make(seed)).problem
+    with_rep, _ = _enumerate_plans(pb)
+    res = mip_bound(pb, time_limit=60.0, rel_gap=0.0)
+    assert res.status == "optimal"
+    assert res.value == pytest.approx(with_rep, abs=1e-9)
+    assert res.bound == pytest.approx(with_rep, abs=1e-6)

@@ -21,6 +21,7 @@ from jaxspline.search.battery import BatteryModel
 from jaxspline.search.exact import exact_search
 from jaxspline.search.lagrangian import BoundResult, dp_paths, dp_prepare, lagrangian, upper_bound
 from jaxspline.search.lns import earliest_pass, greedy, greedy_order, lns
+from jaxspline.search.mip import MipBound, mip_bound
 from jaxspline.search.problem import Problem
 from jaxspline.search.timeline import Timeline
 
@@ -29,6 +30,7 @@ __all__ = [
     "BoundResult",
     "Problem",
     "SearchResult",
+    "MipBound",
     "Timeline",
     "dp_paths",
     "dp_prepare",
@@ -37,6 +39,7 @@ __all__ = [
     "greedy",
     "lagrangian",
     "lns",
+    "mip_bound",
     "solve",
     "upper_bound",
 ]
