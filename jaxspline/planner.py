@@ -51,6 +51,7 @@ __all__ = ["Prepared", "build_problem", "plan"]
 _RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
 _RESERVE_MIN = 1.0  # [s]
 _REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
+_REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _PAIR_BLOCK = 1 << 20  # option pairs per screening block
 _MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
@@ -297,6 +298,10 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
     chosen = [c for c in tl.assigned if c >= 0]
     refined, det = {}, None
+    left = deadline - time.monotonic()
+    if refining and left < _REFINE_MIN_S:
+        refining = False
+        clock.lap("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
     if refining:
         opp_r, refined = refine_starts(sc, scene, opp, chosen, int(pc.refine_steps))
         kept = False
