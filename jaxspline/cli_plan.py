@@ -47,6 +47,13 @@ def register(sub) -> None:
         "--time-limit", type=float, default=None, help="planning budget [s] (default: scenario's)"
     )
     p.add_argument("--seed", type=int, default=0, help="search seed (default 0)")
+    p.add_argument(
+        "--certify",
+        type=float,
+        default=0.0,
+        metavar="SECONDS",
+        help="extra seconds for a tighter bound by HiGHS (needs scipy; default 0: skip)",
+    )
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=_main)
@@ -59,6 +66,7 @@ def _main(args) -> int:
         force=args.force,
         time_limit=args.time_limit,
         seed=args.seed,
+        certify=args.certify,
         plots=not args.no_plots,
         progress=not args.quiet,
     )
@@ -72,6 +80,7 @@ def run_plan(
     force: bool = False,
     time_limit: float | None = None,
     seed: int = 0,
+    certify: float = 0.0,
     plots: bool = True,
     progress: bool = True,
 ):
@@ -93,7 +102,7 @@ def run_plan(
         sc = scenario
     else:
         sc = load_scenario(scenario)
-    result = plan(sc, time_limit=time_limit, seed=seed, progress=progress)
+    result = plan(sc, time_limit=time_limit, seed=seed, progress=progress, certify=certify)
     result.to_json(out / "plan.json", force=force)
     result.to_csv(out / "plan.csv", force=force)
     from jaxspline.czml import write_czml

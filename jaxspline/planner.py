@@ -43,7 +43,7 @@ from jaxspline.plan_check import check_plan
 from jaxspline.pointing import Scene
 from jaxspline.refine_starts import refine_starts
 from jaxspline.result import Observations, PlanResult
-from jaxspline.search import BatteryModel, Problem, solve
+from jaxspline.search import BatteryModel, Problem, mip_bound, solve
 from jaxspline.windows import visibility_windows_all
 
 __all__ = ["Prepared", "build_problem", "plan"]
@@ -111,6 +111,7 @@ def plan(
     seed: int = 0,
     progress: bool = True,
     max_iters: int | None = None,
+    certify: float = 0.0,
 ) -> PlanResult:
     """Plan a scenario: the best observations found within ``time_limit`` seconds.
 
@@ -122,6 +123,10 @@ def plan(
         ``max_iters``; a time limit only truncates the search).
       progress: stage lines on stderr.
       max_iters: optional cap on search iterations (reproducible runs).
+      certify: extra seconds, after the time limit, for a tighter certificate: the
+        candidate model solved as a 0/1 program by HiGHS
+        (:func:`jaxspline.search.mip_bound`, needs scipy); the reported bound is the
+        smaller of its dual bound and the Lagrangian one. 0 (default): skip.
     Returns:
       :class:`jaxspline.result.PlanResult`.
     """
@@ -130,8 +135,10 @@ def plan(
     limit = scenario.planner.default_time_limit if time_limit is None else time_limit
     if not (isinstance(limit, int | float) and math.isfinite(limit) and limit > 0):
         raise ValueError(f"time_limit must be a number > 0, got {time_limit!r}")
+    if not (isinstance(certify, int | float) and math.isfinite(certify) and certify >= 0):
+        raise ValueError(f"certify must be a number of seconds >= 0, got {certify!r}")
     with jax.enable_x64(True):
-        return _plan(scenario, float(limit), int(seed), bool(progress), max_iters)
+        return _plan(scenario, float(limit), int(seed), bool(progress), max_iters, certify)
 
 
 def _orbits(sc: Scenario):
@@ -267,7 +274,7 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
 
-def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> PlanResult:
+def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters, certify) -> PlanResult:
     clock = _Clock(sc.name, progress)
     deadline = clock.t0 + limit
     pc = sc.planner
@@ -343,6 +350,15 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     # every plan images only targets that have an option: their total bounds any plan
     reachable = float(np.sum(np.asarray(tg.value)[np.unique(np.asarray(o.route))]))
     bound = min(float(res.bound), reachable)
+    converged = res.bound_status in ("optimal", "converged")
+    mip = None
+    if certify > 0:
+        m = mip_bound(pb, certify)
+        found = m.value if math.isfinite(m.value) else None
+        mip = {"bound": m.bound, "plan_value": found, "status": m.status, "seconds": m.seconds}
+        if m.bound < bound:
+            bound, converged = m.bound, m.status == "optimal"
+        clock.lap("certify", f"HiGHS bound {m.bound:.6g} ({m.status})")
     bat = {}
     for k, s in enumerate(sats):
         if battery.has(k):
@@ -366,6 +382,7 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
         "bound_status": res.bound_status,
         "refined": refined,
         "exact": res.exact,
+        "mip": mip,
         **res.stats,
     }
     return PlanResult(
@@ -374,7 +391,7 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
         value=value,
         bound=max(bound, value),
         gap=max(bound, value) - value,
-        bound_converged=res.bound_status in ("optimal", "converged"),
+        bound_converged=converged,
         report=report,
         stats=stats,
         timings=clock.timings,

@@ -317,6 +317,22 @@ def test_plan_rejects_bad_arguments():
             plan(sc, time_limit=bad, progress=False)
     with pytest.raises(ValueError, match="scenario"):
         plan("scenario.toml", time_limit=1.0, progress=False)
+    for bad in (-1.0, math.nan, "5"):
+        with pytest.raises(ValueError, match="certify"):
+            plan(sc, time_limit=1.0, progress=False, certify=bad)
+
+
+def test_certify_tightens_the_bound_to_the_optimum():
+    """With certify, HiGHS solves the tiny candidate model: the bound is its optimum
+    (repeats allowed, so >= the no-repeat optimum) and never above the Lagrangian one."""
+    pytest.importorskip("scipy.optimize")
+    sc, optimum, res = _solved(0, **LNS_CASE)
+    cert = plan(sc, time_limit=20.0, progress=False, max_iters=5000, certify=30.0)
+    mip = cert.stats["mip"]
+    assert mip["status"] == "optimal"
+    assert cert.bound_converged
+    assert optimum - 1e-6 <= cert.bound <= res.bound + 1e-9
+    assert cert.bound == pytest.approx(max(mip["bound"], cert.value), abs=1e-6)
 
 
 def test_result_writers_refuse_overwrite(tmp_path):
