@@ -32,9 +32,9 @@ from jaxspline.frames import (
     rot_z,
 )
 from jaxspline.limits import AxisLimits
-from jaxspline.mission import POINT, PlannerConfig, Satellite, Scenario, make_targets
+from jaxspline.mission import POINT, PlannerConfig, Power, Satellite, Scenario, make_targets
 from jaxspline.orbit import circular_orbit_over, orbit_position
-from jaxspline.search import BatteryModel, dp_paths, dp_prepare, mip_bound
+from jaxspline.search import BatteryModel, dp_paths, dp_prepare, mip_bound, upper_bound
 
 DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="aeossp training data not available")
@@ -487,3 +487,32 @@ def test_mip_bound_is_the_optimum_with_repeats(make, seed):
     assert res.status == "optimal"
     assert res.value == pytest.approx(with_rep, abs=1e-9)
     assert res.bound == pytest.approx(with_rep, abs=1e-6)
+
+
+def test_energy_priced_bound_covers_the_battery_optimum():
+    """Battery as priced interval budgets: the bound stays >= the exact optimum with the
+    battery (branch and bound) and is tighter than the bound that drops the battery."""
+    tighter = 0
+    for seed in range(4):
+        sc = _random_scenario(seed)
+        power = Power(
+            capacity_wh=50.0,
+            initial_wh=6.0,
+            idle_w=1.0,
+            imaging_w=300.0,
+            slew_w=100.0,
+            charge_w=0.0,
+        )
+        sc = dataclasses.replace(
+            sc, satellites=tuple(dataclasses.replace(s, power=power) for s in sc.satellites)
+        )
+        res = plan(sc, time_limit=20.0, progress=False)
+        assert res.stats["exact"] and res.report["valid"]
+        pb = build_problem(sc).problem
+        kw = dict(target=res.value, deadline=math.inf, max_iters=300)
+        with_energy = upper_bound(pb, energy=True, **kw).bound
+        without = upper_bound(pb, energy=False, **kw).bound
+        assert with_energy >= res.value - 1e-9
+        assert with_energy <= without + 1e-9
+        tighter += with_energy < without - 1e-6
+    assert tighter >= 2

@@ -52,6 +52,7 @@ class BatteryModel:
         ok = np.ones((lit.shape[0], n), bool)
         for off in range(-guard, guard + 2):
             ok &= lit[:, np.clip(np.arange(n) + off, 0, n)]
+        self.charging = ok  # [S, n]: the step counts charge
         h = self.dt / 3600.0
         self.base = np.zeros((len(self.powers), n))
         for k, p in enumerate(self.powers):

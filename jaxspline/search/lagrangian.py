@@ -4,8 +4,11 @@ Relaxing "each task is imaged at most once" with prices ``lam_t`` splits the pro
 into one longest-path problem per satellite over its options in start order
 (:func:`dp_paths`): ``best[j] = w_j - lam_t(j) + max(base_j, far predecessors, near
 compatible predecessors)``, far ones (gap >= ``far[sat]``, always compatible) through
-a running maximum, near ones through the screened feasible pairs. The battery is
-relaxed. ``UB(lam) = sum_k DP_k(lam) + sum_t lam_t``.
+a running maximum, near ones through the screened feasible pairs. In
+:func:`lagrangian` the battery enters as interval energy budgets priced by ``nu >= 0``
+(:mod:`jaxspline.search.energy`: options and near pairs pay for their energy, the
+bound gains ``sum nu``); otherwise it is dropped.
+``UB(lam) = sum_k DP_k(lam) + sum_t lam_t (+ sum_I nu_I)``.
 
 Weak duality with repeats. The rules let a plan image a task more than once (it
 counts once), and dropping a repeat is not always possible (an observation can be
@@ -29,6 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from jaxspline.search.energy import EnergyBudgets
 from jaxspline.search.lns import greedy
 from jaxspline.search.problem import Problem
 from jaxspline.search.timeline import Timeline
@@ -57,6 +61,7 @@ class DPData:
     """
 
     order: np.ndarray
+    pair: np.ndarray
     sat: np.ndarray
     start: np.ndarray
     groups: list
@@ -99,12 +104,17 @@ def dp_prepare(pb: Problem) -> DPData:
     rt = e + far[sat] if n else np.zeros(0)
     ab = np.argsort(rt, kind="stable")
     first_ok = np.asarray(pb.c_first) <= s
-    return DPData(order, sat, s, groups, ii, seg, ptr, first_ok, ab, rt[ab])
+    return DPData(order, o2, sat, s, groups, ii, seg, ptr, first_ok, ab, rt[ab])
 
 
-def dp_paths(pb: Problem, d: DPData, w: np.ndarray):
+def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
     """Exact per-satellite maximum-value sequences for option values ``w``.
 
+    Args:
+      arc: optional cost of each near pair, in ``d.pred`` order (far transitions and
+        first observations cost nothing).
+      used: optional list; the near-pair ids (``pb.near_src`` order) of the returned
+        paths are appended to it.
     Returns ``(paths, values)``: per satellite the option ids of an optimal sequence
     (time order) and its value (0 for the empty sequence). Battery not modelled.
     """
@@ -126,7 +136,8 @@ def dp_paths(pb: Problem, d: DPData, w: np.ndarray):
         v = np.maximum(base[J], run[sat[J]])
         if pz > pa:
             nv = np.full(gb - ga, -np.inf)
-            np.maximum.at(nv, seg[pa:pz], best[pred[pa:pz]])
+            pv = best[pred[pa:pz]]
+            np.maximum.at(nv, seg[pa:pz], pv if arc is None else pv - arc[pa:pz])
             v = np.maximum(v, nv)
         best[J] = w[J] + v
     rank = np.empty(n, np.int64)
@@ -148,8 +159,13 @@ def dp_paths(pb: Problem, d: DPData, w: np.ndarray):
             target = best[j] - w[j]
             if d.first_ok[j] and target <= _PATH_TOL:
                 break
-            cand = pred[d.ptr[rank[j]] : d.ptr[rank[j] + 1]]
-            hit = cand[best[cand] >= target - _PATH_TOL]
+            q0, q1 = d.ptr[rank[j]], d.ptr[rank[j] + 1]
+            cand = pred[q0:q1]
+            cv = best[cand] if arc is None else best[cand] - arc[q0:q1]
+            ok = np.flatnonzero(cv >= target - _PATH_TOL)
+            hit = cand[ok]
+            if hit.size and used is not None:
+                used.append(int(d.pair[q0 + ok[0]]))
             if hit.size == 0:
                 fp = ids[ends[ids] + far[k] <= d.start[j]]
                 hit = fp[best[fp] >= target - _PATH_TOL]
@@ -201,19 +217,29 @@ class _Prices:
     halves and the prices restart from the best ones seen.
     """
 
-    def __init__(self, pb: Problem):
+    def __init__(self, pb: Problem, energy: bool = False):
         self.pb = pb
         self.d = dp_prepare(pb)
         self.W = np.asarray(pb.weight, np.float64)
         self.ctask = np.asarray(pb.c_task, np.int64)
-        self.lam = np.zeros(self.W.size)
+        self.en = EnergyBudgets(pb) if energy else None
+        m = self.en.m if self.en is not None else 0
+        # prices: tasks (in [0, w]) then energy budgets (>= 0, see search.energy)
+        self.hi = np.r_[self.W, np.full(m, np.inf)]
+        self.lam = np.zeros(self.hi.size)
         self.best_lam = self.lam.copy()
         self.ub, self.mu, self.stall, self.it = math.inf, 1.0, 0, 0
 
     def solve_dp(self):
         """DP paths at the current prices; updates the bound. Returns the paths."""
         self.it += 1
-        paths, vals = dp_paths(self.pb, self.d, self.W[self.ctask] - self.lam[self.ctask])
+        n_t = self.W.size
+        w = self.W[self.ctask] - self.lam[self.ctask]
+        arc, self.used = None, None
+        if self.en is not None and self.en.m:
+            node_pen, arc_pen = self.en.penalties(self.lam[n_t:])
+            w, arc, self.used = w - node_pen, arc_pen[self.d.pair], []
+        paths, vals = dp_paths(self.pb, self.d, w, arc, self.used)
         bound = float(sum(vals) + self.lam.sum())
         if bound < self.ub - _GAP_TOL:
             self.ub, self.best_lam, self.stall = bound, self.lam.copy(), 0
@@ -222,21 +248,30 @@ class _Prices:
         self.paths = paths
         return paths
 
+    def _subgradient(self) -> np.ndarray:
+        cnt = np.zeros(self.W.size)
+        for p in self.paths:
+            np.add.at(cnt, self.ctask[p], 1.0)
+        if self.used is None:
+            return cnt - 1.0
+        nodes = np.zeros(self.pb.n_options, bool)
+        nodes[[c for p in self.paths for c in p]] = True
+        arcs = np.zeros(self.en.n_near, bool)
+        arcs[self.used] = True
+        return np.r_[cnt, self.en.usage(nodes, arcs)] - 1.0
+
     def step(self, target: float) -> bool:
         """Move the prices toward ``target``; False when the iteration has converged."""
         if self.stall >= _STALL_ITERS:
             self.mu, self.stall, self.lam = self.mu * 0.5, 0, self.best_lam.copy()
             return self.mu >= _MU_MIN
-        cnt = np.zeros(self.W.size)
-        for p in self.paths:
-            np.add.at(cnt, self.ctask[p], 1.0)
-        g = cnt - 1.0
-        lam, W = self.lam, self.W
-        g[((lam <= 0.0) & (g < 0.0)) | ((lam >= W) & (g > 0.0))] = 0.0
+        g = self._subgradient()
+        lam, hi = self.lam, self.hi
+        g[((lam <= 0.0) & (g < 0.0)) | ((lam >= hi) & (g > 0.0))] = 0.0
         gn = float(np.dot(g, g))
         if gn == 0.0 or self.mu < _MU_MIN:
             return False
-        self.lam = np.clip(lam + self.mu * max(self.ub - target, 1e-3) / gn * g, 0.0, W)
+        self.lam = np.clip(lam + self.mu * max(self.ub - target, 1e-3) / gn * g, 0.0, hi)
         return True
 
 
@@ -250,7 +285,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     best_w = tl.W
     if pb.n_options == 0:
         return BoundResult(best, 0.0, 0, "optimal")
-    pr = _Prices(pb)
+    pr = _Prices(pb, energy=True)
     status = "time"
     while time.monotonic() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
@@ -270,16 +305,19 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     return BoundResult(best, pr.ub, pr.it, status)
 
 
-def upper_bound(pb: Problem, target: float, deadline: float, max_iters=None) -> BoundResult:
+def upper_bound(
+    pb: Problem, target: float, deadline: float, max_iters=None, energy: bool = False
+) -> BoundResult:
     """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
 
     ``target`` is a value some plan reaches (it sets the step size only; any value
     gives a valid bound). Status "converged" or "time" (cap / deadline reached).
-    Deterministic for a given ``max_iters``.
+    Deterministic for a given ``max_iters``. ``energy``: price the battery budgets of
+    :mod:`jaxspline.search.energy` too (off: the battery is dropped).
     """
     if pb.n_options == 0:
         return BoundResult([], 0.0, 0, "optimal")
-    pr = _Prices(pb)
+    pr = _Prices(pb, energy=energy)
     status = "time"
     while time.monotonic() < deadline and (max_iters is None or pr.it < max_iters):
         pr.solve_dp()
