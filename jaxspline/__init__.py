@@ -6,10 +6,10 @@ import or globally: :func:`plan` runs inside ``jax.enable_x64(True)``; for the k
 use that context manager (or ``jax.config.update("jax_enable_x64", True)``) yourself.
 """
 
-from jaxspline.limits import AxisLimits, validate_limits
+from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 # --- reach (per-channel reachable sets; SPEC section 1) ---
-from jaxspline.reach import (  # noqa: E402
+from jaxspline.kernels.reach import (  # noqa: E402
     angle_interval,
     envelopes,
     feasible_durations,
@@ -22,7 +22,7 @@ from jaxspline.reach import (  # noqa: E402
 )
 
 # --- slew (eigen-axis slew profiles; SPEC section 2) ---
-from jaxspline.slew import (
+from jaxspline.kernels.slew import (
     KIND_CODES,
     SlewProfile,
     bang_bang_time,
@@ -39,7 +39,7 @@ from jaxspline.slew import (
 )
 
 # --- flex (flexible-mode residual and simulator) ---
-from jaxspline.flex import (
+from jaxspline.kernels.flex import (
     flexible_body_rate,
     initial_amplitude,
     min_mode_frequency,
@@ -51,7 +51,7 @@ from jaxspline.flex import (
 )
 
 # --- attitude (quaternion / MRP / rotation matrices) ---
-from jaxspline.attitude import (  # noqa: E402
+from jaxspline.kernels.attitude import (  # noqa: E402
     angular_accel_from_mrp,
     attitude_angle,
     dcm_to_mrp,
@@ -73,7 +73,7 @@ from jaxspline.attitude import (  # noqa: E402
 )
 
 # --- joins (degree-7 joins, vector spline, spatial maneuvers) ---
-from jaxspline.joins import (  # noqa: E402
+from jaxspline.kernels.joins import (  # noqa: E402
     Maneuver,
     ManeuverCheck,
     attitude_spline,
@@ -87,7 +87,7 @@ from jaxspline.joins import (  # noqa: E402
 )
 
 # --- retarget (minimum-peak-control retargeting) ---
-from jaxspline.retarget import (  # noqa: E402
+from jaxspline.kernels.retarget import (  # noqa: E402
     ARCSEC,
     AttitudeModel,
     ChannelControl,
@@ -108,7 +108,7 @@ from jaxspline.retarget import (  # noqa: E402
 )
 
 # --- geometry (orbit, pointing, routes) ---
-from jaxspline.frames import (  # noqa: E402
+from jaxspline.geometry.frames import (  # noqa: E402
     ecef_to_geodetic,
     geodetic_to_ecef,
     gmst,
@@ -116,7 +116,7 @@ from jaxspline.frames import (  # noqa: E402
     sun_direction,
     teme_to_ecef,
 )
-from jaxspline.orbit import (  # noqa: E402
+from jaxspline.geometry.orbit import (  # noqa: E402
     CircularOrbit,
     HermiteOrbit,
     circular_orbit,
@@ -127,7 +127,7 @@ from jaxspline.orbit import (  # noqa: E402
     sso_inclination,
     tle_orbit,
 )
-from jaxspline.pointing import (  # noqa: E402
+from jaxspline.geometry.pointing import (  # noqa: E402
     Scene,
     aim_angles,
     aim_params,
@@ -138,7 +138,7 @@ from jaxspline.pointing import (  # noqa: E402
     pointing_state,
     visibility_windows,
 )
-from jaxspline.routes import (  # noqa: E402
+from jaxspline.geometry.routes import (  # noqa: E402
     RouteSet,
     RouteSpec,
     TabulatedRouteModel,
@@ -150,7 +150,7 @@ from jaxspline.routes import (  # noqa: E402
 )
 
 # --- planning (mission types, the pipeline, its result, scenario files) ---
-from jaxspline.mission import (  # noqa: E402
+from jaxspline.engine.mission import (  # noqa: E402
     MODELS,
     FlexMode,
     Margins,
@@ -161,25 +161,25 @@ from jaxspline.mission import (  # noqa: E402
     Targets,
     make_targets,
 )
-from jaxspline.planner import Prepared, build_problem, plan  # noqa: E402
-from jaxspline.result import Observations, PlanResult  # noqa: E402
+from jaxspline.engine.planner import Prepared, build_problem, plan  # noqa: E402
+from jaxspline.engine.result import Observations, PlanResult  # noqa: E402
 from jaxspline.scenario import default_scenario, load_scenario, load_targets_csv  # noqa: E402
 
 # --- engine (screen, sequence, refine, validate, scenario) ---
-from jaxspline.screen import (  # noqa: E402
+from jaxspline.engine.screen import (  # noqa: E402
     Transitions,
     screen_pairs,
     screen_sequences,
     screen_transitions,
 )
-from jaxspline.sequence import Plan, beam_search, exact_plan, greedy  # noqa: E402
-from jaxspline.refine import (  # noqa: E402
+from jaxspline.engine.sequence import Plan, beam_search, exact_plan, greedy  # noqa: E402
+from jaxspline.engine.refine import (  # noqa: E402
     LinearRouteModel,
     RefineResult,
     refine_plan,
     try_insert,
 )
-from jaxspline.validate import ValidationReport, validate_plan  # noqa: E402
+from jaxspline.engine.validate import ValidationReport, validate_plan  # noqa: E402
 
 __all__ = [
     "MODELS",

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 from test_screen import reach_kernels, ref_reachable  # noqa: F401
 
-from jaxspline import refine, screen, sequence
-from jaxspline.limits import AxisLimits
+from jaxspline.engine import refine, screen, sequence
+from jaxspline.kernels.limits import AxisLimits
 
 LIM = AxisLimits(rate=np.array([0.05, 0.05]), accel=np.array([0.01, 0.01]))
 

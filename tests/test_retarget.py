@@ -1,4 +1,4 @@
-"""Tests for jaxspline.retarget against independent references.
+"""Tests for jaxspline.kernels.retarget against independent references.
 
 References: hand-computed cases; bisection over d with a feasibility check by dense
 numerical quadrature of the envelope curves; dense integration of the produced
@@ -16,8 +16,8 @@ from jax.test_util import check_grads
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from jaxspline import reach
-from jaxspline import retarget as R
+from jaxspline.kernels import reach
+from jaxspline.kernels import retarget as R
 
 DEG = np.pi / 180.0
 AS = R.ARCSEC

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
-from jaxspline import screen, sequence
-from jaxspline.options import RouteOptions, take_options
-from jaxspline.validate import validate_plan
+from jaxspline.engine import screen, sequence
+from jaxspline.engine.options import RouteOptions, take_options
+from jaxspline.engine.validate import validate_plan
 
 
 def brute_force(opt: RouteOptions, tr) -> float:

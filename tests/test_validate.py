@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
-from jaxspline import screen, sequence, validate
-from jaxspline.limits import AxisLimits
-from jaxspline.options import RouteOptions, take_options
+from jaxspline.engine import screen, sequence, validate
+from jaxspline.engine.options import RouteOptions, take_options
+from jaxspline.kernels.limits import AxisLimits
 
 
 def steps_of(opt, idx):

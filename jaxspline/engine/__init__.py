@@ -1,0 +1,1 @@
+"""Engine: option tables, screening, maneuver models, search, refinement, checks, planner."""

@@ -1,0 +1,1 @@
+"""Geometry: time scales and frames, orbits, pointing laws, routes, visibility windows."""

@@ -1,0 +1,1 @@
+"""Kernels: per-candidate mathematics of the papers (one candidate each, batched once)."""
