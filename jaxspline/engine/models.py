@@ -39,7 +39,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jaxspline.geometry.frames import angle_between
-from jaxspline.kernels._arrays import pad_rows
+from jaxspline.kernels._batch import pad_rows, round_up
 from jaxspline.kernels.limits import AxisLimits
 
 __all__ = ["SlewTable", "far_gap", "first_requirements", "pair_requirements", "slew_table"]
@@ -160,7 +160,7 @@ def first_requirements(sat, options, idx, table: SlewTable | None = None):
     from jaxspline.kernels.reach import is_reachable, min_transfer_time
 
     n = idx.size
-    size = -(-n // _PAD) * _PAD
+    size = round_up(n, _PAD)
     a2 = pad_rows(np.asarray(options.start_angle)[idx], size)
     b2 = pad_rows(np.asarray(options.start_rate)[idx], size)
     zero = np.zeros_like(a2)

@@ -39,7 +39,7 @@ from jaxspline.geometry.frames import (
 from jaxspline.geometry.pointing import Scene, _aim_point, aim_geometry, aim_params, aim_state
 from jaxspline.geometry.routes import strip_direction
 from jaxspline.geometry.windows import Windows
-from jaxspline.kernels._arrays import pad_rows, ragged_positions
+from jaxspline.kernels._batch import map_chunked, ragged_positions
 
 __all__ = [
     "Opportunities",
@@ -84,8 +84,8 @@ def _state(scene, sat, p, t0, t):
     return ang, rate, acc
 
 
-_geometry_v = jax.jit(jax.vmap(_geometry, in_axes=(None, 0, 0, 0, 0)))
-_state_v = jax.jit(jax.vmap(_state, in_axes=(None, 0, 0, 0, 0)))
+_geometry_batched = jax.jit(jax.vmap(_geometry, in_axes=(None, 0, 0, 0, 0)))
+_state_batched = jax.jit(jax.vmap(_state, in_axes=(None, 0, 0, 0, 0)))
 
 
 def evaluate(fn, scene: Scene, sat, p, t0, t):
@@ -95,15 +95,10 @@ def evaluate(fn, scene: Scene, sat, p, t0, t):
     compiled shape serves every call (compilation, not evaluation, dominates small
     batches). Returns a list of arrays, or None when there is nothing to evaluate.
     """
-    n = int(np.shape(sat)[0])
-    if n == 0:
+    if int(np.shape(sat)[0]) == 0:
         return None
-    outs = []
-    for a in range(0, n, _CHUNK):
-        b = min(n, a + _CHUNK)
-        args = [jnp.asarray(pad_rows(np.asarray(x)[a:b], _CHUNK)) for x in (sat, p, t0, t)]
-        outs.append([np.asarray(r)[: b - a] for r in fn(scene, *args)])
-    return [np.concatenate(col) for col in zip(*outs, strict=True)]
+    args = [np.asarray(x) for x in (sat, p, t0, t)]
+    return map_chunked(lambda *a: fn(scene, *(jnp.asarray(x) for x in a)), args, _CHUNK)
 
 
 def _aim_laws(sc: Scenario):
@@ -218,11 +213,11 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     if idx.size:
         owner, ts = observation_samples(t0[idx], t1[idx], gstep)
         o = idx[owner]
-        offn, elev, _, _ = evaluate(_geometry_v, scene, sat[o], params[o], t0[o], ts)
+        offn, elev, _, _ = evaluate(_geometry_batched, scene, sat[o], params[o], t0[o], ts)
         good = (offn <= limit[sat[o]]) & (elev > pc.margins.horizon) & table_ok(sat[o], ts)
         if per_ch.any():
             pcm = per_ch[sat[o]]
-            res = evaluate(_state_v, scene, sat[o][pcm], params[o][pcm], t0[o][pcm], ts[pcm])
+            res = evaluate(_state_batched, scene, sat[o][pcm], params[o][pcm], t0[o][pcm], ts[pcm])
             if res is not None:
                 _, rate, acc = res
                 rl, al = _limit_table(sats, "rate"), _limit_table(sats, "accel")
@@ -249,15 +244,15 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
 def _states(sc, scene, sat, tgt, t0, t1, params, per_ch) -> RouteOptions:
     n = sat.size
     zeros = np.zeros((n, 3))
-    st = evaluate(_geometry_v, scene, sat, params, t0, t0)
-    en = evaluate(_geometry_v, scene, sat, params, t0, t1)
+    st = evaluate(_geometry_batched, scene, sat, params, t0, t0)
+    en = evaluate(_geometry_batched, scene, sat, params, t0, t1)
     los0, nad0 = (st[2], st[3]) if n else (zeros, zeros)
     los1 = en[2] if n else zeros
     a0, r0, a1, r1 = zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy()
     m = per_ch[sat] if n else np.zeros(0, bool)
     if m.any():
-        s0 = evaluate(_state_v, scene, sat[m], params[m], t0[m], t0[m])
-        s1 = evaluate(_state_v, scene, sat[m], params[m], t0[m], t1[m])
+        s0 = evaluate(_state_batched, scene, sat[m], params[m], t0[m], t0[m])
+        s1 = evaluate(_state_batched, scene, sat[m], params[m], t0[m], t1[m])
         a0[m], r0[m], a1[m], r1[m] = s0[0], s0[1], s1[0], s1[1]
     return RouteOptions(
         route=tgt,

@@ -24,11 +24,11 @@ import numpy as np
 
 from jaxspline.engine.mission import Scenario
 from jaxspline.engine.models import REST_TO_REST, slew_time
-from jaxspline.engine.opportunities import _geometry_v, evaluate, observation_samples
+from jaxspline.engine.opportunities import _geometry_batched, evaluate, observation_samples
 from jaxspline.engine.options import RouteOptions, take_options
 from jaxspline.engine.validate import validate_plan
 from jaxspline.geometry.frames import angle_between
-from jaxspline.kernels._arrays import pad_rows
+from jaxspline.kernels._batch import pad_rows, round_up
 from jaxspline.kernels.reach import min_transfer_time
 
 __all__ = ["check_plan"]
@@ -60,7 +60,7 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
     # --- geometry at every sample
     owner, ts = observation_samples(t0, t1, step, tol=0.0)
     offn, elev, _, _ = evaluate(
-        _geometry_v, scene, sat[owner], opp.params[chosen][owner], t0[owner], ts
+        _geometry_batched, scene, sat[owner], opp.params[chosen][owner], t0[owner], ts
     )
     lim = np.array([s.off_nadir_max for s in sc.satellites])
     ok_s = (offn <= lim[sat[owner]]) & (elev > 0.0) & table_ok(sat[owner], ts)
@@ -117,7 +117,7 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
                 for v in rep.violations:
                     viol.append(f"{s.name}: {v}")
                 bad.update(int(c) for c in chosen[m])
-            size = -(-m.size // _PAD) * _PAD  # few compiled shapes across checks
+            size = round_up(m.size, _PAD)  # few compiled shapes across checks
             frm_a = np.where(first[m, None], 0.0, o.end_angle[prev[m]])
             frm_b = np.where(first[m, None], 0.0, o.end_rate[prev[m]])
             args = (frm_a, frm_b, o.start_angle[chosen[m]], o.start_rate[chosen[m]])

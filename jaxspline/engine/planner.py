@@ -44,7 +44,7 @@ from jaxspline.geometry.frames import gmst, in_shadow, jd_split, sun_direction
 from jaxspline.geometry.orbit import tabulate_orbits
 from jaxspline.geometry.pointing import Scene
 from jaxspline.geometry.windows import visibility_windows_all
-from jaxspline.kernels._arrays import ragged_positions
+from jaxspline.kernels._batch import ragged_positions
 
 __all__ = ["Prepared", "build_problem", "plan"]
 

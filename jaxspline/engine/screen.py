@@ -50,7 +50,6 @@ Units: radians, seconds.
 from __future__ import annotations
 
 import functools
-import math
 import mmap
 from typing import NamedTuple
 
@@ -61,6 +60,7 @@ from jax.sharding import Mesh, NamedSharding
 from jax.sharding import PartitionSpec as P
 
 from jaxspline.engine.options import RouteOptions
+from jaxspline.kernels._batch import padded_size
 from jaxspline.kernels._validate import check_positive
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
@@ -256,8 +256,7 @@ class _Screener:
 
         Few distinct lengths means few compilations.
         """
-        size = min(chunk_size, 1 << max(int(math.ceil(math.log2(max(n, 1)))), 10))
-        return int(math.ceil(size / self.ndev) * self.ndev)
+        return padded_size(n, chunk_size, self.ndev)
 
     def dispatch(self, src: np.ndarray, dst: np.ndarray, size: int, T: np.ndarray | None = None):
         """Start screening pairs (len <= size, padded to ``size``); returns a pending handle.

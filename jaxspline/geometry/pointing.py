@@ -37,6 +37,7 @@ import numpy as np
 
 from jaxspline.geometry.frames import OMEGA_EARTH, earth_rotation_angle, rot_z
 from jaxspline.geometry.orbit import orbit_state
+from jaxspline.kernels._batch import batched, padded_size
 from jaxspline.kernels._validate import check_finite, check_positive
 
 __all__ = [
@@ -249,11 +250,9 @@ def _offn_kernel(scene, target, t):
     return jnp.where(jnp.dot(-d, g) > 0, offn, jnp.pi)  # behind the Earth: pi
 
 
-_offn_batched = jax.jit(jnp.vectorize(_offn_kernel, excluded={0}, signature="(3),()->()"))
-_point_angles_batched = jax.jit(jnp.vectorize(_point_kernel, excluded={0}, signature="(3),()->(4)"))
-_point_state_batched = jax.jit(
-    jnp.vectorize(_point_state_kernel, excluded={0}, signature="(3),()->(3,3)")
-)
+_offn_batched = batched(_offn_kernel, "(3),()->()", excluded={0})
+_point_angles_batched = batched(_point_kernel, "(3),()->(4)", excluded={0})
+_point_state_batched = batched(_point_state_kernel, "(3),()->(3,3)", excluded={0})
 
 
 def _check_target(target_ecef, t):
@@ -295,10 +294,6 @@ def pointing_state(scene: Scene, target_ecef, t):
     return out[..., 0, :], out[..., 1, :], out[..., 2, :]
 
 
-def _pad_to(n: int) -> int:
-    return max(1024, 1 << (int(n) - 1).bit_length())
-
-
 def off_nadir_flat(scene: Scene, targets_ecef, t):
     """Off-nadir [K] for K (target [K, 3], time [K]) pairs (numpy in/out, float64 if enabled).
 
@@ -307,7 +302,7 @@ def off_nadir_flat(scene: Scene, targets_ecef, t):
     targets = np.asarray(targets_ecef, np.float64).reshape(-1, 3)
     t = np.broadcast_to(np.asarray(t, np.float64), targets.shape[:1])
     k = targets.shape[0]
-    m = _pad_to(k)
+    m = padded_size(k)
     tg = np.concatenate([targets, np.repeat(targets[:1], m - k, 0)]) if k else np.ones((m, 3))
     tt = np.concatenate([t, np.full(m - k, t[0] if k else 0.0)])
     dt = jnp.result_type(float)

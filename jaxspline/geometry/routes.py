@@ -37,6 +37,7 @@ from jaxspline.geometry.frames import (
 )
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.geometry.pointing import Scene, aim_state, off_nadir_flat
+from jaxspline.kernels._batch import map_chunked
 from jaxspline.kernels._validate import check_finite, check_positive
 from jaxspline.kernels.limits import AxisLimits
 
@@ -171,26 +172,15 @@ def _states_jit(scene, params, duration, route, t0):
 
 def _eval_chunked(scene, p, t0, t, chunk=8192, desc=None):
     """aim_state at M (p [M, 8], t0 [M], t [M]) in padded chunks (one compiled shape)."""
-    from tqdm.auto import tqdm
-
-    dtype = jnp.result_type(float)
-    m = t.size
-    outs = []
-    it = range(0, m, chunk)
-    if desc is not None:
-        it = tqdm(it, desc=desc, unit="chunk", leave=False)
-    for s in it:
-        e = min(s + chunk, m)
-        pad = chunk - (e - s)
-        args = [
-            np.pad(x[s:e], [(0, pad)] + [(0, 0)] * (x.ndim - 1), mode="edge") for x in (p, t0, t)
-        ]
-        res = _sample_batched(scene, *(jnp.asarray(a, dtype) for a in args))
-        outs.append([np.asarray(x)[: e - s] for x in res])
-    if not outs:
+    if t.size == 0:
         z = np.zeros((0, 3))
         return z, z, z, np.zeros(0)
-    return tuple(np.concatenate([o[k] for o in outs]) for k in range(4))
+    dtype = jnp.result_type(float)
+
+    def run(*args):
+        return _sample_batched(scene, *(jnp.asarray(a, dtype) for a in args))
+
+    return tuple(map_chunked(run, (p, t0, t), chunk, desc=desc))
 
 
 def sample_scans(routes, route, t0, speed, t):

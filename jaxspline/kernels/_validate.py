@@ -22,6 +22,8 @@ __all__ = [
     "float_dtype_of",
     "is_weak",
     "cast_broadcast",
+    "common_float",
+    "finite_vector",
 ]
 
 
@@ -112,3 +114,28 @@ def cast_broadcast(**named):
     """
     dt = float_dtype_of(*[v for v in named.values() if not is_weak(v)])
     return broadcast_named(**{k: as_float_array(k, v, dt) for k, v in named.items()})
+
+
+def common_float(*xs):
+    """Cast inputs to their common floating dtype (weak Python floats follow arrays).
+
+    Integer-only inputs become JAX's default float. Used inside kernels (traced
+    values welcome) and after the eager checks of the public wrappers.
+    """
+    dt = jnp.result_type(*xs)
+    if not jnp.issubdtype(dt, jnp.floating):
+        dt = jnp.result_type(float)
+    return tuple(jnp.asarray(x, dt) for x in xs)
+
+
+def finite_vector(name: str, x, last: int | None = None):
+    """``x`` as a floating array, checked finite, whose last axis has length ``last``.
+
+    Raises a ValueError naming ``name`` (shape or value) otherwise; ``last=None``
+    accepts any shape.
+    """
+    arr = as_float_array(name, x)
+    if last is not None and (arr.ndim == 0 or arr.shape[-1] != last):
+        raise ValueError(f"{name} must have last axis of length {last}, got shape {arr.shape}")
+    check_finite(name, arr)
+    return arr

@@ -25,10 +25,11 @@ Units: radians, seconds.
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 
-from jaxspline.kernels._validate import as_float_array, check_finite
+from jaxspline.kernels._batch import batched
+from jaxspline.kernels._safe import safe_norm
+from jaxspline.kernels._validate import common_float, finite_vector
 
 __all__ = [
     "quat_multiply",
@@ -53,13 +54,6 @@ __all__ = [
 
 
 # ----------------------------------------------------------------------------- helpers
-def _safe_norm(v):
-    """|v| with a finite (zero) gradient at v = 0 (double-where)."""
-    s = jnp.sum(v * v, axis=-1)
-    pos = s > 0
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, s, 1.0)), 0.0)
-
-
 def _cross(a, b):
     # last-axis cross product (broadcasts over leading sample axes)
     return jnp.stack(
@@ -77,19 +71,6 @@ def _dot(a, b):
     return jnp.sum(a * b, axis=-1, keepdims=True)
 
 
-def _arr(name, x, last=None):
-    arr = as_float_array(name, x)
-    if last is not None and (arr.ndim == 0 or arr.shape[-1] != last):
-        raise ValueError(f"{name} must have last axis of length {last}, got shape {arr.shape}")
-    check_finite(name, arr)
-    return arr
-
-
-def _common(*arrs):
-    dt = jnp.result_type(*arrs)
-    return tuple(a.astype(dt) for a in arrs)
-
-
 # ----------------------------------------------------------------------------- kernels
 def _qmul(p, q):
     # Hamilton product on the last axis (leading axes broadcast)
@@ -105,7 +86,7 @@ def _qconj(q):
 
 
 def _qnormalize(q):
-    n = _safe_norm(q)[..., None]
+    n = safe_norm(q)[..., None]
     # the zero quaternion has no attitude: return identity instead of NaN
     ident = jnp.zeros_like(q).at[..., 0].set(1.0)
     return jnp.where(n > 0, q / jnp.where(n > 0, n, 1.0), ident)
@@ -172,7 +153,7 @@ def _mrp_shadow(sig):
 
 def _angle(q1, q2):
     dq = _qmul(_qconj(_qnormalize(q1)), _qnormalize(q2))
-    return 2.0 * jnp.arctan2(_safe_norm(dq[..., 1:]), jnp.abs(dq[..., 0]))
+    return 2.0 * jnp.arctan2(safe_norm(dq[..., 1:]), jnp.abs(dq[..., 0]))
 
 
 def _qrate(q, w):
@@ -241,24 +222,24 @@ def _omega_derivs(sig, d1, d2, d3):
     return w, e, j
 
 
-_v_qmul = jax.jit(jnp.vectorize(_qmul, signature="(4),(4)->(4)"))
-_v_qconj = jax.jit(jnp.vectorize(_qconj, signature="(4)->(4)"))
-_v_qnorm = jax.jit(jnp.vectorize(_qnormalize, signature="(4)->(4)"))
-_v_qrot = jax.jit(jnp.vectorize(_qrotate, signature="(4),(3)->(3)"))
-_v_q2dcm = jax.jit(jnp.vectorize(lambda q: _q2dcm(_qnormalize(q)), signature="(4)->(3,3)"))
-_v_dcm2q = jax.jit(jnp.vectorize(_dcm2q, signature="(3,3)->(4)"))
-_v_q2mrp = jax.jit(jnp.vectorize(_q2mrp, signature="(4)->(3)"))
-_v_mrp2q = jax.jit(jnp.vectorize(_mrp2q, signature="(3)->(4)"))
-_v_mrp2dcm = jax.jit(jnp.vectorize(lambda s: _q2dcm(_mrp2q(s)), signature="(3)->(3,3)"))
-_v_dcm2mrp = jax.jit(jnp.vectorize(lambda R: _q2mrp(_dcm2q(R)), signature="(3,3)->(3)"))
-_v_shadow = jax.jit(jnp.vectorize(_mrp_shadow, signature="(3)->(3)"))
-_v_angle = jax.jit(jnp.vectorize(_angle, signature="(4),(4)->()"))
-_v_qrate = jax.jit(jnp.vectorize(_qrate, signature="(4),(3)->(4)"))
-_v_mrp_rate = jax.jit(jnp.vectorize(_mrp_rate, signature="(3),(3)->(3)"))
-_v_omega = jax.jit(jnp.vectorize(_omega_from_rate, signature="(3),(3)->(3)"))
-_v_eps = jax.jit(jnp.vectorize(_eps_from_mrp, signature="(3),(3),(3)->(3)"))
-_v_mrp_derivs = jax.jit(jnp.vectorize(_mrp_derivs, signature="(3),(3),(3),(3)->(3),(3),(3)"))
-_v_omega_derivs = jax.jit(jnp.vectorize(_omega_derivs, signature="(3),(3),(3),(3)->(3),(3),(3)"))
+_qmul_batched = batched(_qmul, "(4),(4)->(4)")
+_qconj_batched = batched(_qconj, "(4)->(4)")
+_qnorm_batched = batched(_qnormalize, "(4)->(4)")
+_qrot_batched = batched(_qrotate, "(4),(3)->(3)")
+_q2dcm_batched = batched(lambda q: _q2dcm(_qnormalize(q)), "(4)->(3,3)")
+_dcm2q_batched = batched(_dcm2q, "(3,3)->(4)")
+_q2mrp_batched = batched(_q2mrp, "(4)->(3)")
+_mrp2q_batched = batched(_mrp2q, "(3)->(4)")
+_mrp2dcm_batched = batched(lambda s: _q2dcm(_mrp2q(s)), "(3)->(3,3)")
+_dcm2mrp_batched = batched(lambda R: _q2mrp(_dcm2q(R)), "(3,3)->(3)")
+_shadow_batched = batched(_mrp_shadow, "(3)->(3)")
+_angle_batched = batched(_angle, "(4),(4)->()")
+_qrate_batched = batched(_qrate, "(4),(3)->(4)")
+_mrp_rate_batched = batched(_mrp_rate, "(3),(3)->(3)")
+_omega_batched = batched(_omega_from_rate, "(3),(3)->(3)")
+_eps_batched = batched(_eps_from_mrp, "(3),(3),(3)->(3)")
+_mrp_derivs_batched = batched(_mrp_derivs, "(3),(3),(3),(3)->(3),(3),(3)")
+_omega_derivs_batched = batched(_omega_derivs, "(3),(3),(3),(3)->(3),(3),(3)")
 
 
 # ----------------------------------------------------------------------------- public API
@@ -268,24 +249,24 @@ def quat_multiply(p, q):
     (p∘q)_w = p_w q_w - p_v·q_v, (p∘q)_v = p_w q_v + q_w p_v + p_v × q_v.
     Arrays [..., 4], broadcast. Reference: seed vector-spline-guidance-laws, eq. 1.
     """
-    p, q = _common(_arr("p", p, 4), _arr("q", q, 4))
-    return _v_qmul(p, q)
+    p, q = common_float(finite_vector("p", p, 4), finite_vector("q", q, 4))
+    return _qmul_batched(p, q)
 
 
 def quat_conjugate(q):
     """Conjugate [w, -x, -y, -z] of quaternions q [..., 4] (the inverse for unit q)."""
-    return _v_qconj(_arr("q", q, 4))
+    return _qconj_batched(finite_vector("q", q, 4))
 
 
 def quat_normalize(q):
     """q / |q| for quaternions [..., 4]; the zero quaternion maps to identity [1, 0, 0, 0]."""
-    return _v_qnorm(_arr("q", q, 4))
+    return _qnorm_batched(finite_vector("q", q, 4))
 
 
 def quat_rotate(q, v):
     """Rotate body vectors v [..., 3] to the reference frame: Λ ∘ v ∘ Λ̃ (q unit, [..., 4])."""
-    q, v = _common(_arr("q", q, 4), _arr("v", v, 3))
-    return _v_qrot(q, v)
+    q, v = common_float(finite_vector("q", q, 4), finite_vector("v", v, 3))
+    return _qrot_batched(q, v)
 
 
 def quat_to_dcm(q):
@@ -294,7 +275,7 @@ def quat_to_dcm(q):
     R = (w² - |u|²) I + 2 u uᵀ + 2 w [u×]; columns are body axes in the reference
     frame, so ``R @ v_body == quat_rotate(q, v_body)``.
     """
-    return _v_q2dcm(_arr("q", q, 4))
+    return _q2dcm_batched(finite_vector("q", q, 4))
 
 
 def dcm_to_quat(R):
@@ -302,10 +283,10 @@ def dcm_to_quat(R):
 
     Shepperd's method (largest of 4w², 4x², 4y², 4z² selected branchlessly).
     """
-    R = _arr("R", R, 3)
+    R = finite_vector("R", R, 3)
     if R.ndim < 2 or R.shape[-2] != 3:
         raise ValueError(f"R must have shape [..., 3, 3], got {R.shape}")
-    return _v_dcm2q(R)
+    return _dcm2q_batched(R)
 
 
 def quat_to_mrp(q):
@@ -315,30 +296,30 @@ def quat_to_mrp(q):
     q and -q are the same attitude). σ = e tan(Φ/4) with Φ in [0, π].
     Reference: SPEC §3; seed vector-spline-guidance-laws (σ = λ/(1 + λ0)).
     """
-    return _v_q2mrp(_arr("q", q, 4))
+    return _q2mrp_batched(finite_vector("q", q, 4))
 
 
 def mrp_to_quat(sigma):
     """Unit quaternion [..., 4] of MRPs σ [..., 3]: λ0 = (1 - σ²)/(1 + σ²), λ = 2σ/(1 + σ²)."""
-    return _v_mrp2q(_arr("sigma", sigma, 3))
+    return _mrp2q_batched(finite_vector("sigma", sigma, 3))
 
 
 def mrp_to_dcm(sigma):
     """Rotation matrix [..., 3, 3] (body -> reference) of MRPs σ [..., 3]."""
-    return _v_mrp2dcm(_arr("sigma", sigma, 3))
+    return _mrp2dcm_batched(finite_vector("sigma", sigma, 3))
 
 
 def dcm_to_mrp(R):
     """MRPs [..., 3] (|σ| <= 1) of rotation matrices R [..., 3, 3]."""
-    R = _arr("R", R, 3)
+    R = finite_vector("R", R, 3)
     if R.ndim < 2 or R.shape[-2] != 3:
         raise ValueError(f"R must have shape [..., 3, 3], got {R.shape}")
-    return _v_dcm2mrp(R)
+    return _dcm2mrp_batched(R)
 
 
 def mrp_shadow(sigma):
     """Shadow MRP set σˢ = -σ / |σ|² (same attitude); σ = 0 maps to 0."""
-    return _v_shadow(_arr("sigma", sigma, 3))
+    return _shadow_batched(finite_vector("sigma", sigma, 3))
 
 
 def attitude_angle(q1, q2):
@@ -347,8 +328,8 @@ def attitude_angle(q1, q2):
     δ = q̃1 ∘ q2, angle = 2 atan2(|δ_v|, |δ_w|): exact for tiny angles (no
     arccos), sign-invariant (q ≡ -q), gradient finite (zero) at angle 0.
     """
-    q1, q2 = _common(_arr("q1", q1, 4), _arr("q2", q2, 4))
-    return _v_angle(q1, q2)
+    q1, q2 = common_float(finite_vector("q1", q1, 4), finite_vector("q2", q2, 4))
+    return _angle_batched(q1, q2)
 
 
 def quat_rate(q, omega):
@@ -356,8 +337,8 @@ def quat_rate(q, omega):
 
     Reference: seed vector-spline-guidance-laws, eq. 1.
     """
-    q, omega = _common(_arr("q", q, 4), _arr("omega", omega, 3))
-    return _v_qrate(q, omega)
+    q, omega = common_float(finite_vector("q", q, 4), finite_vector("omega", omega, 3))
+    return _qrate_batched(q, omega)
 
 
 def mrp_rate(sigma, omega):
@@ -366,8 +347,8 @@ def mrp_rate(sigma, omega):
     Reference: seed vector-spline-guidance-laws, eq. 2 (sign verified against
     Λ' = ½ Λ∘ω with the Hamilton product).
     """
-    sigma, omega = _common(_arr("sigma", sigma, 3), _arr("omega", omega, 3))
-    return _v_mrp_rate(sigma, omega)
+    sigma, omega = common_float(finite_vector("sigma", sigma, 3), finite_vector("omega", omega, 3))
+    return _mrp_rate_batched(sigma, omega)
 
 
 def omega_from_mrp_rate(sigma, sigma_dot):
@@ -375,8 +356,10 @@ def omega_from_mrp_rate(sigma, sigma_dot):
 
     ω = 4 [(1 - σ·σ)σ' - 2σ×σ' + 2σ(σ·σ')] / (1 + σ·σ)², using B⁻¹ = Bᵀ/(1 + σ²)².
     """
-    sigma, sigma_dot = _common(_arr("sigma", sigma, 3), _arr("sigma_dot", sigma_dot, 3))
-    return _v_omega(sigma, sigma_dot)
+    sigma, sigma_dot = common_float(
+        finite_vector("sigma", sigma, 3), finite_vector("sigma_dot", sigma_dot, 3)
+    )
+    return _omega_batched(sigma, sigma_dot)
 
 
 def angular_accel_from_mrp(sigma, sigma_dot, sigma_ddot):
@@ -385,10 +368,12 @@ def angular_accel_from_mrp(sigma, sigma_dot, sigma_ddot):
     ε = dω/dt along the trajectory, ω(σ, σ') of ``omega_from_mrp_rate``; closed
     form via the quaternion p = Λ(σ): ε = 2 vec(p̃∘p'') (see ``omega_from_mrp_derivs``).
     """
-    a = _common(
-        _arr("sigma", sigma, 3), _arr("sigma_dot", sigma_dot, 3), _arr("sigma_ddot", sigma_ddot, 3)
+    a = common_float(
+        finite_vector("sigma", sigma, 3),
+        finite_vector("sigma_dot", sigma_dot, 3),
+        finite_vector("sigma_ddot", sigma_ddot, 3),
     )
-    return _v_eps(*a)
+    return _eps_batched(*a)
 
 
 def mrp_derivs_from_omega(sigma, omega, eps, eps_dot=None):
@@ -397,11 +382,11 @@ def mrp_derivs_from_omega(sigma, omega, eps, eps_dot=None):
     Total time derivatives of σ' = ¼B(σ)ω (seed eq. 2) by the Leibniz rule:
     σ'' = ¼(B ε + Ḃ ω), σ''' = ¼(B ε' + 2Ḃ ε + B̈ ω).
     """
-    sigma = _arr("sigma", sigma, 3)
-    omega = _arr("omega", omega, 3)
-    eps = _arr("eps", eps, 3)
-    eps_dot = jnp.zeros_like(eps) if eps_dot is None else _arr("eps_dot", eps_dot, 3)
-    return _v_mrp_derivs(*_common(sigma, omega, eps, eps_dot))
+    sigma = finite_vector("sigma", sigma, 3)
+    omega = finite_vector("omega", omega, 3)
+    eps = finite_vector("eps", eps, 3)
+    eps_dot = jnp.zeros_like(eps) if eps_dot is None else finite_vector("eps_dot", eps_dot, 3)
+    return _mrp_derivs_batched(*common_float(sigma, omega, eps, eps_dot))
 
 
 def omega_from_mrp_derivs(sigma, sigma_dot, sigma_ddot, sigma_dddot):
@@ -411,10 +396,10 @@ def omega_from_mrp_derivs(sigma, sigma_dot, sigma_ddot, sigma_dddot):
     [2g - 1, 2gσ], g = 1/(1 + σ·σ): ω = 2 vec(p̃∘p'), ε = 2 vec(p̃∘p''),
     ε' = 2 vec(p̃'∘p'' + p̃∘p''') (Λ' = ½Λ∘ω differentiated).
     """
-    a = _common(
-        _arr("sigma", sigma, 3),
-        _arr("sigma_dot", sigma_dot, 3),
-        _arr("sigma_ddot", sigma_ddot, 3),
-        _arr("sigma_dddot", sigma_dddot, 3),
+    a = common_float(
+        finite_vector("sigma", sigma, 3),
+        finite_vector("sigma_dot", sigma_dot, 3),
+        finite_vector("sigma_ddot", sigma_ddot, 3),
+        finite_vector("sigma_dddot", sigma_dddot, 3),
     )
-    return _v_omega_derivs(*a)
+    return _omega_derivs_batched(*a)

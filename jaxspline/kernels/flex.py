@@ -45,6 +45,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxspline.kernels._batch import batched
+from jaxspline.kernels._safe import pos_or_one
 from jaxspline.kernels._validate import (
     cast_broadcast,
     check_finite,
@@ -52,7 +54,7 @@ from jaxspline.kernels._validate import (
     check_positive,
     is_concrete,
 )
-from jaxspline.kernels.slew import SlewProfile, _pos, profile_state_kernel
+from jaxspline.kernels.slew import SlewProfile, profile_state_kernel
 
 __all__ = [
     "initial_amplitude",
@@ -66,9 +68,6 @@ __all__ = [
 ]
 
 
-_prep = cast_broadcast
-
-
 # ----------------------------------------------------------------------------
 # the paper's tau design rule (eqs. 6, 7)
 # ----------------------------------------------------------------------------
@@ -76,7 +75,7 @@ _prep = cast_broadcast
 
 def _residual_kernel(tau, freq, damping, rate, accel):
     b = rate / accel
-    a0 = accel / (_pos(tau) * freq**3)
+    a0 = accel / (pos_or_one(tau) * freq**3)
     a0 = jnp.where(tau > 0, a0, jnp.full_like(a0, jnp.inf))
     return a0 * jnp.exp(-damping * freq * (2.0 * b - tau) / (2.0 * jnp.pi))
 
@@ -93,7 +92,7 @@ def initial_amplitude(tau, freq, accel):
     check_positive("tau", tau)
     check_positive("freq", freq)
     check_positive("accel", accel)
-    tau, freq, accel = _prep(tau=tau, freq=freq, accel=accel)
+    tau, freq, accel = cast_broadcast(tau=tau, freq=freq, accel=accel)
     return accel / (tau * freq**3)
 
 
@@ -119,11 +118,11 @@ def residual_amplitude(tau, freq, damping, rate, accel):
     check_nonnegative("damping", damping)
     check_positive("rate", rate)
     check_positive("accel", accel)
-    args = _prep(tau=tau, freq=freq, damping=damping, rate=rate, accel=accel)
+    args = cast_broadcast(tau=tau, freq=freq, damping=damping, rate=rate, accel=accel)
     return _residual_batched(*args)
 
 
-_residual_batched = jax.jit(jnp.vectorize(_residual_kernel))
+_residual_batched = batched(_residual_kernel)
 
 
 def min_mode_frequency(tolerance, rate, accel):
@@ -141,7 +140,7 @@ def min_mode_frequency(tolerance, rate, accel):
     check_positive("tolerance", tolerance)
     check_positive("rate", rate)
     check_positive("accel", accel)
-    tolerance, rate, accel = _prep(tolerance=tolerance, rate=rate, accel=accel)
+    tolerance, rate, accel = cast_broadcast(tolerance=tolerance, rate=rate, accel=accel)
     return jnp.cbrt(accel**2 / (rate * tolerance))
 
 
@@ -171,7 +170,7 @@ def tau_for_tolerance_kernel(tolerance, freq, damping, rate, accel, iters: int =
     b = rate / accel
     c = damping * freq / (2.0 * jnp.pi)
     k = jnp.log(accel / (tolerance * freq**3)) - 2.0 * c * b
-    hi = jnp.where(c * b > 1.0, 1.0 / _pos(c), b)
+    hi = jnp.where(c * b > 1.0, 1.0 / pos_or_one(c), b)
 
     def h(tau):
         return jnp.log(tau) - c * tau - k
@@ -193,7 +192,7 @@ def tau_for_tolerance_kernel(tolerance, freq, damping, rate, accel, iters: int =
     return jnp.where(exists, tau1, jnp.full_like(tau1, jnp.inf))
 
 
-_tau_batched = jax.jit(jnp.vectorize(tau_for_tolerance_kernel))
+_tau_batched = batched(tau_for_tolerance_kernel)
 
 
 def tau_for_tolerance(tolerance, freq, damping, rate, accel):
@@ -211,7 +210,7 @@ def tau_for_tolerance(tolerance, freq, damping, rate, accel):
     check_nonnegative("damping", damping)
     check_positive("rate", rate)
     check_positive("accel", accel)
-    args = _prep(tolerance=tolerance, freq=freq, damping=damping, rate=rate, accel=accel)
+    args = cast_broadcast(tolerance=tolerance, freq=freq, damping=damping, rate=rate, accel=accel)
     return _tau_batched(*args)
 
 
@@ -275,7 +274,7 @@ def _body_rate_kernel(tau, T, T0, T1, accel, t, freq, damping, gain):
     return w_ref + mode_rate_kernel(tau, T, T0, T1, accel, t, freq, damping, gain)
 
 
-_body_rate_batched = jax.jit(jnp.vectorize(_body_rate_kernel))
+_body_rate_batched = batched(_body_rate_kernel)
 
 
 def flexible_body_rate(
@@ -335,7 +334,7 @@ def flexible_body_rate(
         nu, zeta = nu * (1.0 + k) ** 0.5, zeta * (1.0 + k) ** 0.5
         if is_concrete(zeta) and (np.asarray(zeta) >= 1).any():
             raise ValueError(f"damping is >= 1 after the constrained->free conversion: {damping!r}")
-    args = _prep(
+    args = cast_broadcast(
         tau=profile.tau,
         T=profile.T,
         T0=profile.T0,

@@ -35,7 +35,15 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.kernels import attitude as _att
-from jaxspline.kernels._validate import as_float_array, check_finite, check_positive
+from jaxspline.kernels._batch import batched, map_chunked
+from jaxspline.kernels._safe import safe_sqrt
+from jaxspline.kernels._validate import (
+    as_float_array,
+    check_finite,
+    check_positive,
+    common_float,
+    finite_vector,
+)
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 __all__ = [
@@ -299,11 +307,6 @@ def _rates_sq(s, d1, d2, d3):
     return 4.0 * _cdot(w, w), 4.0 * _cdot(e, e), 4.0 * _cdot(j, j)
 
 
-def _safe_sqrt(x):
-    pos = x > 0
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, x, 1.0)), 0.0)
-
-
 # the whole join as one constant map: c = _HERMITE @ (p0, p0_τ, p0_ττ, p0_τττ, p1, ..., p1_τττ)
 _HERMITE = _exact_inverse([[_dmono(k, d, e) for k in range(8)] for e in (0, 1) for d in range(4)])
 
@@ -336,7 +339,7 @@ def _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples):
     (mw, me, mj), _ = jax.lax.scan(step, (z, z, z), tau)
     iT = 1.0 / Ts
     inf = jnp.asarray(jnp.inf, dt)
-    peaks = (_safe_sqrt(mw) * iT, _safe_sqrt(me) * (iT * iT), _safe_sqrt(mj) * (iT * iT * iT))
+    peaks = (safe_sqrt(mw) * iT, safe_sqrt(me) * (iT * iT), safe_sqrt(mj) * (iT * iT * iT))
     pw, pe, pj = (jnp.where(good, p, inf) for p in peaks)
     ok = good & (pw <= rate) & (pe <= accel) & (pj <= jerk) & jnp.isfinite(pw + pe + pj)
     return pw, pe, pj, ok
@@ -362,30 +365,27 @@ def maneuver_check_kernel(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, 
     return _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples)
 
 
-_v_join = jax.jit(jnp.vectorize(_join7, signature="(),(),(),(),(),(),(),(),()->(8)"))
-_v_spline = jax.jit(jnp.vectorize(_spline7, signature="(),(),(),(),(),(),(),(),()->(8)"))
-_v_plan = jax.jit(jnp.vectorize(_plan, signature="(4),(3),(3),(3),(4),(3),(3),(3),()->(4),(3,8)"))
-_v_aspline = jax.jit(
-    jnp.vectorize(_aspline, signature="(4),(3),(3),(4),(4),(4),(3),(3),()->(4),(3,8)")
-)
+_join_batched = batched(_join7, "(),(),(),(),(),(),(),(),()->(8)")
+_spline_batched = batched(_spline7, "(),(),(),(),(),(),(),(),()->(8)")
+_plan_batched = batched(_plan, "(4),(3),(3),(3),(4),(3),(3),(3),()->(4),(3,8)")
+_aspline_batched = batched(_aspline, "(4),(3),(3),(4),(4),(4),(3),(3),()->(4),(3,8)")
 
 
 @functools.lru_cache(maxsize=16)
-def _v_poly(deriv):
-    return jax.jit(jnp.vectorize(functools.partial(_poly, deriv=deriv), signature="(k),(),()->()"))
+def _poly_batched(deriv):
+    return batched(functools.partial(_poly, deriv=deriv), "(k),(),()->()")
 
 
-_v_eval = jax.jit(jnp.vectorize(_eval, signature="(4),(3,8),(),()->(4),(3),(3),(3)"))
+_eval_batched = batched(_eval, "(4),(3,8),(),()->(4),(3),(3),(3)")
 
 
 _CHUNK = 16384  # candidates per call of the public check (~0.5 kB of temporaries each)
 
 
 @functools.lru_cache(maxsize=16)
-def _v_check(n_samples):
+def _check_batched(n_samples):
     f = functools.partial(_check, n_samples=n_samples)
-    sig = "(4),(3),(3),(3),(4),(3),(3),(3),(),(),(),()->(),(),(),()"
-    return jax.jit(jnp.vectorize(f, signature=sig))
+    return batched(f, "(4),(3),(3),(3),(4),(3),(3),(3),(),(),(),()->(),(),(),()")
 
 
 # ----------------------------------------------------------------------------- public API
@@ -417,23 +417,10 @@ class ManeuverCheck(NamedTuple):
     feasible: jnp.ndarray
 
 
-def _vec(name, x, n):
-    arr = as_float_array(name, x)
-    if arr.ndim == 0 or arr.shape[-1] != n:
-        raise ValueError(f"{name} must have last axis of length {n}, got shape {arr.shape}")
-    check_finite(name, arr)
-    return arr
-
-
 def _dur(T):
     T = as_float_array("T", T)
     check_positive("T", T)
     return T
-
-
-def _same(*arrs):
-    dt = jnp.result_type(*arrs)
-    return tuple(jnp.asarray(a, dt) for a in arrs)
 
 
 def join7_coeffs(p0, v0, a0, j0, p1, v1, a1, j1, T):
@@ -453,7 +440,7 @@ def join7_coeffs(p0, v0, a0, j0, p1, v1, a1, j1, T):
     ]
     for n, a in zip(names, args, strict=True):
         check_finite(n, a)
-    return _v_join(*_same(*args, _dur(T)))
+    return _join_batched(*common_float(*args, _dur(T)))
 
 
 def spline7_coeffs(p0, v0, a0, p_third, p_two_thirds, p1, v1, a1, T):
@@ -469,7 +456,7 @@ def spline7_coeffs(p0, v0, a0, p_third, p_two_thirds, p1, v1, a1, T):
     args = [as_float_array(n, x) for n, x in zip(names, vals, strict=True)]
     for n, a in zip(names, args, strict=True):
         check_finite(n, a)
-    return _v_spline(*_same(*args, _dur(T)))
+    return _spline_batched(*common_float(*args, _dur(T)))
 
 
 def poly_eval(coeffs, T, t, deriv: int = 0):
@@ -487,14 +474,16 @@ def poly_eval(coeffs, T, t, deriv: int = 0):
     check_finite("coeffs", c)
     t = as_float_array("t", t)
     check_finite("t", t)
-    return _v_poly(deriv)(*_same(c, _dur(T), t))
+    return _poly_batched(deriv)(*common_float(c, _dur(T), t))
 
 
 def _states(q0, w0, e0, j0, q1, w1, e1, j1):
-    q0, q1 = _vec("q0", q0, 4), _vec("q1", q1, 4)
-    w0, e0, w1, e1 = (_vec(n, x, 3) for n, x in (("w0", w0), ("e0", e0), ("w1", w1), ("e1", e1)))
-    j0 = jnp.zeros_like(e0) if j0 is None else _vec("j0", j0, 3)
-    j1 = jnp.zeros_like(e1) if j1 is None else _vec("j1", j1, 3)
+    q0, q1 = finite_vector("q0", q0, 4), finite_vector("q1", q1, 4)
+    w0, e0, w1, e1 = (
+        finite_vector(n, x, 3) for n, x in (("w0", w0), ("e0", e0), ("w1", w1), ("e1", e1))
+    )
+    j0 = jnp.zeros_like(e0) if j0 is None else finite_vector("j0", j0, 3)
+    j1 = jnp.zeros_like(e1) if j1 is None else finite_vector("j1", j1, 3)
     return q0, w0, e0, j0, q1, w1, e1, j1
 
 
@@ -510,8 +499,8 @@ def maneuver_plan(q0, w0, e0, q1, w1, e1, T, j0=None, j1=None) -> Maneuver:
     Returns a ``Maneuver``.
     """
     st = _states(q0, w0, e0, j0, q1, w1, e1, j1)
-    args = _same(*st, _dur(T))
-    qr, c = _v_plan(*args)
+    args = common_float(*st, _dur(T))
+    qr, c = _plan_batched(*args)
     return Maneuver(qr, c, args[-1])
 
 
@@ -525,12 +514,14 @@ def attitude_spline(q0, w0, e0, q_third, q_two_thirds, q1, w1, e1, T) -> Maneuve
     ``maneuver_eval``).
     """
     q0, qa, qb, q1 = (
-        _vec(n, x, 4)
+        finite_vector(n, x, 4)
         for n, x in (("q0", q0), ("q_third", q_third), ("q_two_thirds", q_two_thirds), ("q1", q1))
     )
-    w0, e0, w1, e1 = (_vec(n, x, 3) for n, x in (("w0", w0), ("e0", e0), ("w1", w1), ("e1", e1)))
-    args = _same(q0, w0, e0, qa, qb, q1, w1, e1, _dur(T))
-    qr, c = _v_aspline(*args)
+    w0, e0, w1, e1 = (
+        finite_vector(n, x, 3) for n, x in (("w0", w0), ("e0", e0), ("w1", w1), ("e1", e1))
+    )
+    args = common_float(q0, w0, e0, qa, qb, q1, w1, e1, _dur(T))
+    qr, c = _aspline_batched(*args)
     return Maneuver(qr, c, args[-1])
 
 
@@ -547,7 +538,7 @@ def maneuver_eval(maneuver: Maneuver, t):
     t = as_float_array("t", t)
     check_finite("t", t)
     qr, c, T = maneuver
-    return _v_eval(*_same(qr, c, T, t))
+    return _eval_batched(*common_float(qr, c, T, t))
 
 
 def maneuver_check(
@@ -567,13 +558,13 @@ def maneuver_check(
         raise ValueError(f"n_samples must be an int >= 2, got {n_samples!r}")
     limits = validate_limits(limits)
     st = _states(q0, w0, e0, j0, q1, w1, e1, j1)
-    args = _same(*st, _dur(T))
+    args = common_float(*st, _dur(T))
     dt = args[0].dtype  # the limits follow the candidate's dtype
     lim = [
         as_float_array(f"limits.{n}", x, dt) for n, x in zip(limits._fields, limits, strict=True)
     ]
     args = (*args, *lim)
-    f = _v_check(n_samples)
+    f = _check_batched(n_samples)
     cores = (4, 3, 3, 3, 4, 3, 3, 3, 0, 0, 0, 0)  # trailing core length (0 = scalar)
     lead = [a.shape[: a.ndim - (k > 0)] for a, k in zip(args, cores, strict=True)]
     batch = jnp.broadcast_shapes(*lead)
@@ -587,8 +578,5 @@ def maneuver_check(
         )
         for a, k in zip(args, cores, strict=True)
     ]
-    pad = -size % _CHUNK
-    flat = [jnp.concatenate([a, jnp.repeat(a[:1], pad, axis=0)]) if pad else a for a in flat]
-    outs = [f(*(a[i : i + _CHUNK] for a in flat)) for i in range(0, size + pad, _CHUNK)]
-    res = (jnp.concatenate([o[k] for o in outs])[:size].reshape(batch) for k in range(4))
-    return ManeuverCheck(*res)
+    res = map_chunked(f, flat, _CHUNK, to_numpy=False)
+    return ManeuverCheck(*(r.reshape(batch) for r in res))

@@ -24,8 +24,8 @@ Two API layers:
   (infeasible = +inf / False / empty interval (+inf, -inf)); callers batch them
   with ``jax.jit(jax.vmap(...))``.
 * Public functions (``angle_interval``, ``is_reachable`` ...) validate concrete
-  inputs eagerly (ValueError naming the argument), broadcast, and call
-  ``jax.jit(jnp.vectorize(kernel))``.
+  inputs eagerly (ValueError naming the argument), broadcast, and call the kernel
+  batched once (``_batch.batched``: ``jax.jit(jnp.vectorize(kernel))``).
 
 Corrections to the paper (verified by the tests against integration, brute force and
 Ruckig): its eq. (3.2) three-link lower bound reads (b - b1)^2, correctly (b + b1)^2; its
@@ -41,15 +41,17 @@ when lo - tol <= a2 <= hi + tol with tol = r (|a1| + |a2| + 2 b T).
 
 from __future__ import annotations
 
-import jax
 import jax.numpy as jnp
 
+from jaxspline.kernels._batch import batched
+from jaxspline.kernels._safe import safe_div, safe_sqrt
 from jaxspline.kernels._validate import (
     as_float_array,
     broadcast_named,
     check_finite,
     check_nonnegative,
     check_positive,
+    common_float,
     float_dtype_of,
 )
 from jaxspline.kernels.limits import AxisLimits, validate_limits
@@ -83,28 +85,8 @@ RTOL_ULPS = 64.0
 # ----------------------------------------------------------------------------- helpers
 
 
-def _floats(*xs):
-    """Cast scalars to their common floating dtype (weak Python floats follow arrays)."""
-    dt = jnp.result_type(*xs)
-    if not jnp.issubdtype(dt, jnp.floating):
-        dt = jnp.result_type(float)
-    return tuple(jnp.asarray(x, dt) for x in xs)
-
-
 def _rtol(x):
     return RTOL_ULPS * jnp.finfo(jnp.result_type(x)).eps
-
-
-def _safe_div(num, den, fill=0.0):
-    """num/den where den != 0, else ``fill``; finite gradients both ways (double where)."""
-    ok = den != 0
-    return jnp.where(ok, num / jnp.where(ok, den, 1.0), fill)
-
-
-def _safe_sqrt(x):
-    """sqrt(max(x, 0)) with a finite gradient at and below 0."""
-    pos = x > 0
-    return jnp.where(pos, jnp.sqrt(jnp.where(pos, x, 1.0)), 0.0)
 
 
 def _hi(a1, b1, b2, T, b, d):
@@ -148,7 +130,7 @@ def angle_interval_kernel(a1, b1, b2, T, rate, accel):
       tolerance; rates are then clipped to [-b, b] and hi < lo from rounding collapses to
       the midpoint).
     """
-    a1, b1, b2, T, b, d = _floats(a1, b1, b2, T, rate, accel)
+    a1, b1, b2, T, b, d = common_float(a1, b1, b2, T, rate, accel)
     ok = _rates_ok(b1, b2, T, b, d)
     b1c = jnp.clip(b1, -b, b)
     b2c = jnp.clip(b2, -b, b)
@@ -168,7 +150,7 @@ def is_reachable_kernel(a1, b1, a2, b2, T, rate, accel):
       boundary cases evaluated in floating point count as reachable. ~40 flops, no
       transcendental functions.
     """
-    a1, b1, a2, b2, T, b, d = _floats(a1, b1, a2, b2, T, rate, accel)
+    a1, b1, a2, b2, T, b, d = common_float(a1, b1, a2, b2, T, rate, accel)
     ok = _rates_ok(b1, b2, T, b, d)
     tol = _angle_tol(a1, a2, T, b)
     b1c = jnp.clip(b1, -b, b)
@@ -194,7 +176,7 @@ def reach_margin_kernel(a1, b1, a2, b2, T, rate, accel):
     gradient refinement: maximise min over channels, or penalise relu(-m). Floating-point
     boundary cases may give m slightly below 0 (see ``is_reachable_kernel`` tolerance).
     """
-    a1, b1, a2, b2, T, b, d = _floats(a1, b1, a2, b2, T, rate, accel)
+    a1, b1, a2, b2, T, b, d = common_float(a1, b1, a2, b2, T, rate, accel)
     hi = _hi(a1, b1, b2, T, b, d)
     lo = _lo(a1, b1, b2, T, b, d)
     scale = b / d
@@ -208,9 +190,9 @@ def _rate_lo(a1, b1, a2, T, b, d):
     upper = jnp.minimum(b, b1 + d * T)
     c = jnp.clip(2.0 * b - b1 - d * T, lower, upper)  # two-link for b2 <= c
     # two-link: hi = a1 + b1 T + dT^2/2 - x^2/(4d), x = b1 + dT - b2 (paper 3.6)
-    root2 = b1 + d * T - 2.0 * _safe_sqrt(d * (a1 + b1 * T + 0.5 * d * T * T - a2))
+    root2 = b1 + d * T - 2.0 * safe_sqrt(d * (a1 + b1 * T + 0.5 * d * T * T - a2))
     # three-link: hi = a1 + bT - ((b-b1)^2 + (b-b2)^2)/(2d)
-    root3 = b - _safe_sqrt(2.0 * d * (a1 - a2 + b * T) - (b - b1) ** 2)
+    root3 = b - safe_sqrt(2.0 * d * (a1 - a2 + b * T) - (b - b1) ** 2)
     r = jnp.where(a2 <= _hi(a1, b1, c, T, b, d), root2, root3)
     r = jnp.where(a2 <= _hi(a1, b1, lower, T, b, d), lower, r)
     return jnp.clip(r, lower, upper)
@@ -229,7 +211,7 @@ def rate_interval_kernel(a1, b1, a2, T, rate, accel):
       when |b1| > b or a2 is outside [lo(L), hi(U)] (module tolerance applies).
       (The paper's steps 3-7 of its second algorithm are garbled; this is re-derived.)
     """
-    a1, b1, a2, T, b, d = _floats(a1, b1, a2, T, rate, accel)
+    a1, b1, a2, T, b, d = common_float(a1, b1, a2, T, rate, accel)
     r = _rtol(a1)
     tol = _angle_tol(a1, a2, T, b)
     b1c = jnp.clip(b1, -b, b)
@@ -272,7 +254,7 @@ def envelopes_kernel(a1, b1, b2, T, rate, accel, t):
     Arguments as in ``angle_interval_kernel``. Infeasible rates (see there) give
     (+inf, -inf).
     """
-    a1, b1, b2, T, b, d, t = _floats(a1, b1, b2, T, rate, accel, t)
+    a1, b1, b2, T, b, d, t = common_float(a1, b1, b2, T, rate, accel, t)
     ok = _rates_ok(b1, b2, T, b, d)
     b1c = jnp.clip(b1, -b, b)
     b2c = jnp.clip(b2, -b, b)
@@ -291,13 +273,13 @@ def transfer_kernel(a1, b1, a2, b2, T, rate, accel, t):
     right-continuous (at t = T the last piece's value); t is clipped to [0, T].
     Returns (+inf, +inf, +inf) when (a2, b2) is not reachable (``is_reachable_kernel``).
     """
-    a1, b1, a2, b2, T, b, d, t = _floats(a1, b1, a2, b2, T, rate, accel, t)
+    a1, b1, a2, b2, T, b, d, t = common_float(a1, b1, a2, b2, T, rate, accel, t)
     ok = is_reachable_kernel(a1, b1, a2, b2, T, b, d)
     b1c = jnp.clip(b1, -b, b)
     b2c = jnp.clip(b2, -b, b)
     hi = _hi(a1, b1c, b2c, T, b, d)
     lo = _lo(a1, b1c, b2c, T, b, d)
-    lam = jnp.clip(_safe_div(a2 - lo, hi - lo, 0.5), 0.0, 1.0)
+    lam = jnp.clip(safe_div(a2 - lo, hi - lo, 0.5), 0.0, 1.0)
     lam = jnp.where(hi > lo, lam, 0.5)
     up = _env_hi(a1, b1c, b2c, T, b, d, t)
     dn = _env_lo(a1, b1c, b2c, T, b, d, t)
@@ -319,12 +301,12 @@ def _h_region(b1, b2, D, b, d):
     e0 = (b1 + b2) * jnp.abs(b1 - b2) / (2.0 * d)
     h_min = jnp.where(jnp.maximum(b1, b2) < 0, -s2 / d, e0)
     nonempty = h_min < D
-    s = _safe_sqrt(s2 + d * D)
+    s = safe_sqrt(s2 + d * D)
     num = q * q + d * D  # = s^2 - p^2
     # larger root, cancellation-free for p > 0
-    plus = jnp.where(p > 0, 2.0 * _safe_div(num, d * (s + p)), 2.0 * (s - p) / d)
+    plus = jnp.where(p > 0, 2.0 * safe_div(num, d * (s + p)), 2.0 * (s - p) / d)
     # smaller root, cancellation-free for p < 0
-    minus = jnp.where(p < 0, -2.0 * _safe_div(num, d * (s - p)), -2.0 * (s + p) / d)
+    minus = jnp.where(p < 0, -2.0 * safe_div(num, d * (s - p)), -2.0 * (s + p) / d)
     k = (b - b1) ** 2 + (b - b2) ** 2
     lin = (D + k / (2.0 * d)) / b
     h_b = (b * b - s2) / d  # H at the two-/three-link switch T = 2(b - p)/d
@@ -348,7 +330,7 @@ def feasible_durations_kernel(a1, b1, a2, b2, rate, accel):
       closed forms of ``_h_region``; |D - E0| <= tol (module tolerance with b^2/d) counts
       as D = E0 (T0 itself feasible).
     """
-    a1, b1, a2, b2, b, d = _floats(a1, b1, a2, b2, rate, accel)
+    a1, b1, a2, b2, b, d = common_float(a1, b1, a2, b2, rate, accel)
     r = _rtol(a1)
     ok = (jnp.abs(b1) <= b * (1.0 + r)) & (jnp.abs(b2) <= b * (1.0 + r))
     b1 = jnp.clip(b1, -b, b)
@@ -387,15 +369,15 @@ def _d_hi(b1, b2, D, T, b):
     p = 0.5 * (b1 + b2)
     q = 0.5 * (b1 - b2)
     # H at the switch d_b = 2(b - p)/T: pT + (b - p)T/2 - q^2 T/(2(b - p))
-    h_b = p * T + 0.5 * (b - p) * T - 0.5 * T * _safe_div(q * q, b - p)
+    h_b = p * T + 0.5 * (b - p) * T - 0.5 * T * safe_div(q * q, b - p)
     # two-link: (T^2/4) d^2 + (pT - D) d - q^2 = 0, non-negative root
     B = p * T - D
-    sq = _safe_sqrt(B * B + T * T * q * q)
-    d2 = jnp.where(B > 0, _safe_div(2.0 * q * q, B + sq), 2.0 * _safe_div(sq - B, T * T))
+    sq = safe_sqrt(B * B + T * T * q * q)
+    d2 = jnp.where(B > 0, safe_div(2.0 * q * q, B + sq), 2.0 * safe_div(sq - B, T * T))
     # three-link: bT - K/(2d) = D
     k = (b - b1) ** 2 + (b - b2) ** 2
     den = 2.0 * (b * T - D)
-    d3 = jnp.where(den > 0, _safe_div(k, den), jnp.inf)
+    d3 = jnp.where(den > 0, safe_div(k, den), jnp.inf)
     return jnp.where(D <= h_b, d2, d3)
 
 
@@ -410,7 +392,7 @@ def min_peak_accel_kernel(a1, b1, a2, b2, T, rate):
     its mirror image. Returns +inf when |b_i| > b (1 + r) or no d works; for T = 0, 0 if the
     states coincide (within tolerance) else +inf. d* <= d  <=>  is_reachable(..., d).
     """
-    a1, b1, a2, b2, T, b = _floats(a1, b1, a2, b2, T, rate)
+    a1, b1, a2, b2, T, b = common_float(a1, b1, a2, b2, T, rate)
     r = _rtol(a1)
     ok = (jnp.abs(b1) <= b * (1.0 + r)) & (jnp.abs(b2) <= b * (1.0 + r))
     b1 = jnp.clip(b1, -b, b)
@@ -430,14 +412,14 @@ def min_peak_accel_kernel(a1, b1, a2, b2, T, rate):
 # ----------------------------------------------------------------------------- batched
 
 
-_angle_interval_v = jax.jit(jnp.vectorize(angle_interval_kernel))
-_rate_interval_v = jax.jit(jnp.vectorize(rate_interval_kernel))
-_is_reachable_v = jax.jit(jnp.vectorize(is_reachable_kernel))
-_reach_margin_v = jax.jit(jnp.vectorize(reach_margin_kernel))
-_envelopes_v = jax.jit(jnp.vectorize(envelopes_kernel))
-_transfer_v = jax.jit(jnp.vectorize(transfer_kernel))
-_feasible_durations_v = jax.jit(jnp.vectorize(feasible_durations_kernel))
-_min_peak_accel_v = jax.jit(jnp.vectorize(min_peak_accel_kernel))
+_angle_interval_batched = batched(angle_interval_kernel)
+_rate_interval_batched = batched(rate_interval_kernel)
+_is_reachable_batched = batched(is_reachable_kernel)
+_reach_margin_batched = batched(reach_margin_kernel)
+_envelopes_batched = batched(envelopes_kernel)
+_transfer_batched = batched(transfer_kernel)
+_feasible_durations_batched = batched(feasible_durations_kernel)
+_min_peak_accel_batched = batched(min_peak_accel_kernel)
 
 
 def _prepare(limits, need_accel=True, **named):
@@ -463,7 +445,7 @@ def angle_interval(a1, b1, b2, T, limits: AxisLimits):
     a1 [rad], b1, b2 [rad/s], T [s] (>= 0) broadcast together; limits = AxisLimits(rate b,
     accel d) (jerk ignored). Formula: ``angle_interval_kernel``. Empty = (+inf, -inf).
     """
-    return _angle_interval_v(*_prepare(limits, a1=a1, b1=b1, b2=b2, T=T))
+    return _angle_interval_batched(*_prepare(limits, a1=a1, b1=b1, b2=b2, T=T))
 
 
 def rate_interval(a1, b1, a2, T, limits: AxisLimits):
@@ -471,7 +453,7 @@ def rate_interval(a1, b1, a2, T, limits: AxisLimits):
 
     Formula and derivation: ``rate_interval_kernel``. Empty = (+inf, -inf).
     """
-    return _rate_interval_v(*_prepare(limits, a1=a1, b1=b1, a2=a2, T=T))
+    return _rate_interval_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, T=T))
 
 
 def is_reachable(a1, b1, a2, b2, T, limits: AxisLimits):
@@ -479,7 +461,7 @@ def is_reachable(a1, b1, a2, b2, T, limits: AxisLimits):
 
     Exact duration T (not "T or longer"). Tolerance: ``is_reachable_kernel``.
     """
-    return _is_reachable_v(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
+    return _is_reachable_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
 
 
 def reach_margin(a1, b1, a2, b2, T, limits: AxisLimits):
@@ -487,7 +469,7 @@ def reach_margin(a1, b1, a2, b2, T, limits: AxisLimits):
 
     Continuous and a.e. differentiable; definition and rationale in ``reach_margin_kernel``.
     """
-    return _reach_margin_v(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
+    return _reach_margin_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
 
 
 def envelopes(a1, b1, b2, T, limits: AxisLimits, t):
@@ -496,7 +478,7 @@ def envelopes(a1, b1, b2, T, limits: AxisLimits, t):
     See ``envelopes_kernel``; t broadcasts with the other arguments.
     """
     a1, b1, b2, T, t, rate, accel = _prepare(limits, a1=a1, b1=b1, b2=b2, T=T, t=t)
-    return _envelopes_v(a1, b1, b2, T, rate, accel, t)
+    return _envelopes_batched(a1, b1, b2, T, rate, accel, t)
 
 
 def transfer(a1, b1, a2, b2, T, limits: AxisLimits, t):
@@ -505,7 +487,7 @@ def transfer(a1, b1, a2, b2, T, limits: AxisLimits, t):
     Convex combination of the envelopes; see ``transfer_kernel``. +inf when unreachable.
     """
     a1, b1, a2, b2, T, t, rate, accel = _prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T, t=t)
-    return _transfer_v(a1, b1, a2, b2, T, rate, accel, t)
+    return _transfer_batched(a1, b1, a2, b2, T, rate, accel, t)
 
 
 def feasible_durations(a1, b1, a2, b2, limits: AxisLimits):
@@ -514,7 +496,7 @@ def feasible_durations(a1, b1, a2, b2, limits: AxisLimits):
     Example b1 = b2 = b, a2 - a1 = D > 0: t_min = D/b, blocked =
     (2(b - sqrt(b^2 - dD))/d, 2(b + sqrt(b^2 - dD))/d). See ``feasible_durations_kernel``.
     """
-    return _feasible_durations_v(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2))
+    return _feasible_durations_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2))
 
 
 def min_transfer_time(a1, b1, a2, b2, limits: AxisLimits):
@@ -532,4 +514,4 @@ def min_peak_accel(a1, b1, a2, b2, T, rate):
     transition (seed retarget-scan eq. 13); formula in ``min_peak_accel_kernel``.
     """
     args = _prepare(None, need_accel=False, a1=a1, b1=b1, a2=a2, b2=b2, T=T, rate=rate)
-    return _min_peak_accel_v(*args)
+    return _min_peak_accel_batched(*args)

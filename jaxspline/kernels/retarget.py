@@ -71,6 +71,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxspline.kernels._batch import batched
+from jaxspline.kernels._safe import safe_sqrt
 from jaxspline.kernels._validate import (
     as_float_array,
     broadcast_named,
@@ -134,9 +136,7 @@ def _unbounded_peak(a1, b1, a2, b2, T):
     D = a2 - a1 - 0.5 * T * (b1 + b2)
     dv = b2 - b1
     q = 4.0 * D * D + (T * dv) ** 2
-    pos = q > 0
-    sq = jnp.where(pos, jnp.sqrt(jnp.where(pos, q, 1.0)), 0.0)
-    return (2.0 * jnp.abs(D) + sq) / (T * T)
+    return (2.0 * jnp.abs(D) + safe_sqrt(q)) / (T * T)
 
 
 def _hi_lo(a1, b1, b2, T, d, rate):
@@ -196,7 +196,7 @@ def _control_from_peak(a1, b1, a2, b2, T, rate, d):
     return ChannelControl(d, s, t1, t2)
 
 
-_channel_vec = jax.jit(jnp.vectorize(min_peak_channel_kernel))
+_channel_batched = batched(min_peak_channel_kernel)
 
 
 def _prep(**named):
@@ -218,7 +218,7 @@ def min_peak_channel(a1, b1, a2, b2, T, rate=float("inf")):
     check_positive("T", T)
     check_positive("rate", rate, allow_inf=True)
     args = _prep(a1=a1, b1=b1, a2=a2, b2=b2, T=T, rate=rate)
-    return ChannelControl(*_channel_vec(*args))
+    return ChannelControl(*_channel_batched(*args))
 
 
 def channel_control_eval(ctrl: ChannelControl, t):
@@ -524,7 +524,7 @@ def _retarget_fn(max_iter, steps, method):
         def k(*a):
             return _retarget_kernel(*a, max_iter=max_iter, steps=steps, method=method)
 
-        _retarget_cache[key] = jax.jit(jnp.vectorize(k, signature=_SIG))
+        _retarget_cache[key] = batched(k, _SIG)
     return _retarget_cache[key]
 
 

@@ -20,10 +20,11 @@ from __future__ import annotations
 import functools
 from typing import NamedTuple
 
-import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxspline.kernels._batch import batched
+from jaxspline.kernels._safe import pos_or_one, safe_sqrt
 from jaxspline.kernels._validate import (
     cast_broadcast,
     check_finite,
@@ -54,14 +55,6 @@ __all__ = [
 # ----------------------------------------------------------------------------
 
 
-def _pos(x):
-    """Double-where guard: ``x`` where it is > 0, else 1 (safe for sqrt / division)."""
-    return jnp.where(x > 0, x, jnp.ones_like(x))
-
-
-_prep = cast_broadcast
-
-
 # ----------------------------------------------------------------------------
 # rigid-body time-optimal models
 # ----------------------------------------------------------------------------
@@ -78,7 +71,7 @@ def bang_bang_time_kernel(angle, accel):
     Reference: SPEC section 2 (rigid-body models).
     """
     phi = jnp.abs(angle)
-    return jnp.where(phi > 0, 2.0 * jnp.sqrt(_pos(phi) / accel), jnp.zeros_like(phi))
+    return jnp.where(phi > 0, 2.0 * jnp.sqrt(pos_or_one(phi) / accel), jnp.zeros_like(phi))
 
 
 def bang_coast_bang_time_kernel(angle, rate, accel):
@@ -110,7 +103,7 @@ def _scurve_acc_time(v, accel, jerk):
     v_tri = jnp.where(full, jnp.ones_like(v), v)
     v_full = jnp.where(full, v, jnp.ones_like(v))
     tri = v_tri / jerk
-    t_tri = jnp.where(tri > 0, 2.0 * jnp.sqrt(_pos(tri)), jnp.zeros_like(tri))
+    t_tri = jnp.where(tri > 0, 2.0 * jnp.sqrt(pos_or_one(tri)), jnp.zeros_like(tri))
     return jnp.where(full, v_full / accel + accel / jerk, t_tri)
 
 
@@ -157,7 +150,7 @@ def scurve_time_kernel(angle, rate, accel, jerk):
     cruise = v_unb > rate
     # no-cruise durations
     q = 0.5 * phi_s / jerk
-    t_small = jnp.where(q > 0, 4.0 * jnp.cbrt(_pos(q)), jnp.zeros_like(q))
+    t_small = jnp.where(q > 0, 4.0 * jnp.cbrt(pos_or_one(q)), jnp.zeros_like(q))
     t_large = 2.0 * (v_large / accel + accel / jerk)
     t_nocruise = jnp.where(small, t_small, t_large)
     # cruise duration
@@ -166,9 +159,9 @@ def scurve_time_kernel(angle, rate, accel, jerk):
     return jnp.where(cruise, t_cruise, t_nocruise)
 
 
-_bang_bang_batched = jax.jit(jnp.vectorize(bang_bang_time_kernel))
-_bang_coast_bang_batched = jax.jit(jnp.vectorize(bang_coast_bang_time_kernel))
-_scurve_batched = jax.jit(jnp.vectorize(scurve_time_kernel))
+_bang_bang_batched = batched(bang_bang_time_kernel)
+_bang_coast_bang_batched = batched(bang_coast_bang_time_kernel)
+_scurve_batched = batched(scurve_time_kernel)
 
 
 def _check_angle(angle):
@@ -187,7 +180,7 @@ def bang_bang_time(angle, accel):
     """
     _check_angle(angle)
     check_positive("accel", accel)
-    return _bang_bang_batched(*_prep(angle=angle, accel=accel))
+    return _bang_bang_batched(*cast_broadcast(angle=angle, accel=accel))
 
 
 def bang_coast_bang_time(angle, rate, accel):
@@ -206,7 +199,7 @@ def bang_coast_bang_time(angle, rate, accel):
     _check_angle(angle)
     check_positive("rate", rate, allow_inf=True)
     check_positive("accel", accel)
-    return _bang_coast_bang_batched(*_prep(angle=angle, rate=rate, accel=accel))
+    return _bang_coast_bang_batched(*cast_broadcast(angle=angle, rate=rate, accel=accel))
 
 
 def scurve_time(angle, rate, accel, jerk):
@@ -225,7 +218,7 @@ def scurve_time(angle, rate, accel, jerk):
     check_positive("rate", rate, allow_inf=True)
     check_positive("accel", accel)
     check_positive("jerk", jerk, allow_inf=True)
-    return _scurve_batched(*_prep(angle=angle, rate=rate, accel=accel, jerk=jerk))
+    return _scurve_batched(*cast_broadcast(angle=angle, rate=rate, accel=accel, jerk=jerk))
 
 
 # ----------------------------------------------------------------------------
@@ -270,11 +263,6 @@ class SlewProfile(NamedTuple):
     T0: jnp.ndarray
     T1: jnp.ndarray
     duration: jnp.ndarray
-
-
-def _sqrt0(x):
-    """sqrt(max(x, 0)) with value 0 and a zero (finite) gradient at x <= 0."""
-    return jnp.where(x > 0, jnp.sqrt(_pos(x)), jnp.zeros_like(x))
 
 
 def slew_profile_kernel(angle, rate, accel, tau, kind: str = "auto"):
@@ -324,10 +312,10 @@ def slew_profile_kernel(angle, rate, accel, tau, kind: str = "auto"):
     inf = jnp.full_like(a, jnp.inf)
     thr_b = 7.0 / 6.0 * b * b
     # A (+ coast beyond 2 b^2)
-    tau_a = jnp.minimum(_sqrt0(0.5 * a), b)
+    tau_a = jnp.minimum(safe_sqrt(0.5 * a), b)
     p_a = (tau_a, z, tau_a, jnp.maximum(a / b - 2.0 * b, 0.0), True)
     # B (+ coast beyond 7/6 b^2)
-    t_b = jnp.minimum(_sqrt0(6.0 / 7.0 * a), b)
+    t_b = jnp.minimum(safe_sqrt(6.0 / 7.0 * a), b)
     p_b = (z, t_b, 2.0 * t_b, jnp.maximum(a / b - 7.0 / 6.0 * b, 0.0), True)
     # C
     tau_c_raw = (6.0 * a / b - 7.0 * b) / 5.0
@@ -358,9 +346,7 @@ def slew_profile_kernel(angle, rate, accel, tau, kind: str = "auto"):
     )
 
 
-_profile_batched = {
-    k: jax.jit(jnp.vectorize(functools.partial(slew_profile_kernel, kind=k))) for k in _KINDS
-}
+_profile_batched = {k: batched(functools.partial(slew_profile_kernel, kind=k)) for k in _KINDS}
 
 
 def slew_profile(angle, rate, accel, tau=None, kind: str = "auto") -> SlewProfile:
@@ -395,7 +381,7 @@ def slew_profile(angle, rate, accel, tau=None, kind: str = "auto") -> SlewProfil
                 raise ValueError(
                     f"tau must be <= rate/accel (T = omega/eps - tau >= 0), got tau={tau!r}"
                 )
-    out = _profile_batched[kind](*_prep(angle=angle, rate=rate, accel=accel, tau=tau))
+    out = _profile_batched[kind](*cast_broadcast(angle=angle, rate=rate, accel=accel, tau=tau))
     return SlewProfile(*out)
 
 
@@ -412,7 +398,7 @@ def slew_profile_time(angle, rate, accel, tau=None, kind: str = "auto"):
 def _ramp_integrals(t, t0, t1):
     """Unit ramp 0 -> 1 on [t0, t1] (a step if t1 == t0) and its 1st/2nd integrals."""
     d = t1 - t0
-    d_s = _pos(d)
+    d_s = pos_or_one(d)
     u = jnp.clip(t - t0, 0.0, jnp.maximum(d, 0.0))  # time spent inside the ramp
     w = jnp.maximum(t - t1, 0.0)  # time after the ramp
     after = t >= t1
@@ -453,7 +439,7 @@ def profile_state_kernel(tau, T, T0, T1, accel, t):
     return accel * acc, accel * rate, accel * ang
 
 
-_state_batched = jax.jit(jnp.vectorize(profile_state_kernel))
+_state_batched = batched(profile_state_kernel)
 
 
 def profile_state(profile: SlewProfile, accel, t):
@@ -471,5 +457,7 @@ def profile_state(profile: SlewProfile, accel, t):
     """
     check_positive("accel", accel)
     check_finite("t", t)
-    args = _prep(tau=profile.tau, T=profile.T, T0=profile.T0, T1=profile.T1, accel=accel, t=t)
+    args = cast_broadcast(
+        tau=profile.tau, T=profile.T, T0=profile.T0, T1=profile.T1, accel=accel, t=t
+    )
     return _state_batched(*args)
