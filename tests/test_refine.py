@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _ref_refine import LinearRouteModel
 from test_screen import reach_kernels, ref_reachable  # noqa: F401
 
 from jaxspline.engine import refine, screen, sequence
@@ -21,7 +22,7 @@ def three_route_model():
     times (15, 20, 25, 30, 35 s) misses that interval. Channel 1 adds a small
     pitch-lead-like drift (0.001 rad/s of t0) and a slow scan on B.
     """
-    return refine.LinearRouteModel(
+    return LinearRouteModel(
         angle0=np.array([[0.0, 0.0], [0.3, 0.01], [0.0, 0.0]]),
         lead=np.array([[0.0, 0.0], [0.0, 0.001], [0.0, 0.0]]),
         scan_rate=np.array([[0.0, 0.0], [0.0, 0.0005], [0.0, 0.0]]),

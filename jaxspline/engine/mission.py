@@ -28,12 +28,11 @@ import numpy as np
 
 from jaxspline.geometry.frames import julian_date
 from jaxspline.geometry.orbit import CircularOrbit
+from jaxspline.geometry.routes import POINT, STRIP
 from jaxspline.kernels.limits import AxisLimits
 
 __all__ = [
     "MODELS",
-    "POINT",
-    "STRIP",
     "FlexMode",
     "Margins",
     "PlannerConfig",
@@ -45,7 +44,6 @@ __all__ = [
 ]
 
 MODELS = ("per_channel", "eigen_axis", "flexible")
-POINT, STRIP = 0, 1
 
 
 def _positive(name: str, value, allow_zero: bool = False) -> float:

@@ -59,7 +59,7 @@ import numpy as np
 from jax.sharding import Mesh, NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxspline.engine.options import RouteOptions
+from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
 from jaxspline.kernels._batch import padded_size
 from jaxspline.kernels._validate import check_positive
 from jaxspline.kernels.limits import AxisLimits, validate_limits
@@ -69,7 +69,6 @@ __all__ = [
     "screen_transitions",
     "screen_sequences",
     "screen_pairs",
-    "validate_options",
 ]
 
 
@@ -113,51 +112,6 @@ def _reach():
     from jaxspline.kernels import reach
 
     return reach
-
-
-def options_dtype(options: RouteOptions):
-    """Floating dtype the engine computes in: that of ``options.start_angle``."""
-    dt = jnp.result_type(options.start_angle)
-    if not jnp.issubdtype(dt, jnp.floating):
-        return jnp.result_type(float)
-    return jax.dtypes.canonicalize_dtype(dt)  # float64 -> float32 when x64 is off
-
-
-def validate_options(options: RouteOptions, name: str = "options") -> int:
-    """Eagerly check shapes and values of a RouteOptions table; return C.
-
-    Raises ValueError naming the field when shapes disagree (N options,
-    C channels), times are not finite, ``t_end < t_start`` or a boundary state is
-    NaN.
-    """
-    if not isinstance(options, RouteOptions):
-        raise ValueError(f"{name} must be a RouteOptions, got {type(options).__name__}")
-    n = np.shape(options.t_start)
-    if len(n) != 1:
-        raise ValueError(f"{name}.t_start must be 1-D [N], got shape {n}")
-    (nn,) = n
-    for f in ("route", "t_end", "value", "scan_ok"):
-        if np.shape(getattr(options, f)) != (nn,):
-            got = np.shape(getattr(options, f))
-            raise ValueError(f"{name}.{f} must have shape ({nn},), got {got}")
-    sa = np.shape(options.start_angle)
-    if len(sa) != 2 or sa[0] != nn:
-        raise ValueError(f"{name}.start_angle must have shape ({nn}, C), got {sa}")
-    for f in ("start_rate", "end_angle", "end_rate"):
-        if np.shape(getattr(options, f)) != sa:
-            got = np.shape(getattr(options, f))
-            raise ValueError(f"{name}.{f} must have shape {sa}, got {got}")
-    ts, te = np.asarray(options.t_start, float), np.asarray(options.t_end, float)
-    if not (np.isfinite(ts).all() and np.isfinite(te).all()):
-        raise ValueError(f"{name}.t_start/t_end must be finite")
-    bad = np.flatnonzero(te < ts)
-    if bad.size:
-        k = int(bad[0])
-        raise ValueError(f"{name}.t_end must be >= t_start, got t_end[{k}]={te[k]!r} < {ts[k]!r}")
-    for f in ("start_angle", "start_rate", "end_angle", "end_rate", "value"):
-        if np.isnan(np.asarray(getattr(options, f), float)).any():
-            raise ValueError(f"{name}.{f} must not contain NaN")
-    return sa[1]
 
 
 def _channel_limits(limits: AxisLimits, c: int, dtype):

@@ -31,8 +31,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jaxspline.engine.options import RouteOptions
-from jaxspline.engine.screen import Transitions, validate_options
+from jaxspline.engine.options import RouteOptions, validate_options
+from jaxspline.engine.screen import Transitions
 
 __all__ = ["Plan", "greedy", "beam_search", "exact_plan", "plan_value"]
 

@@ -26,8 +26,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jaxspline.engine.options import RouteOptions
-from jaxspline.engine.screen import options_dtype, validate_options
+from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 __all__ = ["ValidationReport", "validate_plan"]

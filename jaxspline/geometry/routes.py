@@ -27,31 +27,26 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.engine.options import RouteOptions
 from jaxspline.geometry.frames import (
     OMEGA_EARTH,
     ecef_to_geodetic,
     geodetic_to_ecef,
-    gmst,
-    sun_direction,
 )
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.geometry.pointing import Scene, aim_state, off_nadir_flat
 from jaxspline.kernels._batch import map_chunked
 from jaxspline.kernels._validate import check_finite, check_positive
-from jaxspline.kernels.limits import AxisLimits
 
 __all__ = [
     "POINT",
     "STRIP",
     "RouteSpec",
     "RouteSet",
-    "OptionInfo",
     "make_route_spec",
     "make_route_set",
-    "build_route_options",
     "strip_direction",
     "sample_scans",
+    "sample_aim_states",
     "exact_states",
     "TabulatedRouteModel",
     "tabulate_route_model",
@@ -134,22 +129,6 @@ def strip_direction(lat, lon, azimuth):
     return np.cos(az)[..., None] * north + np.sin(az)[..., None] * east
 
 
-class OptionInfo(NamedTuple):
-    """Per-option side data of :func:`build_route_options` (numpy arrays [N]).
-
-    speed: ground scan speed [m/s] (0 for points); t0: start time [s];
-    peak_rate, peak_accel: [N, C] max |rate| [rad/s], |accel| [rad/s^2] during the scan;
-    max_off_nadir: [N] [rad]; sun_elevation: [N] at the start point and t0 [rad].
-    """
-
-    speed: np.ndarray
-    t0: np.ndarray
-    peak_rate: np.ndarray
-    peak_accel: np.ndarray
-    max_off_nadir: np.ndarray
-    sun_elevation: np.ndarray
-
-
 def _sample_kernel(scene, p, t0, t):
     a, r, acc, offn = aim_state(scene, p, t0, t)
     return a, r, acc, offn
@@ -170,8 +149,12 @@ def _states_jit(scene, params, duration, route, t0):
     return t1, a[:k], r[:k], a[k:], r[k:]
 
 
-def _eval_chunked(scene, p, t0, t, chunk=8192, desc=None):
-    """aim_state at M (p [M, 8], t0 [M], t [M]) in padded chunks (one compiled shape)."""
+def sample_aim_states(scene, p, t0, t, chunk=8192, desc=None):
+    """aim_state at M (p [M, 8], t0 [M], t [M]) in padded chunks (one compiled shape).
+
+    Returns numpy (angle, rate, accel [M, 3], off_nadir [M]); ``desc`` labels a
+    progress bar (None: none).
+    """
     if t.size == 0:
         z = np.zeros((0, 3))
         return z, z, z, np.zeros(0)
@@ -192,7 +175,7 @@ def sample_scans(routes, route, t0, speed, t):
     route = np.asarray(route, np.int64)
     p = np.array(routes.params)[route]
     p[:, 6] = np.where(np.asarray(routes.kind)[route] == STRIP, speed, 0.0)
-    return _eval_chunked(routes.scene, p, np.asarray(t0, np.float64), np.asarray(t, np.float64))
+    return sample_aim_states(routes.scene, p, np.asarray(t0, np.float64), np.asarray(t, np.float64))
 
 
 class RouteSet(NamedTuple):
@@ -353,131 +336,6 @@ def _great_circle_end(lat, lon, az, length):
     east = np.stack([-np.sin(lon2), np.cos(lon2), np.zeros_like(lon2)], -1)
     az2 = np.arctan2(np.sum(-tan * east, -1), np.sum(-tan * north, -1))
     return lat2, lon2, az2
-
-
-def build_route_options(
-    routes: RouteSet,
-    limits: AxisLimits,
-    max_off_nadir: float,
-    *,
-    n_t0: int = 8,
-    scan_speeds=(7000.0,),
-    samples: int = 9,
-    epoch_jd: float | None = None,
-    sun_elevation_min: float | None = None,
-    chunk: int = 8192,
-    progress: bool = False,
-):
-    """Start options of every route: t0 grid x scan speeds, boundary states, ``scan_ok``.
-
-    For route r with a non-empty window, t0 takes ``n_t0`` equally spaced values in
-    [t0_min, t0_max] (one value if the window is a point); strips take every speed in
-    ``scan_speeds`` [m/s] (duration = length / speed), points one option per t0.
-    Each option's scan is sampled at ``samples`` equally spaced times in
-    [t0, t_end]; ``scan_ok`` requires at every sample |rate_c| <= limits.rate[c],
-    |accel_c| <= limits.accel[c], off-nadir <= ``max_off_nadir`` [rad], and (if
-    ``sun_elevation_min`` [rad] and ``epoch_jd`` are given) a Sun elevation at the
-    start point >= the minimum at t0. States come from the exact pointing law with
-    autodiff rates (SPEC section 3, retarget-scan pattern, Steps 1-3). Jerk limits
-    are not checked on the scan.
-
-    Returns:
-      (RouteOptions with N options, OptionInfo). The options keep ``scan_ok == False``
-      rows; the caller drops them before screening.
-    """
-    if n_t0 < 1 or samples < 2:
-        raise ValueError(f"n_t0 must be >= 1 and samples >= 2, got n_t0={n_t0}, samples={samples}")
-    speeds = np.atleast_1d(np.asarray(scan_speeds, np.float64))
-    check_positive("scan_speeds", speeds)
-    rate_lim = np.broadcast_to(np.asarray(limits.rate, np.float64), (3,))
-    acc_lim = np.broadcast_to(np.asarray(limits.accel, np.float64), (3,))
-    kind = np.asarray(routes.kind)
-    t0_min, t0_max = np.asarray(routes.t0_min), np.asarray(routes.t0_max)
-    length, duration = np.asarray(routes.length), np.asarray(routes.duration)
-    params = np.asarray(routes.params)
-    rows_r, rows_t0, rows_v = [], [], []
-    for r in np.nonzero(t0_min <= t0_max)[0]:
-        t0s = (
-            np.linspace(t0_min[r], t0_max[r], n_t0) if t0_max[r] > t0_min[r] else t0_min[r : r + 1]
-        )
-        vs = speeds if kind[r] == STRIP else np.zeros(1)
-        rr, tt, vv = np.meshgrid([r], t0s, vs, indexing="ij")
-        rows_r.append(rr.ravel())
-        rows_t0.append(tt.ravel())
-        rows_v.append(vv.ravel())
-    dtype = jnp.result_type(float)
-    c = 3
-    if not rows_r:
-        empty = np.zeros((0, c))
-        z = np.zeros(0)
-        opts = RouteOptions(
-            *(jnp.asarray(x) for x in (z.astype(np.int64), z, z, empty, empty, empty, empty, z)),
-            scan_ok=jnp.zeros(0, bool),
-        )
-        return opts, OptionInfo(z, z, empty, empty, z, z)
-    route = np.concatenate(rows_r)
-    t0 = np.concatenate(rows_t0)
-    speed = np.concatenate(rows_v)
-    n = route.size
-    p = params[route].copy()
-    p[:, 6] = speed
-    dur = np.where(
-        kind[route] == STRIP, length[route] / np.where(speed > 0, speed, 1.0), duration[route]
-    )
-    frac = np.linspace(0.0, 1.0, samples)
-    ts = t0[:, None] + dur[:, None] * frac[None, :]
-    ang, rate, acc, offn = _eval_chunked(
-        routes.scene,
-        np.repeat(p, samples, axis=0),
-        np.repeat(t0, samples),
-        ts.ravel(),
-        chunk,
-        "route options" if progress else None,
-    )
-    ang = ang.reshape(n, samples, c)
-    rate = rate.reshape(n, samples, c)
-    acc = acc.reshape(n, samples, c)
-    offn = offn.reshape(n, samples)
-    peak_rate = np.abs(rate).max(1)
-    peak_acc = np.abs(acc).max(1)
-    max_off = offn.max(1)
-    ok = (
-        (peak_rate <= rate_lim).all(-1)
-        & (peak_acc <= acc_lim).all(-1)
-        & (max_off <= max_off_nadir + 1e-9)
-        & np.isfinite(ang).all((1, 2))
-    )
-    sun_el = np.full(n, np.nan)
-    if epoch_jd is not None:
-        jd = epoch_jd + t0 / 86400.0
-        sun = sun_direction(jd)
-        th = gmst(jd)
-        sun_e = np.stack(
-            [
-                np.cos(th) * sun[:, 0] + np.sin(th) * sun[:, 1],
-                -np.sin(th) * sun[:, 0] + np.cos(th) * sun[:, 1],
-                sun[:, 2],
-            ],
-            -1,
-        )
-        la, lo = np.asarray(routes.lat)[route], np.asarray(routes.lon)[route]
-        up = np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], -1)
-        sun_el = np.arcsin(np.clip(np.sum(up * sun_e, -1), -1.0, 1.0))
-        if sun_elevation_min is not None:
-            ok &= sun_el >= sun_elevation_min
-    opts = RouteOptions(
-        route=jnp.asarray(route),
-        t_start=jnp.asarray(t0, dtype),
-        t_end=jnp.asarray(t0 + dur, dtype),
-        start_angle=jnp.asarray(ang[:, 0], dtype),
-        start_rate=jnp.asarray(rate[:, 0], dtype),
-        end_angle=jnp.asarray(ang[:, -1], dtype),
-        end_rate=jnp.asarray(rate[:, -1], dtype),
-        value=jnp.asarray(np.asarray(routes.val)[route], dtype),
-        scan_ok=jnp.asarray(ok),
-    )
-    info = OptionInfo(speed, t0, peak_rate, peak_acc, max_off, sun_el)
-    return opts, info
 
 
 class TabulatedRouteModel(NamedTuple):
