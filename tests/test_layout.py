@@ -3,8 +3,8 @@
 Parses every module of the package with ``ast`` (no import side effects): a
 module of the kernels imports nothing above the kernels, geometry imports the
 kernels at most, the engine never imports the product (top-level modules,
-``aeossp``). The aeossp checker imports nothing of the package but the case
-reader: it shares no code with what it checks.
+``aeossp``). The aeossp checker (``check``, ``check_frames``) imports nothing of
+the package but the case reader: it shares no code with what it checks.
 """
 
 from __future__ import annotations
@@ -70,10 +70,12 @@ def test_imports_point_down(module, path, is_pkg):
     assert not up, f"{module} (layer {layer}) imports from above: {up}"
 
 
-def test_aeossp_checker_is_independent():
-    path = ROOT / "aeossp" / "check.py"
-    deps = imports_of("jaxspline.aeossp.check", path, False)
-    assert deps <= {"jaxspline.aeossp", "jaxspline.aeossp.case"}, deps
+@pytest.mark.parametrize("name", ["check", "check_frames"])
+def test_aeossp_checker_is_independent(name):
+    path = ROOT / "aeossp" / f"{name}.py"
+    deps = imports_of(f"jaxspline.aeossp.{name}", path, False)
+    allowed = {"jaxspline.aeossp", "jaxspline.aeossp.case", "jaxspline.aeossp.check_frames"}
+    assert deps <= allowed, deps
 
 
 def test_the_rule_can_fail(tmp_path):

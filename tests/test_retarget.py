@@ -17,8 +17,8 @@ from jax.test_util import check_grads
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
+from jaxspline import kernels as R  # retarget and retarget_channel
 from jaxspline.kernels import reach
-from jaxspline.kernels import retarget as R
 
 DEG = np.pi / 180.0
 AS = R.ARCSEC
