@@ -19,7 +19,7 @@ class LinearRouteModel(NamedTuple):
     runs at the constant channel rate ``scan_rate[r]`` [rad/s], so the end angle
     is the start angle + scan_rate * duration. Windows are
     ``[t0_min[r], t0_max[r]]`` [s]. All fields are arrays: angle0, lead,
-    scan_rate [R, C]; t_ref, duration, t0_min, t0_max, values [R].
+    scan_rate [R, C]; t_ref, duration, t0_min, t0_max, value [R].
     """
 
     angle0: jnp.ndarray
@@ -29,7 +29,7 @@ class LinearRouteModel(NamedTuple):
     duration: jnp.ndarray
     t0_min: jnp.ndarray
     t0_max: jnp.ndarray
-    values: jnp.ndarray
+    value: jnp.ndarray
 
     def states(self, route, t0):
         """(t_end [K], start_angle [K, C], start_rate, end_angle, end_rate) at t0 [K] [s]."""
@@ -46,13 +46,13 @@ class LinearRouteModel(NamedTuple):
         """(t0_min [K], t0_max [K]) [s]."""
         return jnp.asarray(self.t0_min)[route], jnp.asarray(self.t0_max)[route]
 
-    def value(self, route):
+    def value_of(self, route):
         """Value [K] of the routes."""
-        return jnp.asarray(self.values)[route]
+        return jnp.asarray(self.value)[route]
 
     def grid_options(self, per_route: int) -> RouteOptions:
         """RouteOptions with ``per_route`` start times evenly spaced over each window."""
-        r_count = np.shape(self.values)[0]
+        r_count = np.shape(self.value)[0]
         frac = np.linspace(0.0, 1.0, per_route) if per_route > 1 else np.array([0.5])
         route = np.repeat(np.arange(r_count), frac.size)
         lo, hi = (np.asarray(x) for x in self.window(route))
@@ -66,6 +66,6 @@ class LinearRouteModel(NamedTuple):
             start_rate=sr,
             end_angle=ea,
             end_rate=er,
-            value=np.asarray(self.value(route)),
+            value=np.asarray(self.value_of(route)),
             scan_ok=np.ones(route.size, bool),
         )

@@ -3,7 +3,7 @@
 ``mission`` (the scenario's types) and ``options`` (the option table) in;
 ``opportunities`` -> ``screen`` / ``models`` -> ``sequence`` and ``search/``
 (greedy, Lagrangian/DP bound, exact, LNS, battery) -> ``refine`` /
-``refine_starts`` -> ``validate`` / ``plan_check`` (independent re-checks);
+``refine_starts`` -> ``steps_check`` / ``plan_check`` (independent re-checks);
 ``planner.plan`` runs the pipeline and returns a ``result.PlanResult``. The
 engine never imports the product layer.
 
@@ -13,9 +13,18 @@ The planner's internal stages (``opportunities``, ``models``, ``refine_starts``,
 namespaces: ``jaxspline.engine.search.solve``.
 """
 
-from jaxspline.engine import mission, options, planner, refine, result, screen, sequence, validate
+from jaxspline.engine import (
+    mission,
+    options,
+    planner,
+    refine,
+    result,
+    screen,
+    sequence,
+    steps_check,
+)
 
-_MODULES = (mission, options, screen, sequence, refine, validate, planner, result)
+_MODULES = (mission, options, screen, sequence, refine, steps_check, planner, result)
 __all__ = [name for m in _MODULES for name in m.__all__]
 
 from jaxspline.engine.mission import *  # noqa: E402, F403
@@ -25,4 +34,4 @@ from jaxspline.engine.refine import *  # noqa: E402, F403
 from jaxspline.engine.result import *  # noqa: E402, F403
 from jaxspline.engine.screen import *  # noqa: E402, F403
 from jaxspline.engine.sequence import *  # noqa: E402, F403
-from jaxspline.engine.validate import *  # noqa: E402, F403
+from jaxspline.engine.steps_check import *  # noqa: E402, F403

@@ -84,14 +84,14 @@ class RouteModel(Protocol):
     and returns ``(t_end [K], start_angle [K, C], start_rate [K, C],
     end_angle [K, C], end_rate [K, C])``. It must be jit-able and differentiable
     in ``t0``. ``window(route)`` returns ``(t0_min [K], t0_max [K])`` and
-    ``value(route)`` the value [K].
+    ``value_of(route)`` the value [K].
     """
 
     def states(self, route, t0): ...
 
     def window(self, route): ...
 
-    def value(self, route): ...
+    def value_of(self, route): ...
 
 
 def options_dtype(options: RouteOptions):
@@ -273,7 +273,7 @@ def build_route_options(
         start_rate=jnp.asarray(rate[:, 0], dtype),
         end_angle=jnp.asarray(ang[:, -1], dtype),
         end_rate=jnp.asarray(rate[:, -1], dtype),
-        value=jnp.asarray(np.asarray(routes.val)[route], dtype),
+        value=jnp.asarray(np.asarray(routes.value)[route], dtype),
         scan_ok=jnp.asarray(ok),
     )
     info = OptionInfo(speed, t0, peak_rate, peak_acc, max_off, sun_el)

@@ -11,7 +11,7 @@ every constraint of the scenario *without* margins from the kernels:
 * maneuvers: rest-to-rest models need the exact slew time
   (:func:`jaxspline.engine.models.slew_time`) plus settling within the gap; per-channel
   satellites' transfers (from rest at zero angles at t = 0 for the first one) are
-  checked by sampling their Theorem-1 trajectories (:func:`jaxspline.validate_plan`);
+  checked by sampling their Theorem-1 trajectories (:func:`jaxspline.check_steps`);
 * battery: the conservative profile (:class:`jaxspline.engine.search.BatteryModel`) with
   margin 0 stays >= 0.
 
@@ -26,7 +26,7 @@ from jaxspline.engine.mission import Scenario
 from jaxspline.engine.models import REST_TO_REST, slew_time
 from jaxspline.engine.opportunities import _geometry_batched, evaluate, observation_samples
 from jaxspline.engine.options import RouteOptions, take_options
-from jaxspline.engine.validate import validate_plan
+from jaxspline.engine.steps_check import check_steps
 from jaxspline.geometry.frames import angle_between
 from jaxspline.kernels._batch import pad_rows, round_up
 from jaxspline.kernels.reach import min_transfer_time
@@ -112,7 +112,7 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
                 route=np.concatenate([[int(tg.kind.size)], steps.route]),
                 scan_ok=np.ones(m.size + 1, bool),
             )
-            rep = validate_plan(rest, s.limits, samples=_SAMPLES)
+            rep = check_steps(rest, s.limits, samples=_SAMPLES)
             if not rep.ok:
                 for v in rep.violations:
                     viol.append(f"{s.name}: {v}")

@@ -18,7 +18,7 @@ updated by Adam and projected back onto [0, 1] after every step (projected
 gradient), so the windows always hold; the boundary states follow from the
 differentiable :class:`jaxspline.engine.options.RouteModel`. The best iterate
 (feasible first, then best objective) is re-validated with
-:func:`jaxspline.engine.validate.validate_plan`.
+:func:`jaxspline.engine.steps_check.check_steps`.
 
 The geometry layer provides the real RouteModel
 (:class:`jaxspline.geometry.routes.RouteSet`); the tests use a linear toy
@@ -37,7 +37,7 @@ import optax
 
 from jaxspline.engine.options import RouteOptions, validate_options
 from jaxspline.engine.sequence import Plan
-from jaxspline.engine.validate import ValidationReport, validate_plan
+from jaxspline.engine.steps_check import StepsReport, check_steps
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 __all__ = ["RefineResult", "refine_plan", "try_insert", "plan_costs"]
@@ -55,7 +55,7 @@ class RefineResult(NamedTuple):
         (min over channels) at the initial and the refined start times.
       effort_before, effort_after: [K-1] max over channels of d*/accel.
       history: [steps] objective value per optimizer step.
-      report: ValidationReport of the refined plan (independent checker).
+      report: StepsReport of the refined plan (independent checker).
       ok: ``report.ok``.
     """
 
@@ -66,7 +66,7 @@ class RefineResult(NamedTuple):
     effort_before: np.ndarray
     effort_after: np.ndarray
     history: np.ndarray
-    report: ValidationReport
+    report: StepsReport
     ok: bool
 
 
@@ -173,7 +173,7 @@ def _steps_table(model, route, t0, scan_ok, dtype) -> RouteOptions:
         start_rate=sr,
         end_angle=ea,
         end_rate=er,
-        value=np.asarray(model.value(jnp.asarray(route)), dtype),
+        value=np.asarray(model.value_of(jnp.asarray(route)), dtype),
         scan_ok=np.asarray(scan_ok, bool),
     )
 
@@ -195,7 +195,7 @@ def refine_plan(
     Args:
       plan: Plan (option indices in time order) chosen on ``options``.
       options: the RouteOptions the plan indexes (gives routes and initial t0).
-      model: a RouteModel (``states``, ``window``, ``value``), jit-able and
+      model: a RouteModel (``states``, ``window``, ``value_of``), jit-able and
         differentiable in t0. A pytree of arrays (e.g. a NamedTuple) is traced,
         so one compilation serves every call; any other object is a static
         argument (hashed by identity: recompiles per model object).
@@ -222,10 +222,10 @@ def refine_plan(
         raise ValueError(f"steps must be >= 1, got {steps!r}")
     if not learning_rate > 0:
         raise ValueError(f"learning_rate must be > 0, got {learning_rate!r}")
-    idx = np.asarray(plan.options, np.int64)
+    idx = np.asarray(plan.chosen, np.int64)
     n = np.shape(options.t_start)[0]
     if idx.size and (idx.min() < 0 or idx.max() >= n):
-        raise ValueError(f"plan.options must index the {n} options, got {idx.tolist()}")
+        raise ValueError(f"plan.chosen must index the {n} options, got {idx.tolist()}")
     dtype = np.asarray(options.start_angle).dtype
     if not np.issubdtype(dtype, np.floating):
         dtype = np.dtype(jnp.result_type(float))
@@ -248,7 +248,7 @@ def refine_plan(
 
     if idx.size < 2:
         steps_tab = _steps_table(model, route, t_init, scan_ok, dtype)
-        rep = validate_plan(steps_tab, limits, windows=(lo_np, hi_np), samples=samples)
+        rep = check_steps(steps_tab, limits, windows=(lo_np, hi_np), samples=samples)
         z = np.zeros(0, dtype)
         return RefineResult(t_np, steps_tab, z, z, z, z, np.zeros(0), rep, rep.ok)
 
@@ -280,7 +280,7 @@ def refine_plan(
     t_best = lo + (hi - lo) * us[best]
     m1, e1 = _costs_jit(leaves, static, route, t_best, rate, accel)
     steps_tab = _steps_table(model, route, t_best, scan_ok, dtype)
-    rep = validate_plan(steps_tab, limits, windows=(lo_np, hi_np), samples=samples)
+    rep = check_steps(steps_tab, limits, windows=(lo_np, hi_np), samples=samples)
     return RefineResult(
         t0=np.asarray(t_best),
         steps=steps_tab,
@@ -308,7 +308,7 @@ def try_insert(
     are ``result.t0``).
     """
     validate_options(options)
-    idx = np.asarray(plan.options, np.int64)
+    idx = np.asarray(plan.chosen, np.int64)
     routes = np.asarray(options.route)
     if np.any(routes[idx] == route):
         raise ValueError(f"route {route} is already in the plan")
@@ -320,6 +320,6 @@ def try_insert(
         new_idx = np.insert(idx, pos, j)
         res = refine_plan(Plan(new_idx, 0.0), options, model, limits, **kwargs)
         if res.ok and (best is None or res.margin_after.min() > best[1].margin_after.min()):
-            value = float(np.asarray(model.value(jnp.asarray(routes[new_idx]))).sum())
+            value = float(np.asarray(model.value_of(jnp.asarray(routes[new_idx]))).sum())
             best = (Plan(new_idx, value), res)
     return best

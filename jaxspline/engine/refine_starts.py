@@ -43,7 +43,7 @@ class _QuadraticStarts(NamedTuple):
     coef: jnp.ndarray  # [3, K, 4, C]: (c0, c1, c2) of start angle, start rate, end angle, end rate
     lo: jnp.ndarray
     hi: jnp.ndarray
-    val: jnp.ndarray
+    value: jnp.ndarray
 
     def states(self, route, t0):
         d = (t0 - self.t_ref[route])[:, None, None]
@@ -54,8 +54,8 @@ class _QuadraticStarts(NamedTuple):
     def window(self, route):
         return self.lo[route], self.hi[route]
 
-    def value(self, route):
-        return self.val[route]
+    def value_of(self, route):
+        return self.value[route]
 
 
 def _exact(sc, scene, o, opp, ids, t0, per_ch):

@@ -41,11 +41,12 @@ class Plan(NamedTuple):
     """An imaging plan.
 
     Attributes:
-      options: int64 [K], option indices (into the RouteOptions) in time order.
+      chosen: int64 [K], indices of the chosen options (rows of the RouteOptions) in
+        time order.
       value: total value (sum of ``options.value`` over the plan).
     """
 
-    options: np.ndarray
+    chosen: np.ndarray
     value: float
 
 

@@ -1,4 +1,9 @@
-"""Independent plan checker: rebuild every maneuver, sample it, check every rule.
+"""Independent check of a plan's steps: rebuild every maneuver, sample it, check every rule.
+
+Words: *validate* is the eager check of arguments (ValueError); *check* is an
+independent re-check of a result, returned as a report (this module,
+:mod:`jaxspline.engine.plan_check`, :mod:`jaxspline.aeossp.check`,
+:func:`jaxspline.kernels.joins.maneuver_check`).
 
 The screening engine decides feasibility with closed-form kernels; this module
 does not trust that verdict. For each transition of a plan it rebuilds the
@@ -29,11 +34,11 @@ import numpy as np
 from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
-__all__ = ["ValidationReport", "validate_plan"]
+__all__ = ["StepsReport", "check_steps"]
 
 
-class ValidationReport(NamedTuple):
-    """Result of :func:`validate_plan`.
+class StepsReport(NamedTuple):
+    """Result of :func:`check_steps`.
 
     Attributes:
       ok: True iff no violation was found.
@@ -57,14 +62,14 @@ def _transfer(a1, b1, a2, b2, T, limits, t):
     return reach.transfer(a1, b1, a2, b2, T, limits, t)
 
 
-def validate_plan(
+def check_steps(
     steps: RouteOptions,
     limits: AxisLimits,
     windows=None,
     samples: int = 2001,
     *,
     rtol: float | None = None,
-) -> ValidationReport:
+) -> StepsReport:
     """Check a plan given as its K steps (a RouteOptions table in plan order).
 
     Args:
@@ -79,7 +84,7 @@ def validate_plan(
         ``rtol * (1 + |a1| + |a2| + rate T)`` [rad].
 
     Returns:
-      ValidationReport(ok, violations, peak_rate [C], peak_accel [C]).
+      StepsReport(ok, violations, peak_rate [C], peak_accel [C]).
     """
     c = validate_options(steps, "steps")
     limits = validate_limits(limits)
@@ -178,4 +183,4 @@ def validate_plan(
             dev = np.abs(integral - f[ch]).max()
             if dev > tol_int:
                 v.append(f"{tag}: angle is not the integral of the rate (max deviation {dev!r})")
-    return ValidationReport(not v, v, peak_rate, peak_accel)
+    return StepsReport(not v, v, peak_rate, peak_accel)

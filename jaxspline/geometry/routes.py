@@ -187,7 +187,7 @@ class RouteSet(NamedTuple):
         current scan speed, see :meth:`with_speeds`).
       kind: int [R]; length: [R] m; duration: [R] s (points; strips: length / speed).
       t0_min, t0_max: [R] start-time window [s] (+inf/-inf when never visible).
-      val: [R] value.
+      value: [R] value (priority) of each route.
       lat, lon, azimuth: [R] the (possibly direction-flipped) start points [rad].
     """
 
@@ -198,7 +198,7 @@ class RouteSet(NamedTuple):
     duration: jnp.ndarray
     t0_min: jnp.ndarray
     t0_max: jnp.ndarray
-    val: jnp.ndarray
+    value: jnp.ndarray
     lat: jnp.ndarray
     lon: jnp.ndarray
     azimuth: jnp.ndarray
@@ -218,9 +218,9 @@ class RouteSet(NamedTuple):
         """(t0_min [K], t0_max [K]) [s] of the given routes."""
         return self.t0_min[route], self.t0_max[route]
 
-    def value(self, route):
+    def value_of(self, route):
         """Value [K] of the given routes."""
-        return self.val[route]
+        return self.value[route]
 
     def with_speeds(self, route, speed) -> RouteSet:
         """A copy with strips ``route`` [K] scanned at ground speed ``speed`` [K] [m/s].
@@ -308,7 +308,7 @@ def make_route_set(
         duration=jnp.asarray(dur),
         t0_min=jnp.asarray(t0_min),
         t0_max=jnp.asarray(t0_max),
-        val=jnp.asarray(spec.value),
+        value=jnp.asarray(spec.value),
         lat=jnp.asarray(lat),
         lon=jnp.asarray(lon),
         azimuth=jnp.asarray(az),
@@ -352,7 +352,7 @@ class TabulatedRouteModel(NamedTuple):
       row: int [R], table row of each route (0 for routes not tabulated).
       t_first, step, duration: [P] first knot, knot spacing [s], scan duration [s].
       knots: [P, M, 12] (start_angle[3], start_rate[3], end_angle[3], end_rate[3]).
-      t0_min, t0_max, val: [R] windows and values (as in :class:`RouteSet`).
+      t0_min, t0_max, value: [R] windows and values (as in :class:`RouteSet`).
     """
 
     row: jnp.ndarray
@@ -362,7 +362,7 @@ class TabulatedRouteModel(NamedTuple):
     knots: jnp.ndarray
     t0_min: jnp.ndarray
     t0_max: jnp.ndarray
-    val: jnp.ndarray
+    value: jnp.ndarray
 
     def states(self, route, t0):
         """(t_end, start_angle, start_rate, end_angle, end_rate), shapes [K] and [K, 3]."""
@@ -394,9 +394,9 @@ class TabulatedRouteModel(NamedTuple):
         """(t0_min [K], t0_max [K]) [s]."""
         return self.t0_min[route], self.t0_max[route]
 
-    def value(self, route):
+    def value_of(self, route):
         """Value [K]."""
-        return self.val[route]
+        return self.value[route]
 
 
 def exact_states(routes: RouteSet, route, t0, speed):
@@ -449,5 +449,5 @@ def tabulate_route_model(routes: RouteSet, route, speed, knots: int = 129) -> Ta
         knots=jnp.asarray(table),
         t0_min=routes.t0_min,
         t0_max=routes.t0_max,
-        val=routes.val,
+        value=routes.value,
     )
