@@ -16,8 +16,7 @@ from jaxspline.kernels._validate import check_positive, float_dtype_of
 from jaxspline.kernels.retarget import (
     ARCSEC,
     AttitudeModel,
-    _check_model,
-    _check_state,
+    _check_inputs,
     _rk4_segment,
 )
 
@@ -80,14 +79,9 @@ def min_peak_direct(
     """
     import optax
 
-    _check_model(model)
-    for name, x in (
-        ("sigma_a", sigma_a),
-        ("omega_a", omega_a),
-        ("sigma_b", sigma_b),
-        ("omega_b", omega_b),
-    ):
-        _check_state(name, x)
+    states = dict(sigma_a=sigma_a, omega_a=omega_a, sigma_b=sigma_b, omega_b=omega_b)
+    _check_inputs(model, **states)
+    for name, x in states.items():
         if jnp.ndim(x) != 1:
             raise ValueError(f"{name} must have shape (3,), got {jnp.shape(x)}")
     check_positive("T", T)

@@ -372,6 +372,13 @@ def _check_state(name, x):
         raise ValueError(f"{name} must have a trailing axis of length 3, got shape {jnp.shape(x)}")
 
 
+def _check_inputs(model, **states):
+    """Eager checks of a retargeting problem: the model and every named [..., 3] state."""
+    _check_model(model)
+    for name, x in states.items():
+        _check_state(name, x)
+
+
 def _check_model(model):
     if not isinstance(model, AttitudeModel):
         raise ValueError(f"model must be an AttitudeModel, got {type(model).__name__}")
@@ -429,14 +436,7 @@ def min_peak_retarget(
         raise ValueError(f"max_iter must be >= 0, got {max_iter!r}")
     if int(steps) < 1:
         raise ValueError(f"steps must be >= 1, got {steps!r}")
-    _check_model(model)
-    for name, x in (
-        ("sigma_a", sigma_a),
-        ("omega_a", omega_a),
-        ("sigma_b", sigma_b),
-        ("omega_b", omega_b),
-    ):
-        _check_state(name, x)
+    _check_inputs(model, sigma_a=sigma_a, omega_a=omega_a, sigma_b=sigma_b, omega_b=omega_b)
     for name, x in (("sigma_a", sigma_a), ("sigma_b", sigma_b)):
         if is_concrete(x) and (np.abs(np.asarray(x)[..., 1]) >= 0.5 * np.pi).any():
             shown = np.asarray(x).tolist()
