@@ -10,7 +10,7 @@ from typing import Any
 import numpy as np
 
 from jaxspline.aeossp.case import Case
-from jaxspline.aeossp.check import (
+from jaxspline.aeossp.check_frames import (
     Ephemeris,
     _rot3,
     angle_deg,
