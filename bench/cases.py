@@ -82,14 +82,14 @@ class Workload:
 
 def workloads() -> list[Workload]:
     """All benchmarked workloads (kernels imported from jaxspline)."""
-    import jaxspline.joins as J
-    import jaxspline.reach as R
-    import jaxspline.slew as S
+    import jaxspline.kernels.joins as J
+    import jaxspline.kernels.reach as R
+    import jaxspline.kernels.slew as S
     from bench import baselines as B
     from bench.numpy_port import numpy_module
 
-    NR = numpy_module("jaxspline.reach")  # same formulas, numpy arrays
-    NS = numpy_module("jaxspline.slew")
+    NR = numpy_module("jaxspline.kernels.reach")  # same formulas, numpy arrays
+    NS = numpy_module("jaxspline.kernels.slew")
     b, d = RATE, ACCEL
     ws = [
         Workload(

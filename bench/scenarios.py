@@ -1,7 +1,7 @@
 """End-to-end screening workload: the default scenario's geometry with N targets.
 
 Builds the options of the default constellation restricted to its first N targets
-through :func:`jaxspline.planner.build_problem` (timed apart: orbits, windows and options
+through :func:`jaxspline.engine.planner.build_problem` (timed apart: orbits, windows and options
 are the geometry stage), then screens ALL transitions of the first per-channel
 satellite's options within ``MAX_GAP`` seconds with ``screen_transitions`` - the
 first call compiles, the following calls are timed.
@@ -21,10 +21,10 @@ def screening_case(n_routes: int, reps: int = 2) -> dict:
     import jax
     import numpy as np
 
-    from jaxspline.options import take_options
-    from jaxspline.planner import build_problem
+    from jaxspline.engine.options import take_options
+    from jaxspline.engine.planner import build_problem
+    from jaxspline.engine.screen import screen_transitions
     from jaxspline.scenario import default_scenario
-    from jaxspline.screen import screen_transitions
 
     sc = default_scenario()
     n = min(n_routes, len(sc.targets))

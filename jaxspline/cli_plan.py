@@ -18,7 +18,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
-from jaxspline._io import refuse_overwrite
+from jaxspline.engine._io import refuse_overwrite
 
 __all__ = ["OUTPUT_FILES", "register", "run_plan"]
 
@@ -86,10 +86,10 @@ def run_plan(
 ):
     """Load ``scenario`` (path, Scenario or None = default), plan it, write the outputs.
 
-    Returns the :class:`jaxspline.result.PlanResult`.
+    Returns the :class:`jaxspline.engine.result.PlanResult`.
     """
-    from jaxspline.mission import Scenario
-    from jaxspline.planner import plan
+    from jaxspline.engine.mission import Scenario
+    from jaxspline.engine.planner import plan
     from jaxspline.scenario import default_scenario, load_scenario
 
     out = Path(outdir)

@@ -1,6 +1,6 @@
 """CZML export of a plan: satellites, targets and observations for a Cesium viewer.
 
-:func:`write_czml` turns a :class:`jaxspline.result.PlanResult` into a CZML document
+:func:`write_czml` turns a :class:`jaxspline.engine.result.PlanResult` into a CZML document
 (built with the ``czml3`` package, imported lazily) that opens in Cesium
 (``viewer.dataSources.add(Cesium.CzmlDataSource.load("plan.czml"))`` or drag and drop
 on https://sandcastle.cesium.com):
@@ -14,9 +14,9 @@ on https://sandcastle.cesium.com):
 * one packet per observation (id ``obs-<i>``): a straight line from the satellite to
   the target, available only during the imaging interval ``[start, end]``.
 
-Satellite positions come from :func:`jaxspline.orbit.tabulate_orbits` (SGP4 for TLEs,
+Satellite positions come from :func:`jaxspline.geometry.orbit.tabulate_orbits` (SGP4 for TLEs,
 analytic for circular orbits) and are rotated to Earth-fixed coordinates by the Earth
-rotation angle (:mod:`jaxspline.frames`). :func:`satellite_tracks` and
+rotation angle (:mod:`jaxspline.geometry.frames`). :func:`satellite_tracks` and
 :data:`SATELLITE_COLORS` are shared with the plan figures (:mod:`jaxspline.plot_plan`).
 """
 
@@ -28,9 +28,9 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from jaxspline._io import atomic_write_text, refuse_overwrite
-from jaxspline.frames import earth_rotation_angle, gmst, teme_to_ecef
-from jaxspline.orbit import MU_EARTH, orbit_position, tabulate_orbits
+from jaxspline.engine._io import atomic_write_text, refuse_overwrite
+from jaxspline.geometry.frames import earth_rotation_angle, gmst, teme_to_ecef
+from jaxspline.geometry.orbit import MU_EARTH, orbit_position, tabulate_orbits
 
 __all__ = ["SATELLITE_COLORS", "czml_document", "satellite_tracks", "write_czml"]
 
@@ -80,7 +80,7 @@ def satellite_tracks(scenario, step: float):
     """Earth-fixed positions of every satellite on a time grid over the horizon.
 
     Args:
-      scenario: :class:`jaxspline.mission.Scenario`.
+      scenario: :class:`jaxspline.engine.mission.Scenario`.
       step: sample spacing [s] (> 0); the grid is ``0, step, 2 step, ...`` plus the
         horizon end ``scenario.duration``.
     Returns:
@@ -115,7 +115,7 @@ def czml_document(result, *, step: float = 60.0):
     """The CZML document of a plan (a ``czml3.Document``; see the module docstring).
 
     Args:
-      result: :class:`jaxspline.result.PlanResult`.
+      result: :class:`jaxspline.engine.result.PlanResult`.
       step: satellite position sample spacing [s] (> 0).
     Returns:
       ``czml3.Document`` whose first packet (id ``"document"``) carries the clock;
@@ -267,7 +267,7 @@ def write_czml(result, path, *, force: bool = False, step: float = 60.0) -> Path
     """Write the CZML document of a plan to ``path`` atomically (see :func:`czml_document`).
 
     Args:
-      result: :class:`jaxspline.result.PlanResult`.
+      result: :class:`jaxspline.engine.result.PlanResult`.
       path: output file (conventionally ``*.czml``).
       force: overwrite an existing file (otherwise ``FileExistsError``, file untouched).
       step: satellite position sample spacing [s] (> 0).

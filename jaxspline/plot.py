@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxspline._io import atomic_path
+from jaxspline.engine._io import atomic_path
 
 __all__ = ["plot_ground_track", "plot_attitude", "plot_margins", "save_figure"]
 

@@ -1,6 +1,6 @@
 """Figures of a whole plan: ground tracks on a world map, a Gantt timeline, slack histogram.
 
-Each function takes a :class:`jaxspline.result.PlanResult` and writes one PNG
+Each function takes a :class:`jaxspline.engine.result.PlanResult` and writes one PNG
 atomically with :func:`jaxspline.plot.save_figure` (matplotlib, imported lazily, Agg
 backend). Satellite k is drawn in ``SATELLITE_COLORS[k]`` (shared with the CZML export,
 :mod:`jaxspline.czml`).
@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from jaxspline.czml import SATELLITE_COLORS, satellite_tracks
-from jaxspline.frames import ecef_to_geodetic
+from jaxspline.geometry.frames import ecef_to_geodetic
 from jaxspline.plot import _plt, save_figure
 
 __all__ = ["land_fraction", "plot_plan_ground_tracks", "plot_plan_slack", "plot_plan_timeline"]

@@ -1,7 +1,7 @@
 """Planning scenarios from files: the TOML schema, loading with named errors, the default.
 
 A scenario file is TOML; angles are degrees in the file and radians in the
-:class:`jaxspline.mission.Scenario` it becomes; times are seconds from the epoch.
+:class:`jaxspline.engine.mission.Scenario` it becomes; times are seconds from the epoch.
 Unknown keys are errors (typos fail loudly); every error is a ``ValueError`` naming
 the field (``satellites[1].rate_deg_s``) and, where it can be located, the TOML line.
 Only ``[scenario]``, at least one satellite and at least one target are required::
@@ -117,9 +117,7 @@ from jaxspline._fields import (
     field_table,
     field_tables,
 )
-from jaxspline.frames import gmst, jd_split, julian_date
-from jaxspline.limits import AxisLimits
-from jaxspline.mission import (
+from jaxspline.engine.mission import (
     MODELS,
     FlexMode,
     Margins,
@@ -128,7 +126,9 @@ from jaxspline.mission import (
     Satellite,
     Scenario,
 )
-from jaxspline.orbit import circular_orbit, circular_orbit_over, propagate_tle
+from jaxspline.geometry.frames import gmst, jd_split, julian_date
+from jaxspline.geometry.orbit import circular_orbit, circular_orbit_over, propagate_tle
+from jaxspline.kernels.limits import AxisLimits
 from jaxspline.targets_io import TARGET_SECTIONS, load_targets_csv, scenario_targets
 
 __all__ = [

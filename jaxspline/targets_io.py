@@ -2,7 +2,7 @@
 
 The TOML schema of the target sections is documented with the rest of the scenario
 file in :mod:`jaxspline.scenario`; this module reads them. Angles are degrees in the
-files and radians in the :class:`jaxspline.mission.Targets` they become; lengths in
+files and radians in the :class:`jaxspline.engine.mission.Targets` they become; lengths in
 the files are km (strip length) and m (altitude); times are seconds from the scenario
 epoch. Every error is a ``ValueError`` naming the source, the field and the value.
 
@@ -59,7 +59,7 @@ from jaxspline._fields import (
     field_table,
     field_tables,
 )
-from jaxspline.mission import POINT, STRIP, Targets, make_targets
+from jaxspline.engine.mission import POINT, STRIP, Targets, make_targets
 
 __all__ = [
     "CSV_OPTIONAL",

@@ -1,4 +1,4 @@
-"""Reproduce the figures of the reachable-sets paper (SPEC section 1) with jaxspline.reach.
+"""Reproduce the figures of the reachable-sets paper (SPEC section 1) with jaxspline.kernels.reach.
 
 Figs. 1-4: envelopes of f and f' with a feasible Theorem-1 trajectory for the paper's
 boundary data. Figs. 5-8: the pair set P(a1, b1, T) in the (b2, a2) plane for the four
@@ -19,8 +19,8 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxspline.limits import AxisLimits
-from jaxspline.reach import angle_interval, envelopes, is_reachable, transfer
+from jaxspline.kernels.limits import AxisLimits
+from jaxspline.kernels.reach import angle_interval, envelopes, is_reachable, transfer
 
 DEG = math.pi / 180.0
 RATE_DEG = 0.25  # b [deg/s]

@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _ref_aeossp import frame_difference
 
 from jaxspline.aeossp.case import Case, Task, format_time, load_case
 from jaxspline.aeossp.check import (
@@ -21,7 +22,6 @@ from jaxspline.aeossp.check import (
     check_solution,
     ecef_to_gcrf_matrix,
     format_report,
-    frame_difference,
     geodetic_to_ecef,
     gmst82,
     sun_position_gcrf,

@@ -1,4 +1,4 @@
-"""Tests of jaxspline.attitude against scipy Rotation and numerical integration."""
+"""Tests of jaxspline.kernels.attitude against scipy Rotation and numerical integration."""
 
 import jax
 import jax.numpy as jnp
@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from jaxspline import attitude as A
+from jaxspline.kernels import attitude as A
 
 RNG = np.random.default_rng(20261121)
 

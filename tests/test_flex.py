@@ -1,4 +1,4 @@
-"""Tests for jaxspline.flex: eq. 7 design rule vs brute force, the closed-form one-mode
+"""Tests for jaxspline.kernels.flex: eq. 7 design rule vs brute force, the closed-form one-mode
 response vs a scipy ODE of the two-body (hub + appendage) model, the paper's settling
 comparison of profiles A and B."""
 
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-from jaxspline import flex, slew
+from jaxspline.kernels import flex, slew
 
 W, E = 0.035, 0.0035
 

@@ -1,4 +1,4 @@
-"""Tests of jaxspline.joins: degree-7 joins, vector spline, spatial maneuvers."""
+"""Tests of jaxspline.kernels.joins: degree-7 joins, vector spline, spatial maneuvers."""
 
 import functools
 
@@ -10,9 +10,9 @@ from numpy.polynomial import Chebyshev, Polynomial
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
-from jaxspline import joins as J
-from jaxspline.attitude import attitude_angle, quat_normalize
-from jaxspline.limits import AxisLimits
+from jaxspline.kernels import joins as J
+from jaxspline.kernels.attitude import attitude_angle, quat_normalize
+from jaxspline.kernels.limits import AxisLimits
 
 RNG = np.random.default_rng(7)
 DEG = np.pi / 180

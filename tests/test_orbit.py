@@ -7,7 +7,7 @@ import pytest
 from sgp4.api import Satrec
 from sgp4.propagation import gstime
 
-from jaxspline.frames import (
+from jaxspline.geometry.frames import (
     R_EARTH,
     ecef_to_geodetic,
     geodetic_to_ecef,
@@ -16,7 +16,7 @@ from jaxspline.frames import (
     sun_direction,
     teme_to_ecef,
 )
-from jaxspline.orbit import (
+from jaxspline.geometry.orbit import (
     MU_EARTH,
     circular_orbit,
     circular_orbit_over,

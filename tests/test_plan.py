@@ -18,17 +18,7 @@ import numpy as np
 import pytest
 
 from jaxspline import build_problem, plan
-from jaxspline.frames import (
-    earth_rotation_angle,
-    ecef_to_geodetic,
-    ecef_to_teme,
-    geodetic_to_ecef,
-    gmst,
-    julian_date,
-    rot_z,
-)
-from jaxspline.limits import AxisLimits
-from jaxspline.mission import (
+from jaxspline.engine.mission import (
     POINT,
     STRIP,
     FlexMode,
@@ -37,8 +27,18 @@ from jaxspline.mission import (
     Scenario,
     make_targets,
 )
-from jaxspline.orbit import circular_orbit_over, orbit_position, orbit_state
-from jaxspline.slew import bang_coast_bang_time
+from jaxspline.geometry.frames import (
+    earth_rotation_angle,
+    ecef_to_geodetic,
+    ecef_to_teme,
+    geodetic_to_ecef,
+    gmst,
+    julian_date,
+    rot_z,
+)
+from jaxspline.geometry.orbit import circular_orbit_over, orbit_position, orbit_state
+from jaxspline.kernels.limits import AxisLimits
+from jaxspline.kernels.slew import bang_coast_bang_time
 
 EPOCH = dt.datetime(2026, 6, 21, 10, 0, tzinfo=dt.UTC)
 G0 = float(gmst(julian_date(EPOCH)))

@@ -5,9 +5,14 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxspline.frames import OMEGA_EARTH, geodetic_to_ecef, gmst, julian_date
-from jaxspline.orbit import circular_orbit, circular_orbit_over, orbit_position, orbit_state
-from jaxspline.pointing import (
+from jaxspline.geometry.frames import OMEGA_EARTH, geodetic_to_ecef, gmst, julian_date
+from jaxspline.geometry.orbit import (
+    circular_orbit,
+    circular_orbit_over,
+    orbit_position,
+    orbit_state,
+)
+from jaxspline.geometry.pointing import (
     Scene,
     aim_angles,
     aim_params,

@@ -1,4 +1,4 @@
-"""Tests of jaxspline.reach against hand-computed values, numerical integration and brute force.
+"""Tests of jaxspline.kernels.reach: hand-computed values, numerical integration, brute force.
 
 The Ruckig oracle tests live in tests/test_reach_ruckig.py.
 """
@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 from jax.test_util import check_grads
 
-from jaxspline import reach
-from jaxspline.limits import AxisLimits
-from jaxspline.reach import (
+from jaxspline.kernels import reach
+from jaxspline.kernels.limits import AxisLimits
+from jaxspline.kernels.reach import (
     angle_interval,
     envelopes,
     feasible_durations,

@@ -1,4 +1,4 @@
-"""Ruckig (second order, max_jerk = inf) as an independent oracle for jaxspline.reach.
+"""Ruckig (second order, max_jerk = inf) as an independent oracle for jaxspline.kernels.reach.
 
 Ruckig with ``minimum_duration = T`` returns a trajectory of duration exactly T iff the
 exact-T transfer is feasible, otherwise the end of the blocked interval (or T_min);
@@ -12,8 +12,8 @@ import math
 import numpy as np
 import pytest
 
-from jaxspline.limits import AxisLimits
-from jaxspline.reach import feasible_durations, is_reachable, reach_margin
+from jaxspline.kernels.limits import AxisLimits
+from jaxspline.kernels.reach import feasible_durations, is_reachable, reach_margin
 
 ruckig = pytest.importorskip("ruckig")
 

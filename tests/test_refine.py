@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from _ref_refine import LinearRouteModel
 from test_screen import reach_kernels, ref_reachable  # noqa: F401
 
-from jaxspline import refine, screen, sequence
-from jaxspline.limits import AxisLimits
+from jaxspline.engine import refine, screen, sequence
+from jaxspline.kernels.limits import AxisLimits
 
 LIM = AxisLimits(rate=np.array([0.05, 0.05]), accel=np.array([0.01, 0.01]))
 
@@ -21,7 +22,7 @@ def three_route_model():
     times (15, 20, 25, 30, 35 s) misses that interval. Channel 1 adds a small
     pitch-lead-like drift (0.001 rad/s of t0) and a slow scan on B.
     """
-    return refine.LinearRouteModel(
+    return LinearRouteModel(
         angle0=np.array([[0.0, 0.0], [0.3, 0.01], [0.0, 0.0]]),
         lead=np.array([[0.0, 0.0], [0.0, 0.001], [0.0, 0.0]]),
         scan_rate=np.array([[0.0, 0.0], [0.0, 0.0005], [0.0, 0.0]]),
@@ -29,7 +30,7 @@ def three_route_model():
         duration=np.array([10.0, 5.0, 10.0]),
         t0_min=np.array([0.0, 15.0, 40.0]),
         t0_max=np.array([0.0, 35.0, 40.0]),
-        values=np.array([3.0, 2.0, 3.0]),
+        value=np.array([3.0, 2.0, 3.0]),
     )
 
 
@@ -39,12 +40,12 @@ def test_refinement_inserts_route_the_grid_cannot_fit(reach_kernels):  # noqa: F
     tr = screen.screen_transitions(opts, LIM, progress=False)
     grid = sequence.exact_plan(opts, tr)
     # the exact discrete optimum cannot contain B (route 1) on this grid
-    assert 1 not in opts.route[grid.options].tolist()
+    assert 1 not in opts.route[grid.chosen].tolist()
     assert grid.value == pytest.approx(6.0)
     out = refine.try_insert(grid, opts, model, LIM, route=1, steps=200)
     assert out is not None
     plan, res = out
-    assert opts.route[plan.options].tolist() == [0, 1, 2] and plan.value == pytest.approx(8.0)
+    assert opts.route[plan.chosen].tolist() == [0, 1, 2] and plan.value == pytest.approx(8.0)
     assert res.ok, res.report.violations
     assert res.margin_before.min() < 0 <= res.margin_after.min()
     t_b = res.t0[1]
@@ -73,7 +74,7 @@ def test_effort_objective_reduces_effort_and_stays_feasible(reach_kernels):  # n
     opts = model.grid_options(41)  # fine grid: 0.5 s steps in B's window
     tr = screen.screen_transitions(opts, LIM, progress=False)
     plan = sequence.exact_plan(opts, tr)
-    assert opts.route[plan.options].tolist() == [0, 1, 2]
+    assert opts.route[plan.chosen].tolist() == [0, 1, 2]
     res = refine.refine_plan(plan, opts, model, LIM, objective="effort", steps=200)
     assert res.ok
     assert res.effort_after.sum() <= res.effort_before.sum() + 1e-12
@@ -115,7 +116,7 @@ def test_value_errors(reach_kernels):  # noqa: F811
         refine.refine_plan(plan, opts, model, LIM, objective="nope")
     with pytest.raises(ValueError, match="steps"):
         refine.refine_plan(plan, opts, model, LIM, steps=0)
-    with pytest.raises(ValueError, match="plan.options"):
+    with pytest.raises(ValueError, match="plan.chosen"):
         refine.refine_plan(sequence.Plan(np.array([0, 99]), 0.0), opts, model, LIM)
     with pytest.raises(ValueError, match="already"):
         refine.try_insert(plan, opts, model, LIM, route=1)

@@ -5,19 +5,18 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxspline.frames import geodetic_to_ecef, gmst, julian_date
-from jaxspline.limits import AxisLimits
-from jaxspline.options import RouteOptions
-from jaxspline.orbit import circular_orbit_over
-from jaxspline.pointing import Scene, off_nadir, pointing_angles
-from jaxspline.routes import (
+from jaxspline.engine.options import RouteOptions, build_route_options
+from jaxspline.geometry.frames import geodetic_to_ecef, gmst, julian_date
+from jaxspline.geometry.orbit import circular_orbit_over
+from jaxspline.geometry.pointing import Scene, off_nadir, pointing_angles
+from jaxspline.geometry.routes import (
     POINT,
     STRIP,
-    build_route_options,
     make_route_set,
     make_route_spec,
     strip_direction,
 )
+from jaxspline.kernels.limits import AxisLimits
 
 JD = julian_date("2026-06-21T10:00:00Z")
 G0 = float(gmst(JD))

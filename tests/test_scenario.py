@@ -7,8 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jaxspline.mission import POINT, STRIP
-from jaxspline.orbit import CircularOrbit, sso_inclination, tabulate_orbits
+from jaxspline.engine.mission import POINT, STRIP
+from jaxspline.geometry.orbit import CircularOrbit, sso_inclination, tabulate_orbits
 from jaxspline.scenario import (
     DEFAULT_SCENARIO_PATH,
     default_scenario,

@@ -1,7 +1,7 @@
 """Tests of the bulk screening engine against brute-force numpy references.
 
 The exact-T reference here is the SPEC section 1 envelope formula written in
-plain numpy, one candidate at a time, independent of :mod:`jaxspline.reach`.
+plain numpy, one candidate at a time, independent of :mod:`jaxspline.kernels.reach`.
 """
 
 from __future__ import annotations
@@ -15,9 +15,9 @@ import textwrap
 import numpy as np
 import pytest
 
-from jaxspline import screen
-from jaxspline.limits import AxisLimits
-from jaxspline.options import RouteOptions, take_options
+from jaxspline.engine import screen
+from jaxspline.engine.options import RouteOptions, take_options
+from jaxspline.kernels.limits import AxisLimits
 
 # ----------------------------------------------------------------------------
 # numpy references and synthetic instances
@@ -45,8 +45,8 @@ def ref_reachable(a1, b1, a2, b2, T, b, d, tol=0.0):
 
 @pytest.fixture
 def reach_kernels():
-    """The kernel module the engine screens with (``jaxspline.reach``)."""
-    from jaxspline import reach
+    """The kernel module the engine screens with (``jaxspline.kernels.reach``)."""
+    from jaxspline.kernels import reach
 
     return reach
 
@@ -292,7 +292,7 @@ _SHARD_SCRIPT = textwrap.dedent(
     import numpy as np
     sys.path.insert(0, {tests!r})
     import test_screen as ts
-    from jaxspline import screen
+    from jaxspline.engine import screen
     opt = ts.synthetic_options(np.random.default_rng(5), n_routes=12, per_route=4)
     tr = screen.screen_transitions(opt, ts.LIMITS, progress=False, chunk_size=64)
     print(json.dumps({{"ndev": jax.local_device_count(),

@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
-from jaxspline import screen, sequence
-from jaxspline.options import RouteOptions, take_options
-from jaxspline.validate import validate_plan
+from jaxspline.engine import screen, sequence
+from jaxspline.engine.options import RouteOptions, take_options
+from jaxspline.engine.steps_check import check_steps
 
 
 def brute_force(opt: RouteOptions, tr) -> float:
@@ -39,13 +39,13 @@ def steps_of(opt: RouteOptions, idx) -> RouteOptions:
 
 def check_plan(opt, tr, plan):
     """Admissible by the transition table, and passes the independent validator."""
-    idx = plan.options
+    idx = plan.chosen
     assert np.isclose(plan.value, opt.value[idx].sum())
     feas = {(s, d) for s, d, f in zip(tr.src, tr.dst, tr.feasible, strict=True) if f}
     for a, b in zip(idx[:-1], idx[1:], strict=True):
         assert (a, b) in feas
     assert len(set(opt.route[idx].tolist())) == idx.size
-    rep = validate_plan(steps_of(opt, idx), LIMITS, samples=101)
+    rep = check_steps(steps_of(opt, idx), LIMITS, samples=101)
     assert rep.ok, rep.violations
 
 
@@ -102,7 +102,7 @@ def test_beam_width_monotone_ish_and_deterministic(reach_kernels):  # noqa: F811
     assert sum(b < a - 1e-9 for a, b in zip(vals[:-1], vals[1:], strict=True)) <= 1
     p1 = sequence.beam_search(opt, tr, width=4, seed=3)
     p2 = sequence.beam_search(opt, tr, width=4, seed=3)
-    np.testing.assert_array_equal(p1.options, p2.options)
+    np.testing.assert_array_equal(p1.chosen, p2.chosen)
     assert sequence.beam_search(opt, tr, width=100_000).value == pytest.approx(ex)
 
 
@@ -114,10 +114,10 @@ def test_edge_cases_and_errors(reach_kernels):  # noqa: F811
     # without feasible transitions the best plan is the single most valuable option
     for solver in (sequence.exact_plan, sequence.greedy, sequence.beam_search):
         p = solver(opt, none)
-        assert p.options.size == 1
+        assert p.chosen.size == 1
     assert sequence.exact_plan(opt, none).value == pytest.approx(opt.value.max())
     dead = opt._replace(scan_ok=np.zeros(len(opt.route), bool))
-    assert sequence.exact_plan(dead, tr).options.size == 0
+    assert sequence.exact_plan(dead, tr).chosen.size == 0
     assert sequence.greedy(dead, tr).value == 0.0
     with pytest.raises(ValueError, match="width"):
         sequence.beam_search(opt, tr, width=0)

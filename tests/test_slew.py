@@ -1,4 +1,4 @@
-"""Tests for jaxspline.slew: rigid models vs Ruckig, profiles A-D vs the paper and
+"""Tests for jaxspline.kernels.slew: rigid models vs Ruckig, profiles A-D vs the paper and
 numerical integration."""
 
 from __future__ import annotations
@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from ruckig import InputParameter, Result, Ruckig, Trajectory
 
-from jaxspline import slew
+from jaxspline.kernels import slew
 
 INF = float("inf")
 

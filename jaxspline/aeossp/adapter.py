@@ -19,7 +19,7 @@ chain: at most 1.5e-7 deg in off-nadir angle and 3.6e-7 deg in slew angle):
 * maneuver gap 0.05 s: an angle error delta changes the bang-coast-bang time by at
   most ``2 sqrt(delta / a)`` = 3.1e-3 s at the smallest a = 0.15 deg/s^2 (16 x);
 * battery: level >= 10 Wh on the conservative profile
-  (:class:`jaxspline.search.BatteryModel`), one shadow-guard step.
+  (:class:`jaxspline.engine.search.BatteryModel`), one shadow-guard step.
 """
 
 from __future__ import annotations
@@ -30,8 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from jaxspline.aeossp.case import format_time, load_case
-from jaxspline.limits import AxisLimits
-from jaxspline.mission import (
+from jaxspline.engine.mission import (
     POINT,
     Margins,
     PlannerConfig,
@@ -40,6 +39,7 @@ from jaxspline.mission import (
     Scenario,
     make_targets,
 )
+from jaxspline.kernels.limits import AxisLimits
 
 __all__ = ["AEOSSP_MARGINS", "case_scenario", "solve_case", "solution_from_result"]
 
@@ -130,7 +130,7 @@ def solve_case(
     max_iters: int | None = None,
 ):
     """Plan one case through :func:`jaxspline.plan`; returns ``(solution, result)``."""
-    from jaxspline.planner import plan
+    from jaxspline.engine.planner import plan
 
     case = load_case(case_dir) if isinstance(case_dir, str | Path) else case_dir
     sc = case_scenario(case, time_limit=time_limit)

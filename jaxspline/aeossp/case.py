@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from jaxspline._io import atomic_write_text, refuse_overwrite
+from jaxspline.engine._io import atomic_write_text, refuse_overwrite
 
 __all__ = [
     "Case",

@@ -1,0 +1,208 @@
+"""Maneuver models as transition kernels: what a satellite needs between two observations.
+
+Every model answers, for a batch of option pairs (i -> j, same satellite, gap
+``T = t_start[j] - t_end[i]``): is the transfer feasible in exactly T, and what time
+``t_req`` does it need (the maneuver duration reported in the plan and loaded on
+the battery)? A pair is feasible iff ``t_req <= T`` (``t_req = inf`` marks an
+infeasible pair). The models (``Satellite.model``):
+
+* ``per_channel`` - each channel (roll, pitch, yaw) goes from the end state of i to
+  the start state of j in exactly T under its rate and acceleration bound: the
+  reachable sets of SPEC section 1 (:mod:`jaxspline.kernels.reach`, screened by
+  :func:`jaxspline.engine.screen.screen_pairs`). ``t_req`` is the largest per-channel shortest
+  transfer time; the exact-T test decides feasibility (durations above ``t_min`` can
+  still be blocked), so ``t_req = inf`` when it fails.
+* ``eigen_axis`` - rest-to-rest bang-coast-bang slew through the angle between the
+  two lines of sight plus settling plus the gap margin
+  (:func:`jaxspline.kernels.slew.bang_coast_bang_time`).
+* ``flexible`` - rest-to-rest slew with the profile of SPEC section 2 whose ramp
+  tau suppresses the structural mode to its tolerance
+  (:func:`jaxspline.kernels.flex.tau_for_tolerance`,
+  :func:`jaxspline.kernels.slew.slew_profile_time`),
+  plus settling plus the gap margin.
+
+Rest-to-rest models are evaluated through a per-satellite *slew table*: the slew
+time on the angle grid ``theta_k = pi (k / N)^2`` (fine near 0, where the time grows
+like sqrt(theta)), read at the next grid angle above theta. The time is increasing in
+theta, so the table never under-estimates it (the excess is below 1e-3 s for the
+aeossp limits); the plan's final check uses the kernel itself.
+
+Far gaps: :func:`far_gap` gives per satellite a gap beyond which every pair is
+feasible, so the engine only screens pairs closer than that.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import NamedTuple
+
+import numpy as np
+
+from jaxspline.geometry.frames import angle_between
+from jaxspline.kernels._batch import pad_rows, round_up
+from jaxspline.kernels.limits import AxisLimits
+
+__all__ = ["SlewTable", "far_gap", "first_requirements", "pair_requirements", "slew_table"]
+
+_TABLE_SIZE = 1 << 16  # points of a slew table
+_PAD = 1 << 12  # batch sizes are padded to multiples of this (few compiled shapes)
+_FAR_SAFETY = 1.0 + 1e-9  # relative safety of the per-channel far gap
+_FIXED_POINT_ITERS = 200  # iterations of the rest-to-rest far-gap fixed point
+REST_TO_REST = ("eigen_axis", "flexible")
+
+
+class SlewTable(NamedTuple):
+    """Conservative rest-to-rest slew time of one satellite, including settle and margin.
+
+    Attributes:
+      time: [N + 1] required time [s] at theta_k = pi (k/N)^2.
+      size: N.
+    """
+
+    time: np.ndarray
+    size: int
+
+    def __call__(self, theta) -> np.ndarray:
+        """Required time [s] for angles theta [rad] (numpy, never below the kernel)."""
+        theta = np.clip(np.asarray(theta, np.float64), 0.0, math.pi)
+        k = np.minimum(np.ceil(self.size * np.sqrt(theta / math.pi) - 1e-12), self.size)
+        return self.time[k.astype(np.int64)]
+
+    def scalar(self, theta: float) -> float:
+        """Same as calling the table, for one Python float (the search's hot loop)."""
+        k = math.ceil(self.size * math.sqrt(min(max(theta, 0.0), math.pi) / math.pi) - 1e-12)
+        return float(self.time[min(k, self.size)])
+
+
+def slew_time(sat, theta, gap_margin: float = 0.0):
+    """Exact rest-to-rest required time [s] of satellite ``sat`` for angles theta [rad].
+
+    slew + ``sat.settle`` + ``gap_margin``; the kernel behind :class:`SlewTable`.
+    """
+    from jaxspline.kernels.slew import bang_coast_bang_time, slew_profile_time
+
+    theta = np.abs(np.asarray(theta, np.float64))
+    rate, accel = float(sat.limits.rate), float(sat.limits.accel)
+    if sat.model == "eigen_axis":
+        t = bang_coast_bang_time(theta, rate, accel)
+    elif sat.model == "flexible":
+        t = slew_profile_time(theta, rate, accel, flex_tau(sat))
+    else:
+        raise ValueError(f"satellite {sat.name!r}: model {sat.model!r} is not rest-to-rest")
+    return np.asarray(t, np.float64) + sat.settle + gap_margin
+
+
+def flex_tau(sat) -> float:
+    """Ramp time tau [s] of a flexible satellite's profile (its mode at its tolerance)."""
+    from jaxspline.kernels.flex import tau_for_tolerance
+
+    f = sat.flex
+    tau = float(
+        tau_for_tolerance(f.tolerance, f.freq, f.damping, sat.limits.rate, sat.limits.accel)
+    )
+    if not math.isfinite(tau):
+        raise ValueError(
+            f"satellite {sat.name!r}: flex mode freq={f.freq!r} rad/s is too low for "
+            f"tolerance={f.tolerance!r} at these limits (no ramp time suppresses it)"
+        )
+    return tau
+
+
+def slew_table(sat, gap_margin: float = 0.0, size: int = _TABLE_SIZE) -> SlewTable:
+    """Tabulate :func:`slew_time` of a rest-to-rest satellite (see module docstring)."""
+    theta = math.pi * (np.arange(size + 1) / size) ** 2
+    t = slew_time(sat, theta, gap_margin)
+    return SlewTable(np.maximum.accumulate(t), size)
+
+
+def _rest_to_rest(table: SlewTable, frm, i, to, j, available):
+    """Table time of the slew from direction ``frm[i]`` to ``to[j]``; inf if over ``available``."""
+    t_req = table(angle_between(np.asarray(frm)[i], np.asarray(to)[j]))
+    return np.where(available >= t_req, t_req, np.inf)
+
+
+def pair_requirements(sat, options, src, dst, table: SlewTable | None = None):
+    """Required time t_req [P] [s] of transitions src -> dst of one satellite (inf: infeasible).
+
+    Args:
+      sat: the :class:`jaxspline.engine.mission.Satellite` (all pairs belong to it).
+      options: :class:`jaxspline.engine.options.RouteOptions` (numpy fields; ``start_los`` and
+        ``end_los`` needed by rest-to-rest models).
+      src, dst: int [P] option indices.
+      table: the satellite's :class:`SlewTable` (rest-to-rest models).
+    """
+    src = np.asarray(src, np.int64)
+    dst = np.asarray(dst, np.int64)
+    T = np.asarray(options.t_start)[dst] - np.asarray(options.t_end)[src]
+    if src.size == 0:
+        return np.zeros(0)
+    if sat.model in REST_TO_REST:
+        return _rest_to_rest(table, options.end_los, src, options.start_los, dst, T)
+    from jaxspline.engine.screen import screen_pairs
+
+    tr = screen_pairs(options, sat.limits, src, dst)
+    return np.where(tr.feasible & (T > 0), np.minimum(tr.t_min, T), np.inf)
+
+
+def first_requirements(sat, options, idx, table: SlewTable | None = None):
+    """Required time [s] before option idx as the satellite's first observation (inf: no).
+
+    Rest-to-rest models slew from nadir (``start_nadir``) at the option's start; the
+    per-channel model starts at t = 0 at rest with zero angles and must reach the
+    option's start state in exactly ``t_start``.
+    """
+    idx = np.asarray(idx, np.int64)
+    t0 = np.asarray(options.t_start)[idx]
+    if idx.size == 0:
+        return np.zeros(0)
+    if sat.model in REST_TO_REST:
+        return _rest_to_rest(table, options.start_nadir, idx, options.start_los, idx, t0)
+    from jaxspline.kernels.reach import is_reachable, min_transfer_time
+
+    n = idx.size
+    size = round_up(n, _PAD)
+    a2 = pad_rows(np.asarray(options.start_angle)[idx], size)
+    b2 = pad_rows(np.asarray(options.start_rate)[idx], size)
+    zero = np.zeros_like(a2)
+    T = np.broadcast_to(pad_rows(t0, size)[:, None], a2.shape)
+    ok = np.asarray(is_reachable(zero, zero, a2, b2, T, sat.limits)).all(-1)[:n] & (t0 > 0)
+    tmin = np.asarray(min_transfer_time(zero, zero, a2, b2, sat.limits)).max(-1)[:n]
+    return np.where(ok, np.minimum(tmin, t0), np.inf)
+
+
+def far_gap(sat, options, idx, nadir_rate: float, table: SlewTable | None = None) -> float:
+    """A gap [s] beyond which every transition between options idx of ``sat`` is feasible.
+
+    per_channel: with every channel's angles (incl. the initial 0) inside a range R_c
+    and rates bounded by b_c, a transfer can brake to rest (b/d), cross R_c at rate
+    b_c (R_c/b_c + b_c/d_c), accelerate to the target rate (b/d) and wait at rest
+    for any remainder, so it takes at most ``(R_c + 4 b_c^2/d_c) / b_c``; exact-T
+    feasibility also needs T above the blocked interval, whose upper end is at most
+    ``4 b_c / d_c`` (SPEC section 1). Rest-to-rest: two lines of sight inside the
+    off-nadir cone at instants g apart are at most ``2 eta + omega g`` apart (omega =
+    ``nadir_rate``, the inertial turn rate of nadir), so the fixed point of
+    ``g = t_req(min(pi, 2 eta + omega g))`` bounds every required gap.
+    """
+    if sat.model in REST_TO_REST:
+        g = 0.0
+        eta = float(sat.off_nadir_max)
+        for _ in range(_FIXED_POINT_ITERS):
+            g_new = table.scalar(min(math.pi, 2.0 * eta + nadir_rate * g))
+            if abs(g_new - g) < 1e-12:
+                break
+            g = g_new
+        return g * _FAR_SAFETY + 1e-9
+    lim: AxisLimits = sat.limits
+    b = np.asarray(lim.rate, np.float64)
+    d = np.asarray(lim.accel, np.float64)
+    idx = np.asarray(idx, np.int64)
+    angles = np.concatenate(
+        [
+            np.asarray(options.start_angle)[idx],
+            np.asarray(options.end_angle)[idx],
+            np.zeros((1, b.size)),
+        ]
+    )
+    span = angles.max(0) - angles.min(0)
+    need = np.maximum(4.0 * b / d, (span + 4.0 * b * b / d) / b)
+    return float(need.max()) * _FAR_SAFETY

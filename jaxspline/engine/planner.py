@@ -1,0 +1,399 @@
+"""The planning pipeline: one entry point for the CLI, the benchmark and the aeossp adapter.
+
+``plan(scenario) -> PlanResult`` runs, in float64 (inside ``jax.enable_x64``, the
+process-wide setting is left alone):
+
+1. **orbits** - every satellite on common ephemeris knots (SGP4 for TLEs), the Sun
+   and the Earth's shadow at the knots;
+2. **windows** - every visibility window of every target over the horizon
+   (:mod:`jaxspline.geometry.windows`);
+3. **options** - the valid (target, satellite, start) options on the action grid
+   with their boundary states (:mod:`jaxspline.engine.opportunities`);
+4. **screening** - per satellite, every option pair closer than the always-feasible
+   gap through the satellite's maneuver model (:mod:`jaxspline.engine.models`);
+5. **search** - greedy, Lagrangian/DP bound, exact search on tiny instances, LNS
+   (:mod:`jaxspline.engine.search`) until the time limit;
+6. **check** - an independent re-check without margins (:mod:`jaxspline.engine.plan_check`);
+   failing observations are dropped, so the returned plan is valid under it.
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from jaxspline.engine.mission import Scenario
+from jaxspline.engine.models import (
+    REST_TO_REST,
+    far_gap,
+    first_requirements,
+    pair_requirements,
+    slew_table,
+)
+from jaxspline.engine.opportunities import build_opportunities, nadir_rate, reference_points
+from jaxspline.engine.plan_check import check_plan
+from jaxspline.engine.refine_starts import refine_starts
+from jaxspline.engine.result import Observations, PlanResult
+from jaxspline.engine.search import BatteryModel, Problem, mip_bound, solve
+from jaxspline.geometry.frames import gmst, in_shadow, jd_split, sun_direction
+from jaxspline.geometry.orbit import tabulate_orbits
+from jaxspline.geometry.pointing import Scene
+from jaxspline.geometry.windows import visibility_windows_all
+from jaxspline.kernels._batch import ragged_positions
+
+__all__ = ["Prepared", "build_problem", "plan"]
+
+_RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
+_RESERVE_MIN = 1.0  # [s]
+_REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
+_REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
+_NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
+_PAIR_BLOCK = 1 << 20  # option pairs per screening block
+_MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
+
+
+class _Clock:
+    """Stage timings and progress lines on stderr."""
+
+    def __init__(self, name: str, progress: bool):
+        self.t0 = time.monotonic()
+        self.last = self.t0
+        self.name = name
+        self.progress = progress
+        self.timings = {}
+        self.bar = None
+        self.bar_t0 = self.t0
+
+    def lap(self, stage: str, msg: str = ""):
+        now = time.monotonic()
+        self.timings[stage] = round(now - self.last, 3)
+        self.last = now
+        self.say(stage, msg)
+
+    def search_bar(self, seconds: float):
+        """A progress bar over the search budget (None without progress)."""
+        if not self.progress:
+            return None
+        from tqdm import tqdm
+
+        return tqdm(
+            total=round(max(seconds, 0.0), 1),
+            desc=f"[plan {self.name}] search",
+            unit="s",
+            bar_format="{desc} {bar} {n:.0f}/{total:.0f} s {postfix}",
+            file=sys.stderr,
+            leave=False,
+        )
+
+    def say(self, stage: str, msg: str):
+        bar = getattr(self, "bar", None)
+        if bar is not None:
+            bar.n = round(min(time.monotonic() - self.bar_t0, bar.total), 1)
+            bar.set_postfix_str(f"{stage}: {msg}", refresh=True)
+            return
+        if self.progress:
+            print(
+                f"[plan {self.name}] {stage:9s} {msg}  ({time.monotonic() - self.t0:5.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
+
+
+def plan(
+    scenario: Scenario,
+    *,
+    time_limit: float | None = None,
+    seed: int = 0,
+    progress: bool = True,
+    max_iters: int | None = None,
+    certify: float = 0.0,
+) -> PlanResult:
+    """Plan a scenario: the best observations found within ``time_limit`` seconds.
+
+    Args:
+      scenario: a :class:`jaxspline.engine.mission.Scenario`.
+      time_limit: wall-clock budget [s] for the whole call (default
+        ``scenario.planner.default_time_limit``).
+      seed: random seed of the search (runs are deterministic for a seed and
+        ``max_iters``; a time limit only truncates the search).
+      progress: stage lines on stderr.
+      max_iters: optional cap on search iterations (reproducible runs).
+      certify: extra seconds, after the time limit, for a tighter certificate: the
+        candidate model solved as a 0/1 program by HiGHS
+        (:func:`jaxspline.engine.search.mip_bound`, needs scipy); the reported bound is the
+        smaller of its dual bound and the Lagrangian one. 0 (default): skip.
+    Returns:
+      :class:`jaxspline.engine.result.PlanResult`.
+    """
+    if not isinstance(scenario, Scenario):
+        raise ValueError(f"scenario must be a jaxspline Scenario, got {type(scenario).__name__}")
+    limit = scenario.planner.default_time_limit if time_limit is None else time_limit
+    if not (isinstance(limit, int | float) and math.isfinite(limit) and limit > 0):
+        raise ValueError(f"time_limit must be a number > 0, got {time_limit!r}")
+    if not (isinstance(certify, int | float) and math.isfinite(certify) and certify >= 0):
+        raise ValueError(f"certify must be a number of seconds >= 0, got {certify!r}")
+    with jax.enable_x64(True):
+        return _plan(scenario, float(limit), int(seed), bool(progress), max_iters, certify)
+
+
+def _orbits(sc: Scenario):
+    pc = sc.planner
+    table = tabulate_orbits(
+        [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, pc.geometry_step
+    )
+    scene = Scene(table.orbit, np.float64(gmst(sc.epoch_jd)))
+    t = np.asarray(table.orbit.t)
+    knots = (t >= -1e-9) & (t <= sc.duration + pc.geometry_step + 1e-9)
+    jd, fr = jd_split(sc.epoch_jd, t[knots])
+    sun = sun_direction(jd, fr)
+    r = np.asarray(table.orbit.r)[:, knots]
+    n = int(math.ceil(sc.duration / pc.geometry_step - 1e-9)) + 1
+    sunlit = ~in_shadow(r, sun[None])[:, :n]
+    return table, scene, sunlit
+
+
+def _near_pairs(sc, opp, tables, far, slack):
+    """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need.
+
+    The slack (the shortest observation) lets the DP process a block of starts that
+    wide at once (:func:`jaxspline.engine.search.dp_prepare`).
+    """
+    o = opp.options
+    src_all, dst_all, need_all = [], [], []
+    for k, sat in enumerate(sc.satellites):
+        ids = np.flatnonzero(o.sat == k)
+        if ids.size == 0:
+            continue
+        s, e = o.t_start[ids], o.t_end[ids]
+        eo = ids[np.argsort(e, kind="stable")]
+        es = o.t_end[eo]
+        a = np.searchsorted(es, s - far[k] - slack, side="right")
+        b = np.searchsorted(es, s, side="left")
+        cnt = np.maximum(b - a, 0)
+        rows = max(1, ids.size * _PAIR_BLOCK // max(int(cnt.sum()), 1))  # ~_PAIR_BLOCK pairs
+        for c0 in range(0, ids.size, rows):
+            sl = slice(c0, c0 + rows)
+            owner, off = ragged_positions(cnt[sl])
+            jj = ids[sl][owner]
+            ii = eo[a[sl][owner] + off]
+            need = pair_requirements(sat, o, ii, jj, tables[k])
+            ok = np.isfinite(need)
+            src_all.append(ii[ok])
+            dst_all.append(jj[ok])
+            need_all.append(need[ok])
+    if not src_all:
+        z = np.zeros(0, np.int64)
+        return z, z, np.zeros(0)
+    return np.concatenate(src_all), np.concatenate(dst_all), np.concatenate(need_all)
+
+
+class Prepared(NamedTuple):
+    """Everything the search needs, from :func:`build_problem`.
+
+    Attributes:
+      problem: :class:`jaxspline.engine.search.Problem`.
+      opportunities: :class:`jaxspline.engine.opportunities.Opportunities` (option ids of the
+        problem index them).
+      windows: :class:`jaxspline.geometry.windows.Windows`.
+      scene: the multi-satellite :class:`jaxspline.geometry.pointing.Scene`.
+      orbits: :class:`jaxspline.geometry.orbit.OrbitTable`.
+      battery: :class:`jaxspline.engine.search.BatteryModel`.
+      far: [S] always-feasible gaps [s].
+    """
+
+    problem: Problem
+    opportunities: object
+    windows: object
+    scene: Scene
+    orbits: object
+    battery: BatteryModel
+    far: np.ndarray
+
+
+def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) -> Prepared:
+    """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search."""
+    sc = scenario
+    clock = _clock or _Clock(sc.name, progress)
+    with jax.enable_x64(True):
+        pc = sc.planner
+        sats = sc.satellites
+        table, scene, sunlit = _orbits(sc)
+        clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
+        ref = reference_points(sc)
+        tg = sc.targets
+        sensors = np.array([s.sensor for s in sats])
+        allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
+        limit_k = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
+        windows = visibility_windows_all(
+            scene,
+            table.ok,
+            ref,
+            allowed,
+            limit_k,
+            pc.margins.horizon,
+            tg.t_lo,
+            tg.t_hi,
+            sc.duration,
+        )
+        clock.lap(
+            "windows",
+            f"{len(windows)} windows for {len(np.unique(windows.target))}/{len(tg)} targets",
+        )
+        opp = build_opportunities(sc, scene, table.usable, windows)
+        clock.lap("options", f"{len(opp)} options")
+        o = opp.options
+        tables = [slew_table(s, pc.margins.gap) if s.model in REST_TO_REST else None for s in sats]
+        omega = nadir_rate(scene)
+        far = np.zeros(len(sats))
+        first = np.full(len(opp), np.inf)
+        for k, s in enumerate(sats):
+            ids = np.flatnonzero(o.sat == k)
+            far[k] = far_gap(s, o, ids, float(omega[k]), tables[k])
+            first[ids] = first_requirements(s, o, ids, tables[k])
+        slack = float(np.min(o.t_end - o.t_start)) if len(opp) else 0.0
+        near = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK)
+        clock.lap(
+            "screening",
+            f"{near[0].size} feasible near pairs; far gaps "
+            f"{far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s",
+        )
+        battery = BatteryModel(
+            sunlit,
+            [s.power for s in sats],
+            pc.geometry_step,
+            pc.margins.battery_wh,
+            pc.margins.shadow_guard,
+        )
+        pb = Problem.build(opp, sats, first, near, far, tables, battery, tg.value)
+        pb.near_slack = slack
+    return Prepared(pb, opp, windows, scene, table, battery, far)
+
+
+def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters, certify) -> PlanResult:
+    clock = _Clock(sc.name, progress)
+    deadline = clock.t0 + limit
+    pc = sc.planner
+    sats = sc.satellites
+    refining = pc.refine_steps > 0 and any(s.model == "per_channel" for s in sats)
+    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit) + refining * _REFINE_SHARE * limit
+    tg = sc.targets
+    prep = build_problem(sc, _clock=clock)
+    pb, opp, windows, scene, table, battery, far = prep
+    o = opp.options
+    clock.bar = clock.search_bar(deadline - reserve - time.monotonic())
+    clock.bar_t0 = time.monotonic()
+    try:
+        res = solve(
+            pb,
+            deadline - reserve,
+            seed=seed,
+            lagrangian_share=pc.lagrangian_share,
+            exact_max_options=pc.exact_max_options,
+            max_iters=max_iters,
+            report=clock.say,
+        )
+    finally:
+        if clock.bar is not None:
+            clock.bar.close()
+        clock.bar = None
+    tl = res.timeline
+    clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
+    chosen = [c for c in tl.assigned if c >= 0]
+    refined, det = {}, None
+    left = deadline - time.monotonic()
+    if refining and left < _REFINE_MIN_S:
+        refining = False
+        clock.lap("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
+    if refining:
+        opp_r, refined = refine_starts(sc, scene, opp, chosen, int(pc.refine_steps))
+        kept = False
+        if opp_r is not opp:
+            bad, det = check_plan(sc, scene, table.usable, opp_r, chosen, battery)
+            kept = not bad
+            if kept:
+                opp, o = opp_r, opp_r.options
+            else:
+                det = None
+        for v in refined.values():
+            v["kept"] = kept
+        clock.lap("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
+    dropped = 0
+    for _ in range(_MAX_DROP_ROUNDS):
+        if det is None:
+            bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
+        if not bad:
+            break
+        dropped += len(bad)
+        chosen = [c for c in chosen if c not in set(bad)]
+        det = None
+    else:
+        chosen = []
+        bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
+    clock.lap("check", f"{len(chosen)} observations valid, {dropped} dropped")
+    idx = np.asarray(det["order"], np.int64)
+    obs = Observations(
+        sat=np.asarray(o.sat)[idx],
+        target=np.asarray(o.route)[idx],
+        start=np.asarray(o.t_start)[idx],
+        end=np.asarray(o.t_end)[idx],
+        maneuver=det["maneuver"],
+        slack=det["slack"],
+        value=np.asarray(tg.value)[np.asarray(o.route)[idx]],
+        speed=opp.speed[idx],
+    )
+    value = float(np.sum(obs.value))
+    # every plan images only targets that have an option: their total bounds any plan
+    reachable = float(np.sum(np.asarray(tg.value)[np.unique(np.asarray(o.route))]))
+    bound = min(float(res.bound), reachable)
+    converged = res.bound_status in ("optimal", "converged")
+    mip = None
+    if certify > 0:
+        m = mip_bound(pb, certify)
+        found = m.value if math.isfinite(m.value) else None
+        mip = {"bound": m.bound, "plan_value": found, "status": m.status, "seconds": m.seconds}
+        if m.bound < bound:
+            bound, converged = m.bound, m.status == "optimal"
+        clock.lap("certify", f"HiGHS bound {m.bound:.6g} ({m.status})")
+    bat = {}
+    for k, s in enumerate(sats):
+        if battery.has(k):
+            lev = det["battery"].get(s.name)
+            if lev is None:  # no observations: the idle profile
+                lev = battery.profile(k, [], [], [])
+            bat[s.name] = (np.arange(lev.size) * battery.dt, lev)
+    report = {
+        "valid": not det["violations"],
+        "checked": len(obs),
+        "dropped": dropped,
+        "violations": det["violations"],
+        "min_slack_s": float(obs.slack.min()) if len(obs) else None,
+        "min_battery_wh": det["battery_min"],
+    }
+    stats = {
+        "windows": len(windows),
+        "options": len(opp),
+        "near_pairs": int(pb.near_src.size),
+        "far_gap_s": far.tolist(),
+        "bound_status": res.bound_status,
+        "refined": refined,
+        "exact": res.exact,
+        "mip": mip,
+        **res.stats,
+    }
+    return PlanResult(
+        scenario=sc,
+        observations=obs,
+        value=value,
+        bound=max(bound, value),
+        gap=max(bound, value) - value,
+        bound_converged=converged,
+        report=report,
+        stats=stats,
+        timings=clock.timings,
+        battery=bat,
+    )

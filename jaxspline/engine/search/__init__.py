@@ -1,0 +1,132 @@
+"""The planner's search: timelines, greedy, LNS, Lagrangian/DP bound, exact search.
+
+:func:`solve` runs the stages on a :class:`Problem` until a deadline:
+
+1. greedy construction (:func:`greedy`; always completed, even past the deadline);
+2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
+   task prices, repaired plans, and the upper bound (:func:`lagrangian`);
+3. exact branch and bound when the instance is tiny (``exact_max_options``);
+4. large-neighbourhood search until the deadline (:func:`lns`);
+5. earliest-start pass (:func:`earliest_pass`).
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import time
+from dataclasses import dataclass
+
+from jaxspline.engine.search.battery import BatteryModel
+from jaxspline.engine.search.exact import exact_search
+from jaxspline.engine.search.lagrangian import (
+    BoundResult,
+    dp_paths,
+    dp_prepare,
+    lagrangian,
+    upper_bound,
+)
+from jaxspline.engine.search.lns import earliest_pass, greedy, greedy_order, lns
+from jaxspline.engine.search.mip import MipBound, mip_bound
+from jaxspline.engine.search.problem import Problem
+from jaxspline.engine.search.timeline import Timeline
+
+__all__ = [
+    "BatteryModel",
+    "BoundResult",
+    "Problem",
+    "SearchResult",
+    "MipBound",
+    "Timeline",
+    "dp_paths",
+    "dp_prepare",
+    "earliest_pass",
+    "exact_search",
+    "greedy",
+    "lagrangian",
+    "lns",
+    "mip_bound",
+    "solve",
+    "upper_bound",
+]
+
+_EARLIEST_SHARE = 0.05  # share of the budget reserved for the earliest-start pass
+_EARLIEST_MAX = 2.0  # ... at most this many seconds
+_EXACT_SHARE = 0.5  # share of the remaining budget the exact search may use
+
+
+@dataclass
+class SearchResult:
+    """Outcome of :func:`solve`.
+
+    Attributes:
+      timeline: the final :class:`Timeline` (the plan).
+      bound: Lagrangian upper bound of the candidate model (battery relaxed).
+      bound_status: "optimal", "converged" or "time" (see :class:`BoundResult`).
+      exact: True when the exact search proved the plan optimal (tiny instances).
+      stats: per-stage values and iteration counts.
+    """
+
+    timeline: Timeline
+    bound: float
+    bound_status: str
+    exact: bool
+    stats: dict
+
+
+def solve(
+    pb: Problem,
+    deadline: float,
+    *,
+    seed: int = 0,
+    lagrangian_share: float = 0.3,
+    exact_max_options: int = 0,
+    max_iters: int | None = None,
+    report=None,
+) -> SearchResult:
+    """Run the search stages (module docstring) until ``deadline`` (``time.monotonic``).
+
+    ``max_iters`` caps the LNS iterations and (at 10 x) the Lagrangian iterations so
+    that a run is deterministic; ``report(stage, message)`` receives progress lines.
+    """
+    say = report or (lambda stage, msg: None)
+    tl = Timeline(pb)
+    order = greedy_order(tl)
+    now = time.monotonic()
+    tail = min(_EARLIEST_MAX, _EARLIEST_SHARE * max(0.0, deadline - now))
+    greedy(tl, math.inf, order)  # always complete: a plan even when the budget is spent
+    stats = {"greedy_value": tl.W}
+    say("greedy", f"value {tl.W:.6g}")
+    t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())
+    cap = None if max_iters is None else max(10, max_iters // 10)
+    res = lagrangian(
+        tl,
+        t_dp,
+        order,
+        max_iters=cap,
+        report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
+    )
+    stats.update(lagrangian_value=tl.W, lagrangian_iterations=res.iterations)
+    exact = False
+    if pb.n_options <= exact_max_options:
+        start = list(tl.assigned)
+        tl.restore([])
+        # at most half of what is left: a search that cannot finish still leaves the LNS time
+        t_exact = time.monotonic() + _EXACT_SHARE * max(0.0, deadline - tail - time.monotonic())
+        value, exact = exact_search(tl, t_exact)
+        if value < sum(pb.weight[t] for t, c in enumerate(start) if c >= 0):
+            tl.restore(start)
+        stats["exact_proven"] = exact
+    rng = random.Random(seed)
+    its = 0
+    if not (exact or res.status == "optimal"):
+        its = lns(
+            tl,
+            deadline - tail,
+            rng,
+            max_iters,
+            report=lambda it, imp: say("lns", f"it {it}: value {tl.W:.6g} ({imp} improvements)"),
+        )
+    stats.update(lns_iterations=its, lns_value=tl.W)
+    earliest_pass(tl, deadline)
+    return SearchResult(tl, res.bound, res.status, exact, stats)

@@ -1,0 +1,127 @@
+"""Battery budgets as priced constraints of the Lagrangian bound (energy per orbit arc).
+
+Without loads the battery of satellite k moves by ``base[k]`` per step (charge while
+sunlit minus idle, :class:`jaxspline.search.BatteryModel`). Over any interval
+``I = [a, b]`` of the horizon the level cannot exceed ``initial`` (a = 0) or
+``capacity`` at ``a`` and must stay ``>= margin`` at ``b``, so the load energy spent
+inside I obeys
+
+    imaging energy of the observations inside I
+      + slew energy of the near maneuvers inside I  <=  B_I
+    B_I = (initial if a = 0 else capacity) - margin + sum of base over I.
+
+Imaging counts ``imaging_w`` times the exact duration and a near maneuver ``slew_w``
+times its required time less :data:`_SLEW_TOL` (always-feasible "far" transitions and
+the first slew count zero), so every plan of the candidate model meets these
+constraints: they relax its battery rule. Intervals start at 0 or a shadow entry and
+end at a shadow exit or the horizon end. A constraint is dropped when no plan can
+violate it: all options and near pairs inside fit in ``B_I``, or the interval is too
+short (``|I| max(imaging_w, slew_w) <= B_I``: at most one load runs at a time).
+
+Priced with ``nu_I >= 0`` in units of the constraint scaled by ``B_I``, option j
+pays ``e_j sum_{I ∋ j} nu_I / B_I``, a near pair the same with its slew energy, and
+the bound gains ``sum_I nu_I``. With A interval starts and E ends per satellite, "I
+contains j" is ``a < ia_j`` and ``b >= ib_j`` on the index grid, so both the prices
+of all options and the usage of a path are 2-D cumulative sums over an [A, E] grid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jaxspline.engine.search.problem import Problem
+
+__all__ = ["EnergyBudgets"]
+
+_SLEW_TOL = 0.1  # [s] taken off each required slew time (covers the gap margin)
+_WH = 1.0 / 3600.0  # [Wh / J]
+
+
+class EnergyBudgets:
+    """Interval energy constraints of the battery satellites (module docstring).
+
+    Attributes:
+      m: number of constraints kept (length of the price vector).
+      n_options, n_near: sizes of the per-option and per-near-pair price vectors.
+    """
+
+    def __init__(self, pb: Problem):
+        bat = pb.battery
+        s = np.asarray(pb.c_start, np.float64)
+        e = np.asarray(pb.c_end, np.float64)
+        src, dst = np.asarray(pb.near_src, np.int64), np.asarray(pb.near_dst, np.int64)
+        need = np.asarray(pb.near_need, np.float64)
+        sat_src = np.asarray(pb.c_sat, np.int64)[src]
+        far = np.asarray(pb.far, np.float64)
+        self.n_options, self.n_near = pb.n_options, src.size
+        self.sats = []
+        m = 0
+        for k in range(pb.n_sats):
+            lo, hi = pb.sat_lo[k], pb.sat_hi[k]
+            if not bat.has(k) or hi <= lo:
+                continue
+            p = bat.powers[k]
+            lit = bat.charging[k]
+            edges = np.flatnonzero(np.diff(lit.astype(np.int8)))
+            a_i = np.r_[0, edges[~lit[edges + 1]] + 1]  # 0 and shadow entries [steps]
+            b_i = np.r_[edges[lit[edges + 1]] + 1, bat.n]  # shadow exits and the end
+            a_t, b_t = a_i * bat.dt, b_i * bat.dt
+            cum = np.r_[0.0, np.cumsum(bat.base[k])]
+            level = np.where(a_i == 0, p.initial_wh, p.capacity_wh)
+            budget = level[:, None] - bat.margin_wh + cum[b_i][None, :] - cum[a_i][:, None]
+            span = (b_t[None, :] - a_t[:, None]) * max(p.imaging_w, p.slew_w) * _WH
+            pk = np.flatnonzero(sat_src == k)
+            gap = s[dst[pk]] - e[src[pk]]
+            slew = np.where(gap < far[k], np.maximum(need[pk] - _SLEW_TOL, 0.0), 0.0)
+            sk = {
+                "lo": lo,
+                "hi": hi,
+                "pk": pk,
+                "shape": (a_i.size, b_i.size),
+                "ia": np.searchsorted(a_t, s[lo:hi], side="right"),
+                "ib": np.searchsorted(b_t, e[lo:hi], side="left"),
+                "e": p.imaging_w * (e[lo:hi] - s[lo:hi]) * _WH,
+                "ia_arc": np.searchsorted(a_t, s[src[pk]], side="right"),
+                "ib_arc": np.searchsorted(b_t, e[dst[pk]], side="left"),
+                "e_arc": p.slew_w * slew * _WH,
+            }
+            inside = self._usage(sk, np.ones(hi - lo, bool), np.ones(pk.size, bool))
+            kept = (a_t[:, None] < b_t[None, :]) & (budget > 0.0)
+            kept &= (inside > budget) & (span > budget)
+            sk["kept"], sk["budget"], sk["off"] = kept, budget[kept], m
+            m += int(kept.sum())
+            self.sats.append(sk)
+        self.m = m
+
+    @staticmethod
+    def _usage(sk, nodes, arcs):
+        """[A, E] energy inside each interval of the chosen options / near pairs (masks)."""
+        a_n, e_n = sk["shape"]
+        h = np.zeros((a_n + 1, e_n + 1))
+        np.add.at(h, (sk["ia"][nodes], sk["ib"][nodes]), sk["e"][nodes])
+        np.add.at(h, (sk["ia_arc"][arcs], sk["ib_arc"][arcs]), sk["e_arc"][arcs])
+        r = np.cumsum(np.cumsum(h[::-1], axis=0)[::-1], axis=1)  # sum over x >= a, y <= b
+        return r[1:, :e_n]
+
+    def penalties(self, nu: np.ndarray):
+        """Per option and per near pair (``pb.near_src`` order) price of their energy."""
+        node = np.zeros(self.n_options)
+        arc = np.zeros(self.n_near)
+        for sk in self.sats:
+            a_n, e_n = sk["shape"]
+            v = np.zeros((a_n, e_n))
+            v[sk["kept"]] = nu[sk["off"] : sk["off"] + sk["budget"].size] / sk["budget"]
+            sp = np.zeros((a_n + 1, e_n + 1))  # sum over a < x, b >= y
+            sp[1:, :e_n] = np.cumsum(np.cumsum(v[:, ::-1], axis=1)[:, ::-1], axis=0)
+            node[sk["lo"] : sk["hi"]] = sk["e"] * sp[sk["ia"], sk["ib"]]
+            arc[sk["pk"]] = sk["e_arc"] * sp[sk["ia_arc"], sk["ib_arc"]]
+        return node, arc
+
+    def usage(self, nodes: np.ndarray, arcs: np.ndarray) -> np.ndarray:
+        """Scaled energy per constraint of the chosen options and near pairs (bool masks
+        over all options / near pairs)."""
+        out = np.zeros(self.m)
+        for sk in self.sats:
+            u = self._usage(sk, nodes[sk["lo"] : sk["hi"]], arcs[sk["pk"]])
+            out[sk["off"] : sk["off"] + sk["budget"].size] = u[sk["kept"]] / sk["budget"]
+        return out

@@ -1,0 +1,144 @@
+"""The search's view of a planning problem: options as Python lists, transition rules.
+
+Built by :func:`jaxspline.plan` from the screened options. Times are seconds. The
+transition rule between two options i -> j of one satellite is the required time
+``need(i, j)`` (:mod:`jaxspline.engine.models`): feasible iff ``t_start[j] - t_end[i] >=
+need``. Rest-to-rest satellites evaluate it from the lines of sight through their
+slew table (cheap, any pair); per-channel satellites look it up among the screened
+near pairs; pairs at least ``far[sat]`` apart are always feasible.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from jaxspline.engine.search.battery import BatteryModel
+
+__all__ = ["Problem"]
+
+
+@dataclass
+class Problem:
+    """Options, tasks and transition data for the search (see module docstring).
+
+    Attributes:
+      n_sats: number of satellites.
+      weight: per task (target) value.
+      c_task, c_sat: per option target / satellite index.
+      c_start, c_end: per option imaging interval [s].
+      c_first: per option required time before it as its satellite's first
+        observation (inf: not allowed first).
+      c_ls, c_le: per option unit lines of sight (tuples) at start / end.
+      tables: per satellite a :class:`jaxspline.engine.models.SlewTable` (rest-to-rest) or None.
+      near: dict ``i * n + j -> need`` of feasible near pairs of per-channel satellites.
+      near_src, near_dst, near_need: numpy arrays of ALL feasible near pairs (every
+        model), for the per-satellite DP.
+      far: per satellite the always-feasible gap [s].
+      battery: :class:`BatteryModel`.
+      task_cands: per task its option ids.
+      sat_lo, sat_hi: option id range per satellite (options sorted by sat, start).
+      sat_starts: per satellite the sorted starts of its options.
+      near_slack: the near pairs include every feasible pair with gap < far + this [s]
+        (at least the shortest observation: the DP's block width, see ``dp_prepare``).
+    """
+
+    n_sats: int
+    weight: list
+    c_task: list
+    c_sat: list
+    c_start: list
+    c_end: list
+    c_first: list
+    c_ls: list
+    c_le: list
+    tables: list
+    near: dict
+    near_src: np.ndarray
+    near_dst: np.ndarray
+    near_need: np.ndarray
+    far: list
+    battery: BatteryModel
+    task_cands: list
+    sat_lo: list
+    sat_hi: list
+    sat_starts: list
+    near_slack: float = 0.0
+
+    @property
+    def n_options(self) -> int:
+        """Number of options."""
+        return len(self.c_task)
+
+    def need(self, i: int, j: int) -> float:
+        """Required time [s] between the end of option i and the start of option j (same sat)."""
+        k = self.c_sat[j]
+        table = self.tables[k]
+        if table is not None:
+            a, b = self.c_le[i], self.c_ls[j]
+            cx = a[1] * b[2] - a[2] * b[1]
+            cy = a[2] * b[0] - a[0] * b[2]
+            cz = a[0] * b[1] - a[1] * b[0]
+            th = math.atan2(
+                math.sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+            )
+            return table.scalar(th)
+        gap = self.c_start[j] - self.c_end[i]
+        if gap >= self.far[k]:
+            return self.far[k]
+        return self.near.get(i * len(self.c_task) + j, math.inf)
+
+    @classmethod
+    def build(cls, opp, sats, first, near_pairs, far, tables, battery, weights):
+        """Assemble from numpy data.
+
+        Args:
+          opp: :class:`jaxspline.engine.opportunities.Opportunities` sorted by (sat, start).
+          sats: the scenario's satellites.
+          first: [N] required time before each option as a first observation.
+          near_pairs: (src, dst, need) numpy arrays of feasible pairs closer than far.
+          far: [S] always-feasible gaps.
+          tables: per satellite SlewTable or None.
+          battery: :class:`BatteryModel`.
+          weights: per target value.
+        """
+        o = opp.options
+        sat = np.asarray(o.sat, np.int64)
+        n = sat.size
+        n_s = len(sats)
+        task = np.asarray(o.route, np.int64)
+        n_t = len(weights)
+        task_cands = [[] for _ in range(n_t)]
+        for ci, t in enumerate(task.tolist()):
+            task_cands[t].append(ci)
+        lo = np.searchsorted(sat, np.arange(n_s), side="left").tolist()
+        hi = np.searchsorted(sat, np.arange(n_s), side="right").tolist()
+        starts = np.asarray(o.t_start, np.float64).tolist()
+        src, dst, need = near_pairs
+        pc = np.array([s.model == "per_channel" for s in sats], bool)
+        m = pc[sat[dst]] if n else np.zeros(0, bool)
+        near = dict(zip((src[m] * n + dst[m]).tolist(), need[m].tolist(), strict=True))
+        return cls(
+            n_sats=n_s,
+            weight=[float(w) for w in weights],
+            c_task=task.tolist(),
+            c_sat=sat.tolist(),
+            c_start=starts,
+            c_end=np.asarray(o.t_end, np.float64).tolist(),
+            c_first=np.asarray(first, np.float64).tolist(),
+            c_ls=[tuple(v) for v in np.asarray(o.start_los).tolist()],
+            c_le=[tuple(v) for v in np.asarray(o.end_los).tolist()],
+            tables=list(tables),
+            near=near,
+            near_src=np.asarray(src, np.int64),
+            near_dst=np.asarray(dst, np.int64),
+            near_need=np.asarray(need, np.float64),
+            far=[float(f) for f in far],
+            battery=battery,
+            task_cands=task_cands,
+            sat_lo=lo,
+            sat_hi=hi,
+            sat_starts=[starts[a:b] for a, b in zip(lo, hi, strict=True)],
+        )

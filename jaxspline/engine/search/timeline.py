@@ -1,0 +1,249 @@
+"""Mutable per-satellite timelines with feasibility checks, battery bounds and an undo log.
+
+A :class:`Timeline` holds, per satellite, its chosen options in start order and, per
+task, the option that images it (each task at most once). :meth:`Timeline.check`
+tests one insertion: no overlap, the transition from the predecessor (or the first
+maneuver) and to the successor fit their gaps, and the battery stays above its margin.
+Every change is logged so a search step can be undone.
+
+Battery bookkeeping: ``level_min[k]`` is the exact suffix minimum of satellite k's
+battery level for a past state of its timeline and ``debt[k]`` an upper bound of the
+load energy added since (the clamped battery recursion is monotone in its inputs, so
+``level_min - debt`` is a lower bound of the current suffix minimum); the exact
+profile is recomputed only when that bound is tight.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+
+import numpy as np
+
+from jaxspline.engine.search.problem import Problem
+
+__all__ = ["Timeline"]
+
+_CACHE_LIMIT = 3_000_000  # memoized transition times before the cache is cleared
+_TURNAROUND_WEIGHT = 0.02  # tie-break weight of the end time in insertion costs
+_INSERT_NOISE = 0.3  # relative noise of randomized insertion costs
+
+
+class Timeline:
+    """Per-satellite timelines over a :class:`Problem` (see module docstring)."""
+
+    def __init__(self, pb: Problem):
+        self.pb = pb
+        n_s = pb.n_sats
+        self.tl = [[] for _ in range(n_s)]  # option ids by start
+        self.tl_s = [[] for _ in range(n_s)]  # their starts
+        self.assigned = [-1] * len(pb.weight)
+        self.level_min = [None] * n_s
+        self.debt = [0.0] * n_s
+        self.W = 0.0
+        self.N = 0
+        self.tat = 0.0
+        self.log = []
+        self.cache = {}
+        self.saved = {}
+
+    # ------------------------------------------------------------ transitions
+    def need(self, i: int, j: int) -> float:
+        """Required time [s] from option i to option j (memoized :meth:`Problem.need`)."""
+        key = i * self.pb.n_options + j
+        v = self.cache.get(key)
+        if v is None:
+            if len(self.cache) > _CACHE_LIMIT:
+                self.cache.clear()
+            v = self.pb.need(i, j)
+            self.cache[key] = v
+        return v
+
+    def maneuver_into(self, k: int, pos: int) -> float:
+        """Required time [s] of the maneuver into position ``pos`` of satellite k's timeline."""
+        tl = self.tl[k]
+        return self.pb.c_first[tl[pos]] if pos == 0 else self.need(tl[pos - 1], tl[pos])
+
+    def score(self):
+        """Comparable quality: (value, count, -sum of end times)."""
+        return (round(self.W, 9), self.N, -round(self.tat, 6))
+
+    # ------------------------------------------------------------ battery
+    def _profile(self, k, extra=None):
+        pb = self.pb
+        tl = list(self.tl[k])
+        if extra is not None:
+            tl.insert(bisect.bisect_left([pb.c_start[c] for c in tl], pb.c_start[extra]), extra)
+        man, prev = [], -1
+        for c in tl:
+            man.append(pb.c_first[c] if prev < 0 else self.need(prev, c))
+            prev = c
+        return pb.battery.profile(k, [pb.c_start[c] for c in tl], [pb.c_end[c] for c in tl], man)
+
+    def _suffix_min(self, k):
+        if self.level_min[k] is None:
+            lev = self._profile(k)
+            self.level_min[k] = np.minimum.accumulate(lev[::-1])[::-1]
+            self.debt[k] = 0.0
+        return self.level_min[k]
+
+    def _battery_ok(self, k, c, k0, de):
+        bat = self.pb.battery
+        if not bat.has(k):
+            return True
+        smin = self._suffix_min(k)
+        if smin[k0] - self.debt[k] - de >= bat.margin_wh:
+            return True
+        if self.debt[k] > 0.0:
+            self.level_min[k] = None
+            if self._suffix_min(k)[k0] - de >= bat.margin_wh:
+                return True
+        return bool(self._profile(k, extra=c).min() >= bat.margin_wh)
+
+    def _energy(self, k, c, n_in, n_out):
+        pb = self.pb
+        if not pb.battery.has(k):
+            return 0.0
+        return pb.battery.extra_energy(k, pb.c_end[c] - pb.c_start[c], n_in + n_out)
+
+    # ------------------------------------------------------------ moves
+    def check(self, c: int):
+        """Feasibility of inserting option c: the time it consumes [s], or None."""
+        pb = self.pb
+        k = pb.c_sat[c]
+        if self.assigned[pb.c_task[c]] >= 0:
+            return None
+        s, e = pb.c_start[c], pb.c_end[c]
+        pos = bisect.bisect_left(self.tl_s[k], s)
+        tl = self.tl[k]
+        if pos > 0:
+            p = tl[pos - 1]
+            if pb.c_end[p] > s:
+                return None
+            n_in = self.need(p, c)
+            if s - pb.c_end[p] < n_in:
+                return None
+        else:
+            p = -1
+            n_in = pb.c_first[c]
+            if s < n_in:
+                return None
+        if pos < len(tl):
+            q = tl[pos]
+            if e > pb.c_start[q]:
+                return None
+            n_out = self.need(c, q)
+            if pb.c_start[q] - e < n_out:
+                return None
+            n_old = pb.c_first[q] if p < 0 else self.need(p, q)
+        else:
+            n_out = n_old = 0.0
+        if pb.battery.has(k):
+            k0 = max(0, pb.battery.step_index(s - n_in))
+            if not self._battery_ok(k, c, k0, self._energy(k, c, n_in, n_out)):
+                return None
+        return n_in + (e - s) + n_out - n_old
+
+    def insert(self, c: int):
+        """Insert option c (feasibility is the caller's business: :meth:`check`)."""
+        pb = self.pb
+        k, t = pb.c_sat[c], pb.c_task[c]
+        pos = bisect.bisect_left(self.tl_s[k], pb.c_start[c])
+        tl = self.tl[k]
+        if k not in self.saved:
+            self.saved[k] = (self.level_min[k], self.debt[k])
+        n_in = pb.c_first[c] if pos == 0 else self.need(tl[pos - 1], c)
+        n_out = self.need(c, tl[pos]) if pos < len(tl) else 0.0
+        self.debt[k] += self._energy(k, c, n_in, n_out)
+        tl.insert(pos, c)
+        self.tl_s[k].insert(pos, pb.c_start[c])
+        self.assigned[t] = c
+        self.W += pb.weight[t]
+        self.N += 1
+        self.tat += pb.c_end[c]
+        self.log.append(("i", c))
+
+    def remove(self, c: int):
+        """Remove option c from its satellite's timeline."""
+        pb = self.pb
+        k, t = pb.c_sat[c], pb.c_task[c]
+        tl = self.tl[k]
+        if k not in self.saved:
+            self.saved[k] = (self.level_min[k], self.debt[k])
+        pos = tl.index(c)
+        del tl[pos]
+        del self.tl_s[k][pos]
+        if pos < len(tl) and pb.battery.has(k):  # the successor's maneuver may get longer
+            self.debt[k] += pb.battery.extra_energy(k, 0.0, self.maneuver_into(k, pos))
+        self.assigned[t] = -1
+        self.W -= pb.weight[t]
+        self.N -= 1
+        self.tat -= pb.c_end[c]
+        self.log.append(("r", c))
+
+    def removal_ok(self, k: int, pos: int) -> bool:
+        """After removing a block at index ``pos`` of satellite k: the new transition into
+        ``tl[pos]`` and the battery still hold."""
+        pb = self.pb
+        tl = self.tl[k]
+        if pos < len(tl):
+            q = tl[pos]
+            prev_end = 0.0 if pos == 0 else pb.c_end[tl[pos - 1]]
+            if pb.c_start[q] - prev_end < self.maneuver_into(k, pos):
+                return False
+        if not pb.battery.has(k):
+            return True
+        margin = pb.battery.margin_wh
+        if self._suffix_min(k)[0] - self.debt[k] >= margin:
+            return True
+        self.level_min[k] = None
+        return bool(self._suffix_min(k)[0] >= margin)
+
+    def commit(self):
+        """Forget the undo log (the current state becomes the base of the next step)."""
+        self.log.clear()
+        self.saved.clear()
+
+    def undo_to(self, mark: int):
+        """Undo the changes logged after ``mark``; at mark 0 the battery bounds come back too."""
+        while len(self.log) > mark:
+            op, c = self.log.pop()
+            if op == "i":
+                self.remove(c)
+            else:
+                self.insert(c)
+            self.log.pop()
+        if mark == 0:
+            for k, (lm, debt) in self.saved.items():
+                self.level_min[k], self.debt[k] = lm, debt
+            self.saved.clear()
+
+    def best_insert(self, t: int, rng=None) -> bool:
+        """Insert task t at its cheapest feasible option (noisy costs with ``rng``)."""
+        pb = self.pb
+        best, best_cost = -1, math.inf
+        for c in pb.task_cands[t]:
+            cost = self.check(c)
+            if cost is None:
+                continue
+            cost += _TURNAROUND_WEIGHT * pb.c_end[c]
+            if rng is not None:
+                cost *= 1.0 + _INSERT_NOISE * rng.random()
+            if cost < best_cost:
+                best, best_cost = c, cost
+        if best >= 0:
+            self.insert(best)
+            return True
+        return False
+
+    def restore(self, assigned):
+        """Reset to the given task -> option assignment (-1: unassigned)."""
+        pb = self.pb
+        for k in range(pb.n_sats):
+            self.tl[k], self.tl_s[k] = [], []
+            self.level_min[k], self.debt[k] = None, 0.0
+        self.assigned = [-1] * len(pb.weight)
+        self.W, self.N, self.tat = 0.0, 0, 0.0
+        for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.c_start[c]):
+            self.insert(c)
+        self.commit()

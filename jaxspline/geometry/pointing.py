@@ -1,0 +1,360 @@
+"""Pointing geometry: ground aim point -> body attitude (roll, pitch, yaw) in the orbital frame.
+
+Orbital frame (OSK) at time t, from the ECI satellite position r and velocity v:
+``z_o = -r/|r|`` (nadir), ``y_o = -(r x v)/|r x v|`` (minus the orbit normal),
+``x_o = y_o x z_o`` (along-track, forward). Body axes: the camera boresight is
+``z_b``, the push-broom detector line is ``y_b``, the image moves along ``x_b``.
+
+Attitude angles (seeds/retarget-scan-pattern-optimization, eq. 7: pitch, then
+roll, then yaw, each about the already-rotated axis): ``C = Ry(pitch) Rx(roll)
+Rz(yaw)`` maps body to orbital coordinates, so the boresight in the orbital frame
+is ``b = (cos roll sin pitch, -sin roll, cos roll cos pitch)``. For a unit line of
+sight ``n`` to the aim point: ``pitch = atan2(n_x, n_z)``,
+``roll = atan2(-n_y, hypot(n_x, n_z))``.
+
+Yaw aligns the image motion with ``x_b`` (detector line across it): a scan
+direction ``s`` (orbital frame) is expressed in the pitched-and-rolled frame,
+``s' = (Ry Rx)^T s``, and ``yaw = atan2(s'_y, s'_x)``. For a strip, ``s`` is the
+ground tangent of the strip at the aim point (the scene slides along the strip
+as the boresight sweeps it). For a point target (tracked: no image motion at the
+boresight) ``s`` is minus the target's motion in the orbital frame, i.e. the
+direction the image would move for an orbit-fixed camera; at nadir without Earth
+rotation this is ``x_o`` and yaw = 0, with Earth rotation it is the classic
+yaw-steering angle (~3.8 deg at the equator for a 98 deg orbit).
+
+Channel order everywhere: ``[roll, pitch, yaw]`` (C = 3). Rates and accelerations
+are the time derivatives of these angles (the per-channel model of SPEC section 1),
+computed by forward-mode autodiff (``jax.jvp``), never by finite differences.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxspline.geometry.frames import OMEGA_EARTH, earth_rotation_angle, rot_z
+from jaxspline.geometry.orbit import orbit_state
+from jaxspline.kernels._batch import batched, padded_size
+from jaxspline.kernels._validate import check_finite, check_positive
+
+__all__ = [
+    "Scene",
+    "CHANNELS",
+    "aim_params",
+    "aim_angles",
+    "aim_state",
+    "aim_geometry",
+    "pointing_angles",
+    "pointing_state",
+    "off_nadir",
+    "off_nadir_flat",
+    "boresight",
+    "visibility_windows",
+]
+
+CHANNELS = ("roll", "pitch", "yaw")
+
+
+class Scene(NamedTuple):
+    """The pointing geometry of one scenario (a pytree).
+
+    Attributes:
+      orbit: a ``CircularOrbit`` or ``HermiteOrbit`` (jaxspline.geometry.orbit); a
+        multi-satellite HermiteOrbit ([S, M, 3] tables) needs the ``sat`` argument of
+        the kernels.
+      gmst0: Earth rotation angle at t = 0 [rad] (``frames.gmst`` of the epoch).
+    """
+
+    orbit: object
+    gmst0: jnp.ndarray
+
+
+def aim_params(target_ecef, direction_ecef=None, speed=0.0):
+    """Pack an aim law into the [8] parameter vector used by the kernels.
+
+    ``[x0, y0, z0, dx, dy, dz, speed, is_strip]``: start point (ECEF, m), unit ground
+    direction at the start (ECEF), ground speed of the aim point [m/s], and 1.0 for
+    a strip (yaw from the strip tangent) or 0.0 for a point target (yaw from the
+    relative motion). ``direction_ecef=None`` is a point target.
+    """
+    g0 = jnp.asarray(target_ecef)
+    if direction_ecef is None:
+        d = jnp.zeros_like(g0).at[..., 2].set(1.0)
+        strip = jnp.zeros(g0.shape[:-1], g0.dtype)
+        speed = jnp.zeros(g0.shape[:-1], g0.dtype)
+    else:
+        d = jnp.asarray(direction_ecef, g0.dtype)
+        strip = jnp.ones(g0.shape[:-1], g0.dtype)
+        speed = jnp.broadcast_to(jnp.asarray(speed, g0.dtype), g0.shape[:-1])
+    return jnp.concatenate([g0, d, speed[..., None], strip[..., None]], -1)
+
+
+def _aim_point(p, delta):
+    """Aim point and unit ground tangent (ECEF) after an arc delta [rad] along the great circle.
+
+    g(delta) = |g0| (u cos delta + d sin delta), u = g0/|g0|, d the start direction
+    (made orthogonal to u): the great circle on the sphere through the start point.
+    """
+    g0, d = p[:3], p[3:6]
+    rad = jnp.linalg.norm(g0)
+    u = g0 / rad
+    d = d - jnp.dot(d, u) * u
+    dn2 = jnp.dot(d, d)
+    # a point target's dummy direction (+z) is parallel to u at a pole: any unit d works
+    d = jnp.where(dn2 > 0, d, jnp.array([1.0, 0.0, 0.0], d.dtype))
+    d = d / jnp.sqrt(jnp.where(dn2 > 0, dn2, 1.0))
+    c, s = jnp.cos(delta), jnp.sin(delta)
+    return rad * (u * c + d * s), d * c - u * s
+
+
+def _frame_los(scene: Scene, p, t0, t, sat=None):
+    """LOS L [3] [m], its rate L' [3] [m/s] and the strip tangent [3], all in the orbital frame.
+
+    L = B (g - r); L' = B (g' - v) - W x L, with B the orbital-frame basis (rows),
+    g' = w_E z x g + (ground speed) * tangent (ECI), and W = (0, -|r x v| / |r|^2, 0)
+    the orbital frame's angular velocity in its own axes (exact for Keplerian motion).
+    """
+    r, v = orbit_state(scene.orbit, t, sat)
+    rn = jnp.linalg.norm(r)
+    z = -r / rn
+    h = jnp.cross(r, v)
+    hn = jnp.linalg.norm(h)
+    y = -h / hn
+    x = jnp.cross(y, z)
+    basis = jnp.stack([x, y, z])
+    theta = earth_rotation_angle(scene.gmst0, t)
+    rad_g = jnp.linalg.norm(p[:3])
+    delta = p[6] * (t - t0) / rad_g
+    g, tan = _aim_point(p, delta)
+    g_eci = rot_z(-theta, g)
+    tan_eci = rot_z(-theta, tan)
+    g_dot = OMEGA_EARTH * jnp.stack([-g_eci[1], g_eci[0], jnp.zeros_like(g_eci[0])])
+    g_dot = g_dot + tan_eci * p[6]
+    los = basis @ (g_eci - r)
+    w = hn / rn**2
+    w_x_los = jnp.stack([-w * los[2], jnp.zeros_like(w), w * los[0]])  # (0, -w, 0) x L
+    los_dot = basis @ (g_dot - v) - w_x_los
+    sees = jnp.dot(r - g_eci, g_eci)  # > 0 iff the satellite is above the aim point's horizon
+    return los, los_dot, basis @ tan_eci, sees
+
+
+def _angles_from(n, s):
+    """Roll, pitch, yaw [3] from a unit LOS n and a scan direction s (orbital frame)."""
+    pitch = jnp.arctan2(n[0], n[2])
+    roll = jnp.arctan2(-n[1], jnp.hypot(n[0], n[2]))
+    cp, sp, cr, sr = jnp.cos(pitch), jnp.sin(pitch), jnp.cos(roll), jnp.sin(roll)
+    # s' = Rx(roll)^T Ry(pitch)^T s
+    a = cp * s[0] - sp * s[2]  # after undoing the pitch
+    b = s[1]
+    c = sp * s[0] + cp * s[2]
+    sx = a
+    sy = cr * b + sr * c
+    small = (jnp.abs(sx) + jnp.abs(sy)) < 1e-30
+    yaw = jnp.arctan2(jnp.where(small, 0.0, sy), jnp.where(small, 1.0, sx))
+    return jnp.stack([roll, pitch, yaw])
+
+
+def aim_angles(scene: Scene, p, t0, t, sat=None):
+    """Kernel: [roll, pitch, yaw, off_nadir] [rad] at time t [s] for aim law p [8] started at t0.
+
+    off_nadir is pi when the aim point is below its horizon (seen through the Earth).
+
+    One candidate (scalars t, t0; p of shape [8] from :func:`aim_params`); the aim
+    point moves along its great circle at ground speed p[6] from t0. Branchless in
+    the point/strip switch; differentiable in t and t0. The aim point covers
+    p[6] * (t - t0) metres of arc on the sphere of radius |g0| through the start point
+    (within ~0.2 km of the ellipsoid for a 100 km strip). ``sat``: satellite index of a
+    multi-satellite orbit table (None for one orbit).
+    """
+
+    los, los_dot, tan_o, sees = _frame_los(scene, p, t0, t, sat)
+    n = los / jnp.linalg.norm(los)
+    s = jnp.where(p[7] > 0.5, tan_o, -los_dot)
+    ang = _angles_from(n, s)
+    offn = jnp.arctan2(jnp.hypot(n[0], n[1]), n[2])
+    offn = jnp.where(sees > 0, offn, jnp.pi)  # behind the Earth: not visible
+    return jnp.concatenate([ang, offn[None]])
+
+
+def aim_state(scene: Scene, p, t0, t, sat=None):
+    """Kernel: (angle, rate, accel), each [3] (roll, pitch, yaw), plus off-nadir, at time t.
+
+    rate = d(angle)/dt and accel = d^2(angle)/dt^2 with t0 fixed, by nested
+    ``jax.jvp`` of :func:`aim_angles`. Units rad, rad/s, rad/s^2.
+    Returns (angle [3], rate [3], accel [3], off_nadir scalar).
+    """
+
+    def f(tt):
+        return aim_angles(scene, p, t0, tt, sat)
+
+    def f1(tt):
+        return jax.jvp(f, (tt,), (jnp.ones_like(tt),))
+
+    (a, r), (_, acc) = jax.jvp(f1, (t,), (jnp.ones_like(t),))
+    return a[:3], r[:3], acc[:3], a[3]
+
+
+def aim_geometry(scene: Scene, p, t0, t, sat=None):
+    """Kernel: imaging geometry of aim law p at time t, without attitude angles.
+
+    Returns ``(off_nadir, elevation_sine, los, nadir)``: the off-nadir angle [rad]
+    ``atan2(|d x n|, d . n)`` between the line of sight ``d = g - r`` and nadir
+    ``n = -r``; the sine of the aim point's geocentric elevation
+    ``(r - g) . g / (|r - g| |g|)`` (> 0 iff the satellite is above the aim point's
+    horizon, aeossp RULES.md rule 5); and the unit line of sight and unit nadir [3]
+    in ECI (TEME). This is what rest-to-rest eigen-axis slews need (the angle between
+    two lines of sight); one candidate, no autodiff, cheap.
+    """
+    r, _ = orbit_state(scene.orbit, t, sat)
+    theta = earth_rotation_angle(scene.gmst0, t)
+    g, _ = _aim_point(p, p[6] * (t - t0) / jnp.linalg.norm(p[:3]))
+    g_eci = rot_z(-theta, g)
+    d = g_eci - r
+    dn = jnp.linalg.norm(d)
+    rn = jnp.linalg.norm(r)
+    cr = jnp.cross(d, -r)
+    offn = jnp.arctan2(jnp.linalg.norm(cr), jnp.dot(d, -r))
+    elev = jnp.dot(-d, g_eci) / (dn * jnp.linalg.norm(g_eci))
+    return offn, elev, d / dn, -r / rn
+
+
+def _as_t(t, like):
+    t = jnp.asarray(t)
+    dt = jnp.result_type(t, like) if jnp.issubdtype(jnp.result_type(like), jnp.floating) else None
+    if dt is None or not jnp.issubdtype(dt, jnp.floating):
+        dt = jnp.result_type(float)
+    return t.astype(dt)
+
+
+def _point_kernel(scene, target, t):
+    p = aim_params(target)
+    return aim_angles(scene, p, jnp.zeros_like(t), t)
+
+
+def _point_state_kernel(scene, target, t):
+    p = aim_params(target)
+    a, r, acc, _ = aim_state(scene, p, jnp.zeros_like(t), t)
+    return jnp.stack([a, r, acc])
+
+
+def _offn_kernel(scene, target, t):
+    r, _ = orbit_state(scene.orbit, t)
+    g = rot_z(-earth_rotation_angle(scene.gmst0, t), target)
+    d = g - r
+    nadir = -r
+    cr = jnp.cross(d, nadir)
+    offn = jnp.arctan2(jnp.sqrt(jnp.sum(cr * cr)), jnp.dot(d, nadir))
+    return jnp.where(jnp.dot(-d, g) > 0, offn, jnp.pi)  # behind the Earth: pi
+
+
+_offn_batched = batched(_offn_kernel, "(3),()->()", excluded={0})
+_point_angles_batched = batched(_point_kernel, "(3),()->(4)", excluded={0})
+_point_state_batched = batched(_point_state_kernel, "(3),()->(3,3)", excluded={0})
+
+
+def _check_target(target_ecef, t):
+    target = jnp.asarray(target_ecef)
+    if target.shape[-1:] != (3,):
+        raise ValueError(f"target_ecef must have shape [..., 3], got {target.shape}")
+    check_finite("target_ecef", target)
+    check_finite("t", t)
+    t = _as_t(t, target)
+    return target.astype(t.dtype), t
+
+
+def pointing_angles(scene: Scene, target_ecef, t):
+    """[roll, pitch, yaw] [..., 3] [rad] tracking a fixed ground point at time(s) t [s].
+
+    ``target_ecef`` [..., 3] [m] (Earth-fixed); broadcasts with t. See the module
+    docstring for the frames and the yaw law (point target: yaw from relative motion).
+    """
+    target, t = _check_target(target_ecef, t)
+    return _point_angles_batched(scene, target, t)[..., :3]
+
+
+def off_nadir(scene: Scene, target_ecef, t):
+    """Off-nadir angle [rad] of the line of sight to a ground point: atan2(|n x z_o|, n . z_o).
+
+    A point below its horizon (satellite behind the Earth: (r - g) . g <= 0) gets pi.
+    """
+    target, t = _check_target(target_ecef, t)
+    return _offn_batched(scene, target, t)
+
+
+def pointing_state(scene: Scene, target_ecef, t):
+    """(angle, rate, accel) of [roll, pitch, yaw] tracking a ground point, each [..., 3].
+
+    Rates [rad/s] and accelerations [rad/s^2] are exact derivatives by ``jax.jvp``.
+    """
+    target, t = _check_target(target_ecef, t)
+    out = _point_state_batched(scene, target, t)
+    return out[..., 0, :], out[..., 1, :], out[..., 2, :]
+
+
+def off_nadir_flat(scene: Scene, targets_ecef, t):
+    """Off-nadir [K] for K (target [K, 3], time [K]) pairs (numpy in/out, float64 if enabled).
+
+    Pads K to a power of two (>= 1024) so repeated calls reuse one compiled kernel.
+    """
+    targets = np.asarray(targets_ecef, np.float64).reshape(-1, 3)
+    t = np.broadcast_to(np.asarray(t, np.float64), targets.shape[:1])
+    k = targets.shape[0]
+    m = padded_size(k)
+    tg = np.concatenate([targets, np.repeat(targets[:1], m - k, 0)]) if k else np.ones((m, 3))
+    tt = np.concatenate([t, np.full(m - k, t[0] if k else 0.0)])
+    dt = jnp.result_type(float)
+    return np.asarray(_offn_batched(scene, jnp.asarray(tg, dt), jnp.asarray(tt, dt)))[:k]
+
+
+def boresight(roll, pitch):
+    """Unit boresight [..., 3] in the orbital frame: (cos r sin p, -sin r, cos r cos p)."""
+    roll, pitch = jnp.asarray(roll), jnp.asarray(pitch)
+    return jnp.stack(
+        [jnp.cos(roll) * jnp.sin(pitch), -jnp.sin(roll), jnp.cos(roll) * jnp.cos(pitch)], -1
+    )
+
+
+def visibility_windows(scene: Scene, targets_ecef, t_begin, t_end, max_off_nadir, step=10.0):
+    """Intervals where each ground point is within ``max_off_nadir`` [rad] of nadir.
+
+    The off-nadir angle is sampled every ``step`` seconds on [t_begin, t_end]; each
+    sign change of ``off_nadir - max_off_nadir`` is refined by 50 bisection steps
+    (vectorized over all crossings). A window narrower than ``step`` can be missed.
+
+    Returns a list (one per target) of float64 arrays [W, 2] of (start, end) [s].
+    """
+    check_positive("max_off_nadir", max_off_nadir)
+    check_positive("step", step)
+    if not t_end > t_begin:
+        raise ValueError(f"t_end must be > t_begin, got t_begin={t_begin!r}, t_end={t_end!r}")
+    targets = np.asarray(targets_ecef, dtype=np.float64).reshape(-1, 3)
+    m = int(np.ceil((t_end - t_begin) / step)) + 1
+    grid = np.linspace(t_begin, t_end, m)
+    nt = targets.shape[0]
+    g = off_nadir_flat(scene, np.repeat(targets, m, 0), np.tile(grid, nt)).reshape(nt, m)
+    g = g - max_off_nadir
+    inside = g <= 0
+    ti, ki = np.nonzero(inside[:, 1:] != inside[:, :-1])
+    lo, hi = grid[ki].copy(), grid[ki + 1].copy()
+    if ti.size:
+        lo_in = inside[ti, ki]
+        for _ in range(50):
+            mid = 0.5 * (lo + hi)
+            gm = off_nadir_flat(scene, targets[ti], mid) - max_off_nadir
+            same = (gm <= 0) == lo_in
+            lo = np.where(same, mid, lo)
+            hi = np.where(same, hi, mid)
+    cross = 0.5 * (lo + hi)
+    out = []
+    for i in range(targets.shape[0]):
+        sel = ti == i
+        edges = list(cross[sel])
+        if inside[i, 0]:
+            edges.insert(0, grid[0])
+        if inside[i, -1]:
+            edges.append(grid[-1])
+        out.append(np.asarray(edges, dtype=np.float64).reshape(-1, 2))
+    return out

@@ -1,0 +1,453 @@
+"""Imaging routes (point targets and strips), their start-time windows and start options.
+
+A *route* is either
+- a point target: the boresight tracks one ground point for ``duration`` seconds;
+- a strip: the aim point runs along a great circle from a start point at
+  ``azimuth`` for ``length`` metres at a ground ``scan speed`` (so the duration is
+  length / speed); push-broom yaw aligns the detector line across the strip.
+
+Each route has a window of allowed start times ``[t0_min, t0_max]`` (visibility
+under the off-nadir limit intersected with any user window) and a value
+(priority). Following the retarget-scan pattern (SPEC section 3, seeds/retarget-
+scan-pattern-optimization, Steps 1-3) every route gets a grid of start times
+``t0`` in its window and, for strips, a small set of scan speeds; each option's
+scan is checked (visible, rates/accelerations within limits, Sun elevation) into
+``scan_ok``, and the boundary states (angle, rate per channel at start and end)
+go into a :class:`jaxspline.engine.options.RouteOptions` table.
+
+:class:`RouteSet` implements :class:`jaxspline.engine.options.RouteModel`: a
+differentiable ``states(route, t0)`` for refinement.
+"""
+
+from __future__ import annotations
+
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from jaxspline.geometry.frames import (
+    OMEGA_EARTH,
+    ecef_to_geodetic,
+    geodetic_to_ecef,
+)
+from jaxspline.geometry.orbit import orbit_state
+from jaxspline.geometry.pointing import Scene, aim_state, off_nadir_flat
+from jaxspline.kernels._batch import map_chunked
+from jaxspline.kernels._validate import check_finite, check_positive
+
+__all__ = [
+    "POINT",
+    "STRIP",
+    "RouteSpec",
+    "RouteSet",
+    "make_route_spec",
+    "make_route_set",
+    "strip_direction",
+    "sample_scans",
+    "sample_aim_states",
+    "exact_states",
+    "TabulatedRouteModel",
+    "tabulate_route_model",
+]
+
+POINT, STRIP = 0, 1
+
+
+class RouteSpec(NamedTuple):
+    """User-level description of R routes (numpy arrays [R]; angles rad, lengths m, times s).
+
+    Attributes:
+      kind: POINT (0) or STRIP (1).
+      lat, lon: geodetic start point (the target for a point route).
+      azimuth: strip direction at the start, clockwise from north (0 for points).
+      length: strip length [m] (0 for points).
+      duration: imaging time of a point target [s] (0 for strips).
+      value: priority collected if the route is imaged (> 0).
+      t0_lo, t0_hi: user window of start times [s] (-inf/+inf when free).
+    """
+
+    kind: np.ndarray
+    lat: np.ndarray
+    lon: np.ndarray
+    azimuth: np.ndarray
+    length: np.ndarray
+    duration: np.ndarray
+    value: np.ndarray
+    t0_lo: np.ndarray
+    t0_hi: np.ndarray
+
+
+def make_route_spec(
+    kind, lat, lon, azimuth=0.0, length=0.0, duration=0.0, value=1.0, t0_lo=-np.inf, t0_hi=np.inf
+) -> RouteSpec:
+    """Validate and broadcast route fields into a RouteSpec (ValueError names the field)."""
+    kind = np.atleast_1d(np.asarray(kind, dtype=np.int64))
+    if not np.isin(kind, (POINT, STRIP)).all():
+        raise ValueError(f"kind must be 0 (point) or 1 (strip), got {kind.tolist()}")
+    arrs = {
+        "lat": lat,
+        "lon": lon,
+        "azimuth": azimuth,
+        "length": length,
+        "duration": duration,
+        "value": value,
+        "t0_lo": t0_lo,
+        "t0_hi": t0_hi,
+    }
+    try:
+        out = dict(
+            zip(
+                arrs,
+                np.broadcast_arrays(*(np.asarray(v, np.float64) for v in arrs.values()), kind),
+                strict=False,
+            )
+        )
+    except ValueError as exc:
+        raise ValueError(f"route fields are not broadcastable: {exc}") from exc
+    kind = np.broadcast_to(kind, out["lat"].shape)
+    for name in ("lat", "lon", "azimuth", "length", "duration", "value"):
+        check_finite(name, out[name])
+    if (np.abs(out["lat"]) > np.pi / 2).any():
+        raise ValueError(f"lat must be within [-pi/2, pi/2] rad, got {out['lat'].tolist()}")
+    check_positive("value", out["value"])
+    if (out["length"][kind == STRIP] <= 0).any():
+        raise ValueError("length must be > 0 for strips")
+    if (out["duration"][kind == POINT] <= 0).any():
+        raise ValueError("duration must be > 0 for point targets")
+    if (out["t0_lo"] > out["t0_hi"]).any():
+        raise ValueError("t0_lo must be <= t0_hi (route window)")
+    return RouteSpec(kind=np.array(kind), **{k: np.array(v) for k, v in out.items()})
+
+
+def strip_direction(lat, lon, azimuth):
+    """Unit ECEF ground direction at (lat, lon) [rad] for an azimuth [rad] (from north, cw)."""
+    lat, lon, az = (np.asarray(x, np.float64) for x in (lat, lon, azimuth))
+    north = np.stack([-np.sin(lat) * np.cos(lon), -np.sin(lat) * np.sin(lon), np.cos(lat)], -1)
+    east = np.stack([-np.sin(lon), np.cos(lon), np.zeros_like(lon)], -1)
+    return np.cos(az)[..., None] * north + np.sin(az)[..., None] * east
+
+
+def _sample_kernel(scene, p, t0, t):
+    a, r, acc, offn = aim_state(scene, p, t0, t)
+    return a, r, acc, offn
+
+
+_sample_batched = jax.jit(jax.vmap(_sample_kernel, in_axes=(None, 0, 0, 0)))
+
+
+@jax.jit
+def _states_jit(scene, params, duration, route, t0):
+    p = params[route].astype(t0.dtype)
+    t1 = t0 + duration[route].astype(t0.dtype)
+    # one batched evaluation of both ends (one kernel copy in the compiled graph)
+    a, r, _, _ = jax.vmap(_sample_kernel, in_axes=(None, 0, 0, 0))(
+        scene, jnp.concatenate([p, p]), jnp.concatenate([t0, t0]), jnp.concatenate([t0, t1])
+    )
+    k = t0.shape[0]
+    return t1, a[:k], r[:k], a[k:], r[k:]
+
+
+def sample_aim_states(scene, p, t0, t, chunk=8192, desc=None):
+    """aim_state at M (p [M, 8], t0 [M], t [M]) in padded chunks (one compiled shape).
+
+    Returns numpy (angle, rate, accel [M, 3], off_nadir [M]); ``desc`` labels a
+    progress bar (None: none).
+    """
+    if t.size == 0:
+        z = np.zeros((0, 3))
+        return z, z, z, np.zeros(0)
+    dtype = jnp.result_type(float)
+
+    def run(*args):
+        return _sample_batched(scene, *(jnp.asarray(a, dtype) for a in args))
+
+    return tuple(map_chunked(run, (p, t0, t), chunk, desc=desc))
+
+
+def sample_scans(routes, route, t0, speed, t):
+    """Pointing-law (angle, rate, accel [M, 3], off_nadir [M]) of routes scanned from t0 at t.
+
+    ``route`` [M] route indices, ``t0`` [M] start times [s], ``speed`` [M] strip ground
+    speeds [m/s] (ignored for points), ``t`` [M] sample times [s]. numpy in/out.
+    """
+    route = np.asarray(route, np.int64)
+    p = np.array(routes.params)[route]
+    p[:, 6] = np.where(np.asarray(routes.kind)[route] == STRIP, speed, 0.0)
+    return sample_aim_states(routes.scene, p, np.asarray(t0, np.float64), np.asarray(t, np.float64))
+
+
+class RouteSet(NamedTuple):
+    """R routes ready for pointing: a :class:`jaxspline.engine.options.RouteModel` implementation.
+
+    Attributes:
+      scene: the :class:`jaxspline.geometry.pointing.Scene`.
+      params: [R, 8] aim laws (:func:`jaxspline.geometry.pointing.aim_params`; strips at the
+        current scan speed, see :meth:`with_speeds`).
+      kind: int [R]; length: [R] m; duration: [R] s (points; strips: length / speed).
+      t0_min, t0_max: [R] start-time window [s] (+inf/-inf when never visible).
+      value: [R] value (priority) of each route.
+      lat, lon, azimuth: [R] the (possibly direction-flipped) start points [rad].
+    """
+
+    scene: Scene
+    params: jnp.ndarray
+    kind: jnp.ndarray
+    length: jnp.ndarray
+    duration: jnp.ndarray
+    t0_min: jnp.ndarray
+    t0_max: jnp.ndarray
+    value: jnp.ndarray
+    lat: jnp.ndarray
+    lon: jnp.ndarray
+    azimuth: jnp.ndarray
+
+    def states(self, route, t0):
+        """(t_end [K], start_angle [K,C], start_rate [K,C], end_angle [K,C], end_rate [K,C]).
+
+        Exact pointing-law states at t0 and t_end = t0 + duration (rad, rad/s);
+        jit-able and differentiable in t0 (RouteModel protocol).
+        """
+        t0 = jnp.asarray(t0)
+        if not jnp.issubdtype(t0.dtype, jnp.floating):
+            t0 = t0.astype(jnp.result_type(float))
+        return _states_jit(self.scene, self.params, self.duration, jnp.asarray(route), t0)
+
+    def window(self, route):
+        """(t0_min [K], t0_max [K]) [s] of the given routes."""
+        return self.t0_min[route], self.t0_max[route]
+
+    def value_of(self, route):
+        """Value [K] of the given routes."""
+        return self.value[route]
+
+    def with_speeds(self, route, speed) -> RouteSet:
+        """A copy with strips ``route`` [K] scanned at ground speed ``speed`` [K] [m/s].
+
+        Use before refinement so ``states`` reproduces the chosen options' scan speeds
+        (points ignore the speed).
+        """
+        route = np.asarray(route, dtype=np.int64)
+        speed = np.broadcast_to(np.asarray(speed, np.float64), route.shape)
+        kind = np.asarray(self.kind)
+        params = np.array(self.params)
+        dur = np.array(self.duration)
+        strip = kind[route] == STRIP
+        r_s = route[strip]
+        params[r_s, 6] = speed[strip]
+        dur[r_s] = np.asarray(self.length)[r_s] / speed[strip]
+        return self._replace(params=jnp.asarray(params), duration=jnp.asarray(dur))
+
+
+def make_route_set(
+    scene: Scene,
+    spec: RouteSpec,
+    t_begin: float,
+    t_end: float,
+    max_off_nadir: float,
+    nominal_speed: float = 7000.0,
+    step: float = 10.0,
+) -> RouteSet:
+    """Place routes under the pass: direction of strips, start-time windows, aim laws.
+
+    - A strip whose direction opposes the satellite's ground motion (negative dot
+      product of its ECI tangent with the satellite velocity at the start point's
+      closest approach) is scanned from its other end (push-broom images forward).
+    - Window: the start point must be within ``max_off_nadir`` [rad]; t0 ranges over
+      the longest visibility interval of the start point in [t_begin, t_end],
+      intersected with the user window, with t0_max reduced by the route's duration
+      at ``nominal_speed`` (strips). Invisible routes get (+inf, -inf).
+    The ``scan_ok`` check of :func:`build_route_options` covers the rest of the scan.
+    """
+    from jaxspline.geometry.pointing import aim_params, visibility_windows
+
+    check_positive("max_off_nadir", max_off_nadir)
+    check_positive("nominal_speed", nominal_speed)
+    lat, lon, az = spec.lat.copy(), spec.lon.copy(), spec.azimuth.copy()
+    strip = spec.kind == STRIP
+    r_e = geodetic_to_ecef(lat, lon, 0.0)
+    grid = np.linspace(t_begin, t_end, max(int((t_end - t_begin) / step), 1) + 1)
+    if strip.any():
+        rs_ = np.asarray(r_e)[strip]
+        offn = off_nadir_flat(scene, np.repeat(rs_, grid.size, 0), np.tile(grid, rs_.shape[0]))
+        offn = offn.reshape(rs_.shape[0], grid.size)
+        t_ca = grid[np.argmin(offn, axis=1)]
+        _, v = orbit_state(scene.orbit, jnp.asarray(t_ca))
+        theta = np.asarray(scene.gmst0) + OMEGA_EARTH * t_ca
+        d = strip_direction(lat[strip], lon[strip], az[strip])
+        # ECEF -> ECI rotation of the tangent (the Earth-rotation term does not matter for a sign)
+        c, s = np.cos(theta), np.sin(theta)
+        d_eci = np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], d[:, 2]], -1)
+        back = np.sum(d_eci * np.asarray(v), -1) < 0
+        if back.any():
+            idx = np.nonzero(strip)[0][back]
+            la, lo, azb = _great_circle_end(lat[idx], lon[idx], az[idx], spec.length[idx])
+            lat[idx], lon[idx], az[idx] = la, lo, azb
+    r_e = np.asarray(geodetic_to_ecef(lat, lon, 0.0))
+    wins = visibility_windows(scene, r_e, t_begin, t_end, max_off_nadir, step=step)
+    dur = np.where(strip, spec.length / nominal_speed, spec.duration)
+    t0_min = np.full(lat.shape, np.inf)
+    t0_max = np.full(lat.shape, -np.inf)
+    for i, w in enumerate(wins):
+        if w.shape[0] == 0:
+            continue
+        k = int(np.argmax(w[:, 1] - w[:, 0]))
+        lo_, hi_ = max(w[k, 0], spec.t0_lo[i]), min(w[k, 1] - dur[i], spec.t0_hi[i])
+        if lo_ <= hi_:
+            t0_min[i], t0_max[i] = lo_, hi_
+    d = strip_direction(lat, lon, az)
+    params = np.array(aim_params(jnp.asarray(r_e), jnp.asarray(d), nominal_speed))
+    params[:, 6] = np.where(strip, nominal_speed, 0.0)
+    params[:, 7] = strip.astype(np.float64)
+    return RouteSet(
+        scene=scene,
+        params=jnp.asarray(params),
+        kind=jnp.asarray(spec.kind),
+        length=jnp.asarray(spec.length),
+        duration=jnp.asarray(dur),
+        t0_min=jnp.asarray(t0_min),
+        t0_max=jnp.asarray(t0_max),
+        value=jnp.asarray(spec.value),
+        lat=jnp.asarray(lat),
+        lon=jnp.asarray(lon),
+        azimuth=jnp.asarray(az),
+    )
+
+
+def _great_circle_end(lat, lon, az, length):
+    """End point (geodetic lat, lon [rad]) and reversed azimuth [rad] of a strip of ``length`` [m].
+
+    Same arc as the aim law of :func:`jaxspline.geometry.pointing.aim_angles`: the great circle
+    on the sphere through the start point's ECEF position g0, direction = the ground
+    direction made orthogonal to g0; numpy, for geometry and plots.
+    """
+    g0 = np.asarray(geodetic_to_ecef(lat, lon, 0.0))
+    rad = np.linalg.norm(g0, axis=-1, keepdims=True)
+    u = g0 / rad
+    d = strip_direction(lat, lon, az)
+    d = d - np.sum(d * u, -1, keepdims=True) * u
+    d = d / np.linalg.norm(d, axis=-1, keepdims=True)
+    delta = np.asarray(length, np.float64)[..., None] / rad
+    e = rad * (u * np.cos(delta) + d * np.sin(delta))
+    tan = d * np.cos(delta) - u * np.sin(delta)
+    lat2, lon2, _ = (np.asarray(x) for x in ecef_to_geodetic(e))
+    north = np.stack([-np.sin(lat2) * np.cos(lon2), -np.sin(lat2) * np.sin(lon2), np.cos(lat2)], -1)
+    east = np.stack([-np.sin(lon2), np.cos(lon2), np.zeros_like(lon2)], -1)
+    az2 = np.arctan2(np.sum(-tan * east, -1), np.sum(-tan * north, -1))
+    return lat2, lon2, az2
+
+
+class TabulatedRouteModel(NamedTuple):
+    """A cheap :class:`jaxspline.engine.options.RouteModel`: states tabulated on a t0 grid.
+
+    For P routes, the boundary states (start/end angle and rate, 12 numbers) are
+    sampled with the exact pointing law at M equally spaced start times over each
+    window and interpolated by Catmull-Rom cubic Hermite pieces (C1 in t0), so
+    ``states`` is a small differentiable graph (fast to compile inside an optimizer).
+    Interpolation error is O(h^3); recompute the final states exactly
+    (:func:`exact_states`) before validating.
+
+    Attributes:
+      row: int [R], table row of each route (0 for routes not tabulated).
+      t_first, step, duration: [P] first knot, knot spacing [s], scan duration [s].
+      knots: [P, M, 12] (start_angle[3], start_rate[3], end_angle[3], end_rate[3]).
+      t0_min, t0_max, value: [R] windows and values (as in :class:`RouteSet`).
+    """
+
+    row: jnp.ndarray
+    t_first: jnp.ndarray
+    step: jnp.ndarray
+    duration: jnp.ndarray
+    knots: jnp.ndarray
+    t0_min: jnp.ndarray
+    t0_max: jnp.ndarray
+    value: jnp.ndarray
+
+    def states(self, route, t0):
+        """(t_end, start_angle, start_rate, end_angle, end_rate), shapes [K] and [K, 3]."""
+        t0 = jnp.asarray(t0)
+        r = self.row[route]
+        m = self.knots.shape[1]
+        step = self.step[r].astype(t0.dtype)
+        u = (t0 - self.t_first[r].astype(t0.dtype)) / step
+        k = jnp.clip(jnp.floor(u), 0, m - 2).astype(jnp.int32)
+        s = (u - k)[:, None]
+        kn = self.knots.astype(t0.dtype)
+        p0 = kn[r, jnp.maximum(k - 1, 0)]
+        p1 = kn[r, k]
+        p2 = kn[r, k + 1]
+        p3 = kn[r, jnp.minimum(k + 2, m - 1)]
+        # Catmull-Rom slopes (one-sided at the table ends), in knot units
+        m1 = jnp.where((k > 0)[:, None], 0.5 * (p2 - p0), p2 - p1)
+        m2 = jnp.where((k < m - 2)[:, None], 0.5 * (p3 - p1), p2 - p1)
+        s2, s3 = s * s, s * s * s
+        y = (
+            (2 * s3 - 3 * s2 + 1) * p1
+            + (s3 - 2 * s2 + s) * m1
+            + (-2 * s3 + 3 * s2) * p2
+            + (s3 - s2) * m2
+        )
+        return t0 + self.duration[r].astype(t0.dtype), y[:, :3], y[:, 3:6], y[:, 6:9], y[:, 9:]
+
+    def window(self, route):
+        """(t0_min [K], t0_max [K]) [s]."""
+        return self.t0_min[route], self.t0_max[route]
+
+    def value_of(self, route):
+        """Value [K]."""
+        return self.value[route]
+
+
+def exact_states(routes: RouteSet, route, t0, speed):
+    """Exact boundary states of routes started at t0 with strip speeds (numpy, chunked kernel).
+
+    Returns (t_end [K], start_angle, start_rate, end_angle, end_rate [K, 3]).
+    """
+    route = np.asarray(route, np.int64)
+    t0 = np.asarray(t0, np.float64)
+    speed = np.asarray(speed, np.float64)
+    strip = np.asarray(routes.kind)[route] == STRIP
+    dur = np.where(
+        strip,
+        np.asarray(routes.length)[route] / np.where(speed > 0, speed, 1.0),
+        np.asarray(routes.duration)[route],
+    )
+    a, w, _, _ = sample_scans(
+        routes,
+        np.concatenate([route, route]),
+        np.concatenate([t0, t0]),
+        np.concatenate([speed, speed]),
+        np.concatenate([t0, t0 + dur]),
+    )
+    k = route.size
+    return t0 + dur, a[:k], w[:k], a[k:], w[k:]
+
+
+def tabulate_route_model(routes: RouteSet, route, speed, knots: int = 129) -> TabulatedRouteModel:
+    """Tabulate the exact states of ``route`` [P] (strips at ``speed`` [P] m/s) on their windows."""
+    route = np.asarray(route, np.int64)
+    speed = np.broadcast_to(np.asarray(speed, np.float64), route.shape)
+    lo = np.asarray(routes.t0_min)[route]
+    hi = np.asarray(routes.t0_max)[route]
+    if not (np.isfinite(lo).all() and np.isfinite(hi).all()):
+        raise ValueError("route: every tabulated route needs a non-empty window")
+    width = np.maximum(hi - lo, 1e-6)
+    step = width / (knots - 1)
+    tk = lo[:, None] + step[:, None] * np.arange(knots)[None, :]
+    rr = np.repeat(route, knots)
+    t1, sa, sr, ea, er = exact_states(routes, rr, tk.ravel(), np.repeat(speed, knots))
+    table = np.concatenate([sa, sr, ea, er], axis=1).reshape(route.size, knots, 12)
+    row = np.zeros(np.asarray(routes.kind).shape, np.int64)
+    row[route] = np.arange(route.size)
+    dur = (t1 - tk.ravel()).reshape(route.size, knots)[:, 0]
+    return TabulatedRouteModel(
+        row=jnp.asarray(row),
+        t_first=jnp.asarray(lo),
+        step=jnp.asarray(step),
+        duration=jnp.asarray(dur),
+        knots=jnp.asarray(table),
+        t0_min=routes.t0_min,
+        t0_max=routes.t0_max,
+        value=routes.value,
+    )

@@ -1,0 +1,31 @@
+"""Kernels: the per-candidate mathematics of the papers, one candidate each, batched once.
+
+``limits`` (parameter bundles), ``reach`` (per-channel reachable sets, SPEC §1),
+``slew`` (eigen-axis slew profiles, SPEC §2), ``flex`` (flexible-mode residual),
+``attitude`` (quaternions, MRPs), ``joins`` (degree-7 joins, spatial maneuvers),
+``retarget_channel`` / ``retarget`` (minimum-peak control: one channel, 3-D).
+Private helpers: ``_safe`` (numerical guards), ``_validate`` (eager input checks),
+``_batch`` (batching, padding, chunks). Kernels import nothing above this package.
+"""
+
+from jaxspline.kernels import (
+    attitude,
+    flex,
+    joins,
+    limits,
+    reach,
+    retarget,
+    retarget_channel,
+    slew,
+)
+from jaxspline.kernels.attitude import *  # noqa: F403
+from jaxspline.kernels.flex import *  # noqa: F403
+from jaxspline.kernels.joins import *  # noqa: F403
+from jaxspline.kernels.limits import *  # noqa: F403
+from jaxspline.kernels.reach import *  # noqa: F403
+from jaxspline.kernels.retarget import *  # noqa: F403
+from jaxspline.kernels.retarget_channel import *  # noqa: F403
+from jaxspline.kernels.slew import *  # noqa: F403
+
+_MODULES = (limits, reach, slew, flex, attitude, joins, retarget_channel, retarget)
+__all__ = [name for m in _MODULES for name in m.__all__]

@@ -1,0 +1,141 @@
+"""Eager input validation at the public boundary.
+
+Kernels never raise; public wrappers call these helpers on *concrete* inputs
+before dispatching to the batched kernel. Every error is a ``ValueError`` that
+names the offending argument and shows its value. Traced inputs (inside a user's
+``jit``/``vmap``/``grad``) cannot be inspected and are passed through unchecked.
+"""
+
+from __future__ import annotations
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+__all__ = [
+    "is_concrete",
+    "as_float_array",
+    "check_positive",
+    "check_nonnegative",
+    "check_finite",
+    "broadcast_named",
+    "float_dtype_of",
+    "is_weak",
+    "cast_broadcast",
+    "common_float",
+    "finite_vector",
+]
+
+
+def is_concrete(x) -> bool:
+    """True when ``x`` holds actual values (not a tracer inside jit/vmap/grad)."""
+    return not isinstance(x, jax.core.Tracer)
+
+
+def _show(value) -> str:
+    arr = np.asarray(value)
+    if arr.size <= 6:
+        return repr(arr.tolist())
+    return f"array(shape={arr.shape}, min={np.nanmin(arr)!r}, max={np.nanmax(arr)!r})"
+
+
+def float_dtype_of(*xs):
+    """Common floating dtype of the inputs (JAX's default float if none are floating)."""
+    dts = [jnp.result_type(x) for x in xs if x is not None]
+    dt = jnp.result_type(*dts) if dts else jnp.result_type(float)
+    if not jnp.issubdtype(dt, jnp.floating):
+        dt = jnp.result_type(float)
+    return dt
+
+
+def as_float_array(name: str, x, dtype=None):
+    """Convert ``x`` to a floating JAX array, raising a named ValueError on failure."""
+    try:
+        arr = jnp.asarray(x)
+    except (TypeError, ValueError) as exc:
+        raise ValueError(f"{name} must be numeric array-like, got {x!r}") from exc
+    if dtype is None:
+        dtype = arr.dtype if jnp.issubdtype(arr.dtype, jnp.floating) else jnp.result_type(float)
+    return arr.astype(dtype)
+
+
+def check_finite(name: str, x, allow_inf: bool = False) -> None:
+    """Reject NaN (and, unless ``allow_inf``, infinities) in concrete ``x``."""
+    if not is_concrete(x):
+        return
+    arr = np.asarray(x)
+    bad = np.isnan(arr) if allow_inf else ~np.isfinite(arr)
+    if bad.any():
+        raise ValueError(f"{name} must be {'not NaN' if allow_inf else 'finite'}, got {_show(x)}")
+
+
+def check_positive(name: str, x, allow_inf: bool = False) -> None:
+    """Reject non-positive or NaN entries in concrete ``x`` (``+inf`` allowed if asked)."""
+    if not is_concrete(x):
+        return
+    check_finite(name, x, allow_inf=allow_inf)
+    if (np.asarray(x) <= 0).any():
+        raise ValueError(f"{name} must be > 0, got {_show(x)}")
+
+
+def check_nonnegative(name: str, x, allow_inf: bool = False) -> None:
+    """Reject negative or NaN entries in concrete ``x``."""
+    if not is_concrete(x):
+        return
+    check_finite(name, x, allow_inf=allow_inf)
+    if (np.asarray(x) < 0).any():
+        raise ValueError(f"{name} must be >= 0, got {_show(x)}")
+
+
+def broadcast_named(**arrays):
+    """Broadcast named arrays together; on failure name every argument and its shape.
+
+    Returns the broadcast arrays in the given order.
+    """
+    shapes = {k: jnp.shape(v) for k, v in arrays.items()}
+    try:
+        shape = jnp.broadcast_shapes(*shapes.values())
+    except ValueError as exc:
+        desc = ", ".join(f"{k}{s}" for k, s in shapes.items())
+        raise ValueError(f"arguments are not broadcastable: {desc}") from exc
+    return tuple(jnp.broadcast_to(v, shape) for v in arrays.values())
+
+
+def is_weak(x) -> bool:
+    """Python scalars and weakly typed arrays, which do not set a result dtype."""
+    return isinstance(x, int | float) or bool(getattr(x, "weak_type", False))
+
+
+def cast_broadcast(**named):
+    """Cast named inputs to one float dtype and broadcast them (named errors on failure).
+
+    The dtype is set by the non-weak inputs (JAX's default float when all are
+    Python scalars), so float32 arrays stay float32 next to Python constants.
+    """
+    dt = float_dtype_of(*[v for v in named.values() if not is_weak(v)])
+    return broadcast_named(**{k: as_float_array(k, v, dt) for k, v in named.items()})
+
+
+def common_float(*xs):
+    """Cast inputs to their common floating dtype (weak Python floats follow arrays).
+
+    Integer-only inputs become JAX's default float. Used inside kernels (traced
+    values welcome) and after the eager checks of the public wrappers.
+    """
+    dt = jnp.result_type(*xs)
+    if not jnp.issubdtype(dt, jnp.floating):
+        dt = jnp.result_type(float)
+    return tuple(jnp.asarray(x, dt) for x in xs)
+
+
+def finite_vector(name: str, x, last: int | None = None):
+    """``x`` as a floating array, checked finite, whose last axis has length ``last``.
+
+    Raises a ValueError naming ``name`` (shape or value) otherwise; ``last=None``
+    accepts any shape.
+    """
+    arr = as_float_array(name, x)
+    if last is not None and (arr.ndim == 0 or arr.shape[-1] != last):
+        raise ValueError(f"{name} must have last axis of length {last}, got shape {arr.shape}")
+    check_finite(name, arr)
+    return arr
