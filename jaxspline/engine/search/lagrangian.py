@@ -6,7 +6,7 @@ into one longest-path problem per satellite over its options in start order
 compatible predecessors)``, far ones (gap >= ``far[sat]``, always compatible) through
 a running maximum, near ones through the screened feasible pairs. In
 :func:`lagrangian` the battery enters as interval energy budgets priced by ``nu >= 0``
-(:mod:`jaxspline.search.energy`: options and near pairs pay for their energy, the
+(:mod:`jaxspline.engine.search.energy`: options and near pairs pay for their energy, the
 bound gains ``sum nu``); otherwise it is dropped.
 ``UB(lam) = sum_k DP_k(lam) + sum_t lam_t (+ sum_I nu_I)``.
 
@@ -313,7 +313,7 @@ def upper_bound(
     ``target`` is a value some plan reaches (it sets the step size only; any value
     gives a valid bound). Status "converged" or "time" (cap / deadline reached).
     Deterministic for a given ``max_iters``. ``energy``: price the battery budgets of
-    :mod:`jaxspline.search.energy` too (off: the battery is dropped).
+    :mod:`jaxspline.engine.search.energy` too (off: the battery is dropped).
     """
     if pb.n_options == 0:
         return BoundResult([], 0.0, 0, "optimal")

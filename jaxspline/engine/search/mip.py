@@ -1,6 +1,6 @@
 """A tighter, slower certificate: the candidate model as a 0/1 program solved by HiGHS.
 
-The Lagrangian bound of :mod:`jaxspline.search.lagrangian` equals the linear
+The Lagrangian bound of :mod:`jaxspline.engine.search.lagrangian` equals the linear
 relaxation of the path model below (each satellite's subproblem is a longest path, an
 integral polytope), so it cannot close a gap that comes from fractional "half plans".
 A MIP solver's cuts and branching can: :func:`mip_bound` hands the model to HiGHS
