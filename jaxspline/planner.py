@@ -40,6 +40,7 @@ from jaxspline.models import (
 from jaxspline.opportunities import build_opportunities, nadir_rate, reference_points
 from jaxspline.orbit import tabulate_orbits
 from jaxspline.plan_check import check_plan
+from jaxspline.plan_joins import reject_unflyable
 from jaxspline.pointing import Scene
 from jaxspline.refine_starts import refine_starts
 from jaxspline.result import Observations, PlanResult
@@ -315,10 +316,13 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
         for v in refined.values():
             v["kept"] = kept
         clock.lap("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
-    dropped = 0
+    dropped, rejected, joins = 0, [], {}
     for _ in range(_MAX_DROP_ROUNDS):
         if det is None:
             bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
+        if not bad:  # the flown profile: degree-7 joins within the limits (plan_joins)
+            bad, joins = reject_unflyable(sc, scene, opp, chosen)
+            rejected += bad
         if not bad:
             break
         dropped += len(bad)
@@ -327,7 +331,9 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     else:
         chosen = []
         bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
-    clock.lap("check", f"{len(chosen)} observations valid, {dropped} dropped")
+    clock.lap(
+        "check", f"{len(chosen)} observations valid, {dropped} dropped ({len(rejected)} joins)"
+    )
     idx = np.asarray(det["order"], np.int64)
     obs = Observations(
         sat=np.asarray(o.sat)[idx],
@@ -357,6 +363,7 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
         "violations": det["violations"],
         "min_slack_s": float(obs.slack.min()) if len(obs) else None,
         "min_battery_wh": det["battery_min"],
+        "joins": {**joins, "rejected": len(rejected)},
     }
     stats = {
         "windows": len(windows),
