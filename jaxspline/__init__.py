@@ -163,6 +163,15 @@ from jaxspline.mission import (  # noqa: E402
 )
 from jaxspline.planner import Prepared, build_problem, plan  # noqa: E402
 from jaxspline.result import Observations, PlanResult  # noqa: E402
+
+# --- operations (attitude history of a plan, join check, CCSDS AEM export) ---
+from jaxspline.aem import read_aem, write_aems  # noqa: E402
+from jaxspline.attitude_history import (  # noqa: E402
+    AttitudeHistory,
+    PlanAttitude,
+    attitude_history,
+)
+from jaxspline.plan_joins import Joins, plan_joins  # noqa: E402
 from jaxspline.scenario import default_scenario, load_scenario, load_targets_csv  # noqa: E402
 
 # --- engine (screen, sequence, refine, validate, scenario) ---
@@ -182,6 +191,13 @@ from jaxspline.refine import (  # noqa: E402
 from jaxspline.validate import ValidationReport, validate_plan  # noqa: E402
 
 __all__ = [
+    "attitude_history",
+    "AttitudeHistory",
+    "Joins",
+    "PlanAttitude",
+    "plan_joins",
+    "read_aem",
+    "write_aems",
     "MODELS",
     "FlexMode",
     "Margins",
