@@ -7,7 +7,10 @@ calls :func:`jaxspline.plan` and writes into the output directory:
   every observation; ``plan.csv`` - one row per observation;
 * ``plan.czml`` - satellites, targets and imaging intervals for Cesium;
 * ``ground_track.png`` (world map with coastlines), ``timeline.png`` (per-satellite
-  Gantt chart and battery), ``slack.png`` (maneuver slack per model).
+  Gantt chart and battery), ``slack.png`` (maneuver slack per model),
+  ``attitude.png`` (flown rate / acceleration / jerk against the limits);
+* ``attitude_<satellite>.aem.xml`` - one CCSDS AEM per satellite (:mod:`jaxspline.aem`),
+  sampled every ``--aem-step`` seconds plus every junction instant.
 
 Existing outputs are never overwritten unless ``--force``; every file is written
 atomically.
@@ -16,11 +19,16 @@ atomically.
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 from jaxspline._io import refuse_overwrite
 
-__all__ = ["OUTPUT_FILES", "register", "run_plan"]
+__all__ = ["AEM_STEP_S", "OUTPUT_FILES", "register", "run_plan"]
+
+# AEM sample step of the plan command [s]: ccsds-ndm serializes ~2,000 states/s, so
+# 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
+AEM_STEP_S = 10.0
 
 OUTPUT_FILES = (
     "plan.json",
@@ -29,6 +37,7 @@ OUTPUT_FILES = (
     "ground_track.png",
     "timeline.png",
     "slack.png",
+    "attitude.png",
 )
 _PLOTS = OUTPUT_FILES[3:]
 
@@ -48,6 +57,12 @@ def register(sub) -> None:
     )
     p.add_argument("--seed", type=int, default=0, help="search seed (default 0)")
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    p.add_argument(
+        "--aem-step",
+        type=float,
+        default=AEM_STEP_S,
+        help=f"attitude sample step of the AEM files [s] (default {AEM_STEP_S:g})",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=_main)
 
@@ -61,6 +76,7 @@ def _main(args) -> int:
         seed=args.seed,
         plots=not args.no_plots,
         progress=not args.quiet,
+        aem_step=args.aem_step,
     )
     return 0 if result.report["valid"] else 1
 
@@ -74,26 +90,35 @@ def run_plan(
     seed: int = 0,
     plots: bool = True,
     progress: bool = True,
+    aem_step: float = AEM_STEP_S,
 ):
     """Load ``scenario`` (path, Scenario or None = default), plan it, write the outputs.
 
     Returns the :class:`jaxspline.result.PlanResult`.
     """
+    from jaxspline.aem import aem_file_name, write_aems
+    from jaxspline.attitude_history import attitude_history
     from jaxspline.mission import Scenario
     from jaxspline.planner import plan
     from jaxspline.scenario import default_scenario, load_scenario
 
     out = Path(outdir)
-    names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
-    for name in names:  # fail before planning, not after
-        refuse_overwrite(out / name, force)
     if scenario is None:
         sc = default_scenario()
     elif isinstance(scenario, Scenario):
         sc = scenario
     else:
         sc = load_scenario(scenario)
+    names = (OUTPUT_FILES if plots else OUTPUT_FILES[:3]) + tuple(
+        aem_file_name(s.name) for s in sc.satellites
+    )
+    for name in names:  # fail before planning, not after
+        refuse_overwrite(out / name, force)
     result = plan(sc, time_limit=time_limit, seed=seed, progress=progress)
+    t0 = time.monotonic()
+    attitude = attitude_history(result, aem_step)
+    write_aems(result, attitude, out, force=force)
+    result.timings["attitude"] = round(time.monotonic() - t0, 3)
     result.to_json(out / "plan.json", force=force)
     result.to_csv(out / "plan.csv", force=force)
     from jaxspline.czml import write_czml
@@ -105,6 +130,9 @@ def run_plan(
         plot_plan_ground_tracks(result, out / "ground_track.png")
         plot_plan_timeline(result, out / "timeline.png")
         plot_plan_slack(result, out / "slack.png")
+        from jaxspline.plot_attitude import plot_attitude_profile
+
+        plot_attitude_profile(result, attitude, out / "attitude.png")
     _print_summary(result, out, names)
     return result
 
@@ -122,6 +150,19 @@ def _print_summary(r, out: Path, names) -> None:
         f"bound         {s['bound']:.6g} ({st['bound_status']}); gap {s['gap']:.6g} "
         f"({100 * s['gap'] / max(s['bound'], 1e-300):.2f} % of the bound)",
         f"check         {'valid' if s['valid'] else 'INVALID'} ({r.report['dropped']} dropped)",
+        "joins         {joins} degree-7 joins, {retimed} re-timed, {rejected} rejected; peak "
+        "ratios rate {max_rate_ratio:.3f}, accel {max_accel_ratio:.3f}, jerk "
+        "{max_jerk_ratio:.3f}".format(
+            **{
+                "joins": 0,
+                "retimed": 0,
+                "rejected": 0,
+                "max_rate_ratio": 0.0,
+                "max_accel_ratio": 0.0,
+                "max_jerk_ratio": 0.0,
+                **r.report.get("joins", {}),
+            }
+        ),
         "wall time [s]  " + ", ".join(f"{k} {v:.2f}" for k, v in r.timings.items()),
         f"outputs       {out}/ ({', '.join(names)})",
     ]

@@ -17,6 +17,7 @@ import json
 
 import pytest
 
+from jaxspline.aem import aem_file_name
 from jaxspline.cli import main
 from jaxspline.cli_plan import OUTPUT_FILES
 
@@ -104,8 +105,9 @@ def _snapshot(out):
 def test_plan_writes_all_outputs(runs):
     code, out = runs["code"], runs["out"]
     assert code == 0
-    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES)  # no temporaries
-    for name in OUTPUT_FILES:
+    aems = [aem_file_name(n) for n in ("eo-tle", "eo-agile")]
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES + tuple(aems))
+    for name in OUTPUT_FILES + tuple(aems):  # no temporaries, nothing empty
         assert (out / name).stat().st_size > 0, name
     assert json.loads((out / "plan.czml").read_text())[0]["id"] == "document"
 
