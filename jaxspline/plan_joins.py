@@ -75,7 +75,7 @@ RETIME_MAX_SHARE = 0.5  # at most this share of a join is given to the extension
 SAMPLING_MARGIN = 2e-3
 NO_LIMIT = float(np.finfo(np.float64).max)  # a norm that is not limited (finite for validation)
 NADIR = -1  # observation index of the nadir law
-_PAD = 1 << 10  # kernel batches are padded to multiples of this (few compiled shapes)
+_PAD = 1 << 10  # smallest padded kernel batch (batches are padded to powers of two)
 
 
 class Joins(NamedTuple):
@@ -172,7 +172,8 @@ def _laws(idx, start, params, mode):
 
 
 def _padded(n: int) -> int:
-    return -(-max(n, 1) // _PAD) * _PAD
+    """Batch size for n rows: a power of two >= _PAD (one compiled shape per octave)."""
+    return max(_PAD, 1 << (max(n, 1) - 1).bit_length())
 
 
 def _check_rows(scene, sats, sat, law0, s0, law1, s1, ta, tb):
