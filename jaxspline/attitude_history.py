@@ -19,6 +19,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple
 
+import jax
 import numpy as np
 
 from jaxspline.attitude_laws import LAW_POINTING, LAW_ZERO_YAW, NADIR_LAW, law_states
@@ -99,7 +100,7 @@ def observation_laws(sc, target, speed) -> np.ndarray:
 
 
 def attitude_history(result, step: float = 1.0) -> PlanAttitude:
-    """Attitude history of every satellite of a plan (module docstring).
+    """Attitude history of every satellite of a plan (module docstring), in float64.
 
     Args:
       result: a :class:`jaxspline.result.PlanResult`.
@@ -109,6 +110,11 @@ def attitude_history(result, step: float = 1.0) -> PlanAttitude:
     """
     if not (isinstance(step, int | float) and math.isfinite(step) and step > 0):
         raise ValueError(f"step must be a number > 0 [s], got {step!r}")
+    with jax.enable_x64(True):  # as plan(): float64 inside, the global setting untouched
+        return _history(result, float(step))
+
+
+def _history(result, step: float) -> PlanAttitude:
     sc = result.scenario
     obs = result.observations
     scene = plan_scene(sc)

@@ -12,6 +12,7 @@ grey; the dashed line is the limit.
 
 from __future__ import annotations
 
+import jax
 import numpy as np
 
 from jaxspline.attitude_history import PHASES, plan_scene
@@ -38,7 +39,10 @@ def flown_ratios(scene, k: int, sat, hist) -> np.ndarray:
     n = hist.t.size
     out = np.full((n, 3), np.nan)
     if chan is not None:
-        _, rate, acc = state_angles(scene, np.full(n, k), hist.q, hist.omega, hist.accel, hist.t)
+        with jax.enable_x64(True):
+            _, rate, acc = state_angles(
+                scene, np.full(n, k), hist.q, hist.omega, hist.accel, hist.t
+            )
         out[:, 0] = np.max(np.abs(rate) / np.broadcast_to(chan.rate, (3,)), -1)
         out[:, 1] = np.max(np.abs(acc) / np.broadcast_to(chan.accel, (3,)), -1)
     else:
@@ -53,7 +57,8 @@ def plot_attitude_profile(result, attitude, path) -> None:
     """Write the flown-profile figure of ``attitude`` (:class:`PlanAttitude`) to ``path``."""
     plt = _plt()
     sc = result.scenario
-    scene = plan_scene(sc)
+    with jax.enable_x64(True):
+        scene = plan_scene(sc)
     sats = sc.satellites
     fig, axes = plt.subplots(
         len(sats), 3, figsize=(WIDTH_IN, ROW_HEIGHT_IN * len(sats) + 0.6), squeeze=False
