@@ -114,7 +114,8 @@ def run_plan(
     )
     for name in names:  # fail before planning, not after
         refuse_overwrite(out / name, force)
-    result = plan(sc, time_limit=time_limit, seed=seed, progress=progress)
+    # the flown joins are checked: the AEM files never exceed a limit (issue 11)
+    result = plan(sc, time_limit=time_limit, seed=seed, progress=progress, flown_joins=True)
     t0 = time.monotonic()
     attitude = attitude_history(result, aem_step)
     write_aems(result, attitude, out, force=force)

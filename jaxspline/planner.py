@@ -112,6 +112,7 @@ def plan(
     seed: int = 0,
     progress: bool = True,
     max_iters: int | None = None,
+    flown_joins: bool = False,
 ) -> PlanResult:
     """Plan a scenario: the best observations found within ``time_limit`` seconds.
 
@@ -123,6 +124,11 @@ def plan(
         ``max_iters``; a time limit only truncates the search).
       progress: stage lines on stderr.
       max_iters: optional cap on search iterations (reproducible runs).
+      flown_joins: also drop observations whose degree-7 joins (SPEC section 3) exceed
+        the limits after re-timing (:func:`jaxspline.plan_joins.reject_unflyable`), so
+        the plan is flyable as :func:`jaxspline.attitude_history` exports it; off by
+        default: the satellites' maneuver models alone decide (as the aeossp rules).
+        Its time (first call: compilation) is not part of ``time_limit``.
     Returns:
       :class:`jaxspline.result.PlanResult`.
     """
@@ -132,7 +138,7 @@ def plan(
     if not (isinstance(limit, int | float) and math.isfinite(limit) and limit > 0):
         raise ValueError(f"time_limit must be a number > 0, got {time_limit!r}")
     with jax.enable_x64(True):
-        return _plan(scenario, float(limit), int(seed), bool(progress), max_iters)
+        return _plan(scenario, float(limit), int(seed), bool(progress), max_iters, flown_joins)
 
 
 def _orbits(sc: Scenario):
@@ -268,7 +274,7 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
 
-def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> PlanResult:
+def _plan(sc: Scenario, limit, seed, progress, max_iters, flown_joins=False) -> PlanResult:
     clock = _Clock(sc.name, progress)
     deadline = clock.t0 + limit
     pc = sc.planner
@@ -320,7 +326,7 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters) -> P
     for _ in range(_MAX_DROP_ROUNDS):
         if det is None:
             bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
-        if not bad:  # the flown profile: degree-7 joins within the limits (plan_joins)
+        if not bad and flown_joins:  # the flown profile: degree-7 joins within the limits
             bad, joins = reject_unflyable(sc, scene, opp, chosen)
             rejected += bad
         if not bad:

@@ -83,7 +83,10 @@ scan_speeds_km_s = [4.0, 7.0]
 time_limit_s = 15.0
 """
 N_TARGETS = 32
-QUICK = ["--time-limit", "3", "--quiet"]  # later runs: kernels already compiled
+QUICK = ["--time-limit", "3", "--quiet"]
+AEMS = tuple(
+    aem_file_name(n) for n in ("eo-tle", "eo-agile")
+)  # one attitude file a satellite  # later runs: kernels already compiled
 
 
 @pytest.fixture(scope="module")
@@ -105,9 +108,8 @@ def _snapshot(out):
 def test_plan_writes_all_outputs(runs):
     code, out = runs["code"], runs["out"]
     assert code == 0
-    aems = [aem_file_name(n) for n in ("eo-tle", "eo-agile")]
-    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES + tuple(aems))
-    for name in OUTPUT_FILES + tuple(aems):  # no temporaries, nothing empty
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES + AEMS)
+    for name in OUTPUT_FILES + AEMS:  # no temporaries, nothing empty
         assert (out / name).stat().st_size > 0, name
     assert json.loads((out / "plan.czml").read_text())[0]["id"] == "document"
 
@@ -118,6 +120,9 @@ def test_plan_json_summary_bound_and_gap(runs):
     s, obs = doc["summary"], doc["observations"]
     assert s["valid"] is True
     assert doc["report"]["violations"] == [] and doc["report"]["checked"] == len(obs)
+    joins = doc["report"]["joins"]  # the command checks the flown degree-7 joins
+    assert joins["violating"] == 0 and joins["joins"] >= len(obs)
+    assert max(joins["max_rate_ratio"], joins["max_accel_ratio"]) < 1.0
     assert (s["satellites"], s["targets"], s["observations"]) == (2, N_TARGETS, len(obs))
     assert s["bound"] >= s["value"] > 0
     assert s["gap"] == pytest.approx(s["bound"] - s["value"], abs=1e-9)
@@ -173,14 +178,14 @@ def test_plan_force_overwrites(runs):
     assert main(["plan", str(scen), "-o", str(out), "--force", *QUICK]) == 0
     for name in OUTPUT_FILES:
         assert (out / name).stat().st_mtime_ns > before[name], name
-    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES)
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES + AEMS)
     assert json.loads((out / "plan.json").read_text())["summary"]["valid"] is True
 
 
 def test_plan_no_plots_writes_data_files_only(runs):
     code, out = runs["no_plots"]
     assert code == 0
-    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES[:3])
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES[:3] + AEMS)
     assert json.loads((out / "plan.json").read_text())["summary"]["valid"] is True
 
 
