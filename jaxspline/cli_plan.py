@@ -7,7 +7,11 @@ calls :func:`jaxspline.plan` and writes into the output directory:
   every observation; ``plan.csv`` - one row per observation;
 * ``plan.czml`` - satellites, targets and imaging intervals for Cesium;
 * ``ground_track.png`` (world map with coastlines), ``timeline.png`` (per-satellite
-  Gantt chart and battery), ``slack.png`` (maneuver slack per model).
+  Gantt chart and battery), ``slack.png`` (maneuver slack per model);
+* with ``--aem`` (a flyable plan: observations whose degree-7 joins exceed a limit
+  are dropped) also ``attitude_<satellite>.aem.xml``, one CCSDS AEM per satellite
+  (:mod:`jaxspline.aem`) sampled every ``--aem-step`` seconds plus every junction
+  instant, and ``attitude.png`` (flown rate / acceleration / jerk against the limits).
 
 Existing outputs are never overwritten unless ``--force``; every file is written
 atomically.
@@ -16,11 +20,16 @@ atomically.
 from __future__ import annotations
 
 import sys
+import time
 from pathlib import Path
 
 from jaxspline.engine._io import refuse_overwrite
 
-__all__ = ["OUTPUT_FILES", "register", "run_plan"]
+__all__ = ["AEM_STEP_S", "ATTITUDE_FIGURE", "OUTPUT_FILES", "register", "run_plan"]
+
+# AEM sample step of the plan command [s]: ccsds-ndm serializes ~2,000 states/s, so
+# 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
+AEM_STEP_S = 10.0
 
 OUTPUT_FILES = (
     "plan.json",
@@ -30,6 +39,7 @@ OUTPUT_FILES = (
     "timeline.png",
     "slack.png",
 )
+ATTITUDE_FIGURE = "attitude.png"  # with --aem
 _PLOTS = OUTPUT_FILES[3:]
 
 
@@ -55,6 +65,18 @@ def register(sub) -> None:
         help="extra seconds for a tighter bound by HiGHS (needs scipy; default 0: skip)",
     )
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
+    p.add_argument(
+        "--aem",
+        action="store_true",
+        help="flyable plan: drop observations whose degree-7 joins exceed the limits, "
+        "write one CCSDS AEM per satellite and attitude.png",
+    )
+    p.add_argument(
+        "--aem-step",
+        type=float,
+        default=AEM_STEP_S,
+        help=f"attitude sample step of the AEM files [s] (default {AEM_STEP_S:g})",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=_main)
 
@@ -69,6 +91,8 @@ def _main(args) -> int:
         certify=args.certify,
         plots=not args.no_plots,
         progress=not args.quiet,
+        aem=args.aem,
+        aem_step=args.aem_step,
     )
     return 0 if result.report["valid"] else 1
 
@@ -83,26 +107,40 @@ def run_plan(
     certify: float = 0.0,
     plots: bool = True,
     progress: bool = True,
+    aem: bool = False,
+    aem_step: float = AEM_STEP_S,
 ):
     """Load ``scenario`` (path, Scenario or None = default), plan it, write the outputs.
 
     Returns the :class:`jaxspline.engine.result.PlanResult`.
     """
+    from jaxspline.aem import aem_file_name, write_aems
+    from jaxspline.engine.attitude_history import attitude_history
     from jaxspline.engine.mission import Scenario
     from jaxspline.engine.planner import plan
     from jaxspline.scenario import default_scenario, load_scenario
 
     out = Path(outdir)
-    names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
-    for name in names:  # fail before planning, not after
-        refuse_overwrite(out / name, force)
     if scenario is None:
         sc = default_scenario()
     elif isinstance(scenario, Scenario):
         sc = scenario
     else:
         sc = load_scenario(scenario)
-    result = plan(sc, time_limit=time_limit, seed=seed, progress=progress, certify=certify)
+    names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
+    if aem:
+        names += (ATTITUDE_FIGURE,) * plots + tuple(aem_file_name(s.name) for s in sc.satellites)
+    for name in names:  # fail before planning, not after
+        refuse_overwrite(out / name, force)
+    # with --aem the flown joins are checked: the AEM files never exceed a limit
+    result = plan(
+        sc, time_limit=time_limit, seed=seed, progress=progress, certify=certify, flown_joins=aem
+    )
+    if aem:
+        t0 = time.monotonic()
+        attitude = attitude_history(result, aem_step)
+        write_aems(result, attitude, out, force=force)
+        result.timings["attitude"] = round(time.monotonic() - t0, 3)
     result.to_json(out / "plan.json", force=force)
     result.to_csv(out / "plan.csv", force=force)
     from jaxspline.czml import write_czml
@@ -114,6 +152,10 @@ def run_plan(
         plot_plan_ground_tracks(result, out / "ground_track.png")
         plot_plan_timeline(result, out / "timeline.png")
         plot_plan_slack(result, out / "slack.png")
+        if aem:
+            from jaxspline.plot_attitude import plot_attitude_profile
+
+            plot_attitude_profile(result, attitude, out / ATTITUDE_FIGURE)
     _print_summary(result, out, names)
     return result
 
@@ -131,6 +173,26 @@ def _print_summary(r, out: Path, names) -> None:
         f"bound         {s['bound']:.6g} ({st['bound_status']}); gap {s['gap']:.6g} "
         f"({100 * s['gap'] / max(s['bound'], 1e-300):.2f} % of the bound)",
         f"check         {'valid' if s['valid'] else 'INVALID'} ({r.report['dropped']} dropped)",
+        *(
+            [
+                "joins         {joins} degree-7 joins, {retimed} re-timed, {rejected} "
+                "rejected; peak "
+                "ratios rate {max_rate_ratio:.3f}, accel {max_accel_ratio:.3f}, jerk "
+                "{max_jerk_ratio:.3f}".format(
+                    **{
+                        "joins": 0,
+                        "retimed": 0,
+                        "rejected": 0,
+                        "max_rate_ratio": 0.0,
+                        "max_accel_ratio": 0.0,
+                        "max_jerk_ratio": 0.0,
+                        **r.report.get("joins", {}),
+                    }
+                )
+            ]
+            if r.report.get("joins")
+            else []
+        ),
         "wall time [s]  " + ", ".join(f"{k} {v:.2f}" for k, v in r.timings.items()),
         f"outputs       {out}/ ({', '.join(names)})",
     ]

@@ -17,8 +17,9 @@ import json
 
 import pytest
 
+from jaxspline.aem import aem_file_name
 from jaxspline.cli import main
-from jaxspline.cli_plan import OUTPUT_FILES
+from jaxspline.cli_plan import ATTITUDE_FIGURE, OUTPUT_FILES
 
 EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)
 DURATION_S = 1800.0
@@ -82,7 +83,9 @@ scan_speeds_km_s = [4.0, 7.0]
 time_limit_s = 15.0
 """
 N_TARGETS = 32
-QUICK = ["--time-limit", "3", "--quiet"]  # later runs: kernels already compiled
+QUICK = ["--time-limit", "3", "--quiet"]
+AEMS = tuple(aem_file_name(n) for n in ("eo-tle", "eo-agile"))  # one file a satellite
+FULL = OUTPUT_FILES + (ATTITUDE_FIGURE,) + AEMS  # with --aem
 
 
 @pytest.fixture(scope="module")
@@ -93,7 +96,7 @@ def runs(tmp_path_factory):
     no_plots = d / "no_plots"
     code_no_plots = main(["plan", str(scen), "-o", str(no_plots), "--no-plots", *QUICK])
     out = d / "out"
-    code = main(["plan", str(scen), "-o", str(out)])
+    code = main(["plan", str(scen), "-o", str(out), "--aem"])
     return {"scen": scen, "out": out, "code": code, "no_plots": (code_no_plots, no_plots)}
 
 
@@ -104,8 +107,8 @@ def _snapshot(out):
 def test_plan_writes_all_outputs(runs):
     code, out = runs["code"], runs["out"]
     assert code == 0
-    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES)  # no temporaries
-    for name in OUTPUT_FILES:
+    assert sorted(p.name for p in out.iterdir()) == sorted(FULL)
+    for name in FULL:  # no temporaries, nothing empty
         assert (out / name).stat().st_size > 0, name
     assert json.loads((out / "plan.czml").read_text())[0]["id"] == "document"
 
@@ -116,6 +119,9 @@ def test_plan_json_summary_bound_and_gap(runs):
     s, obs = doc["summary"], doc["observations"]
     assert s["valid"] is True
     assert doc["report"]["violations"] == [] and doc["report"]["checked"] == len(obs)
+    joins = doc["report"]["joins"]  # with --aem the command checks the flown joins
+    assert joins["violating"] == 0 and joins["joins"] >= len(obs)
+    assert max(joins["max_rate_ratio"], joins["max_accel_ratio"]) < 1.0
     assert (s["satellites"], s["targets"], s["observations"]) == (2, N_TARGETS, len(obs))
     assert s["bound"] >= s["value"] > 0
     assert s["gap"] == pytest.approx(s["bound"] - s["value"], abs=1e-9)
@@ -171,7 +177,7 @@ def test_plan_force_overwrites(runs):
     assert main(["plan", str(scen), "-o", str(out), "--force", *QUICK]) == 0
     for name in OUTPUT_FILES:
         assert (out / name).stat().st_mtime_ns > before[name], name
-    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES)
+    assert sorted(p.name for p in out.iterdir()) == sorted(FULL)  # AEMs kept from before
     assert json.loads((out / "plan.json").read_text())["summary"]["valid"] is True
 
 

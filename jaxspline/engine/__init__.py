@@ -14,8 +14,10 @@ namespaces: ``jaxspline.engine.search.solve``.
 """
 
 from jaxspline.engine import (
+    attitude_history,
     mission,
     options,
+    plan_joins,
     planner,
     refine,
     result,
@@ -24,11 +26,24 @@ from jaxspline.engine import (
     steps_check,
 )
 
-_MODULES = (mission, options, screen, sequence, refine, steps_check, planner, result)
+_MODULES = (
+    mission,
+    options,
+    screen,
+    sequence,
+    refine,
+    steps_check,
+    planner,
+    result,
+    plan_joins,
+    attitude_history,
+)
 __all__ = [name for m in _MODULES for name in m.__all__]
 
+from jaxspline.engine.attitude_history import *  # noqa: E402, F403
 from jaxspline.engine.mission import *  # noqa: E402, F403
 from jaxspline.engine.options import *  # noqa: E402, F403
+from jaxspline.engine.plan_joins import *  # noqa: E402, F403
 from jaxspline.engine.planner import *  # noqa: E402, F403
 from jaxspline.engine.refine import *  # noqa: E402, F403
 from jaxspline.engine.result import *  # noqa: E402, F403

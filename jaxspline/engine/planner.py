@@ -37,6 +37,7 @@ from jaxspline.engine.models import (
 )
 from jaxspline.engine.opportunities import build_opportunities, nadir_rate, reference_points
 from jaxspline.engine.plan_check import check_plan
+from jaxspline.engine.plan_joins import reject_unflyable
 from jaxspline.engine.refine_starts import refine_starts
 from jaxspline.engine.result import Observations, PlanResult
 from jaxspline.engine.search import BatteryModel, Problem, mip_bound, solve
@@ -112,6 +113,7 @@ def plan(
     progress: bool = True,
     max_iters: int | None = None,
     certify: float = 0.0,
+    flown_joins: bool = False,
 ) -> PlanResult:
     """Plan a scenario: the best observations found within ``time_limit`` seconds.
 
@@ -127,6 +129,12 @@ def plan(
         candidate model solved as a 0/1 program by HiGHS
         (:func:`jaxspline.engine.search.mip_bound`, needs scipy); the reported bound is the
         smaller of its dual bound and the Lagrangian one. 0 (default): skip.
+      flown_joins: also drop observations whose degree-7 joins (SPEC section 3) exceed
+        the limits after re-timing (:func:`jaxspline.engine.plan_joins.reject_unflyable`),
+        so the plan is flyable as :func:`jaxspline.engine.attitude_history.attitude_history`
+        exports it; off by default: the satellites' maneuver models alone decide (as the
+        aeossp rules).
+        Its time (first call: compilation) is not part of ``time_limit``.
     Returns:
       :class:`jaxspline.engine.result.PlanResult`.
     """
@@ -138,7 +146,9 @@ def plan(
     if not (isinstance(certify, int | float) and math.isfinite(certify) and certify >= 0):
         raise ValueError(f"certify must be a number of seconds >= 0, got {certify!r}")
     with jax.enable_x64(True):
-        return _plan(scenario, float(limit), int(seed), bool(progress), max_iters, certify)
+        return _plan(
+            scenario, float(limit), int(seed), bool(progress), max_iters, certify, flown_joins
+        )
 
 
 def _orbits(sc: Scenario):
@@ -274,7 +284,7 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
 
-def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters, certify) -> PlanResult:
+def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
     clock = _Clock(sc.name, progress)
     deadline = clock.t0 + limit
     pc = sc.planner
@@ -322,10 +332,13 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters, cert
         for v in refined.values():
             v["kept"] = kept
         clock.lap("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
-    dropped = 0
+    dropped, rejected, joins = 0, [], {}
     for _ in range(_MAX_DROP_ROUNDS):
         if det is None:
             bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
+        if not bad and flown_joins:  # the flown profile: degree-7 joins within the limits
+            bad, joins = reject_unflyable(sc, scene, opp, chosen)
+            rejected += bad
         if not bad:
             break
         dropped += len(bad)
@@ -334,7 +347,9 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters, cert
     else:
         chosen = []
         bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
-    clock.lap("check", f"{len(chosen)} observations valid, {dropped} dropped")
+    clock.lap(
+        "check", f"{len(chosen)} observations valid, {dropped} dropped ({len(rejected)} joins)"
+    )
     idx = np.asarray(det["order"], np.int64)
     obs = Observations(
         sat=np.asarray(o.sat)[idx],
@@ -373,6 +388,7 @@ def _plan(sc: Scenario, limit: float, seed: int, progress: bool, max_iters, cert
         "violations": det["violations"],
         "min_slack_s": float(obs.slack.min()) if len(obs) else None,
         "min_battery_wh": det["battery_min"],
+        "joins": {**joins, "rejected": len(rejected)},
     }
     stats = {
         "windows": len(windows),
