@@ -15,7 +15,7 @@ Conventions (used everywhere in jaxspline):
   Φ rotation angle); |σ| <= 1 is the canonical set (Φ <= 180°), its shadow
   σˢ = -σ/|σ|² describes the same attitude. MRP kinematics (seed eq. 2):
   σ' = ¼[(1 - σ·σ)ω + 2σ×ω + 2σ(σ·ω)] = ¼ B(σ) ω (checked against the
-  quaternion equation in tests/test_attitude.py).
+  quaternion equation in tests/kernels/test_attitude.py).
 
 All functions are kernels on one attitude (small fixed arrays), batched with
 ``jnp.vectorize`` over leading axes; they follow the input dtype and are

@@ -51,7 +51,7 @@ through the integrator also converges in 2–3 iterations but takes minutes to c
 2-core CPU, so it is not offered.)
 The iterate at convergence is the minimum-peak control of the linear problem with the
 nonlinear terms frozen along its own trajectory; a direct optimisation
-(``min_peak_direct`` in tests/_ref_retarget.py) can therefore find a slightly lower peak.
+(``min_peak_direct`` in tests/kernels/_ref_retarget.py) can therefore find a slightly lower peak.
 
 Left out: ν = 2 (Euclidean norm of u). Its reference problem couples the channels: the
 optimal control is ``u = J* B⁻¹ g(t)/|g(t)|`` with g linear in t (Krasovskii's moment

@@ -17,7 +17,7 @@ from jaxspline.scenario import (
     parse_scenario,
 )
 
-EXAMPLE = Path(__file__).resolve().parents[1] / "scripts" / "example_scenario.toml"
+EXAMPLE = Path(__file__).resolve().parents[2] / "scripts" / "example_scenario.toml"
 TLE = [
     "1 40013U 14033D   26103.93736737  .00001307  00000+0  12918-3 0  9990",
     "2 40013  97.5922 340.6596 0001765 111.5119 248.6289 14.93547723628139",

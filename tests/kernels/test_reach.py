@@ -1,6 +1,6 @@
 """Tests of jaxspline.kernels.reach: hand-computed values, numerical integration, brute force.
 
-The Ruckig oracle tests live in tests/test_reach_ruckig.py.
+The Ruckig oracle tests live in tests/kernels/test_reach_ruckig.py.
 """
 
 from __future__ import annotations
@@ -524,7 +524,7 @@ def test_reach_figures(tmp_path):
     import importlib.util
     from pathlib import Path
 
-    script = Path(__file__).resolve().parents[1] / "scripts" / "reach_figures.py"
+    script = Path(__file__).resolve().parents[2] / "scripts" / "reach_figures.py"
     spec = importlib.util.spec_from_file_location("reach_figures", script)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)

@@ -369,7 +369,7 @@ def test_paper_example_script():
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "scripts" / "maneuver_figures.py"
+    path = Path(__file__).resolve().parents[2] / "scripts" / "maneuver_figures.py"
     spec = importlib.util.spec_from_file_location("maneuver_figures", path)
     mf = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mf)

@@ -435,7 +435,7 @@ def test_make_slew_figures(tmp_path):
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "scripts" / "slew_figures.py"
+    path = Path(__file__).resolve().parents[2] / "scripts" / "slew_figures.py"
     spec = importlib.util.spec_from_file_location("slew_figures", path)
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
