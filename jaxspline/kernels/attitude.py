@@ -247,41 +247,88 @@ def quat_multiply(p, q):
     """Hamilton product p ∘ q of scalar-first quaternions [w, x, y, z].
 
     (p∘q)_w = p_w q_w - p_v·q_v, (p∘q)_v = p_w q_v + q_w p_v + p_v × q_v.
-    Arrays [..., 4], broadcast. Reference: seed vector-spline-guidance-laws, eq. 1.
+    Reference: seed vector-spline-guidance-laws, eq. 1.
+
+    Args:
+      p: float [..., 4], left quaternion (scalar first), broadcast against q.
+      q: float [..., 4], right quaternion (scalar first).
+    Returns:
+      float [..., 4], the product p ∘ q.
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     p, q = common_float(finite_vector("p", p, 4), finite_vector("q", q, 4))
     return _qmul_batched(p, q)
 
 
 def quat_conjugate(q):
-    """Conjugate [w, -x, -y, -z] of quaternions q [..., 4] (the inverse for unit q)."""
+    """Conjugate [w, -x, -y, -z] of quaternions (the inverse for unit q).
+
+    Args:
+      q: float [..., 4], quaternions (scalar first).
+    Returns:
+      float [..., 4], the conjugates.
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
+    """
     return _qconj_batched(finite_vector("q", q, 4))
 
 
 def quat_normalize(q):
-    """q / |q| for quaternions [..., 4]; the zero quaternion maps to identity [1, 0, 0, 0]."""
+    """q / |q|; the zero quaternion maps to identity [1, 0, 0, 0].
+
+    Args:
+      q: float [..., 4], quaternions (scalar first).
+    Returns:
+      float [..., 4], unit quaternions.
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
+    """
     return _qnorm_batched(finite_vector("q", q, 4))
 
 
 def quat_rotate(q, v):
-    """Rotate body vectors v [..., 3] to the reference frame: Λ ∘ v ∘ Λ̃ (q unit, [..., 4])."""
+    """Rotate body vectors to the reference frame: Λ ∘ v ∘ Λ̃.
+
+    Args:
+      q: float [..., 4], unit attitude quaternions (body -> reference), broadcast against v.
+      v: float [..., 3], vectors in body axes (any unit).
+    Returns:
+      float [..., 3], the vectors in the reference frame (unit of v).
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
+    """
     q, v = common_float(finite_vector("q", q, 4), finite_vector("v", v, 3))
     return _qrot_batched(q, v)
 
 
 def quat_to_dcm(q):
-    """Rotation matrix [..., 3, 3] of attitude quaternions q [..., 4] (normalized first).
+    """Rotation matrix of attitude quaternions (normalized first).
 
     R = (w² - |u|²) I + 2 u uᵀ + 2 w [u×]; columns are body axes in the reference
     frame, so ``R @ v_body == quat_rotate(q, v_body)``.
+
+    Args:
+      q: float [..., 4], attitude quaternions (scalar first).
+    Returns:
+      float [..., 3, 3], rotation matrices body -> reference.
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     return _q2dcm_batched(finite_vector("q", q, 4))
 
 
 def dcm_to_quat(R):
-    """Unit quaternion [..., 4] (w >= 0) of rotation matrices R [..., 3, 3].
+    """Unit quaternion (w >= 0) of rotation matrices.
 
     Shepperd's method (largest of 4w², 4x², 4y², 4z² selected branchlessly).
+
+    Args:
+      R: float [..., 3, 3], rotation matrices body -> reference.
+    Returns:
+      float [..., 4], unit quaternions (scalar first, w >= 0).
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     R = finite_vector("R", R, 3)
     if R.ndim < 2 or R.shape[-2] != 3:
@@ -290,27 +337,58 @@ def dcm_to_quat(R):
 
 
 def quat_to_mrp(q):
-    """Modified Rodrigues parameters σ [..., 3] of quaternions q [..., 4], |σ| <= 1.
+    """Modified Rodrigues parameters σ of quaternions, |σ| <= 1.
 
     σ = λ / (1 + λ0) if λ0 >= 0, else the shadow -λ / (1 - λ0) (same attitude,
     q and -q are the same attitude). σ = e tan(Φ/4) with Φ in [0, π].
     Reference: SPEC §3; seed vector-spline-guidance-laws (σ = λ/(1 + λ0)).
+
+    Args:
+      q: float [..., 4], attitude quaternions (scalar first).
+    Returns:
+      float [..., 3], MRPs σ (dimensionless), |σ| <= 1.
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     return _q2mrp_batched(finite_vector("q", q, 4))
 
 
 def mrp_to_quat(sigma):
-    """Unit quaternion [..., 4] of MRPs σ [..., 3]: λ0 = (1 - σ²)/(1 + σ²), λ = 2σ/(1 + σ²)."""
+    """Unit quaternion of MRPs: λ0 = (1 - σ²)/(1 + σ²), λ = 2σ/(1 + σ²).
+
+    Args:
+      sigma: float [..., 3], MRPs σ (dimensionless).
+    Returns:
+      float [..., 4], unit quaternions (scalar first).
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
+    """
     return _mrp2q_batched(finite_vector("sigma", sigma, 3))
 
 
 def mrp_to_dcm(sigma):
-    """Rotation matrix [..., 3, 3] (body -> reference) of MRPs σ [..., 3]."""
+    """Rotation matrix (body -> reference) of MRPs.
+
+    Args:
+      sigma: float [..., 3], MRPs σ (dimensionless).
+    Returns:
+      float [..., 3, 3], rotation matrices body -> reference.
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
+    """
     return _mrp2dcm_batched(finite_vector("sigma", sigma, 3))
 
 
 def dcm_to_mrp(R):
-    """MRPs [..., 3] (|σ| <= 1) of rotation matrices R [..., 3, 3]."""
+    """MRPs (|σ| <= 1) of rotation matrices.
+
+    Args:
+      R: float [..., 3, 3], rotation matrices body -> reference.
+    Returns:
+      float [..., 3], MRPs σ (dimensionless), |σ| <= 1.
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
+    """
     R = finite_vector("R", R, 3)
     if R.ndim < 2 or R.shape[-2] != 3:
         raise ValueError(f"R must have shape [..., 3, 3], got {R.shape}")
@@ -318,43 +396,83 @@ def dcm_to_mrp(R):
 
 
 def mrp_shadow(sigma):
-    """Shadow MRP set σˢ = -σ / |σ|² (same attitude); σ = 0 maps to 0."""
+    """Shadow MRP set σˢ = -σ / |σ|² (same attitude); σ = 0 maps to 0.
+
+    Args:
+      sigma: float [..., 3], MRPs σ (dimensionless).
+    Returns:
+      float [..., 3], the shadow set σˢ.
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
+    """
     return _shadow_batched(finite_vector("sigma", sigma, 3))
 
 
 def attitude_angle(q1, q2):
-    """Eigen-axis angle [rad, in [0, π]] between attitudes q1, q2 [..., 4].
+    """Eigen-axis angle between two attitudes.
 
     δ = q̃1 ∘ q2, angle = 2 atan2(|δ_v|, |δ_w|): exact for tiny angles (no
     arccos), sign-invariant (q ≡ -q), gradient finite (zero) at angle 0.
+
+    Args:
+      q1: float [..., 4], attitude quaternions (scalar first), broadcast against q2.
+      q2: float [..., 4], attitude quaternions (scalar first).
+    Returns:
+      float [...], angle [rad] in [0, π].
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     q1, q2 = common_float(finite_vector("q1", q1, 4), finite_vector("q2", q2, 4))
     return _angle_batched(q1, q2)
 
 
 def quat_rate(q, omega):
-    """Quaternion derivative Λ' = ½ Λ ∘ [0, ω] [1/s], ω body angular velocity [rad/s].
+    """Quaternion derivative Λ' = ½ Λ ∘ [0, ω].
 
     Reference: seed vector-spline-guidance-laws, eq. 1.
+
+    Args:
+      q: float [..., 4], attitude quaternions Λ (scalar first).
+      omega: float [..., 3], body angular velocity ω [rad/s].
+    Returns:
+      float [..., 4], Λ' [1/s].
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     q, omega = common_float(finite_vector("q", q, 4), finite_vector("omega", omega, 3))
     return _qrate_batched(q, omega)
 
 
 def mrp_rate(sigma, omega):
-    """MRP derivative σ' = ¼[(1 - σ·σ)ω + 2σ×ω + 2σ(σ·ω)] [1/s] for body ω [rad/s].
+    """MRP derivative σ' = ¼[(1 - σ·σ)ω + 2σ×ω + 2σ(σ·ω)].
 
     Reference: seed vector-spline-guidance-laws, eq. 2 (sign verified against
     Λ' = ½ Λ∘ω with the Hamilton product).
+
+    Args:
+      sigma: float [..., 3], MRPs σ (dimensionless).
+      omega: float [..., 3], body angular velocity ω [rad/s].
+    Returns:
+      float [..., 3], σ' [1/s].
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     sigma, omega = common_float(finite_vector("sigma", sigma, 3), finite_vector("omega", omega, 3))
     return _mrp_rate_batched(sigma, omega)
 
 
 def omega_from_mrp_rate(sigma, sigma_dot):
-    """Body angular velocity [rad/s] from σ and σ' [1/s]: the inverse of ``mrp_rate``.
+    """Body angular velocity from σ and σ': the inverse of ``mrp_rate``.
 
     ω = 4 [(1 - σ·σ)σ' - 2σ×σ' + 2σ(σ·σ')] / (1 + σ·σ)², using B⁻¹ = Bᵀ/(1 + σ²)².
+
+    Args:
+      sigma: float [..., 3], MRPs σ (dimensionless).
+      sigma_dot: float [..., 3], σ' [1/s].
+    Returns:
+      float [..., 3], body angular velocity ω [rad/s].
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     sigma, sigma_dot = common_float(
         finite_vector("sigma", sigma, 3), finite_vector("sigma_dot", sigma_dot, 3)
@@ -363,10 +481,19 @@ def omega_from_mrp_rate(sigma, sigma_dot):
 
 
 def angular_accel_from_mrp(sigma, sigma_dot, sigma_ddot):
-    """Body angular acceleration ε = dω/dt [rad/s²] from σ, σ' [1/s], σ'' [1/s²].
+    """Body angular acceleration ε = dω/dt from σ, σ', σ''.
 
     ε = dω/dt along the trajectory, ω(σ, σ') of ``omega_from_mrp_rate``; closed
     form via the quaternion p = Λ(σ): ε = 2 vec(p̃∘p'') (see ``omega_from_mrp_derivs``).
+
+    Args:
+      sigma: float [..., 3], MRPs σ (dimensionless).
+      sigma_dot: float [..., 3], σ' [1/s].
+      sigma_ddot: float [..., 3], σ'' [1/s²].
+    Returns:
+      float [..., 3], ε [rad/s²].
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     a = common_float(
         finite_vector("sigma", sigma, 3),
@@ -377,10 +504,20 @@ def angular_accel_from_mrp(sigma, sigma_dot, sigma_ddot):
 
 
 def mrp_derivs_from_omega(sigma, omega, eps, eps_dot=None):
-    """(σ', σ'', σ''') from σ, ω [rad/s], ε [rad/s²] and ε' [rad/s³] (default 0).
+    """(σ', σ'', σ''') from σ, ω, ε and ε'.
 
     Total time derivatives of σ' = ¼B(σ)ω (seed eq. 2) by the Leibniz rule:
     σ'' = ¼(B ε + Ḃ ω), σ''' = ¼(B ε' + 2Ḃ ε + B̈ ω).
+
+    Args:
+      sigma: float [..., 3], MRPs σ (dimensionless).
+      omega: float [..., 3], body angular velocity ω [rad/s].
+      eps: float [..., 3], body angular acceleration ε [rad/s²].
+      eps_dot: float [..., 3], ε' [rad/s³]; None means 0.
+    Returns:
+      tuple (σ' [1/s], σ'' [1/s²], σ''' [1/s³]), each float [..., 3].
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     sigma = finite_vector("sigma", sigma, 3)
     omega = finite_vector("omega", omega, 3)
@@ -390,11 +527,21 @@ def mrp_derivs_from_omega(sigma, omega, eps, eps_dot=None):
 
 
 def omega_from_mrp_derivs(sigma, sigma_dot, sigma_ddot, sigma_dddot):
-    """(ω, ε, ε') [rad/s, rad/s², rad/s³] from σ and its first three time derivatives.
+    """(ω, ε, ε') from σ and its first three time derivatives.
 
     The inverse of ``mrp_derivs_from_omega``. Closed form through p = Λ(σ) =
     [2g - 1, 2gσ], g = 1/(1 + σ·σ): ω = 2 vec(p̃∘p'), ε = 2 vec(p̃∘p''),
     ε' = 2 vec(p̃'∘p'' + p̃∘p''') (Λ' = ½Λ∘ω differentiated).
+
+    Args:
+      sigma: float [..., 3], MRPs σ (dimensionless).
+      sigma_dot: float [..., 3], σ' [1/s].
+      sigma_ddot: float [..., 3], σ'' [1/s²].
+      sigma_dddot: float [..., 3], σ''' [1/s³].
+    Returns:
+      tuple (ω [rad/s], ε [rad/s²], ε' [rad/s³]), each float [..., 3].
+    Raises:
+      ValueError: an argument is not finite or its last axis has the wrong length.
     """
     a = common_float(
         finite_vector("sigma", sigma, 3),
