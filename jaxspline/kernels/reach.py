@@ -175,6 +175,17 @@ def reach_margin_kernel(a1, b1, a2, b2, T, rate, accel):
     argument and piecewise smooth (kinks where the min switches), so it is a usable cost for
     gradient refinement: maximise min over channels, or penalise relu(-m). Floating-point
     boundary cases may give m slightly below 0 (see ``is_reachable_kernel`` tolerance).
+
+    Args:
+      a1: scalar, start angle [rad].
+      b1: scalar, start rate [rad/s].
+      a2: scalar, end angle [rad].
+      b2: scalar, end rate [rad/s].
+      T: scalar, transfer duration [s].
+      rate: scalar, rate bound b [rad/s].
+      accel: scalar, acceleration bound d [rad/s^2].
+    Returns:
+      m [rad], a scalar.
     """
     a1, b1, a2, b2, T, b, d = common_float(a1, b1, a2, b2, T, rate, accel)
     hi = _hi(a1, b1, b2, T, b, d)
@@ -247,12 +258,21 @@ def _env_lo(a1, b1, b2, T, b, d, t):
 
 
 def envelopes_kernel(a1, b1, b2, T, rate, accel, t):
-    """Envelope angle curves (f_lo(t), f_hi(t)) [rad] at time t [s] (paper Theorems 2-5).
+    """Envelope angle curves (f_lo(t), f_hi(t)) at one time (paper Theorems 2-5).
 
     f_hi(t) = a1 + int_0^t min(b1 + d s, b2 + d (T - s), b) ds and f_lo likewise with
     max(b1 - d s, b2 - d (T - s), -b); t is clipped to [0, T]. f_hi(T) = hi, f_lo(T) = lo.
-    Arguments as in ``angle_interval_kernel``. Infeasible rates (see there) give
-    (+inf, -inf).
+
+    Args:
+      a1: scalar, start angle [rad].
+      b1: scalar, start rate [rad/s].
+      b2: scalar, end rate [rad/s].
+      T: scalar, transfer duration [s].
+      rate: scalar, rate bound b [rad/s].
+      accel: scalar, acceleration bound d [rad/s^2].
+      t: scalar, evaluation time [s] (clipped to [0, T]).
+    Returns:
+      (f_lo, f_hi) [rad]; infeasible rates (see ``angle_interval_kernel``) give (+inf, -inf).
     """
     a1, b1, b2, T, b, d, t = common_float(a1, b1, b2, T, rate, accel, t)
     ok = _rates_ok(b1, b2, T, b, d)
@@ -264,14 +284,26 @@ def envelopes_kernel(a1, b1, b2, T, rate, accel, t):
 
 
 def transfer_kernel(a1, b1, a2, b2, T, rate, accel, t):
-    """Theorem-1 trajectory at time t [s]: (angle [rad], rate [rad/s], accel [rad/s^2]).
+    """Theorem-1 trajectory at one time t.
 
     f = ((hi - a2) f_lo + (a2 - lo) f_hi)/(hi - lo) (paper Theorem 1), i.e. the convex
     combination lam f_hi + (1 - lam) f_lo with lam = clip((a2 - lo)/(hi - lo), 0, 1) and
     lam = 1/2 when hi == lo. It is a quadratic spline (piecewise-constant f'', at most four
     switches) with |f'| <= b, |f''| <= d and the four boundary values. The acceleration is
     right-continuous (at t = T the last piece's value); t is clipped to [0, T].
-    Returns (+inf, +inf, +inf) when (a2, b2) is not reachable (``is_reachable_kernel``).
+
+    Args:
+      a1: scalar, start angle [rad].
+      b1: scalar, start rate [rad/s].
+      a2: scalar, end angle [rad].
+      b2: scalar, end rate [rad/s].
+      T: scalar, transfer duration [s].
+      rate: scalar, rate bound b [rad/s].
+      accel: scalar, acceleration bound d [rad/s^2].
+      t: scalar, evaluation time [s] (clipped to [0, T]).
+    Returns:
+      (angle [rad], rate [rad/s], accel [rad/s^2]); (+inf, +inf, +inf) when (a2, b2) is
+      not reachable (``is_reachable_kernel``).
     """
     a1, b1, a2, b2, T, b, d, t = common_float(a1, b1, a2, b2, T, rate, accel, t)
     ok = is_reachable_kernel(a1, b1, a2, b2, T, b, d)
@@ -356,10 +388,19 @@ def feasible_durations_kernel(a1, b1, a2, b2, rate, accel):
 
 
 def min_transfer_time_kernel(a1, b1, a2, b2, rate, accel):
-    """Shortest feasible duration T_min [s] (+inf when |b1| or |b2| > b).
+    """Shortest feasible duration T_min (first element of ``feasible_durations_kernel``).
 
-    First element of ``feasible_durations_kernel``; note that T > T_min need not be
-    feasible (blocked interval).
+    Note that T > T_min need not be feasible (blocked interval).
+
+    Args:
+      a1: scalar, start angle [rad].
+      b1: scalar, start rate [rad/s].
+      a2: scalar, end angle [rad].
+      b2: scalar, end rate [rad/s].
+      rate: scalar, rate bound b [rad/s].
+      accel: scalar, acceleration bound d [rad/s^2].
+    Returns:
+      T_min [s]; +inf when |b1| or |b2| > b.
     """
     return feasible_durations_kernel(a1, b1, a2, b2, rate, accel)[0]
 
@@ -382,15 +423,24 @@ def _d_hi(b1, b2, D, T, b):
 
 
 def min_peak_accel_kernel(a1, b1, a2, b2, T, rate):
-    """Smallest acceleration bound d* [rad/s^2] making the exact-T transfer possible.
+    """Smallest acceleration bound d* making the exact-T transfer possible.
 
-    Dual problem (seed retarget-scan, eq. 13, L-inf norm of the control). Args (scalars):
-    a1, a2 [rad]; b1, b2 [rad/s]; T [s]; rate bound b [rad/s]. Because hi_d is increasing
-    and lo_d decreasing in d, d* = max(|b1 - b2|/T, d_hi, d_lo) where d_hi solves
+    Dual problem (seed retarget-scan, eq. 13, L-inf norm of the control). Because hi_d is
+    increasing and lo_d decreasing in d, d* = max(|b1 - b2|/T, d_hi, d_lo) where d_hi solves
     hi_d = a2 on the active piece: two-link (T^2/4) d^2 + (pT - D) d - q^2 = 0, three-link
     d = ((b - b1)^2 + (b - b2)^2)/(2(bT - D)) (D = a2 - a1; +inf if bT <= D), and d_lo is
-    its mirror image. Returns +inf when |b_i| > b (1 + r) or no d works; for T = 0, 0 if the
-    states coincide (within tolerance) else +inf. d* <= d  <=>  is_reachable(..., d).
+    its mirror image. d* <= d  <=>  is_reachable(..., d).
+
+    Args:
+      a1: scalar, start angle [rad].
+      b1: scalar, start rate [rad/s].
+      a2: scalar, end angle [rad].
+      b2: scalar, end rate [rad/s].
+      T: scalar, transfer duration [s].
+      rate: scalar, rate bound b [rad/s].
+    Returns:
+      d* [rad/s^2]; +inf when |b_i| > b (1 + r) or no d works; for T = 0, 0 if the
+      states coincide (within tolerance) else +inf.
     """
     a1, b1, a2, b2, T, b = common_float(a1, b1, a2, b2, T, rate)
     r = _rtol(a1)
@@ -440,78 +490,187 @@ def _prepare(limits, need_accel=True, **named):
 
 
 def angle_interval(a1, b1, b2, T, limits: AxisLimits):
-    """Reachable end angles (lo, hi) [rad] for exactly duration T (SPEC section 1, question 1).
+    """Reachable end angles (lo, hi) for exactly duration T (SPEC section 1, question 1).
 
-    a1 [rad], b1, b2 [rad/s], T [s] (>= 0) broadcast together; limits = AxisLimits(rate b,
-    accel d) (jerk ignored). Formula: ``angle_interval_kernel``. Empty = (+inf, -inf).
+    Formula: ``angle_interval_kernel``. Arguments broadcast together.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      b2: float [...], end rate [rad/s].
+      T: float [...], transfer duration [s], >= 0.
+      limits: AxisLimits, rate bound b [rad/s] and acceleration bound d [rad/s^2] (jerk ignored).
+    Returns:
+      (lo, hi), float [...] each [rad]; empty = (+inf, -inf).
+    Raises:
+      ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
     return _angle_interval_batched(*_prepare(limits, a1=a1, b1=b1, b2=b2, T=T))
 
 
 def rate_interval(a1, b1, a2, T, limits: AxisLimits):
-    """Reachable end rates (lo, hi) [rad/s] for end angle a2 and duration T (question 2).
+    """Reachable end rates (lo, hi) for end angle a2 and duration T (question 2).
 
-    Formula and derivation: ``rate_interval_kernel``. Empty = (+inf, -inf).
+    Formula and derivation: ``rate_interval_kernel``. Arguments broadcast together.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      a2: float [...], end angle [rad].
+      T: float [...], transfer duration [s], >= 0.
+      limits: AxisLimits, rate bound b [rad/s] and acceleration bound d [rad/s^2] (jerk ignored).
+    Returns:
+      (lo, hi), float [...] each [rad/s]; empty = (+inf, -inf).
+    Raises:
+      ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
     return _rate_interval_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, T=T))
 
 
 def is_reachable(a1, b1, a2, b2, T, limits: AxisLimits):
-    """Membership of (a2, b2) in the pair set P(a1, b1, T) (Theorem 6; question 3) -> bool.
+    """Membership of (a2, b2) in the pair set P(a1, b1, T) (Theorem 6; question 3).
 
     Exact duration T (not "T or longer"). Tolerance: ``is_reachable_kernel``.
+    Arguments broadcast together.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      a2: float [...], end angle [rad].
+      b2: float [...], end rate [rad/s].
+      T: float [...], transfer duration [s], >= 0.
+      limits: AxisLimits, rate bound b [rad/s] and acceleration bound d [rad/s^2] (jerk ignored).
+    Returns:
+      bool [...].
+    Raises:
+      ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
     return _is_reachable_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
 
 
 def reach_margin(a1, b1, a2, b2, T, limits: AxisLimits):
-    """Signed margin [rad], >= 0 iff reachable: min(a2 - lo, hi - a2, (b - |b_i|) b/d).
+    """Signed margin, >= 0 iff reachable: min(a2 - lo, hi - a2, (b - |b_i|) b/d).
 
     Continuous and a.e. differentiable; definition and rationale in ``reach_margin_kernel``.
+    Arguments broadcast together.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      a2: float [...], end angle [rad].
+      b2: float [...], end rate [rad/s].
+      T: float [...], transfer duration [s], >= 0.
+      limits: AxisLimits, rate bound b [rad/s] and acceleration bound d [rad/s^2] (jerk ignored).
+    Returns:
+      float [...], margin [rad].
+    Raises:
+      ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
     return _reach_margin_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
 
 
 def envelopes(a1, b1, b2, T, limits: AxisLimits, t):
-    """Envelope angle curves (f_lo(t), f_hi(t)) [rad] at times t [s] (paper Theorems 2-5).
+    """Envelope angle curves (f_lo(t), f_hi(t)) at times t (paper Theorems 2-5).
 
     See ``envelopes_kernel``; t broadcasts with the other arguments.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      b2: float [...], end rate [rad/s].
+      T: float [...], transfer duration [s], >= 0.
+      limits: AxisLimits, rate bound b [rad/s] and acceleration bound d [rad/s^2] (jerk ignored).
+      t: float [...], evaluation times [s] (clipped to [0, T]).
+    Returns:
+      (f_lo, f_hi), float [...] each [rad].
+    Raises:
+      ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
     a1, b1, b2, T, t, rate, accel = _prepare(limits, a1=a1, b1=b1, b2=b2, T=T, t=t)
     return _envelopes_batched(a1, b1, b2, T, rate, accel, t)
 
 
 def transfer(a1, b1, a2, b2, T, limits: AxisLimits, t):
-    """Theorem-1 trajectory (angle [rad], rate [rad/s], accel [rad/s^2]) at times t [s].
+    """Theorem-1 trajectory at times t.
 
-    Convex combination of the envelopes; see ``transfer_kernel``. +inf when unreachable.
+    Convex combination of the envelopes; see ``transfer_kernel``. Arguments broadcast together.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      a2: float [...], end angle [rad].
+      b2: float [...], end rate [rad/s].
+      T: float [...], transfer duration [s], >= 0.
+      limits: AxisLimits, rate bound b [rad/s] and acceleration bound d [rad/s^2] (jerk ignored).
+      t: float [...], evaluation times [s] (clipped to [0, T]).
+    Returns:
+      (angle [rad], rate [rad/s], accel [rad/s^2]), float [...] each; +inf when
+      unreachable.
+    Raises:
+      ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
     a1, b1, a2, b2, T, t, rate, accel = _prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T, t=t)
     return _transfer_batched(a1, b1, a2, b2, T, rate, accel, t)
 
 
 def feasible_durations(a1, b1, a2, b2, limits: AxisLimits):
-    """Feasible durations [t_min, inf) minus (blocked_lo, blocked_hi) [s] (SPEC section 1).
+    """Feasible durations [t_min, inf) minus (blocked_lo, blocked_hi) (SPEC section 1).
 
     Example b1 = b2 = b, a2 - a1 = D > 0: t_min = D/b, blocked =
     (2(b - sqrt(b^2 - dD))/d, 2(b + sqrt(b^2 - dD))/d). See ``feasible_durations_kernel``.
+    Arguments broadcast together.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      a2: float [...], end angle [rad].
+      b2: float [...], end rate [rad/s].
+      limits: AxisLimits, rate bound b [rad/s] and acceleration bound d [rad/s^2] (jerk ignored).
+    Returns:
+      (t_min, blocked_lo, blocked_hi), float [...] each [s]; no block gives
+      blocked_lo == blocked_hi == t_min; impossible gives all +inf.
+    Raises:
+      ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
     return _feasible_durations_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2))
 
 
 def min_transfer_time(a1, b1, a2, b2, limits: AxisLimits):
-    """Shortest feasible duration [s] (+inf when impossible).
+    """Shortest feasible duration (+inf when impossible).
 
-    Longer durations need not be feasible: see ``feasible_durations``.
+    Longer durations need not be feasible: see ``feasible_durations``. Arguments broadcast together.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      a2: float [...], end angle [rad].
+      b2: float [...], end rate [rad/s].
+      limits: AxisLimits, rate bound b [rad/s] and acceleration bound d [rad/s^2] (jerk ignored).
+    Returns:
+      float [...], t_min [s].
+    Raises:
+      ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
     return feasible_durations(a1, b1, a2, b2, limits)[0]
 
 
 def min_peak_accel(a1, b1, a2, b2, T, rate):
-    """Smallest acceleration bound d* [rad/s^2] for the exact-T transfer under rate bound b.
+    """Smallest acceleration bound d* for the exact-T transfer under rate bound b.
 
-    rate: b [rad/s] (> 0). +inf if impossible for every d. The differentiable "effort" of a
-    transition (seed retarget-scan eq. 13); formula in ``min_peak_accel_kernel``.
+    The differentiable "effort" of a transition (seed retarget-scan eq. 13); formula in
+    ``min_peak_accel_kernel``. Arguments broadcast together.
+
+    Args:
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      a2: float [...], end angle [rad].
+      b2: float [...], end rate [rad/s].
+      T: float [...], transfer duration [s], >= 0.
+      rate: float [...], rate bound b [rad/s], > 0.
+    Returns:
+      float [...], d* [rad/s^2]; +inf if impossible for every d.
+    Raises:
+      ValueError: an argument is not finite, T < 0 or rate is not positive (named).
     """
     args = _prepare(None, need_accel=False, a1=a1, b1=b1, a2=a2, b2=b2, T=T, rate=rate)
     return _min_peak_accel_batched(*args)
