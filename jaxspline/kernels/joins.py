@@ -348,10 +348,7 @@ def _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples):
 def maneuver_check_kernel(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples=129):
     """One-candidate kernel of ``maneuver_check`` (no validation; ``n_samples`` static).
 
-    Arguments as in ``maneuver_check`` with the limits unpacked (rate [rad/s],
-    accel [rad/s²], jerk [rad/s³], 0-d). Returns (peak |ω|, peak |ε|, peak
-    |ε'|, feasible); T <= 0 gives +inf peaks and False. For the engine: ``jax.jit(jax.vmap(partial(
-    maneuver_check_kernel, n_samples=N)))``.
+    For the engine: ``jax.jit(jax.vmap(partial(maneuver_check_kernel, n_samples=N)))``.
 
     Computation (per component, no sample grid is materialized): boundary states ->
     midpoint-chart MRPs σ0, σ1 and their τ-derivatives (τ = t/T) -> join coefficients
@@ -361,6 +358,20 @@ def maneuver_check_kernel(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, 
     running maxima -> peaks sqrt(max)·T⁻¹, T⁻², T⁻³. Temporaries are ~0.5 kB per
     candidate whatever n; batches of ~1e4 candidates per call keep each scan step in
     cache (``maneuver_check`` chunks larger batches itself).
+
+    Args:
+      q0, q1: float [4], start / end attitude quaternions (scalar first).
+      w0, w1: float [3], start / end body angular velocity [rad/s].
+      e0, e1: float [3], start / end body angular acceleration [rad/s²].
+      j0, j1: float [3], start / end angular jerk [rad/s³].
+      T: scalar, duration [s].
+      rate: scalar, bound on |ω| [rad/s].
+      accel: scalar, bound on |ε| [rad/s²].
+      jerk: scalar, bound on |ε'| [rad/s³].
+      n_samples: static int >= 2, equally spaced samples on [0, T].
+    Returns:
+      (peak |ω| [rad/s], peak |ε| [rad/s²], peak |ε'| [rad/s³], feasible bool);
+      T <= 0 gives +inf peaks and False.
     """
     return _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples)
 
@@ -407,8 +418,11 @@ class Maneuver(NamedTuple):
 class ManeuverCheck(NamedTuple):
     """Result of ``maneuver_check``: sampled peaks and the feasibility flag.
 
-    Attributes: peak_rate [rad/s], peak_accel [rad/s²], peak_jerk [rad/s³]
-    (max over samples of |ω|, |ε|, |ε'|), feasible (bool: all within limits).
+    Attributes:
+      peak_rate: float [...], max over samples of |ω| [rad/s].
+      peak_accel: float [...], max over samples of |ε| [rad/s²].
+      peak_jerk: float [...], max over samples of |ε'| [rad/s³].
+      feasible: bool [...], all three peaks within the limits.
     """
 
     peak_rate: jnp.ndarray
@@ -424,15 +438,25 @@ def _dur(T):
 
 
 def join7_coeffs(p0, v0, a0, j0, p1, v1, a1, j1, T):
-    """Normalized coefficients [..., 8] of the degree-7 join on [0, T].
+    """Normalized coefficients of the degree-7 join on [0, T].
 
     p(t) = Σ_{k=0..7} c_k (t/T)^k with p, p', p'', p''' equal to (p0, v0, a0, j0)
-    at t = 0 and (p1, v1, a1, j1) at t = T. Units: angle [rad], rate [rad/s],
-    acceleration [rad/s²], jerk [rad/s³], T [s] > 0; elementwise over
-    broadcast inputs (a vector join = per component). c0..c3 = p0, T v0,
-    T²a0/2, T³j0/6; c4..c7 from a constant 4×4 system (exact inverse). This is
-    the unique minimizer of ∫₀ᵀ (p⁗)² dt under these conditions (seed
-    retarget-scan-pattern-optimization, optimal conjugation, eq. 27; SPEC §3).
+    at t = 0 and (p1, v1, a1, j1) at t = T; elementwise over broadcast inputs (a
+    vector join = per component). c0..c3 = p0, T v0, T²a0/2, T³j0/6; c4..c7 from a
+    constant 4×4 system (exact inverse). This is the unique minimizer of ∫₀ᵀ (p⁗)² dt
+    under these conditions (seed retarget-scan-pattern-optimization, optimal
+    conjugation, eq. 27; SPEC §3).
+
+    Args:
+      p0, p1: float [...], angle at 0 and T [rad].
+      v0, v1: float [...], rate at 0 and T [rad/s].
+      a0, a1: float [...], acceleration at 0 and T [rad/s²].
+      j0, j1: float [...], jerk at 0 and T [rad/s³].
+      T: float [...], duration [s], > 0.
+    Returns:
+      float [..., 8], normalized coefficients c_k [rad].
+    Raises:
+      ValueError: T is not positive or an argument is not finite (named).
     """
     names = ("p0", "v0", "a0", "j0", "p1", "v1", "a1", "j1")
     args = [
@@ -444,12 +468,23 @@ def join7_coeffs(p0, v0, a0, j0, p1, v1, a1, j1, T):
 
 
 def spline7_coeffs(p0, v0, a0, p_third, p_two_thirds, p1, v1, a1, T):
-    """Normalized coefficients [..., 8] of the vector-spline segment on [0, T].
+    """Normalized coefficients of the vector-spline segment on [0, T].
 
     p(t) = Σ c_k (t/T)^k with p, p', p'' = (p0, v0, a0) at 0 and (p1, v1, a1) at
     T, p(T/3) = p_third, p(2T/3) = p_two_thirds (seed vector-spline-guidance-laws,
     "Синтез закона наведения при сканирующей съёмке": 8 vector coefficients
-    from (i)–(iii)). Units as in ``join7_coeffs``; elementwise (per component).
+    from (i)–(iii)). Elementwise over broadcast inputs (per component).
+
+    Args:
+      p0, p1: float [...], angle at 0 and T [rad].
+      v0, v1: float [...], rate at 0 and T [rad/s].
+      a0, a1: float [...], acceleration at 0 and T [rad/s²].
+      p_third, p_two_thirds: float [...], angle at T/3 and 2T/3 [rad].
+      T: float [...], duration [s], > 0.
+    Returns:
+      float [..., 8], normalized coefficients c_k [rad].
+    Raises:
+      ValueError: T is not positive or an argument is not finite (named).
     """
     names = ("p0", "v0", "a0", "p_third", "p_two_thirds", "p1", "v1", "a1")
     vals = (p0, v0, a0, p_third, p_two_thirds, p1, v1, a1)
@@ -460,11 +495,18 @@ def spline7_coeffs(p0, v0, a0, p_third, p_two_thirds, p1, v1, a1, T):
 
 
 def poly_eval(coeffs, T, t, deriv: int = 0):
-    """d^deriv p / dt^deriv at times t [s] of p(t) = Σ c_k (t/T)^k.
+    """d^deriv p / dt^deriv at times t of p(t) = Σ c_k (t/T)^k.
 
-    coeffs [..., K] normalized coefficients (as returned by ``join7_coeffs``),
-    T [s] > 0, t [s] (broadcast against coeffs[..., 0]); deriv a static int
-    >= 0. Result in [rad / s^deriv] for angle coefficients in [rad].
+    Args:
+      coeffs: float [..., K], normalized coefficients (as returned by ``join7_coeffs``) [rad].
+      T: float [...], duration [s], > 0.
+      t: float [...], times [s], broadcast against coeffs[..., 0].
+      deriv: static int >= 0, order of the derivative.
+    Returns:
+      float [...], the derivative [rad / s^deriv] for angle coefficients in [rad].
+    Raises:
+      ValueError: deriv is not a non-negative int, coeffs has no coefficient axis, or
+        an argument is not finite / T not positive (named).
     """
     if not isinstance(deriv, int) or deriv < 0:
         raise ValueError(f"deriv must be a non-negative int, got {deriv!r}")
@@ -490,13 +532,21 @@ def _states(q0, w0, e0, j0, q1, w1, e1, j1):
 def maneuver_plan(q0, w0, e0, q1, w1, e1, T, j0=None, j1=None) -> Maneuver:
     """Spatial maneuver between two attitude states as a degree-7 MRP join.
 
-    Boundary states at t = 0 and t = T [s]: attitude quaternions q0, q1 [..., 4]
-    (scalar-first, body -> reference), body angular velocity w [rad/s],
-    acceleration e = dω/dt [rad/s²] and its derivative j [rad/s³] (default 0),
-    all [..., 3]. (Λ, ω, ε, ε') -> (σ, σ', σ'', σ''') in the midpoint chart
-    (module docstring), then ``join7_coeffs`` per MRP component. Every boundary
-    condition (seed vector-spline-guidance-laws eq. 3, plus ε') holds exactly.
-    Returns a ``Maneuver``.
+    (Λ, ω, ε, ε') -> (σ, σ', σ'', σ''') in the midpoint chart (module docstring), then
+    ``join7_coeffs`` per MRP component. Every boundary condition (seed
+    vector-spline-guidance-laws eq. 3, plus ε') holds exactly.
+
+    Args:
+      q0, q1: float [..., 4], attitude quaternions
+        (scalar first, body -> reference) at t = 0 and t = T.
+      w0, w1: float [..., 3], body angular velocity ω at 0 and T [rad/s].
+      e0, e1: float [..., 3], body angular acceleration ε = dω/dt at 0 and T [rad/s²].
+      T: float [...], duration [s], > 0.
+      j0, j1: float [..., 3], ε' at 0 and T [rad/s³]; None means 0.
+    Returns:
+      Maneuver, the join (batch shape of the broadcast inputs).
+    Raises:
+      ValueError: an argument is not finite, has the wrong last axis, or T <= 0 (named).
     """
     st = _states(q0, w0, e0, j0, q1, w1, e1, j1)
     args = common_float(*st, _dur(T))
@@ -507,11 +557,19 @@ def maneuver_plan(q0, w0, e0, q1, w1, e1, T, j0=None, j1=None) -> Maneuver:
 def attitude_spline(q0, w0, e0, q_third, q_two_thirds, q1, w1, e1, T) -> Maneuver:
     """Vector-spline approximation of an attitude law on [0, T] (degree-7 MRP).
 
-    Inputs: the law's attitude at 0, T/3, 2T/3, T (quaternions [..., 4]), body
-    ω [rad/s] and ε [rad/s²] at both ends [..., 3], T [s]. σ, σ', σ'' at the ends
-    and σ at T/3, 2T/3 (midpoint chart) fix the 8 vector coefficients (seed
-    vector-spline-guidance-laws). Returns a ``Maneuver`` (evaluate with
-    ``maneuver_eval``).
+    σ, σ', σ'' at the ends and σ at T/3, 2T/3 (midpoint chart) fix the 8 vector
+    coefficients (seed vector-spline-guidance-laws). Evaluate with ``maneuver_eval``.
+
+    Args:
+      q0, q_third, q_two_thirds, q1: float [..., 4], attitude quaternions
+        (scalar first, body -> reference) of the law at 0, T/3, 2T/3, T.
+      w0, w1: float [..., 3], body angular velocity ω at 0 and T [rad/s].
+      e0, e1: float [..., 3], body angular acceleration ε at 0 and T [rad/s²].
+      T: float [...], duration [s], > 0.
+    Returns:
+      Maneuver, the spline segment.
+    Raises:
+      ValueError: an argument is not finite, has the wrong last axis, or T <= 0 (named).
     """
     q0, qa, qb, q1 = (
         finite_vector(n, x, 4)
@@ -526,12 +584,19 @@ def attitude_spline(q0, w0, e0, q_third, q_two_thirds, q1, w1, e1, T) -> Maneuve
 
 
 def maneuver_eval(maneuver: Maneuver, t):
-    """Attitude state of a ``Maneuver`` at times t [s].
+    """Attitude state of a ``Maneuver`` at times t.
 
-    Returns (q [..., 4], ω [..., 3] rad/s, ε = dω/dt [..., 3] rad/s², ε' [..., 3]
-    rad/s³), body-frame components; ω, ε, ε' are recovered exactly from σ and its
-    derivatives (``attitude.omega_from_mrp_derivs``). t broadcasts against the
-    maneuver's batch shape.
+    ω, ε, ε' are recovered exactly from σ and its derivatives
+    (``attitude.omega_from_mrp_derivs``); body-frame components.
+
+    Args:
+      maneuver: Maneuver, from ``maneuver_plan`` or ``attitude_spline``.
+      t: float [...], times [s], broadcast against the maneuver's batch shape.
+    Returns:
+      (q float [..., 4], ω float [..., 3] [rad/s], ε = dω/dt float [..., 3] [rad/s²],
+      ε' float [..., 3] [rad/s³]).
+    Raises:
+      ValueError: maneuver is not a Maneuver or t is not finite.
     """
     if not isinstance(maneuver, Maneuver):
         raise ValueError(f"maneuver must be a Maneuver, got {type(maneuver).__name__}")
@@ -546,13 +611,20 @@ def maneuver_check(
 ) -> ManeuverCheck:
     """Plan the degree-7 MRP maneuver and check |ω|, |ε|, |ε'| against limits.
 
-    Inputs as in ``maneuver_plan``; ``limits`` = AxisLimits(rate [rad/s], accel
-    [rad/s²], jerk [rad/s³]) on the Euclidean norms of body ω, ε and ε';
-    ``n_samples`` (static, >= 2) equally spaced samples on [0, T] including both
-    ends. Peaks are sampled maxima (they can miss an interior peak by
-    O((T/n)²) relatively). Reference: SPEC §3 (seed vector-spline-guidance-laws,
-    constraints |ω| <= ω_max, |ε| <= ε_max, |ε'| <= jerk_max). Batches larger than
-    16384 candidates are checked in chunks of that size (one compile, bounded memory).
+    Peaks are sampled maxima (they can miss an interior peak by O((T/n)²) relatively).
+    Reference: SPEC §3 (seed vector-spline-guidance-laws, constraints |ω| <= ω_max,
+    |ε| <= ε_max, |ε'| <= jerk_max). Batches larger than 16384 candidates are checked
+    in chunks of that size (one compile, bounded memory).
+
+    Args:
+      q0, w0, e0, q1, w1, e1, T, j0, j1: as in ``maneuver_plan``.
+      limits: AxisLimits, rate [rad/s], accel [rad/s²], jerk [rad/s³] bounds on the
+        Euclidean norms of body ω, ε and ε'.
+      n_samples: static int >= 2, equally spaced samples on [0, T] including both ends.
+    Returns:
+      ManeuverCheck, float [...] peaks and bool [...] feasible.
+    Raises:
+      ValueError: n_samples < 2, invalid limits, or an argument as in ``maneuver_plan``.
     """
     if not isinstance(n_samples, int) or n_samples < 2:
         raise ValueError(f"n_samples must be an int >= 2, got {n_samples!r}")
