@@ -48,7 +48,14 @@ def ragged_positions(counts):
 
 
 def round_up(n: int, multiple: int) -> int:
-    """The smallest multiple of ``multiple`` that is >= n."""
+    """The smallest multiple of ``multiple`` that is >= n.
+
+    Args:
+      n: int >= 0.
+      multiple: int > 0.
+    Returns:
+      int.
+    """
     return -(-int(n) // multiple) * multiple
 
 
@@ -69,10 +76,16 @@ def padded_size(n: int, maximum: int | None = None, multiple: int = 1) -> int:
 
 
 def pad_rows(x, size: int):
-    """``x`` (leading axis n <= size) with its last row repeated up to ``size`` rows.
+    """``x`` with its last row repeated up to ``size`` rows.
 
     Compiled kernels see a few fixed shapes instead of one per batch size. numpy
     arrays stay numpy, JAX arrays stay on the device.
+
+    Args:
+      x: array [n, ...], n <= size (n >= 1).
+      size: number of rows wanted.
+    Returns:
+      array [size, ...] of the same kind and dtype as x.
     """
     xp = jnp if isinstance(x, jax.Array) else np
     x = xp.asarray(x)

@@ -28,7 +28,13 @@ __all__ = [
 
 
 def is_concrete(x) -> bool:
-    """True when ``x`` holds actual values (not a tracer inside jit/vmap/grad)."""
+    """True when ``x`` holds actual values (not a tracer inside jit/vmap/grad).
+
+    Args:
+      x: any array-like or tracer.
+    Returns:
+      bool.
+    """
     return not isinstance(x, jax.core.Tracer)
 
 
@@ -40,7 +46,13 @@ def _show(value) -> str:
 
 
 def float_dtype_of(*xs):
-    """Common floating dtype of the inputs (JAX's default float if none are floating)."""
+    """Common floating dtype of the inputs (JAX's default float if none are floating).
+
+    Args:
+      *xs: array-likes of any shape.
+    Returns:
+      a numpy floating dtype.
+    """
     dts = [jnp.result_type(x) for x in xs if x is not None]
     dt = jnp.result_type(*dts) if dts else jnp.result_type(float)
     if not jnp.issubdtype(dt, jnp.floating):
@@ -49,7 +61,17 @@ def float_dtype_of(*xs):
 
 
 def as_float_array(name: str, x, dtype=None):
-    """Convert ``x`` to a floating JAX array, raising a named ValueError on failure."""
+    """Convert ``x`` to a floating JAX array, raising a named ValueError on failure.
+
+    Args:
+      name: argument name used in the error message.
+      x: array-like of any shape.
+      dtype: target floating dtype; None keeps a floating input's dtype.
+    Returns:
+      float array, the shape of x.
+    Raises:
+      ValueError: x is not numeric (message names ``name``).
+    """
     try:
         arr = jnp.asarray(x)
     except (TypeError, ValueError) as exc:
@@ -60,7 +82,17 @@ def as_float_array(name: str, x, dtype=None):
 
 
 def check_finite(name: str, x, allow_inf: bool = False) -> None:
-    """Reject NaN (and, unless ``allow_inf``, infinities) in concrete ``x``."""
+    """Reject NaN (and, unless ``allow_inf``, infinities) in concrete ``x``.
+
+    Tracers are not checked (kernels never raise).
+
+    Args:
+      name: argument name used in the error message.
+      x: array-like of any shape.
+      allow_inf: accept ±inf.
+    Raises:
+      ValueError: naming ``name`` and the offending value.
+    """
     if not is_concrete(x):
         return
     arr = np.asarray(x)
@@ -70,7 +102,15 @@ def check_finite(name: str, x, allow_inf: bool = False) -> None:
 
 
 def check_positive(name: str, x, allow_inf: bool = False) -> None:
-    """Reject non-positive or NaN entries in concrete ``x`` (``+inf`` allowed if asked)."""
+    """Reject non-positive or NaN entries in concrete ``x`` (``+inf`` allowed if asked).
+
+    Args:
+      name: argument name used in the error message.
+      x: array-like of any shape.
+      allow_inf: accept +inf.
+    Raises:
+      ValueError: naming ``name`` and the offending value.
+    """
     if not is_concrete(x):
         return
     check_finite(name, x, allow_inf=allow_inf)
@@ -79,7 +119,15 @@ def check_positive(name: str, x, allow_inf: bool = False) -> None:
 
 
 def check_nonnegative(name: str, x, allow_inf: bool = False) -> None:
-    """Reject negative or NaN entries in concrete ``x``."""
+    """Reject negative or NaN entries in concrete ``x``.
+
+    Args:
+      name: argument name used in the error message.
+      x: array-like of any shape.
+      allow_inf: accept +inf.
+    Raises:
+      ValueError: naming ``name`` and the offending value.
+    """
     if not is_concrete(x):
         return
     check_finite(name, x, allow_inf=allow_inf)
@@ -90,7 +138,12 @@ def check_nonnegative(name: str, x, allow_inf: bool = False) -> None:
 def broadcast_named(**arrays):
     """Broadcast named arrays together; on failure name every argument and its shape.
 
-    Returns the broadcast arrays in the given order.
+    Args:
+      **arrays: name -> array of any shape.
+    Returns:
+      list of the broadcast arrays in the given order.
+    Raises:
+      ValueError: the shapes do not broadcast (every name and shape listed).
     """
     shapes = {k: jnp.shape(v) for k, v in arrays.items()}
     try:
@@ -102,7 +155,13 @@ def broadcast_named(**arrays):
 
 
 def is_weak(x) -> bool:
-    """Python scalars and weakly typed arrays, which do not set a result dtype."""
+    """Python scalars and weakly typed arrays, which do not set a result dtype.
+
+    Args:
+      x: any value.
+    Returns:
+      bool.
+    """
     return isinstance(x, int | float) or bool(getattr(x, "weak_type", False))
 
 
@@ -111,6 +170,13 @@ def cast_broadcast(**named):
 
     The dtype is set by the non-weak inputs (JAX's default float when all are
     Python scalars), so float32 arrays stay float32 next to Python constants.
+
+    Args:
+      **named: name -> array-like of any shape.
+    Returns:
+      list of float arrays of the common broadcast shape, in the given order.
+    Raises:
+      ValueError: an input is not numeric or the shapes do not broadcast (named).
     """
     dt = float_dtype_of(*[v for v in named.values() if not is_weak(v)])
     return broadcast_named(**{k: as_float_array(k, v, dt) for k, v in named.items()})
@@ -121,6 +187,11 @@ def common_float(*xs):
 
     Integer-only inputs become JAX's default float. Used inside kernels (traced
     values welcome) and after the eager checks of the public wrappers.
+
+    Args:
+      *xs: array-likes or tracers of any shape (not broadcast).
+    Returns:
+      list of float arrays, shapes unchanged.
     """
     dt = jnp.result_type(*xs)
     if not jnp.issubdtype(dt, jnp.floating):
@@ -131,8 +202,14 @@ def common_float(*xs):
 def finite_vector(name: str, x, last: int | None = None):
     """``x`` as a floating array, checked finite, whose last axis has length ``last``.
 
-    Raises a ValueError naming ``name`` (shape or value) otherwise; ``last=None``
-    accepts any shape.
+    Args:
+      name: argument name used in the error message.
+      x: array-like, float [..., last].
+      last: required length of the last axis; None accepts any shape.
+    Returns:
+      float array, the shape of x.
+    Raises:
+      ValueError: naming ``name`` (shape or value).
     """
     arr = as_float_array(name, x)
     if last is not None and (arr.ndim == 0 or arr.shape[-1] != last):

@@ -30,7 +30,17 @@ class AxisLimits(NamedTuple):
 
 
 def validate_limits(limits: AxisLimits, name: str = "limits") -> AxisLimits:
-    """Eagerly check that ``limits`` is an AxisLimits with positive fields."""
+    """Eagerly check that ``limits`` is an AxisLimits with positive fields.
+
+    Args:
+      limits: AxisLimits (or a plain 2- or 3-tuple), rate [rad/s], accel [rad/s^2],
+        jerk [rad/s^3] (may be +inf); scalars or arrays.
+      name: argument name used in the error message.
+    Returns:
+      AxisLimits (the tuple converted).
+    Raises:
+      ValueError: not an AxisLimits, or a field is not positive (names ``name.field``).
+    """
     if not isinstance(limits, AxisLimits):
         if isinstance(limits, tuple) and len(limits) in (2, 3):
             limits = AxisLimits(*limits)

@@ -126,8 +126,12 @@ def euler_rates_matrix(sigma):
     """N(σ) of paper eq. 7: (ϑ', γ', ψ') = N(σ) (ω̃_x, ω̃_y, ω̃_z).
 
     Rows: ϑ' = (−sinψ ω̃_x + cosψ ω̃_z)/cosγ; γ' = cosψ ω̃_x + sinψ ω̃_z;
-    ψ' = ω̃_y + tanγ (sinψ ω̃_x − cosψ ω̃_z). σ = (pitch, roll, yaw) [rad], (..., 3);
-    singular at cosγ = 0. Returns (..., 3, 3).
+    ψ' = ω̃_y + tanγ (sinψ ω̃_x − cosψ ω̃_z). Singular at cosγ = 0.
+
+    Args:
+      sigma: float [..., 3], angles σ = (pitch ϑ, roll γ, yaw ψ) [rad].
+    Returns:
+      float [..., 3, 3], N(σ) [dimensionless] mapping body rates [rad/s] to angle rates [rad/s].
     """
     sigma = jnp.asarray(sigma)
     g, p = sigma[..., 1], sigma[..., 2]
@@ -147,7 +151,12 @@ def orbital_to_body(sigma):
     """Direction-cosine matrix C(σ) = R_y(ψ) R_x(γ) R_z(ϑ) (orbital -> body components).
 
     Passive elementary rotations (pitch about z, then roll about x, then yaw about y),
-    consistent with eq. 7: dC/dt = −[ω̃×] C. σ [rad], (..., 3); returns (..., 3, 3).
+    consistent with eq. 7: dC/dt = −[ω̃×] C.
+
+    Args:
+      sigma: float [..., 3], angles σ = (pitch, roll, yaw) [rad].
+    Returns:
+      float [..., 3, 3], C(σ).
     """
     sigma = jnp.asarray(sigma)
     t, g, p = sigma[..., 0], sigma[..., 1], sigma[..., 2]
@@ -461,10 +470,16 @@ def min_peak_retarget(
 
 
 def body_control(model: AttitudeModel, ctrl: ChannelControl, t):
-    """Body-axis control u(t) (x, y, z) [units of u] of a per-channel control at t [s].
+    """Body-axis control u(t) (x, y, z) of a per-channel control at t.
 
-    u_p(k) = a_k(t) / B_p(k) with p = (z, x, y) for (pitch, roll, yaw). ctrl fields (3,);
-    t scalar or (n,) -> (3,) or (n, 3).
+    u_p(k) = a_k(t) / B_p(k) with p = (z, x, y) for (pitch, roll, yaw).
+
+    Args:
+      model: AttitudeModel, its gain B [rad/s² per unit u] is used.
+      ctrl: ChannelControl with fields float [3] (pitch, roll, yaw channels).
+      t: scalar or float [n], times [s].
+    Returns:
+      float [3] or [n, 3], u [units of u].
     """
     t = jnp.asarray(t)
     if t.ndim:

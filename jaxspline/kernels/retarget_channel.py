@@ -155,17 +155,32 @@ def min_peak_channel(a1, b1, a2, b2, T, rate=float("inf")):
 
 
 def channel_control_eval(ctrl: ChannelControl, t):
-    """Control value a(t) = s d [t < t1] − s d [t >= t2] [rad/s²] of a ChannelControl at t [s]."""
+    """Control value a(t) = s d [t < t1] − s d [t >= t2] of a ChannelControl at t.
+
+    Args:
+      ctrl: ChannelControl (fields scalar or broadcast against t).
+      t: float [...], times [s].
+    Returns:
+      float [...], a(t) [rad/s²].
+    """
     d = jnp.where(jnp.isfinite(ctrl.peak), ctrl.peak, 0.0)
     sd = ctrl.sign * d
     return jnp.where(t < ctrl.t1, sd, 0.0) - jnp.where(t >= ctrl.t2, sd, 0.0)
 
 
 def channel_state(ctrl: ChannelControl, a1, b1, t):
-    """Closed-form (angle [rad], rate [rad/s]) at t [s] of f'' = a(t), f(0) = a1, f'(0) = b1.
+    """Closed-form (angle, rate) at t of f'' = a(t), f(0) = a1, f'(0) = b1.
 
     rate = b1 + s d (min(t, t1) − max(t − t2, 0));
     angle = a1 + b1 t + s d (∫₀ᵗ min(τ, t1) dτ − max(t − t2, 0)²/2).
+
+    Args:
+      ctrl: ChannelControl (fields scalar or broadcast against t).
+      a1: float [...], start angle [rad].
+      b1: float [...], start rate [rad/s].
+      t: float [...], times [s].
+    Returns:
+      (angle [rad], rate [rad/s]), float [...] each.
     """
     d = jnp.where(jnp.isfinite(ctrl.peak), ctrl.peak, 0.0)
     sd = ctrl.sign * d

@@ -386,7 +386,19 @@ def slew_profile(angle, rate, accel, tau=None, kind: str = "auto") -> SlewProfil
 
 
 def slew_profile_time(angle, rate, accel, tau=None, kind: str = "auto"):
-    """Duration T_d [s] of :func:`slew_profile` (same arguments)."""
+    """Duration T_d of :func:`slew_profile` (same arguments).
+
+    Args:
+      angle: slew angle(s) phi [rad], >= 0.
+      rate: rate bound(s) omega [rad/s], > 0.
+      accel: acceleration bound(s) eps [rad/s^2], > 0.
+      tau: ramp time of profile D [s]; default omega/eps.
+      kind: "auto", "A", "B", "C" or "D" (static).
+    Returns:
+      float [...] (broadcast shape), T_d [s].
+    Raises:
+      ValueError: as :func:`slew_profile`.
+    """
     return slew_profile(angle, rate, accel, tau, kind).duration
 
 
