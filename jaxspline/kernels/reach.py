@@ -123,9 +123,15 @@ def _angle_tol(a1, a2, T, b):
 def angle_interval_kernel(a1, b1, b2, T, rate, accel):
     """Reachable end angles [lo, hi] for one candidate (paper eqs. 2.5-2.10; SPEC section 1).
 
-    Args (scalars): a1 start angle [rad]; b1, b2 start/end rates [rad/s]; T duration [s];
-      rate b [rad/s] and accel d [rad/s^2] bounds.
-    Returns: (lo, hi) [rad], the integrals of the envelopes F_lo, F_hi (module docstring).
+    Args:
+      a1: scalar, start angle [rad].
+      b1: scalar, start rate [rad/s].
+      b2: scalar, end rate [rad/s].
+      T: scalar, duration [s].
+      rate: scalar, rate bound b [rad/s].
+      accel: scalar, acceleration bound d [rad/s^2].
+    Returns:
+      (lo, hi) [rad], the integrals of the envelopes F_lo, F_hi (module docstring).
       Empty (+inf, -inf) unless |b1|, |b2| <= b and |b1 - b2| <= dT (within the module
       tolerance; rates are then clipped to [-b, b] and hi < lo from rounding collapses to
       the midpoint).
@@ -144,11 +150,19 @@ def angle_interval_kernel(a1, b1, b2, T, rate, accel):
 def is_reachable_kernel(a1, b1, a2, b2, T, rate, accel):
     """True iff (a2, b2) is in the pair set P(a1, b1, T) (Theorem 6; SPEC section 1).
 
-    Args (scalars): a1, a2 [rad]; b1, b2 [rad/s]; T [s]; rate b [rad/s]; accel d [rad/s^2].
-    Returns: bool. Conditions |b1|, |b2| <= b (1 + r), |b1 - b2| <= dT + 2 r b and
-      lo - tol <= a2 <= hi + tol with r = 64 eps(dtype), tol = r (|a1| + |a2| + 2 b T), so
-      boundary cases evaluated in floating point count as reachable. ~40 flops, no
-      transcendental functions.
+    Conditions |b1|, |b2| <= b (1 + r), |b1 - b2| <= dT + 2 r b and
+    lo - tol <= a2 <= hi + tol with r = 64 eps(dtype), tol = r (|a1| + |a2| + 2 b T), so
+    boundary cases evaluated in floating point count as reachable. ~40 flops, no
+    transcendental functions.
+
+    Args:
+      a1, a2: scalars, start / end angle [rad].
+      b1, b2: scalars, start / end rate [rad/s].
+      T: scalar, duration [s].
+      rate: scalar, rate bound b [rad/s].
+      accel: scalar, acceleration bound d [rad/s^2].
+    Returns:
+      scalar bool.
     """
     a1, b1, a2, b2, T, b, d = common_float(a1, b1, a2, b2, T, rate, accel)
     ok = _rates_ok(b1, b2, T, b, d)
@@ -212,15 +226,23 @@ def _rate_lo(a1, b1, a2, T, b, d):
 def rate_interval_kernel(a1, b1, a2, T, rate, accel):
     """Reachable end rates [lo, hi] for a given end angle a2 (Theorem 6, derived roots).
 
-    Args (scalars): a1, a2 [rad]; b1 [rad/s]; T [s]; rate b [rad/s]; accel d [rad/s^2].
-    Returns: (b2_lo, b2_hi) [rad/s]. On [L, U] = [max(-b, b1 - dT), min(b, b1 + dT)] the
-      bound hi(b2) is concave non-decreasing and lo(b2) convex non-decreasing, so the set is
-      [min{b2: hi(b2) >= a2}, max{b2: lo(b2) <= a2}]. Each end is a root of one piece:
-      two-link upper b2 = b1 + dT - 2 sqrt(d (a1 + b1 T + dT^2/2 - a2)) for b2 <= 2b - b1 - dT,
-      three-link upper b2 = b - sqrt(2d (a1 - a2 + bT) - (b - b1)^2) above it; the lower
-      bound by mirror symmetry b2_hi(a1, b1, a2) = -b2_lo(-a1, -b1, -a2). Empty (+inf, -inf)
-      when |b1| > b or a2 is outside [lo(L), hi(U)] (module tolerance applies).
-      (The paper's steps 3-7 of its second algorithm are garbled; this is re-derived.)
+    On [L, U] = [max(-b, b1 - dT), min(b, b1 + dT)] the bound hi(b2) is concave
+    non-decreasing and lo(b2) convex non-decreasing, so the set is
+    [min{b2: hi(b2) >= a2}, max{b2: lo(b2) <= a2}]. Each end is a root of one piece:
+    two-link upper b2 = b1 + dT - 2 sqrt(d (a1 + b1 T + dT^2/2 - a2)) for b2 <= 2b - b1 - dT,
+    three-link upper b2 = b - sqrt(2d (a1 - a2 + bT) - (b - b1)^2) above it; the lower
+    bound by mirror symmetry b2_hi(a1, b1, a2) = -b2_lo(-a1, -b1, -a2).
+    (The paper's steps 3-7 of its second algorithm are garbled; this is re-derived.)
+
+    Args:
+      a1, a2: scalars, start / end angle [rad].
+      b1: scalar, start rate [rad/s].
+      T: scalar, duration [s].
+      rate: scalar, rate bound b [rad/s].
+      accel: scalar, acceleration bound d [rad/s^2].
+    Returns:
+      (b2_lo, b2_hi) [rad/s]; empty (+inf, -inf) when |b1| > b or a2 is outside
+      [lo(L), hi(U)] (module tolerance applies).
     """
     a1, b1, a2, T, b, d = common_float(a1, b1, a2, T, rate, accel)
     r = _rtol(a1)
@@ -350,17 +372,23 @@ def _h_region(b1, b2, D, b, d):
 def feasible_durations_kernel(a1, b1, a2, b2, rate, accel):
     """Feasible transfer durations: [t_min, inf) minus the open interval (blocked_lo, blocked_hi).
 
-    Args (scalars): a1, a2 [rad]; b1, b2 [rad/s]; rate b [rad/s]; accel d [rad/s^2].
-    Returns: (t_min, blocked_lo, blocked_hi) [s]; no block gives blocked_lo == blocked_hi
-      == t_min; impossible (|b_i| > b) gives all +inf.
     Derivation (SPEC section 1 "durations are not monotone"): with D = a2 - a1, the
-      transfer takes exactly T iff T >= T0 = |b1 - b2|/d and L(T) <= D <= H(T), H = hi - a1,
-      L = lo - a1. dH/dT = min(p + dT/2, b) is non-decreasing (H convex), L is concave, and
-      H(T0) = L(T0) = E0 = (b1 + b2)|b1 - b2|/(2d). So {H < D} and {L > D} are intervals,
-      disjoint; the one that contains T0 (D > E0 or D < E0) ends at t_min, the other (it can
-      start after T0 only if b1, b2 share a sign) is the blocked interval. Roots are the
-      closed forms of ``_h_region``; |D - E0| <= tol (module tolerance with b^2/d) counts
-      as D = E0 (T0 itself feasible).
+    transfer takes exactly T iff T >= T0 = |b1 - b2|/d and L(T) <= D <= H(T), H = hi - a1,
+    L = lo - a1. dH/dT = min(p + dT/2, b) is non-decreasing (H convex), L is concave, and
+    H(T0) = L(T0) = E0 = (b1 + b2)|b1 - b2|/(2d). So {H < D} and {L > D} are intervals,
+    disjoint; the one that contains T0 (D > E0 or D < E0) ends at t_min, the other (it can
+    start after T0 only if b1, b2 share a sign) is the blocked interval. Roots are the
+    closed forms of ``_h_region``; |D - E0| <= tol (module tolerance with b^2/d) counts
+    as D = E0 (T0 itself feasible).
+
+    Args:
+      a1, a2: scalars, start / end angle [rad].
+      b1, b2: scalars, start / end rate [rad/s].
+      rate: scalar, rate bound b [rad/s].
+      accel: scalar, acceleration bound d [rad/s^2].
+    Returns:
+      (t_min, blocked_lo, blocked_hi) [s]; no block gives blocked_lo == blocked_hi
+      == t_min; impossible (|b_i| > b) gives all +inf.
     """
     a1, b1, a2, b2, b, d = common_float(a1, b1, a2, b2, rate, accel)
     r = _rtol(a1)

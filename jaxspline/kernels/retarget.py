@@ -180,8 +180,13 @@ def attitude_rhs(model: AttitudeModel, sigma, omega_rel, accel_body):
     dσ/dt = N(σ) ω̃; dω̃/dt = a + J⁻¹[M_gg − ω × J ω] + ω̃ × ω_o with ω_o = omega0 C e_z,
     ω = ω̃ + ω_o, M_gg = gravity_gradient · 3 omega0² r × J r, r = C e_y.
 
-    Args: sigma (3,) [rad]; omega_rel ω̃ (3,) [rad/s] body x, y, z; accel_body = B u (3,)
-      [rad/s²]. Returns dσ/dt [rad/s], dω̃/dt [rad/s²].
+    Args:
+      model: AttitudeModel.
+      sigma: float [3], pitch, roll, yaw [rad].
+      omega_rel: float [3], ω̃ body x, y, z [rad/s].
+      accel_body: float [3], B u [rad/s²].
+    Returns:
+      (dσ/dt [rad/s], dω̃/dt [rad/s²]), float [3] each.
     """
     J = _inertia_matrix(model.inertia).astype(omega_rel.dtype)
     C = orbital_to_body(sigma)
@@ -238,8 +243,15 @@ def simulate(model: AttitudeModel, sigma_a, omega_a, ctrl: ChannelControl, T, st
     (z, x, y)[k]. RK4 with ``steps`` steps between consecutive switch times (the control
     is constant there, so the scheme keeps its 4th order).
 
-    Args: sigma_a (3,) [rad], omega_a ω̃ (3,) [rad/s], ctrl with (3,) fields, T [s].
-    Returns: (σ(T) [rad], ω̃(T) [rad/s]).
+    Args:
+      model: AttitudeModel.
+      sigma_a: float [3], pitch, roll, yaw at t = 0 [rad].
+      omega_a: float [3], ω̃ at t = 0 [rad/s].
+      ctrl: ChannelControl with float [3] fields (pitch, roll, yaw).
+      T: scalar, duration [s].
+      steps: int, RK4 steps per constant-control segment.
+    Returns:
+      (σ(T) [rad], ω̃(T) [rad/s]), float [3] each.
     """
     sigma_a = jnp.asarray(sigma_a)
     dt = float_dtype_of(sigma_a, omega_a, T)
@@ -430,14 +442,20 @@ def min_peak_retarget(
 
     Args:
       model: :class:`AttitudeModel`.
-      sigma_a, sigma_b: (..., 3) pitch, roll, yaw [rad] at t = 0 and t = T (|roll| < π/2).
-      omega_a, omega_b: (..., 3) ω̃ body x, y, z [rad/s] at t = 0 and t = T.
-      T: [s] > 0, broadcast over the leading axes.
-      tol [rad], rate_tol [rad/s]: convergence tolerances (default 1″ and 1″/s).
-      max_iter: maximum corrections; steps: RK4 steps per constant-control segment;
+      sigma_a, sigma_b: float [..., 3], pitch, roll, yaw [rad] at t = 0 and t = T
+        (|roll| < π/2).
+      omega_a, omega_b: float [..., 3], ω̃ body x, y, z [rad/s] at t = 0 and t = T.
+      T: float [...], duration [s] > 0, broadcast over the leading axes.
+      tol: convergence tolerance on σ(T) [rad] (default 1″).
+      rate_tol: convergence tolerance on ω̃(T) [rad/s] (default 1″/s).
+      max_iter: maximum number of corrections.
+      steps: RK4 steps per constant-control segment.
       method: "picard" (the paper's simple iteration) or "broyden" (quasi-Newton).
-    Returns: :class:`RetargetResult` (check ``converged``).
-    Raises: ValueError naming the argument (shapes, NaN, T <= 0, |roll| >= π/2, model).
+    Returns:
+      :class:`RetargetResult` (check ``converged``).
+    Raises:
+      ValueError: naming the argument (shapes, NaN, T <= 0, |roll| >= π/2, model,
+        method, max_iter).
     """
     if method not in ("picard", "broyden"):
         raise ValueError(f"method must be 'picard' or 'broyden', got {method!r}")

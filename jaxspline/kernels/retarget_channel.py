@@ -99,8 +99,13 @@ def min_peak_channel_kernel(a1, b1, a2, b2, T, rate):
     SPEC §1 for d = d*: apex tA = (T + s Δ/d)/2, t1 = min((rate − s b1)/d, tA),
     t2 = max(T − (rate − s b2)/d, tA).
 
-    Args: a1, a2 [rad]; b1, b2 [rad/s]; T [s] > 0; rate [rad/s] > 0 or inf.
-    Returns: :class:`ChannelControl` (peak [rad/s²], sign, t1 [s], t2 [s]); peak = inf
+    Args:
+      a1, a2: start / end angle [rad] (broadcast together).
+      b1, b2: start / end rate [rad/s].
+      T: duration [s], > 0.
+      rate: rate bound [rad/s], > 0 or inf.
+    Returns:
+      :class:`ChannelControl` (peak [rad/s²], sign, t1 [s], t2 [s]); peak = inf
       (sign 0) if no admissible transfer exists.
     """
     a1, b1, a2, b2, T, rate = jnp.broadcast_arrays(a1, b1, a2, b2, T, rate)
@@ -144,9 +149,15 @@ def _prep(**named):
 def min_peak_channel(a1, b1, a2, b2, T, rate=float("inf")):
     """Minimum peak |f''| for one channel, batched (see :func:`min_peak_channel_kernel`).
 
-    Args (broadcastable): a1, a2 [rad]; b1, b2 [rad/s]; T [s] > 0; rate [rad/s] > 0 or
-      inf (no bound). Returns :class:`ChannelControl` with arrays of the broadcast shape.
-    Raises: ValueError naming the argument for NaN/inf boundary values, T <= 0, rate <= 0.
+    Args:
+      a1, a2: float [...], start / end angle [rad].
+      b1, b2: float [...], start / end rate [rad/s].
+      T: float [...], duration [s], > 0.
+      rate: float [...], rate bound [rad/s], > 0 or inf (no bound).
+    Returns:
+      :class:`ChannelControl` with float [...] fields (the broadcast shape).
+    Raises:
+      ValueError: naming the argument for NaN/inf boundary values, T <= 0, rate <= 0.
     """
     check_positive("T", T)
     check_positive("rate", rate, allow_inf=True)
@@ -197,10 +208,16 @@ def min_peak_linear(angle_a, rate_a, angle_b, rate_b, T, rate=float("inf"), gain
     Channel k: ``f_k'' = gain_k u_k``; the minimum of ``max_t max_k |u_k(t)|`` is
     ``max_k d*_k / |gain_k|`` and the per-channel minimum-peak controls realise it.
 
-    Args: angle_a, angle_b [rad], rate_a, rate_b [rad/s]: arrays with a trailing
-      channel axis; T [s] broadcast over the leading axes; rate [rad/s] bound per channel
-      (inf: none); gain [rad/s² per unit u], nonzero.
-    Returns: (peak [units of u], ChannelControl in rad/s² per channel).
+    Args:
+      angle_a, angle_b: float [..., K], start / end angles per channel [rad].
+      rate_a, rate_b: float [..., K], start / end rates per channel [rad/s].
+      T: float [...], duration [s], broadcast over the leading axes.
+      rate: float [K] or scalar, rate bound per channel [rad/s] (inf: none).
+      gain: float [K] or scalar, [rad/s² per unit u], nonzero.
+    Returns:
+      (peak float [...] [units of u], ChannelControl with float [..., K] fields in rad/s²).
+    Raises:
+      ValueError: gain is zero or not finite, or as :func:`min_peak_channel`.
     """
     check_finite("gain", gain)
     if is_concrete(gain) and (np.asarray(gain) == 0).any():
