@@ -67,7 +67,12 @@ def _xp(*xs):
 def julian_date(when) -> float:
     """Julian date (UTC) of a datetime or ISO-8601 string (naive = UTC).
 
-    Raises ValueError naming the value if it is not a date-time.
+    Args:
+      when: datetime or ISO-8601 string.
+    Returns:
+      float, Julian date [days].
+    Raises:
+      ValueError: naming the value if it is not a date-time.
     """
     if isinstance(when, str):
         text = when.strip()
@@ -85,11 +90,17 @@ def julian_date(when) -> float:
 
 
 def jd_split(epoch_jd: float, t):
-    """Two-part Julian dates ``(jd, fr)`` of ``epoch_jd + t / 86400`` for t [s] (numpy).
+    """Two-part Julian dates ``(jd, fr)`` of ``epoch_jd + t / 86400`` (numpy).
 
     ``jd`` is the epoch's preceding midnight (x.5) and ``fr`` the day fraction from it,
     so ``fr`` keeps float64 resolution of ~1e-11 s over days (SGP4 and GMST take the
     split form; a single float64 Julian date resolves only ~40 microseconds).
+
+    Args:
+      epoch_jd: float, Julian date of the epoch [days].
+      t: float [...], seconds from the epoch.
+    Returns:
+      (jd, fr), float64 [...] each [days].
     """
     t = np.asarray(t, np.float64)
     jd0 = math.floor(epoch_jd - 0.5) + 0.5
@@ -98,11 +109,17 @@ def jd_split(epoch_jd: float, t):
 
 
 def gmst(jd, fr=0.0):
-    """Greenwich mean sidereal time (IAU 1982) [rad] in [0, 2 pi) at Julian date jd + fr.
+    """Greenwich mean sidereal time (IAU 1982) at Julian date jd + fr.
 
     ``GMST = 67310.54841 + (876600 h + 8640184.812866) T + 0.093104 T^2 - 6.2e-6 T^3``
     seconds of time, ``T`` Julian centuries of UT1 (UTC used) from J2000 (Vallado 4th
     ed. eq. 3-45; identical to ``sgp4.propagation.gstime``). numpy float64.
+
+    Args:
+      jd: float [...], Julian date (whole part) [days].
+      fr: float [...], day fraction [days].
+    Returns:
+      float64 [...], GMST [rad] in [0, 2 pi).
     """
     t = ((np.asarray(jd, np.float64) - _JD_J2000) + np.asarray(fr, np.float64)) / _DAYS_PER_CENTURY
     sec = -6.2e-6 * t**3 + 0.093104 * t**2 + (876600.0 * 3600.0 + 8640184.812866) * t + 67310.54841
@@ -110,17 +127,29 @@ def gmst(jd, fr=0.0):
 
 
 def earth_rotation_angle(gmst0, t):
-    """Earth rotation angle ``theta(t) = gmst0 + w_E t`` [rad], t [s] from the epoch (generic).
+    """Earth rotation angle ``theta(t) = gmst0 + w_E t`` (generic: numpy or JAX).
 
     Linear in t: the dropped T^2 term of GMST changes theta by < 1e-12 rad over a day.
+
+    Args:
+      gmst0: float [...], GMST at the epoch [rad].
+      t: float [...], seconds from the epoch.
+    Returns:
+      float [...], theta [rad] (not wrapped).
     """
     return gmst0 + OMEGA_EARTH * t
 
 
 def rot_z(theta, x):
-    """Coordinates of x [..., 3] in a frame rotated by +theta about z (generic).
+    """Coordinates of x in a frame rotated by +theta about z (generic: numpy or JAX).
 
-    ``(c x + s y, -s x + c y, z)``; theta broadcastable to ``x[..., 0]``.
+    ``(c x + s y, -s x + c y, z)``.
+
+    Args:
+      theta: float [...], rotation angle [rad], broadcastable to ``x[..., 0]``.
+      x: float [..., 3], vectors (any unit).
+    Returns:
+      float [..., 3], the rotated coordinates (unit of x).
     """
     xp = _xp(theta, x)
     c, s = xp.cos(theta), xp.sin(theta)
@@ -128,10 +157,16 @@ def rot_z(theta, x):
 
 
 def teme_to_ecef(r, theta, v=None):
-    """TEME position (and velocity) to Earth-fixed by the Earth rotation angle theta (generic).
+    """TEME position (and velocity) to Earth-fixed by the rotation angle (generic: numpy or JAX).
 
-    ``r_ecef = Rz(theta) r``; ``v_ecef = Rz(theta) v - w_E z x r_ecef``. Polar motion
-    ignored. Returns r_ecef, or (r_ecef, v_ecef) when v is given.
+    ``r_ecef = Rz(theta) r``; ``v_ecef = Rz(theta) v - w_E z x r_ecef``. Polar motion ignored.
+
+    Args:
+      r: float [..., 3], TEME position [m].
+      theta: float [...], Earth rotation angle [rad].
+      v: float [..., 3], TEME velocity [m/s], optional.
+    Returns:
+      r_ecef float [..., 3] [m], or (r_ecef, v_ecef [m/s]) when v is given.
     """
     xp = _xp(r, theta, v)
     r_e = rot_z(theta, xp.asarray(r))
@@ -143,16 +178,29 @@ def teme_to_ecef(r, theta, v=None):
 
 
 def ecef_to_teme(r, theta):
-    """Earth-fixed vectors r [..., 3] to TEME: ``Rz(-theta) r`` (generic; directions too)."""
+    """Earth-fixed vectors to TEME: ``Rz(-theta) r`` (generic: numpy or JAX; directions too).
+
+    Args:
+      r: float [..., 3], Earth-fixed vectors (any unit).
+      theta: float [...], Earth rotation angle [rad].
+    Returns:
+      float [..., 3], TEME vectors (unit of r).
+    """
     return rot_z(-theta, r)
 
 
 def geodetic_to_ecef(lat, lon, h=0.0):
-    """WGS84 geodetic latitude, longitude [rad] and height [m] -> Earth-fixed [..., 3] [m].
+    """WGS84 geodetic coordinates to Earth-fixed position (generic: numpy or JAX).
 
     ``N = a / sqrt(1 - e^2 sin^2 lat)``; ``x = (N + h) cos lat cos lon``,
     ``y = (N + h) cos lat sin lon``, ``z = (N (1 - e^2) + h) sin lat`` (Vallado eq. 3-7).
-    Generic.
+
+    Args:
+      lat: float [...], geodetic latitude [rad].
+      lon: float [...], longitude [rad].
+      h: float [...], height above the ellipsoid [m].
+    Returns:
+      float [..., 3], Earth-fixed position [m].
     """
     xp = _xp(lat, lon, h)
     lat, lon, h = xp.asarray(lat), xp.asarray(lon), xp.asarray(h)
@@ -169,9 +217,14 @@ def geodetic_to_ecef(lat, lon, h=0.0):
 
 
 def ecef_to_geodetic(r):
-    """Earth-fixed [..., 3] [m] -> WGS84 (lat [rad], lon [rad], h [m]), generic.
+    """Earth-fixed position to WGS84 geodetic coordinates (generic: numpy or JAX).
 
     Five fixed-point iterations on the latitude: < 1 mm for heights below 1000 km.
+
+    Args:
+      r: float [..., 3], Earth-fixed position [m].
+    Returns:
+      (lat [rad], lon [rad], h [m]), float [...] each.
     """
     xp = _xp(r)
     r = xp.asarray(r)
@@ -189,13 +242,19 @@ def ecef_to_geodetic(r):
 
 
 def sun_direction(jd, fr=0.0):
-    """Unit vector to the Sun [..., 3], mean equator and equinox of date (~TEME), ~0.01 deg.
+    """Unit vector to the Sun, mean equator and equinox of date (~TEME), ~0.01 deg.
 
     Astronomical Almanac low-precision formula: mean longitude
     ``L = 280.460 + 36000.771 T``, mean anomaly ``M = 357.5291092 + 35999.05034 T``,
     ecliptic longitude ``L + 1.914666471 sin M + 0.019994643 sin 2M``, obliquity
     ``23.439291 - 0.0130042 T`` [deg], T Julian centuries from J2000 (UTC ~ TT).
     Reference: Vallado (4th ed.) algorithm 29. numpy float64.
+
+    Args:
+      jd: float [...], Julian date (whole part) [days].
+      fr: float [...], day fraction [days].
+    Returns:
+      float64 [..., 3], unit Sun direction.
     """
     t = ((np.asarray(jd, np.float64) - _JD_J2000) + np.asarray(fr, np.float64)) / _DAYS_PER_CENTURY
     mean_lon = np.radians(280.460 + 36000.771 * t)
@@ -206,21 +265,33 @@ def sun_direction(jd, fr=0.0):
 
 
 def angle_between(u, v):
-    """Angle [rad] between vectors u and v [..., 3]: ``atan2(|u x v|, u . v)`` (generic).
+    """Angle between vectors: ``atan2(|u x v|, u . v)`` (generic: numpy or JAX).
 
     Accurate near 0 and pi, unlike ``arccos`` of the normalized dot product.
+
+    Args:
+      u: float [..., 3], vectors (any unit, not necessarily unit length).
+      v: float [..., 3], vectors, broadcast against u.
+    Returns:
+      float [...], angle [rad] in [0, pi].
     """
     xp = _xp(u, v)
     return xp.arctan2(xp.linalg.norm(xp.cross(u, v), axis=-1), xp.sum(u * v, axis=-1))
 
 
 def in_shadow(r_sat, sun_hat, radius=R_EARTH):
-    """True where a satellite is in the cylindrical Earth shadow (generic).
+    """True where a satellite is in the cylindrical Earth shadow (generic: numpy or JAX).
 
     In shadow iff ``r . s < 0`` (behind the Earth relative to the Sun) and the
-    distance to the Earth-Sun line ``|r - (r . s) s| < radius``. ``r_sat`` [..., 3]
-    [m] and ``sun_hat`` (unit, broadcastable) in the same inertial frame.
+    distance to the Earth-Sun line ``|r - (r . s) s| < radius``.
     Reference: aeossp_standard RULES.md rule 8.
+
+    Args:
+      r_sat: float [..., 3], satellite position [m], inertial frame.
+      sun_hat: float [..., 3], unit Sun direction in the same frame (broadcastable).
+      radius: float, shadow cylinder radius [m] (default the Earth's equatorial radius).
+    Returns:
+      bool [...].
     """
     xp = _xp(r_sat, sun_hat)
     proj = xp.sum(r_sat * sun_hat, axis=-1)
@@ -229,10 +300,17 @@ def in_shadow(r_sat, sun_hat, radius=R_EARTH):
 
 
 def sun_elevation(lat, lon, sun_ecef):
-    """Elevation [rad] of the Sun over the geodetic horizon at (lat, lon) [rad] (generic).
+    """Elevation of the Sun over the geodetic horizon at (lat, lon) (generic: numpy or JAX).
 
     ``asin(up . s)`` with ``up`` the geodetic vertical and ``s`` the unit Sun direction
     in Earth-fixed coordinates (``teme_to_ecef(sun_direction(...), theta)``).
+
+    Args:
+      lat: float [...], geodetic latitude [rad].
+      lon: float [...], longitude [rad].
+      sun_ecef: float [..., 3], unit Sun direction, Earth-fixed.
+    Returns:
+      float [...], elevation [rad] in [-pi/2, pi/2].
     """
     xp = _xp(lat, lon, sun_ecef)
     up = xp.stack([xp.cos(lat) * xp.cos(lon), xp.cos(lat) * xp.sin(lon), xp.sin(lat)], -1)

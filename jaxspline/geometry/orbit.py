@@ -98,10 +98,17 @@ class HermiteOrbit(NamedTuple):
 
 
 def sso_inclination(altitude: float) -> float:
-    """Inclination [rad] of a circular Sun-synchronous orbit at ``altitude`` [m].
+    """Inclination of a circular Sun-synchronous orbit.
 
     cos i = -W'_sun / (1.5 n J2 (R/a)^2), with W'_sun = 2 pi / tropical year,
     n = sqrt(mu / a^3), a = R + h (Vallado eq. 9-41). 600 km -> 97.79 deg.
+
+    Args:
+      altitude: float, height above the equatorial radius [m].
+    Returns:
+      float, inclination [rad].
+    Raises:
+      ValueError: the altitude admits no Sun-synchronous orbit.
     """
     check_positive("altitude", altitude)
     a = R_EARTH + float(altitude)
@@ -119,10 +126,19 @@ def circular_orbit(
     arg_lat: float = 0.0,
     j2_drift: bool = True,
 ) -> CircularOrbit:
-    """Build a :class:`CircularOrbit` from elements (angles in rad, altitude in m).
+    """Build a :class:`CircularOrbit` from elements.
 
-    ``inclination=None`` gives the Sun-synchronous inclination (:func:`sso_inclination`).
-    ``j2_drift`` adds the secular nodal regression W' = -1.5 n J2 (R/a)^2 cos i.
+    Args:
+      altitude: float, height above the equatorial radius [m].
+      inclination: float [rad] in [0, pi]; None gives the Sun-synchronous inclination
+        (:func:`sso_inclination`).
+      raan: float, right ascension of the ascending node at t = 0 [rad].
+      arg_lat: float, argument of latitude at t = 0 [rad].
+      j2_drift: add the secular nodal regression W' = -1.5 n J2 (R/a)^2 cos i.
+    Returns:
+      CircularOrbit.
+    Raises:
+      ValueError: inclination outside [0, pi] or no Sun-synchronous orbit at altitude.
     """
     check_positive("altitude", altitude)
     for name, val in (("raan", raan), ("arg_lat", arg_lat)):
@@ -148,10 +164,24 @@ def circular_orbit_over(
     descending: bool = True,
     j2_drift: bool = True,
 ) -> CircularOrbit:
-    """A circular orbit whose sub-satellite point is at geocentric (lat, lon) [rad] at time t [s].
+    """A circular orbit whose sub-satellite point is at geocentric (lat, lon) at time t.
 
     sin(lat) = sin i sin u gives u (ascending or descending branch); the node follows
     from lon + theta(t) = W + atan2(cos i sin u, cos u), theta(t) = gmst0 + w_E t.
+
+    Args:
+      lat: float, geocentric latitude [rad].
+      lon: float, longitude [rad].
+      t: float, seconds from the epoch.
+      gmst0: float, GMST at the epoch [rad].
+      altitude: float [m].
+      inclination: float [rad]; None gives the Sun-synchronous inclination.
+      descending: pass over the point on the descending branch.
+      j2_drift: as in :func:`circular_orbit`.
+    Returns:
+      CircularOrbit.
+    Raises:
+      ValueError: |lat| is not reachable with the inclination.
     """
     base = circular_orbit(altitude, inclination, 0.0, 0.0, j2_drift)
     inc = float(base.inclination)
@@ -228,10 +258,17 @@ def _hermite_basis(orb: HermiteOrbit, t, deriv: bool, sat=None):
 
 
 def orbit_position(orbit, t, sat=None):
-    """Satellite position [..., 3] [m] in ECI (TEME) at time(s) t [s]; differentiable in t.
+    """Satellite position in ECI (TEME) at times t; differentiable in t.
 
-    ``sat`` selects the satellite of a multi-satellite :class:`HermiteOrbit` (int,
-    broadcastable with t); None for a single orbit.
+    Args:
+      orbit: CircularOrbit or HermiteOrbit.
+      t: float [...], seconds from the epoch.
+      sat: int [...] broadcastable with t, selects the satellite of a multi-satellite
+        :class:`HermiteOrbit`; None for a single orbit.
+    Returns:
+      float [..., 3], position [m].
+    Raises:
+      ValueError: orbit is neither a CircularOrbit nor a HermiteOrbit.
     """
     if isinstance(orbit, HermiteOrbit):
         return _hermite_basis(orbit, t, False, sat)
@@ -241,11 +278,19 @@ def orbit_position(orbit, t, sat=None):
 
 
 def orbit_state(orbit, t, sat=None):
-    """(position [..., 3] [m], velocity [..., 3] [m/s]) in ECI at time(s) t [s].
+    """Position and velocity in ECI at times t.
 
     The velocity is the analytic time derivative of :func:`orbit_position` (so that
-    pointing kernels need no nested autodiff for it); differentiable in t. ``sat`` as
-    in :func:`orbit_position`.
+    pointing kernels need no nested autodiff for it); differentiable in t.
+
+    Args:
+      orbit: CircularOrbit or HermiteOrbit.
+      t: float [...], seconds from the epoch.
+      sat: as in :func:`orbit_position`.
+    Returns:
+      (position float [..., 3] [m], velocity float [..., 3] [m/s]).
+    Raises:
+      ValueError: orbit is neither a CircularOrbit nor a HermiteOrbit.
     """
     if isinstance(orbit, HermiteOrbit):
         return _hermite_basis(orbit, t, False, sat), _hermite_basis(orbit, t, True, sat)
@@ -312,11 +357,22 @@ def _gravity_j2(r):
 
 
 def tle_orbit(line1: str, line2: str, epoch_jd: float, t_end: float, step: float = 20.0):
-    """Tabulate one TLE with SGP4 on [-step, t_end + step] s from ``epoch_jd`` (HermiteOrbit).
+    """Tabulate one TLE with SGP4 on [-step, t_end + step] s from ``epoch_jd``.
 
     Knots every ``step`` seconds; knot accelerations from the two-body + J2 field,
     so the interpolant is a differentiable JAX function of t. Interpolation error
     against SGP4 is below 1 m for step <= 30 s at LEO.
+
+    Args:
+      line1: TLE line 1.
+      line2: TLE line 2.
+      epoch_jd: float, Julian date of t = 0 [days].
+      t_end: float, end of the span [s from the epoch].
+      step: float, knot spacing [s].
+    Returns:
+      HermiteOrbit (one satellite).
+    Raises:
+      ValueError: the lines cannot be parsed or SGP4 reports an error in the span.
     """
     check_positive("t_end", t_end)
     check_positive("step", step)
