@@ -78,7 +78,15 @@ def aim_params(target_ecef, direction_ecef=None, speed=0.0):
     ``[x0, y0, z0, dx, dy, dz, speed, is_strip]``: start point (ECEF, m), unit ground
     direction at the start (ECEF), ground speed of the aim point [m/s], and 1.0 for
     a strip (yaw from the strip tangent) or 0.0 for a point target (yaw from the
-    relative motion). ``direction_ecef=None`` is a point target.
+    relative motion).
+
+    Args:
+      target_ecef: float [..., 3], start point, Earth-fixed [m].
+      direction_ecef: float [..., 3], unit ground direction, Earth-fixed; None is a
+        point target.
+      speed: float [...], ground speed of the aim point [m/s] (0 for a point target).
+    Returns:
+      float [..., 8], the aim law p.
     """
     g0 = jnp.asarray(target_ecef)
     if direction_ecef is None:
@@ -158,16 +166,22 @@ def _angles_from(n, s):
 
 
 def aim_angles(scene: Scene, p, t0, t, sat=None):
-    """Kernel: [roll, pitch, yaw, off_nadir] [rad] at time t [s] for aim law p [8] started at t0.
+    """Kernel: [roll, pitch, yaw, off_nadir] at time t for aim law p started at t0.
 
     off_nadir is pi when the aim point is below its horizon (seen through the Earth).
-
-    One candidate (scalars t, t0; p of shape [8] from :func:`aim_params`); the aim
-    point moves along its great circle at ground speed p[6] from t0. Branchless in
-    the point/strip switch; differentiable in t and t0. The aim point covers
+    The aim point moves along its great circle at ground speed p[6] from t0. Branchless
+    in the point/strip switch; differentiable in t and t0. The aim point covers
     p[6] * (t - t0) metres of arc on the sphere of radius |g0| through the start point
-    (within ~0.2 km of the ellipsoid for a 100 km strip). ``sat``: satellite index of a
-    multi-satellite orbit table (None for one orbit).
+    (within ~0.2 km of the ellipsoid for a 100 km strip).
+
+    Args:
+      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
+      p: float [8], aim law from :func:`aim_params`.
+      t0: scalar, start of the aim law [s from the epoch].
+      t: scalar, time [s from the epoch].
+      sat: int, satellite index of a multi-satellite orbit table (None for one orbit).
+    Returns:
+      float [4], [roll, pitch, yaw, off_nadir] [rad].
     """
 
     los, los_dot, tan_o, sees = _frame_los(scene, p, t0, t, sat)
@@ -180,11 +194,20 @@ def aim_angles(scene: Scene, p, t0, t, sat=None):
 
 
 def aim_state(scene: Scene, p, t0, t, sat=None):
-    """Kernel: (angle, rate, accel), each [3] (roll, pitch, yaw), plus off-nadir, at time t.
+    """Kernel: (angle, rate, accel) of (roll, pitch, yaw), plus off-nadir, at time t.
 
     rate = d(angle)/dt and accel = d^2(angle)/dt^2 with t0 fixed, by nested
-    ``jax.jvp`` of :func:`aim_angles`. Units rad, rad/s, rad/s^2.
-    Returns (angle [3], rate [3], accel [3], off_nadir scalar).
+    ``jax.jvp`` of :func:`aim_angles`.
+
+    Args:
+      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
+      p: float [8], aim law from :func:`aim_params`.
+      t0: scalar, start of the aim law [s from the epoch].
+      t: scalar, time [s from the epoch].
+      sat: int, satellite index of a multi-satellite orbit table (None for one orbit).
+    Returns:
+      (angle float [3] [rad], rate float [3] [rad/s], accel float [3] [rad/s^2],
+      off_nadir scalar [rad]).
     """
 
     def f(tt):
@@ -200,13 +223,21 @@ def aim_state(scene: Scene, p, t0, t, sat=None):
 def aim_geometry(scene: Scene, p, t0, t, sat=None):
     """Kernel: imaging geometry of aim law p at time t, without attitude angles.
 
-    Returns ``(off_nadir, elevation_sine, los, nadir)``: the off-nadir angle [rad]
-    ``atan2(|d x n|, d . n)`` between the line of sight ``d = g - r`` and nadir
-    ``n = -r``; the sine of the aim point's geocentric elevation
+    The off-nadir angle is ``atan2(|d x n|, d . n)`` between the line of sight
+    ``d = g - r`` and nadir ``n = -r``; the elevation sine is
     ``(r - g) . g / (|r - g| |g|)`` (> 0 iff the satellite is above the aim point's
-    horizon, aeossp RULES.md rule 5); and the unit line of sight and unit nadir [3]
-    in ECI (TEME). This is what rest-to-rest eigen-axis slews need (the angle between
-    two lines of sight); one candidate, no autodiff, cheap.
+    horizon, aeossp RULES.md rule 5). This is what rest-to-rest eigen-axis slews need
+    (the angle between two lines of sight); one candidate, no autodiff, cheap.
+
+    Args:
+      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
+      p: float [8], aim law from :func:`aim_params`.
+      t0: scalar, start of the aim law [s from the epoch].
+      t: scalar, time [s from the epoch].
+      sat: int, satellite index of a multi-satellite orbit table (None for one orbit).
+    Returns:
+      (off_nadir scalar [rad], elevation_sine scalar, los float [3], nadir float [3]):
+      the unit line of sight and unit nadir in ECI (TEME).
     """
     r, _ = orbit_state(scene.orbit, t, sat)
     theta = earth_rotation_angle(scene.gmst0, t)
@@ -266,28 +297,49 @@ def _check_target(target_ecef, t):
 
 
 def pointing_angles(scene: Scene, target_ecef, t):
-    """[roll, pitch, yaw] [..., 3] [rad] tracking a fixed ground point at time(s) t [s].
+    """[roll, pitch, yaw] tracking a fixed ground point at times t.
 
-    ``target_ecef`` [..., 3] [m] (Earth-fixed); broadcasts with t. See the module
-    docstring for the frames and the yaw law (point target: yaw from relative motion).
+    See the module docstring for the frames and the yaw law (point target: yaw from
+    relative motion).
+
+    Args:
+      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
+      target_ecef: float [..., 3], ground point, Earth-fixed [m]; broadcasts with t.
+      t: float [...], seconds from the epoch.
+    Returns:
+      float [..., 3], [roll, pitch, yaw] [rad].
     """
     target, t = _check_target(target_ecef, t)
     return _point_angles_batched(scene, target, t)[..., :3]
 
 
 def off_nadir(scene: Scene, target_ecef, t):
-    """Off-nadir angle [rad] of the line of sight to a ground point: atan2(|n x z_o|, n . z_o).
+    """Off-nadir angle of the line of sight to a ground point: atan2(|n x z_o|, n . z_o).
 
     A point below its horizon (satellite behind the Earth: (r - g) . g <= 0) gets pi.
+
+    Args:
+      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
+      target_ecef: float [..., 3], ground point, Earth-fixed [m]; broadcasts with t.
+      t: float [...], seconds from the epoch.
+    Returns:
+      float [...], off-nadir angle [rad].
     """
     target, t = _check_target(target_ecef, t)
     return _offn_batched(scene, target, t)
 
 
 def pointing_state(scene: Scene, target_ecef, t):
-    """(angle, rate, accel) of [roll, pitch, yaw] tracking a ground point, each [..., 3].
+    """(angle, rate, accel) of [roll, pitch, yaw] tracking a ground point.
 
-    Rates [rad/s] and accelerations [rad/s^2] are exact derivatives by ``jax.jvp``.
+    Rates and accelerations are exact derivatives by ``jax.jvp``.
+
+    Args:
+      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
+      target_ecef: float [..., 3], ground point, Earth-fixed [m]; broadcasts with t.
+      t: float [...], seconds from the epoch.
+    Returns:
+      (angle [rad], rate [rad/s], accel [rad/s^2]), float [..., 3] each.
     """
     target, t = _check_target(target_ecef, t)
     out = _point_state_batched(scene, target, t)
@@ -295,9 +347,16 @@ def pointing_state(scene: Scene, target_ecef, t):
 
 
 def off_nadir_flat(scene: Scene, targets_ecef, t):
-    """Off-nadir [K] for K (target [K, 3], time [K]) pairs (numpy in/out, float64 if enabled).
+    """Off-nadir angles of K (target, time) pairs (numpy in/out, float64 if enabled).
 
     Pads K to a power of two (>= 1024) so repeated calls reuse one compiled kernel.
+
+    Args:
+      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
+      targets_ecef: float [K, 3], ground points, Earth-fixed [m].
+      t: float [K], seconds from the epoch.
+    Returns:
+      numpy float [K], off-nadir angles [rad].
     """
     targets = np.asarray(targets_ecef, np.float64).reshape(-1, 3)
     t = np.broadcast_to(np.asarray(t, np.float64), targets.shape[:1])
@@ -310,7 +369,14 @@ def off_nadir_flat(scene: Scene, targets_ecef, t):
 
 
 def boresight(roll, pitch):
-    """Unit boresight [..., 3] in the orbital frame: (cos r sin p, -sin r, cos r cos p)."""
+    """Unit boresight in the orbital frame: (cos r sin p, -sin r, cos r cos p).
+
+    Args:
+      roll: float [...], roll angle r [rad].
+      pitch: float [...], pitch angle p [rad].
+    Returns:
+      float [..., 3], unit vector.
+    """
     roll, pitch = jnp.asarray(roll), jnp.asarray(pitch)
     return jnp.stack(
         [jnp.cos(roll) * jnp.sin(pitch), -jnp.sin(roll), jnp.cos(roll) * jnp.cos(pitch)], -1
@@ -318,13 +384,21 @@ def boresight(roll, pitch):
 
 
 def visibility_windows(scene: Scene, targets_ecef, t_begin, t_end, max_off_nadir, step=10.0):
-    """Intervals where each ground point is within ``max_off_nadir`` [rad] of nadir.
+    """Intervals where each ground point is within ``max_off_nadir`` of nadir.
 
     The off-nadir angle is sampled every ``step`` seconds on [t_begin, t_end]; each
     sign change of ``off_nadir - max_off_nadir`` is refined by 50 bisection steps
     (vectorized over all crossings). A window narrower than ``step`` can be missed.
 
-    Returns a list (one per target) of float64 arrays [W, 2] of (start, end) [s].
+    Args:
+      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
+      targets_ecef: float [K, 3], ground points, Earth-fixed [m].
+      t_begin: float, start of the search [s from the epoch].
+      t_end: float, end of the search [s from the epoch].
+      max_off_nadir: float, off-nadir limit [rad].
+      step: float, sampling step [s].
+    Returns:
+      list of K float64 arrays [W, 2] of (start, end) [s from the epoch].
     """
     check_positive("max_off_nadir", max_off_nadir)
     check_positive("step", step)
