@@ -82,7 +82,26 @@ class RouteSpec(NamedTuple):
 def make_route_spec(
     kind, lat, lon, azimuth=0.0, length=0.0, duration=0.0, value=1.0, t0_lo=-np.inf, t0_hi=np.inf
 ) -> RouteSpec:
-    """Validate and broadcast route fields into a RouteSpec (ValueError names the field)."""
+    """Validate and broadcast route fields into a RouteSpec.
+
+    All fields broadcast together (scalars allowed).
+
+    Args:
+      kind: int [R], POINT (0) or STRIP (1).
+      lat: float [R], geodetic latitude of the start point [rad], in [-pi/2, pi/2].
+      lon: float [R], longitude of the start point [rad].
+      azimuth: float [R], strip direction, clockwise from north [rad].
+      length: float [R], strip length [m], > 0 for strips.
+      duration: float [R], imaging time of a point target [s], > 0 for points.
+      value: float [R], priority, > 0.
+      t0_lo: float [R], earliest start [s from the epoch] (-inf: free).
+      t0_hi: float [R], latest start [s from the epoch] (+inf: free).
+    Returns:
+      RouteSpec with numpy [R] fields.
+    Raises:
+      ValueError: naming the field (kind, not finite, lat range, value, length,
+        duration, t0_lo > t0_hi, shapes).
+    """
     kind = np.atleast_1d(np.asarray(kind, dtype=np.int64))
     if not np.isin(kind, (POINT, STRIP)).all():
         raise ValueError(f"kind must be 0 (point) or 1 (strip), got {kind.tolist()}")
@@ -122,7 +141,15 @@ def make_route_spec(
 
 
 def strip_direction(lat, lon, azimuth):
-    """Unit ECEF ground direction at (lat, lon) [rad] for an azimuth [rad] (from north, cw)."""
+    """Unit ECEF ground direction at (lat, lon) for an azimuth (from north, clockwise).
+
+    Args:
+      lat: float [...], geodetic latitude [rad].
+      lon: float [...], longitude [rad].
+      azimuth: float [...], direction clockwise from north [rad].
+    Returns:
+      float [..., 3], unit direction, Earth-fixed.
+    """
     lat, lon, az = (np.asarray(x, np.float64) for x in (lat, lon, azimuth))
     north = np.stack([-np.sin(lat) * np.cos(lon), -np.sin(lat) * np.sin(lon), np.cos(lat)], -1)
     east = np.stack([-np.sin(lon), np.cos(lon), np.zeros_like(lon)], -1)
@@ -150,10 +177,18 @@ def _states_jit(scene, params, duration, route, t0):
 
 
 def sample_aim_states(scene, p, t0, t, chunk=8192, desc=None):
-    """aim_state at M (p [M, 8], t0 [M], t [M]) in padded chunks (one compiled shape).
+    """``aim_state`` at M (p, t0, t) triples in padded chunks (one compiled shape).
 
-    Returns numpy (angle, rate, accel [M, 3], off_nadir [M]); ``desc`` labels a
-    progress bar (None: none).
+    Args:
+      scene: Scene.
+      p: float [M, 8], aim laws.
+      t0: float [M], aim-law start times [s from the epoch].
+      t: float [M], sample times [s from the epoch].
+      chunk: int, rows per compiled call.
+      desc: label of a progress bar (None: none).
+    Returns:
+      numpy (angle [rad], rate [rad/s], accel [rad/s^2]), float [M, 3] each, and
+      off_nadir float [M] [rad].
     """
     if t.size == 0:
         z = np.zeros((0, 3))
@@ -167,10 +202,17 @@ def sample_aim_states(scene, p, t0, t, chunk=8192, desc=None):
 
 
 def sample_scans(routes, route, t0, speed, t):
-    """Pointing-law (angle, rate, accel [M, 3], off_nadir [M]) of routes scanned from t0 at t.
+    """Pointing-law states of routes scanned from t0, sampled at t (numpy in/out).
 
-    ``route`` [M] route indices, ``t0`` [M] start times [s], ``speed`` [M] strip ground
-    speeds [m/s] (ignored for points), ``t`` [M] sample times [s]. numpy in/out.
+    Args:
+      routes: RouteSet.
+      route: int [M], route indices.
+      t0: float [M], scan start times [s from the epoch].
+      speed: float [M], strip ground speeds [m/s] (ignored for points).
+      t: float [M], sample times [s from the epoch].
+    Returns:
+      (angle [rad], rate [rad/s], accel [rad/s^2]) float [M, 3] each, and off_nadir
+      float [M] [rad].
     """
     route = np.asarray(route, np.int64)
     p = np.array(routes.params)[route]
@@ -254,11 +296,23 @@ def make_route_set(
     - A strip whose direction opposes the satellite's ground motion (negative dot
       product of its ECI tangent with the satellite velocity at the start point's
       closest approach) is scanned from its other end (push-broom images forward).
-    - Window: the start point must be within ``max_off_nadir`` [rad]; t0 ranges over
+    - Window: the start point must be within ``max_off_nadir``; t0 ranges over
       the longest visibility interval of the start point in [t_begin, t_end],
       intersected with the user window, with t0_max reduced by the route's duration
       at ``nominal_speed`` (strips). Invisible routes get (+inf, -inf).
+
     The ``scan_ok`` check of :func:`build_route_options` covers the rest of the scan.
+
+    Args:
+      scene: Scene.
+      spec: RouteSpec of R routes.
+      t_begin: float, start of the planning horizon [s from the epoch].
+      t_end: float, end of the planning horizon [s from the epoch].
+      max_off_nadir: float, off-nadir limit [rad].
+      nominal_speed: float, strip ground speed used for the windows [m/s].
+      step: float, visibility sampling step [s].
+    Returns:
+      RouteSet of R routes.
     """
     from jaxspline.geometry.pointing import aim_params, visibility_windows
 
@@ -402,7 +456,14 @@ class TabulatedRouteModel(NamedTuple):
 def exact_states(routes: RouteSet, route, t0, speed):
     """Exact boundary states of routes started at t0 with strip speeds (numpy, chunked kernel).
 
-    Returns (t_end [K], start_angle, start_rate, end_angle, end_rate [K, 3]).
+    Args:
+      routes: RouteSet.
+      route: int [K], route indices.
+      t0: float [K], start times [s from the epoch].
+      speed: float [K], strip ground speeds [m/s] (ignored for points).
+    Returns:
+      (t_end float [K] [s from the epoch], start_angle [rad], start_rate [rad/s],
+      end_angle [rad], end_rate [rad/s], float [K, 3] each).
     """
     route = np.asarray(route, np.int64)
     t0 = np.asarray(t0, np.float64)
@@ -425,7 +486,18 @@ def exact_states(routes: RouteSet, route, t0, speed):
 
 
 def tabulate_route_model(routes: RouteSet, route, speed, knots: int = 129) -> TabulatedRouteModel:
-    """Tabulate the exact states of ``route`` [P] (strips at ``speed`` [P] m/s) on their windows."""
+    """Tabulate the exact states of some routes on their windows.
+
+    Args:
+      routes: RouteSet.
+      route: int [P], the routes to tabulate.
+      speed: float [P] (or scalar), strip ground speeds [m/s].
+      knots: int, M knots per window.
+    Returns:
+      TabulatedRouteModel.
+    Raises:
+      ValueError: a tabulated route has an empty window.
+    """
     route = np.asarray(route, np.int64)
     speed = np.broadcast_to(np.asarray(speed, np.float64), route.shape)
     lo = np.asarray(routes.t0_min)[route]
