@@ -73,29 +73,66 @@ class RouteOptions(NamedTuple):
 
 
 def take_options(options: RouteOptions, idx) -> RouteOptions:
-    """The options at positions ``idx`` (numpy fancy index or mask); None fields stay None."""
+    """The options at positions ``idx``; None fields stay None.
+
+    Args:
+      options: RouteOptions of N options.
+      idx: numpy fancy index (int [M]) or mask (bool [N]).
+    Returns:
+      RouteOptions with numpy fields of M rows.
+    """
     return type(options)(*(None if x is None else np.asarray(x)[idx] for x in options))
 
 
 class RouteModel(Protocol):
     """A differentiable map from route start times to boundary states (for refinement).
 
-    ``states(route, t0)`` takes int route indices [K] and start times t0 [K] [s]
-    and returns ``(t_end [K], start_angle [K, C], start_rate [K, C],
-    end_angle [K, C], end_rate [K, C])``. It must be jit-able and differentiable
-    in ``t0``. ``window(route)`` returns ``(t0_min [K], t0_max [K])`` and
-    ``value_of(route)`` the value [K].
+    Implemented by :class:`jaxspline.geometry.routes.RouteSet` (exact) and
+    :class:`jaxspline.geometry.routes.TabulatedRouteModel` (interpolated).
     """
 
-    def states(self, route, t0): ...
+    def states(self, route, t0):
+        """Boundary states of routes started at t0; jit-able, differentiable in ``t0``.
 
-    def window(self, route): ...
+        Args:
+          route: int [K], route indices.
+          t0: float [K], start times [s from the epoch].
+        Returns:
+          (t_end float [K] [s], start_angle [rad], start_rate [rad/s], end_angle [rad],
+          end_rate [rad/s], float [K, C] each).
+        """
+        ...
 
-    def value_of(self, route): ...
+    def window(self, route):
+        """Start-time windows of routes.
+
+        Args:
+          route: int [K], route indices.
+        Returns:
+          (t0_min, t0_max), float [K] each [s from the epoch].
+        """
+        ...
+
+    def value_of(self, route):
+        """Values (priorities) of routes.
+
+        Args:
+          route: int [K], route indices.
+        Returns:
+          float [K].
+        """
+        ...
 
 
 def options_dtype(options: RouteOptions):
-    """Floating dtype the engine computes in: that of ``options.start_angle``."""
+    """Floating dtype the engine computes in: that of ``options.start_angle``.
+
+    Args:
+      options: RouteOptions.
+    Returns:
+      a JAX floating dtype (JAX's default float when ``start_angle`` is not floating;
+      float64 becomes float32 when x64 is off).
+    """
     dt = jnp.result_type(options.start_angle)
     if not jnp.issubdtype(dt, jnp.floating):
         return jnp.result_type(float)
@@ -103,11 +140,16 @@ def options_dtype(options: RouteOptions):
 
 
 def validate_options(options: RouteOptions, name: str = "options") -> int:
-    """Eagerly check shapes and values of a RouteOptions table; return C.
+    """Eagerly check shapes and values of a RouteOptions table.
 
-    Raises ValueError naming the field when shapes disagree (N options,
-    C channels), times are not finite, ``t_end < t_start`` or a boundary state is
-    NaN.
+    Args:
+      options: RouteOptions of N options and C channels.
+      name: argument name used in the error messages.
+    Returns:
+      int, the number of channels C.
+    Raises:
+      ValueError: naming the field when shapes disagree (N options, C channels),
+        times are not finite, ``t_end < t_start`` or a boundary state is NaN.
     """
     if not isinstance(options, RouteOptions):
         raise ValueError(f"{name} must be a RouteOptions, got {type(options).__name__}")
@@ -140,11 +182,15 @@ def validate_options(options: RouteOptions, name: str = "options") -> int:
 
 
 class OptionInfo(NamedTuple):
-    """Per-option side data of :func:`build_route_options` (numpy arrays [N]).
+    """Per-option side data of :func:`build_route_options` (numpy arrays).
 
-    speed: ground scan speed [m/s] (0 for points); t0: start time [s];
-    peak_rate, peak_accel: [N, C] max |rate| [rad/s], |accel| [rad/s^2] during the scan;
-    max_off_nadir: [N] [rad]; sun_elevation: [N] at the start point and t0 [rad].
+    Attributes:
+      speed: float [N], ground scan speed [m/s] (0 for points).
+      t0: float [N], scan start time [s from the epoch].
+      peak_rate: float [N, C], max |rate| during the scan [rad/s].
+      peak_accel: float [N, C], max |accel| during the scan [rad/s^2].
+      max_off_nadir: float [N], largest off-nadir angle during the scan [rad].
+      sun_elevation: float [N], Sun elevation at the start point and t0 [rad].
     """
 
     speed: np.ndarray
