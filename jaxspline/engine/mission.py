@@ -223,9 +223,27 @@ def make_targets(
     sensor="",
     name=None,
 ) -> Targets:
-    """Validate and broadcast target fields into :class:`Targets` (ValueError names the field).
+    """Validate and broadcast target fields into :class:`Targets`.
 
-    Angles in radians, lengths in metres, times in seconds from the epoch.
+    All fields broadcast together to R targets (scalars allowed).
+
+    Args:
+      kind: int [R], POINT (0) or STRIP (1).
+      lat: float [R], geodetic latitude of the start point [rad], in [-pi/2, pi/2].
+      lon: float [R], longitude of the start point [rad].
+      alt: float [R], height above the WGS84 ellipsoid [m].
+      duration: float [R], imaging time of a point [s], > 0 for points (0 kept for strips).
+      length: float [R], strip length [m], > 0 for strips (0 kept for points).
+      azimuth: float [R], strip direction, clockwise from north [rad].
+      value: float [R], priority, > 0.
+      t_lo: float [R], imaging window start [s from the epoch] (-inf: free).
+      t_hi: float [R], imaging window end [s from the epoch] (+inf: free), >= t_lo.
+      sensor: str [R], required sensor type ("" = any).
+      name: str [R]; None gives "t0", "t1", ...
+    Returns:
+      Targets.
+    Raises:
+      ValueError: naming the target and field (``targets[i].field``) or the shapes.
     """
     kind = np.atleast_1d(np.asarray(kind, dtype=np.int64))
     num = {

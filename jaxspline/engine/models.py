@@ -109,7 +109,15 @@ def flex_tau(sat) -> float:
 
 
 def slew_table(sat, gap_margin: float = 0.0, size: int = _TABLE_SIZE) -> SlewTable:
-    """Tabulate :func:`slew_time` of a rest-to-rest satellite (see module docstring)."""
+    """Tabulate :func:`slew_time` of a rest-to-rest satellite (see module docstring).
+
+    Args:
+      sat: Satellite with a rest-to-rest model.
+      gap_margin: float, extra time added to every slew [s].
+      size: int N, the table has N + 1 entries at theta_k = pi (k/N)^2.
+    Returns:
+      SlewTable, made non-decreasing in the angle.
+    """
     theta = math.pi * (np.arange(size + 1) / size) ** 2
     t = slew_time(sat, theta, gap_margin)
     return SlewTable(np.maximum.accumulate(t), size)
@@ -145,11 +153,19 @@ def pair_requirements(sat, options, src, dst, table: SlewTable | None = None):
 
 
 def first_requirements(sat, options, idx, table: SlewTable | None = None):
-    """Required time [s] before option idx as the satellite's first observation (inf: no).
+    """Required time before each option as the satellite's first observation.
 
     Rest-to-rest models slew from nadir (``start_nadir``) at the option's start; the
     per-channel model starts at t = 0 at rest with zero angles and must reach the
     option's start state in exactly ``t_start``.
+
+    Args:
+      sat: Satellite.
+      options: RouteOptions.
+      idx: int [K], option indices.
+      table: SlewTable of ``sat`` (rest-to-rest models).
+    Returns:
+      numpy float [K], required time [s]; inf where the option cannot come first.
     """
     idx = np.asarray(idx, np.int64)
     t0 = np.asarray(options.t_start)[idx]
@@ -171,7 +187,7 @@ def first_requirements(sat, options, idx, table: SlewTable | None = None):
 
 
 def far_gap(sat, options, idx, nadir_rate: float, table: SlewTable | None = None) -> float:
-    """A gap [s] beyond which every transition between options idx of ``sat`` is feasible.
+    """A gap beyond which every transition between options idx of ``sat`` is feasible.
 
     per_channel: with every channel's angles (incl. the initial 0) inside a range R_c
     and rates bounded by b_c, a transfer can brake to rest (b/d), cross R_c at rate
@@ -182,6 +198,15 @@ def far_gap(sat, options, idx, nadir_rate: float, table: SlewTable | None = None
     off-nadir cone at instants g apart are at most ``2 eta + omega g`` apart (omega =
     ``nadir_rate``, the inertial turn rate of nadir), so the fixed point of
     ``g = t_req(min(pi, 2 eta + omega g))`` bounds every required gap.
+
+    Args:
+      sat: Satellite.
+      options: RouteOptions.
+      idx: int [K], option indices of ``sat``.
+      nadir_rate: float, inertial turn rate of nadir [rad/s].
+      table: SlewTable of ``sat`` (rest-to-rest models).
+    Returns:
+      float, the gap [s].
     """
     if sat.model in REST_TO_REST:
         g = 0.0

@@ -93,7 +93,17 @@ def evaluate(fn, scene: Scene, sat, p, t0, t):
 
     Every chunk is padded to :data:`_CHUNK` rows by repeating the last row, so one
     compiled shape serves every call (compilation, not evaluation, dominates small
-    batches). Returns a list of arrays, or None when there is nothing to evaluate.
+    batches).
+
+    Args:
+      fn: vmapped kernel over the leading axis of sat, p, t0 and t.
+      scene: Scene.
+      sat: int [M], satellite indices.
+      p: float [M, 8], aim laws.
+      t0: float [M], aim-law start times [s from the epoch].
+      t: float [M], evaluation times [s from the epoch].
+    Returns:
+      list of numpy arrays [M, ...] (one per kernel output), or None when M = 0.
     """
     if int(np.shape(sat)[0]) == 0:
         return None
@@ -116,10 +126,15 @@ def _aim_laws(sc: Scenario):
 
 
 def reference_points(sc: Scenario) -> np.ndarray:
-    """Earth-fixed [R, 3] point whose visibility windows a target's options come from.
+    """The Earth-fixed point whose visibility windows a target's options come from.
 
     A point target itself; a strip's midpoint, on the same great circle as its scan
     (:func:`jaxspline.geometry.pointing.aim_params`, half the strip's length along it).
+
+    Args:
+      sc: Scenario with R targets.
+    Returns:
+      numpy float [R, 3], Earth-fixed points [m].
     """
     tg = sc.targets
     _, p, _ = _aim_laws(sc)[0]
@@ -132,7 +147,14 @@ def observation_samples(t0, t1, step: float, tol: float = _KNOT_TOL):
     """Sample instants of observations [t0, t1]: start, every knot ``k step`` inside, end.
 
     Knots within ``tol`` steps of the start or end are left to the start / end sample.
-    Returns ``(owner, t)``: the observation index and the time of every sample.
+
+    Args:
+      t0: float [K], observation starts [s from the epoch].
+      t1: float [K], observation ends [s from the epoch].
+      step: float, knot spacing [s].
+      tol: float, fraction of a step.
+    Returns:
+      (owner int [M], t float [M]): the observation index and the time [s] of every sample.
     """
     t0, t1 = np.asarray(t0, np.float64), np.asarray(t1, np.float64)
     k0 = np.floor(t0 / step + tol).astype(np.int64) + 1
@@ -272,7 +294,13 @@ def _states(sc, scene, sat, tgt, t0, t1, params, per_ch) -> RouteOptions:
 
 
 def nadir_rate(scene: Scene) -> np.ndarray:
-    """Per satellite: the largest inertial turn rate of the nadir direction [rad/s]."""
+    """Per satellite: the largest inertial turn rate of the nadir direction (with a safety factor).
+
+    Args:
+      scene: Scene with a HermiteOrbit of S satellites ([S, M, 3] tables).
+    Returns:
+      numpy float [S], rate [rad/s].
+    """
     r = np.asarray(scene.orbit.r)
     v = np.asarray(scene.orbit.v)
     rate = np.linalg.norm(np.cross(r, v), axis=-1) / np.sum(r * r, axis=-1)
