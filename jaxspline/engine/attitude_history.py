@@ -79,7 +79,13 @@ class PlanAttitude(NamedTuple):
 
 
 def plan_scene(sc) -> Scene:
-    """The planner's multi-satellite :class:`Scene` of a scenario (same knots as ``plan``)."""
+    """The planner's multi-satellite :class:`Scene` of a scenario (same knots as ``plan``).
+
+    Args:
+      sc: Scenario.
+    Returns:
+      Scene with a HermiteOrbit of all satellites.
+    """
     pc = sc.planner
     table = tabulate_orbits(
         [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, pc.geometry_step

@@ -38,11 +38,21 @@ _PAD = 1 << 10  # kernel batches are padded to multiples of this (few compiled s
 
 
 def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
-    """Re-check the options ``chosen`` (ids into ``opp``); returns (bad ids, details).
+    """Re-check the options ``chosen`` (ids into ``opp``) from scratch.
 
-    ``details`` holds the per-observation required maneuver time and slack [s] (exact
-    kernels), the battery profile and minimum of every powered satellite that has
-    observations, and human-readable violations.
+    Args:
+      sc: Scenario.
+      scene: Scene of the scenario's satellites.
+      table_ok: callable (sat int [M], t float [M] [s]) -> bool [M], the orbit table is
+        usable there.
+      opp: Opportunities.
+      chosen: int [K], option ids of the plan.
+      battery: BatteryModel of the scenario.
+    Returns:
+      (bad, details): the sorted option ids that fail, and a dict with the
+      per-observation required maneuver time and slack [s] (exact kernels), the
+      battery profile and minimum of every powered satellite that has observations,
+      the human-readable violations and the checked order.
     """
     o = opp.options
     chosen = np.asarray(sorted(chosen, key=lambda c: (o.sat[c], o.t_start[c])), np.int64)

@@ -122,6 +122,11 @@ def join_limits(sat) -> tuple[AxisLimits, AxisLimits]:
     Norm limits bound |ω|, |ε|, |ε'| (:data:`NO_LIMIT` / inf where the model sets
     none); per-channel limits bound the roll, pitch, yaw rates and accelerations
     (per_channel model only; ``None`` otherwise). See the module docstring.
+
+    Args:
+      sat: Satellite.
+    Returns:
+      (AxisLimits of scalars [rad/s, rad/s², rad/s³], AxisLimits of float [3] or None).
     """
     lim = sat.limits
     if sat.model == "per_channel":
@@ -286,7 +291,13 @@ def plan_joins(scene, sats, sat, start, end, params) -> Joins:
 
 
 def join_summary(joins: Joins) -> dict:
-    """Counts and worst ratios of checked joins (JSON-ready)."""
+    """Counts and worst ratios of checked joins (JSON-ready).
+
+    Args:
+      joins: Joins of a plan.
+    Returns:
+      dict of plain Python numbers.
+    """
     worst = joins.ratio.max(0) if len(joins) else np.zeros(3)
     return {
         "joins": len(joins),
@@ -304,9 +315,16 @@ def reject_unflyable(sc, scene, opp, chosen) -> tuple[list, dict]:
     Joins are planned and re-timed (:func:`plan_joins`); for each join that still
     violates a limit the later observation of the pair is dropped (the earlier one if
     the join leads back to nadir), and the joins are planned again, until none
-    violates. Returns ``(dropped option ids, join_summary of the kept plan)``; the
-    caller re-checks the remaining plan (a per-channel transfer over the longer gap
-    must be re-verified).
+    violates. The caller re-checks the remaining plan (a per-channel transfer over the
+    longer gap must be re-verified).
+
+    Args:
+      sc: Scenario.
+      scene: Scene of the scenario's satellites.
+      opp: Opportunities.
+      chosen: int [K], option ids of the plan.
+    Returns:
+      (dropped option ids, join_summary of the kept plan).
     """
     o = opp.options
     ids = np.asarray(sorted(chosen), np.int64)

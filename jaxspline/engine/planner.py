@@ -226,7 +226,15 @@ class Prepared(NamedTuple):
 
 
 def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) -> Prepared:
-    """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search."""
+    """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
+
+    Args:
+      scenario: Scenario.
+      progress: show progress bars.
+      _clock: private; the stage timer of an enclosing :func:`plan` call.
+    Returns:
+      Prepared, the inputs of the search stage.
+    """
     sc = scenario
     clock = _clock or _Clock(sc.name, progress)
     with jax.enable_x64(True):

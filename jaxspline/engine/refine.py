@@ -80,13 +80,22 @@ def _kernels():
 
 
 def plan_costs(model, route, t0, rate, accel):
-    """Per-transition, per-channel margins m [K-1, C] [rad] and efforts e [K-1, C].
+    """Per-transition, per-channel margins m and efforts e of a plan.
 
     m = ``reach.reach_margin_kernel`` at T_k = t0[k+1] - t_end[k]; for
     T_k <= eps the margin is continued linearly, m(eps) - (eps - T_k) rate (a
     negative, differentiable penalty for overlapping steps). e = d*/accel
     (``reach.min_peak_accel_kernel``), +inf where impossible for any d.
     Differentiable in t0 (jit-able; ``model`` must be jit-able).
+
+    Args:
+      model: RouteModel.
+      route: int [K], routes of the plan in time order.
+      t0: float [K], start times [s from the epoch].
+      rate: float [C], rate bounds [rad/s].
+      accel: float [C], acceleration bounds [rad/s^2].
+    Returns:
+      (m float [K-1, C] [rad], e float [K-1, C] [dimensionless]).
     """
     margin_k, peak_k = _kernels()
     t_end, sa, sr, ea, er = model.states(route, t0)
@@ -301,11 +310,20 @@ def try_insert(
 
     Every option of ``route`` (none already in the plan) is placed at its
     time-ordered position in the plan, and the combined plan is refined with
-    :func:`refine_plan` (``objective="softmin_margin"``; ``kwargs`` are passed
-    on). Returns ``(new plan, result)`` of the refined plan that validates with
-    the largest minimum margin, or None when none validates. The returned Plan
-    indexes ``options`` (start times as in the options table; the refined ones
-    are ``result.t0``).
+    :func:`refine_plan` (``objective="softmin_margin"``).
+
+    Args:
+      plan: Plan indexing ``options``.
+      options: RouteOptions.
+      model: RouteModel.
+      limits: AxisLimits per channel.
+      route: int, the route to insert.
+      **kwargs: passed on to :func:`refine_plan`.
+    Returns:
+      ``(new plan, result)`` of the refined plan that validates with the largest
+      minimum margin, or None when none validates. The returned Plan indexes
+      ``options`` (start times as in the options table; the refined ones are
+      ``result.t0``).
     """
     validate_options(options)
     idx = np.asarray(plan.chosen, np.int64)

@@ -75,8 +75,16 @@ def _exact(sc, scene, o, opp, ids, t0, per_ch):
 def refine_starts(sc, scene, opp: Opportunities, chosen, steps: int):
     """Refined copy of ``opp`` for the ``chosen`` option ids (those rows replaced).
 
-    Returns ``(opp2, stats)``: per refined satellite the smallest transition margin
-    [rad] before and after (model states); ``opp2 is opp`` when nothing moved.
+    Args:
+      sc: Scenario.
+      scene: Scene of the scenario's satellites.
+      opp: Opportunities.
+      chosen: int [K], option ids of the plan.
+      steps: int, refinement iterations.
+    Returns:
+      ``(opp2, stats)``: ``stats`` maps each refined satellite's name to the smallest
+      transition margin [rad] before and after (model states) and whether the refined
+      plan validates; ``opp2 is opp`` when nothing moved.
     """
     o = opp.options
     chosen = np.asarray(chosen, np.int64)

@@ -417,6 +417,17 @@ def screen_pairs(
 
     Same kernels and outputs as :func:`screen_transitions`; a pair with
     ``T <= 0`` is infeasible (margin -inf, effort +inf).
+
+    Args:
+      options: RouteOptions of N options and C channels.
+      limits: AxisLimits per channel.
+      src: int [M], source option indices.
+      dst: int [M], destination option indices.
+      chunk_size: pairs per compiled call.
+    Returns:
+      Transitions of the M pairs.
+    Raises:
+      ValueError: src and dst differ in length, or invalid options / limits.
     """
     validate_options(options)
     src = np.asarray(src, np.int64).reshape(-1)

@@ -51,7 +51,14 @@ class Plan(NamedTuple):
 
 
 def plan_value(options: RouteOptions, idx) -> float:
-    """Sum of ``options.value`` over option indices ``idx``."""
+    """Sum of ``options.value`` over option indices ``idx``.
+
+    Args:
+      options: RouteOptions.
+      idx: int [K], option indices.
+    Returns:
+      float.
+    """
     idx = np.asarray(idx, np.int64)
     return float(np.asarray(options.value, np.float64)[idx].sum()) if idx.size else 0.0
 
@@ -198,6 +205,14 @@ def beam_search(
     ``numpy.random.default_rng(seed)``; deterministic for a given seed). Work is
     O(sum over options of in-degree x width). Equals ``exact_plan`` when
     ``width`` is at least the largest number of distinct states at an option.
+
+    Args:
+      options: RouteOptions.
+      transitions: Transitions screened on ``options``.
+      width: int, states kept per option.
+      seed: int, tie-breaking seed.
+    Returns:
+      Plan.
     """
     if int(width) < 1:
         raise ValueError(f"width must be >= 1, got {width!r}")
@@ -212,6 +227,12 @@ def greedy(options: RouteOptions, transitions: Transitions) -> Plan:
     any option at the start) maximizing value[j] / (t_end[j] - t_now), with
     t_now the end time of the last option (the earliest t_start at the
     start); ties go to the earlier t_start, then the lower index.
+
+    Args:
+      options: RouteOptions.
+      transitions: Transitions screened on ``options``.
+    Returns:
+      Plan.
     """
     nodes, src, dst, _ = _graph(options, transitions)
     value = np.asarray(options.value, np.float64)
