@@ -23,7 +23,14 @@ def _umask() -> int:
 
 
 def refuse_overwrite(path, force: bool) -> None:
-    """Raise ``FileExistsError`` naming ``path`` if it exists and ``force`` is false."""
+    """Refuse to overwrite an existing file unless ``force``.
+
+    Args:
+      path: str or Path.
+      force: allow overwriting.
+    Raises:
+      FileExistsError: naming ``path`` if it exists and ``force`` is false.
+    """
     if not force and Path(path).exists():
         raise FileExistsError(f"{path} exists (use --force to overwrite)")
 
@@ -33,7 +40,14 @@ def atomic_path(path, suffix: str = ".tmp"):
     """Yield a temporary path next to ``path``; on success move it onto ``path`` atomically.
 
     On an exception the temporary file is removed and ``path`` is left untouched.
-    ``suffix`` lets writers that pick a format by extension (matplotlib) see it.
+    Missing parent directories are created.
+
+    Args:
+      path: str or Path, the destination.
+      suffix: suffix of the temporary name, so writers that pick a format by
+        extension (matplotlib) see it.
+    Yields:
+      str, the temporary path to write.
     """
     path = Path(path)
     directory = path.parent if str(path.parent) else Path(".")
@@ -50,7 +64,17 @@ def atomic_path(path, suffix: str = ".tmp"):
 
 
 def atomic_write_text(path, text: str, *, force: bool = True) -> Path:
-    """Write ``text`` (UTF-8) to ``path`` atomically; refuse to overwrite unless ``force``."""
+    """Write ``text`` (UTF-8) to ``path`` atomically; refuse to overwrite unless ``force``.
+
+    Args:
+      path: str or Path.
+      text: the content.
+      force: allow overwriting.
+    Returns:
+      Path of the written file.
+    Raises:
+      FileExistsError: ``path`` exists and ``force`` is false.
+    """
     refuse_overwrite(path, force)
     with atomic_path(path) as tmp, open(tmp, "w", encoding="utf-8", newline="") as fh:
         fh.write(text)

@@ -58,7 +58,15 @@ JERK_STEP_S = 1e-2  # [s] half step of the central difference of the exact eps g
 
 
 def orbital_basis(scene, t, sat=None):
-    """Orbital axes (rows x_o, y_o, z_o) [3, 3] in TEME at time t [s] (pointing module frame)."""
+    """Orbital axes in TEME at time t (the frame of :mod:`jaxspline.geometry.pointing`).
+
+    Args:
+      scene: Scene of the scenario's satellites.
+      t: scalar, seconds from the epoch.
+      sat: int, satellite index (None for a one-satellite orbit).
+    Returns:
+      float [3, 3], rows x_o, y_o, z_o (unit vectors in TEME).
+    """
     r, v = orbit_state(scene.orbit, t, sat)
     z = -r / jnp.linalg.norm(r)
     h = jnp.cross(r, v)
@@ -67,7 +75,13 @@ def orbital_basis(scene, t, sat=None):
 
 
 def dcm_from_angles(ang):
-    """``C = Ry(pitch) Rx(roll) Rz(yaw)`` [3, 3] (body -> orbital) of [roll, pitch, yaw] [rad]."""
+    """``C = Ry(pitch) Rx(roll) Rz(yaw)`` (body -> orbital) of attitude angles.
+
+    Args:
+      ang: float [3], [roll, pitch, yaw] [rad].
+    Returns:
+      float [3, 3], C.
+    """
     cr, cp, cy = jnp.cos(ang)
     sr, sp, sy = jnp.sin(ang)
     one, zero = jnp.ones_like(cr), jnp.zeros_like(cr)
@@ -78,11 +92,16 @@ def dcm_from_angles(ang):
 
 
 def angles_from_dcm(c):
-    """[roll, pitch, yaw] [rad] of a body -> orbital matrix C = Ry(pitch) Rx(roll) Rz(yaw).
+    """Attitude angles of a body -> orbital matrix C = Ry(pitch) Rx(roll) Rz(yaw).
 
     Boresight ``b = C e_z = (cos r sin p, -sin r, cos r cos p)``: pitch = atan2(b_x, b_z),
     roll = atan2(-b_y, hypot(b_x, b_z)); row 1 of C is ``(cos r sin y, cos r cos y, -sin r)``,
     so yaw = atan2(C_10, C_11). No arcsin / arccos (exact near zero).
+
+    Args:
+      c: float [3, 3], C.
+    Returns:
+      float [3], [roll, pitch, yaw] [rad].
     """
     b = c[:, 2]
     pitch = jnp.arctan2(b[0], b[2])
@@ -142,21 +161,40 @@ def _angle_rate(ang, omega, w):
 
 
 def compose(ang, rate, acc, b, w, wd):
-    """Kernel: (q [4], ω [3], ε [3]) of a body at angles ``ang`` (rates, accelerations) [3].
+    """Kernel: inertial state of a body at given attitude angles, rates and accelerations.
 
-    ``b``, ``w``, ``wd``: orbital axes [3, 3] and their rate and acceleration [3]
-    (:func:`_rates_kernel`). R = B^T C(ang); ω by :func:`_body_rate`; ε = dω/dt by one
-    ``jax.jvp`` of it along (rate, acc, wd).
+    R = B^T C(ang); ω by :func:`_body_rate`; ε = dω/dt by one ``jax.jvp`` of it
+    along (rate, acc, wd).
+
+    Args:
+      ang: float [3], [roll, pitch, yaw] [rad].
+      rate: float [3], their rates [rad/s].
+      acc: float [3], their accelerations [rad/s^2].
+      b: float [3, 3], orbital axes (rows) in TEME.
+      w: float [3], angular velocity of the orbital axes [rad/s].
+      wd: float [3], its derivative [rad/s^2] (:func:`_rates_kernel`).
+    Returns:
+      (q float [4], ω float [3] [rad/s], ε float [3] [rad/s^2]), body -> TEME.
     """
     omega, eps = jax.jvp(_body_rate, (ang, rate, w), (rate, acc, wd))
     return _dcm2q(b.T @ dcm_from_angles(ang)), omega, eps
 
 
 def decompose(q, omega, eps, b, w, wd):
-    """Kernel, inverse of :func:`compose`: (angles, rates, accelerations) [3] each.
+    """Kernel, inverse of :func:`compose`: attitude angles, rates and accelerations.
 
     C = B R(q); angles by :func:`angles_from_dcm`; rates by :func:`_angle_rate`; the
     accelerations by one ``jax.jvp`` of it along (rates, ε, wd).
+
+    Args:
+      q: float [4], attitude quaternion (scalar first, body -> TEME).
+      omega: float [3], body angular velocity [rad/s].
+      eps: float [3], body angular acceleration [rad/s^2].
+      b: float [3, 3], orbital axes (rows) in TEME.
+      w: float [3], angular velocity of the orbital axes [rad/s].
+      wd: float [3], its derivative [rad/s^2].
+    Returns:
+      (angles [rad], rates [rad/s], accelerations [rad/s^2]), float [3] each.
     """
     ang = angles_from_dcm(b @ _q2dcm(q))
     rate, acc = jax.jvp(lambda a, o, ww: _angle_rate(a, o, ww), (ang, omega, w), (
@@ -180,13 +218,21 @@ _decompose_v = jax.jit(jax.vmap(_decompose_packed, in_axes=(None, 0, 0, 0, 0)))
 
 
 def frame_rates(scene, sat, t):
-    """numpy: orbital axes B [n, 3, 3] and their rate w, dw/dt [n, 3] at (sat [n], t [n])."""
+    """Orbital axes and their angular velocity and acceleration (numpy).
+
+    Args:
+      scene: Scene of the scenario's satellites.
+      sat: int [n], satellite indices.
+      t: float [n], seconds from the epoch.
+    Returns:
+      (B float [n, 3, 3], w float [n, 3] [rad/s], dw/dt float [n, 3] [rad/s^2]).
+    """
     t = np.asarray(t, np.float64)
     return evaluate(_rates_v, scene, sat, np.zeros((t.size, 8)), t, t)
 
 
 def law_states(scene, sat, law, t0, t, jerk: bool = True):
-    """numpy: (q [n, 4], ω, ε, ε' [n, 3]) of laws ``law`` [n, 9] started at t0 [n], at t [n].
+    """Inertial states of attitude laws started at t0, at t (numpy).
 
     Angles, rates and accelerations of an aim law are the planner's own
     (:func:`jaxspline.geometry.pointing.aim_state`, through the compiled batch of
@@ -194,6 +240,16 @@ def law_states(scene, sat, law, t0, t, jerk: bool = True):
     for :data:`LAW_NADIR`; :func:`compose` turns them into the inertial state. ε' is the
     central difference of the exact ε over +-:data:`JERK_STEP_S` (truncation ~1e-4 s^2
     times the fourth derivative of ω; zeros when ``jerk`` is False).
+
+    Args:
+      scene: Scene of the scenario's satellites.
+      sat: int [n], satellite indices.
+      law: float [n, 9], aim law [8] plus its yaw mode law[8] (``LAW_*``).
+      t0: float [n], law start times [s from the epoch].
+      t: float [n], evaluation times [s from the epoch].
+      jerk: compute ε'.
+    Returns:
+      (q float [n, 4], ω [rad/s], ε [rad/s^2], ε' [rad/s^3] float [n, 3] each).
     """
     sat, law = np.asarray(sat), np.asarray(law, np.float64).reshape(-1, 9)
     t0, t = np.asarray(t0, np.float64), np.asarray(t, np.float64)
@@ -217,10 +273,20 @@ def law_states(scene, sat, law, t0, t, jerk: bool = True):
 
 
 def state_angles(scene, sat, q, omega, eps, t):
-    """numpy: per-channel (angles, rates, accelerations) [n, 3] of inertial states at t [n].
+    """Per-channel angles, rates and accelerations of inertial states (numpy).
 
     The inverse of :func:`law_states` (without yaw modes): what the per-channel model
     limits, for any attitude history (e.g. samples of a join).
+
+    Args:
+      scene: Scene of the scenario's satellites.
+      sat: int [n], satellite indices.
+      q: float [n, 4], attitude quaternions (scalar first, body -> TEME).
+      omega: float [n, 3], body angular velocity [rad/s].
+      eps: float [n, 3], body angular acceleration [rad/s^2].
+      t: float [n], seconds from the epoch.
+    Returns:
+      (angles [rad], rates [rad/s], accelerations [rad/s^2]), float [n, 3] each.
     """
     b, w, wd = frame_rates(scene, sat, t)
     x = np.concatenate([q, omega, eps, w, wd, b.reshape(-1, 9)], -1)
