@@ -84,10 +84,21 @@ def solve(
     max_iters: int | None = None,
     report=None,
 ) -> SearchResult:
-    """Run the search stages (module docstring) until ``deadline`` (``time.monotonic``).
+    """Run the search stages (module docstring) until ``deadline``.
 
-    ``max_iters`` caps the LNS iterations and (at 10 x) the Lagrangian iterations so
-    that a run is deterministic; ``report(stage, message)`` receives progress lines.
+    Args:
+      pb: Problem.
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      seed: int, seed of the randomized stages.
+      lagrangian_share: float in [0, 1], share of the time budget given to the
+        Lagrangian phase.
+      exact_max_options: int, run the exact search when the problem has at most this
+        many options (0: never).
+      max_iters: caps the LNS iterations and (at 10 x) the Lagrangian iterations so
+        that a run is deterministic; None: the deadline alone.
+      report: callable ``report(stage, message)`` receiving progress lines, or None.
+    Returns:
+      SearchResult.
     """
     say = report or (lambda stage, msg: None)
     tl = Timeline(pb)

@@ -22,8 +22,11 @@ _TOL = 1e-12
 def exact_search(tl: Timeline, deadline: float):
     """Optimal plan of the candidate model (battery included) by branch and bound.
 
-    ``tl`` must be empty; it ends holding the best plan. Returns ``(value, proven)``
-    with ``proven`` False when the deadline cut the search.
+    Args:
+      tl: Timeline, must be empty; it ends holding the best plan.
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+    Returns:
+      ``(value, proven)``, with ``proven`` False when the deadline cut the search.
     """
     pb = tl.pb
     order = sorted(range(pb.n_options), key=lambda c: (pb.c_start[c], c))

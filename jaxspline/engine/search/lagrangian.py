@@ -58,6 +58,21 @@ class DPData:
     the block (``end + far`` between the block's first start and the option's start)
     is among the near pairs. ``absorb`` lists options by ``end + far[sat]``, the time
     from which they are far predecessors of everything.
+
+    Attributes:
+      order: int [N], option ids sorted by start (then satellite).
+      pair: int [P], near pairs (``pb.near_src`` / ``near_dst`` order) sorted by the
+        rank of their destination in ``order``.
+      sat: int [N], satellite of each option.
+      start: float [N], start time of each option [s].
+      groups: list of ``(ga, gb, pa, pz)``: block ``order[ga:gb]`` and its near pairs
+        ``pred[pa:pz]`` / ``seg[pa:pz]``.
+      pred: int [P], the predecessor (source) option of each sorted near pair.
+      seg: int [P], position of the pair's destination inside its block.
+      ptr: int [N + 1], start of each destination rank's pairs (CSR pointer).
+      first_ok: bool [N], the option may be its satellite's first observation.
+      absorb: int [N], option ids sorted by ``end + far[sat]``.
+      absorb_t: float [N], those times [s].
     """
 
     order: np.ndarray
@@ -74,7 +89,13 @@ class DPData:
 
 
 def dp_prepare(pb: Problem) -> DPData:
-    """Group the options and their near feasible predecessors for :func:`dp_paths`."""
+    """Group the options and their near feasible predecessors for :func:`dp_paths`.
+
+    Args:
+      pb: Problem.
+    Returns:
+      DPData.
+    """
     n = pb.n_options
     s = np.asarray(pb.c_start)
     e = np.asarray(pb.c_end)
@@ -276,9 +297,18 @@ class _Prices:
 
 
 def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report=None):
-    """Lagrangian phase with repaired plans (see module docstring); returns BoundResult.
+    """Lagrangian phase with repaired plans (see module docstring).
 
     The step target is the best repaired plan's value; ``tl`` ends at the best plan.
+
+    Args:
+      tl: Timeline over the problem (its plan is replaced).
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      order_fill: task order used to fill each repaired plan greedily.
+      max_iters: cap on the subgradient iterations (None: the deadline alone).
+      report: callable ``report(iteration, bound, best_value)`` or None.
+    Returns:
+      BoundResult.
     """
     pb = tl.pb
     best = list(tl.assigned)
@@ -310,10 +340,18 @@ def upper_bound(
 ) -> BoundResult:
     """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
 
-    ``target`` is a value some plan reaches (it sets the step size only; any value
-    gives a valid bound). Status "converged" or "time" (cap / deadline reached).
-    Deterministic for a given ``max_iters``. ``energy``: price the battery budgets of
-    :mod:`jaxspline.engine.search.energy` too (off: the battery is dropped).
+    Deterministic for a given ``max_iters``.
+
+    Args:
+      pb: Problem.
+      target: float, a value some plan reaches (it sets the step size only; any value
+        gives a valid bound).
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      max_iters: cap on the iterations (None: the deadline alone).
+      energy: price the battery budgets of :mod:`jaxspline.engine.search.energy` too
+        (off: the battery is dropped).
+    Returns:
+      BoundResult with status "converged" or "time" (cap / deadline reached).
     """
     if pb.n_options == 0:
         return BoundResult([], 0.0, 0, "optimal")

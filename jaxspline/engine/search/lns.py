@@ -36,7 +36,13 @@ _TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
 
 
 def greedy_order(tl: Timeline):
-    """Tasks with options, heaviest first, fewest satellites / options first among equals."""
+    """Tasks with options, heaviest first, fewest satellites / options first among equals.
+
+    Args:
+      tl: Timeline.
+    Returns:
+      list of task indices.
+    """
     pb = tl.pb
     return sorted(
         (t for t in range(len(pb.weight)) if pb.task_cands[t]),
@@ -50,7 +56,13 @@ def greedy_order(tl: Timeline):
 
 
 def greedy(tl: Timeline, deadline: float, order=None):
-    """Insert the tasks greedily (see module docstring) until done or the deadline."""
+    """Insert the tasks greedily (see module docstring) until done or the deadline.
+
+    Args:
+      tl: Timeline (tasks already assigned stay).
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      order: task order; None uses :func:`greedy_order`.
+    """
     for i, t in enumerate(order if order is not None else greedy_order(tl)):
         if i % _DEADLINE_CHECK == 0 and time.monotonic() > deadline:
             break
@@ -74,9 +86,17 @@ def _destroy(tl: Timeline, k: int, lo: float, hi: float):
 
 
 def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
-    """Large-neighbourhood search until ``deadline`` (or ``max_iters``); returns iterations.
+    """Large-neighbourhood search until ``deadline`` (or ``max_iters``).
 
-    ``report(it, improved)`` is called every few seconds (progress display).
+    Args:
+      tl: Timeline holding the start plan; it ends at the best plan.
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      rng: numpy Generator.
+      max_iters: cap on the iterations (None: the deadline alone).
+      report: callable ``report(it, improved)`` called every few seconds (progress
+        display), or None.
+    Returns:
+      int, the number of iterations.
     """
     pb = tl.pb
     t_start = time.monotonic()
@@ -153,7 +173,12 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
 
 
 def earliest_pass(tl: Timeline, deadline: float):
-    """Move each observation to the earliest feasible option of its task (value unchanged)."""
+    """Move each observation to the earliest feasible option of its task (value unchanged).
+
+    Args:
+      tl: Timeline, modified in place.
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+    """
     pb = tl.pb
     for t in range(len(pb.weight)):
         if time.monotonic() > deadline:

@@ -30,7 +30,23 @@ _INSERT_NOISE = 0.3  # relative noise of randomized insertion costs
 
 
 class Timeline:
-    """Per-satellite timelines over a :class:`Problem` (see module docstring)."""
+    """Per-satellite timelines over a :class:`Problem` (see module docstring).
+
+    Attributes:
+      pb: the Problem.
+      tl: per satellite, its option ids in start order.
+      tl_s: per satellite, their start times [s].
+      assigned: per task, the option that images it (-1: none).
+      level_min: per satellite, the battery suffix minimum [Wh] of a past state (None:
+        not computed).
+      debt: per satellite, an upper bound of the load energy added since [Wh].
+      W: total value of the plan.
+      N: number of observations.
+      tat: sum of the observations' end times [s] (tie-break).
+      log: undo log of the changes since the last :meth:`commit`.
+      cache: memoized transition times.
+      saved: battery bounds saved for :meth:`undo_to`.
+    """
 
     def __init__(self, pb: Problem):
         self.pb = pb
