@@ -28,7 +28,16 @@ _IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
 
 
 class FieldContext:
-    """Error helper: names the field and, when the raw text is known, its TOML line."""
+    """Error helper: names the field and, when the raw text is known, its TOML line.
+
+    Args:
+      source: name of the file (or other source) in error messages.
+      text: the raw TOML text, or None when line numbers are unknown.
+
+    Attributes:
+      source: as given.
+      lines: the text's lines, or None.
+    """
 
     def __init__(self, source: str, text: str | None):
         self.source = source
@@ -91,7 +100,22 @@ REQUIRED = object()
 def check_float(
     raw, err, *, default=REQUIRED, text=False, positive=False, nonneg=False, lo=None, hi=None
 ):
-    """``raw`` as a checked float; ``err(msg)`` builds the error; ``text`` parses strings."""
+    """``raw`` as a checked float.
+
+    Args:
+      raw: the value read (None: missing).
+      err: callable ``err(msg) -> Exception`` building the error to raise.
+      default: value returned when ``raw`` is None; required when not given.
+      text: also parse strings.
+      positive: require > 0.
+      nonneg: require >= 0.
+      lo: lower bound (with ``hi``: the closed interval [lo, hi]).
+      hi: upper bound.
+    Returns:
+      float (or ``default``).
+    Raises:
+      Exception: ``err(msg)`` when missing, not a number, not finite or out of bounds.
+    """
     if raw is None:
         if default is REQUIRED:
             raise err("missing")
@@ -119,12 +143,34 @@ def check_float(
 
 
 def field_number(ctx, field, value, **kw) -> float:
-    """``value`` as a checked float (keywords as in :func:`check_float`)."""
+    """``value`` as a checked float (keywords as in :func:`check_float`).
+
+    Args:
+      ctx: FieldContext of the file being read.
+      field: dotted field label used in the error (``table[index].key``).
+      value: the value read.
+      **kw: as in :func:`check_float`.
+    Returns:
+      float.
+    Raises:
+      ValueError: from ``ctx.error``, naming the field and its TOML line.
+    """
     return check_float(value, lambda m: ctx.error(field, m), **kw)
 
 
 def field_int(ctx, field, value, minimum=0) -> int:
-    """``value`` as an integer >= ``minimum`` (booleans rejected)."""
+    """``value`` as an integer >= ``minimum`` (booleans rejected).
+
+    Args:
+      ctx: FieldContext of the file being read.
+      field: dotted field label used in the error (``table[index].key``).
+      value: the value read.
+      minimum: smallest accepted value.
+    Returns:
+      int.
+    Raises:
+      ValueError: from ``ctx.error``, naming the field and its TOML line.
+    """
     if isinstance(value, bool) or not isinstance(value, int):
         raise ctx.error(field, f"must be an integer, got {value!r}")
     if value < minimum:
@@ -133,14 +179,35 @@ def field_int(ctx, field, value, minimum=0) -> int:
 
 
 def field_bool(ctx, field, value) -> bool:
-    """``value`` as a TOML boolean."""
+    """``value`` as a TOML boolean.
+
+    Args:
+      ctx: FieldContext of the file being read.
+      field: dotted field label used in the error (``table[index].key``).
+      value: the value read.
+    Returns:
+      bool.
+    Raises:
+      ValueError: from ``ctx.error``, naming the field and its TOML line.
+    """
     if not isinstance(value, bool):
         raise ctx.error(field, f"must be true or false, got {value!r}")
     return value
 
 
 def field_str(ctx, field, value, allow_empty=True) -> str:
-    """``value`` as a string (non-blank unless ``allow_empty``)."""
+    """``value`` as a string (non-blank unless ``allow_empty``).
+
+    Args:
+      ctx: FieldContext of the file being read.
+      field: dotted field label used in the error (``table[index].key``).
+      value: the value read.
+      allow_empty: accept "" and blank strings.
+    Returns:
+      str.
+    Raises:
+      ValueError: from ``ctx.error``, naming the field and its TOML line.
+    """
     if not isinstance(value, str) or (not allow_empty and not value.strip()):
         raise ctx.error(
             field, f"must be a {'' if allow_empty else 'non-empty '}string, got {value!r}"
@@ -149,7 +216,18 @@ def field_str(ctx, field, value, allow_empty=True) -> str:
 
 
 def field_pair(ctx, field, value, **kw) -> tuple[float, float]:
-    """``value`` as a ``[lo, hi]`` list of checked floats with lo <= hi."""
+    """``value`` as a ``[lo, hi]`` list of checked floats with lo <= hi.
+
+    Args:
+      ctx: FieldContext of the file being read.
+      field: dotted field label used in the error (``table[index].key``).
+      value: the value read.
+      **kw: as in :func:`check_float`, applied to both numbers.
+    Returns:
+      (lo, hi) floats.
+    Raises:
+      ValueError: from ``ctx.error``, naming the field and its TOML line.
+    """
     if not isinstance(value, list) or len(value) != 2:
         raise ctx.error(field, f"must be a list [lo, hi], got {value!r}")
     lo, hi = (field_number(ctx, field, v, **kw) for v in value)
@@ -159,7 +237,18 @@ def field_pair(ctx, field, value, **kw) -> tuple[float, float]:
 
 
 def field_table(ctx, field, tab, keys) -> dict:
-    """``tab`` as a table whose keys are all in ``keys`` (the first unknown one is named)."""
+    """``tab`` as a table whose keys are all in ``keys`` (the first unknown one is named).
+
+    Args:
+      ctx: FieldContext of the file being read.
+      field: dotted field label used in the error (``table[index].key``).
+      tab: the value read.
+      keys: set of allowed keys.
+    Returns:
+      dict, ``tab`` itself.
+    Raises:
+      ValueError: from ``ctx.error``, naming the field and its TOML line.
+    """
     if not isinstance(tab, dict):
         raise ctx.error(field, f"must be a table, got {tab!r}")
     unknown = sorted(set(tab) - keys)
@@ -169,7 +258,18 @@ def field_table(ctx, field, tab, keys) -> dict:
 
 
 def field_tables(ctx, data, name, alias) -> list[tuple[str, dict]]:
-    """(field label, table) of each entry of array ``name`` or its alias (one table or many)."""
+    """(field label, table) of each entry of array ``name`` or its alias (one table or many).
+
+    Args:
+      ctx: FieldContext of the file being read.
+      data: dict, the parsed TOML document (or a parent table).
+      name: key of the array of tables (``[[name]]``).
+      alias: key of the alternative single table (``[alias]``).
+    Returns:
+      list of (label, dict).
+    Raises:
+      ValueError: from ``ctx.error``, naming the field and its TOML line.
+    """
     if name in data and alias in data:
         raise ctx.error(alias, f"give either [[{name}]] or its alias [{alias}], not both")
     key = name if name in data else alias
