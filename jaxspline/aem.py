@@ -39,7 +39,13 @@ _SAFE_NAME = re.compile(r"[^A-Za-z0-9_.-]+")
 
 
 def aem_file_name(sat_name: str) -> str:
-    """``attitude_<name>.aem.xml`` with characters other than ``[A-Za-z0-9_.-]`` as ``_``."""
+    """``attitude_<name>.aem.xml`` with characters other than ``[A-Za-z0-9_.-]`` as ``_``.
+
+    Args:
+      sat_name: satellite name.
+    Returns:
+      str, the file name.
+    """
     return f"attitude_{_SAFE_NAME.sub('_', sat_name)}.aem.xml"
 
 
@@ -65,7 +71,16 @@ def _object_id(sat) -> str:
 
 
 def aem_document(scenario, sat_index: int, history, *, created: _dt.datetime | None = None):
-    """The ``ccsds_ndm`` AEM object of one satellite's :class:`AttitudeHistory`."""
+    """The ``ccsds_ndm`` AEM object of one satellite's :class:`AttitudeHistory`.
+
+    Args:
+      scenario: Scenario (epoch, satellite names).
+      sat_index: int, index of the satellite in ``scenario.satellites``.
+      history: AttitudeHistory of that satellite (times [s from the epoch], q, ω).
+      created: creation date of the header; None: now (UTC).
+    Returns:
+      ``ccsds_ndm`` Aem (quaternion scalar first, body to TEME; rates in deg/s).
+    """
     from ccsds_ndm.models.ndmxml4 import Aem
     from ccsds_ndm.models.ndmxml4.ndmxml_4_0_0_aem_2_0 import (
         AemBody,
@@ -137,8 +152,18 @@ def aem_document(scenario, sat_index: int, history, *, created: _dt.datetime | N
 def write_aems(result, attitude, outdir, *, force: bool = False) -> list[Path]:
     """Write one AEM per satellite of ``attitude`` (:func:`attitude_history`) into ``outdir``.
 
-    File names: :func:`aem_file_name`. Atomic; refuses to overwrite unless ``force``
-    (every name is checked before anything is written). Returns the paths.
+    File names: :func:`aem_file_name`. Atomic; every name is checked before anything
+    is written.
+
+    Args:
+      result: PlanResult.
+      attitude: PlanAttitude of the plan (its ``histories`` by satellite name).
+      outdir: str or Path, created if missing.
+      force: overwrite existing files.
+    Returns:
+      list of the written paths.
+    Raises:
+      FileExistsError: a file exists and ``force`` is false.
     """
     from ccsds_ndm.mapping import NDMFileFormats
     from ccsds_ndm.ndm_io import NdmIo
@@ -156,9 +181,13 @@ def write_aems(result, attitude, outdir, *, force: bool = False) -> list[Path]:
 
 
 def read_aem(path):
-    """Re-read an AEM through ``ccsds-ndm``: ``(object name, epochs [N] str, q [N, 4], ω [N, 3])``.
+    """Re-read an AEM through ``ccsds-ndm``.
 
-    ``q`` scalar first (as the library), ``ω`` [rad/s] body axes.
+    Args:
+      path: str or Path of an AEM XML file.
+    Returns:
+      ``(object name, epochs str [N], q float [N, 4], ω float [N, 3])``: ``q`` scalar
+      first (as the library), ``ω`` [rad/s] body axes.
     """
     from ccsds_ndm.ndm_io import NdmIo
 

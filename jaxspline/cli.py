@@ -25,7 +25,13 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``jaxspline`` console script; returns the exit code."""
+    """Entry point of the ``jaxspline`` console script.
+
+    Args:
+      argv: command-line arguments without the program name; None: ``sys.argv[1:]``.
+    Returns:
+      int, the exit code.
+    """
     parser = build_parser()
     args = parser.parse_args(argv)
     try:

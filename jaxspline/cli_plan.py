@@ -44,7 +44,11 @@ _PLOTS = OUTPUT_FILES[3:]
 
 
 def register(sub) -> None:
-    """Register the ``plan`` sub-command."""
+    """Register the ``plan`` sub-command.
+
+    Args:
+      sub: the ``argparse`` sub-parsers object of the ``jaxspline`` command.
+    """
     p = sub.add_parser(
         "plan",
         help="plan imaging for a scenario (default: the built-in constellation job)",
@@ -110,9 +114,26 @@ def run_plan(
     aem: bool = False,
     aem_step: float = AEM_STEP_S,
 ):
-    """Load ``scenario`` (path, Scenario or None = default), plan it, write the outputs.
+    """Load ``scenario``, plan it, write the outputs.
 
-    Returns the :class:`jaxspline.engine.result.PlanResult`.
+    Every output name is checked before planning, so an existing file fails fast.
+
+    Args:
+      scenario: path of a scenario TOML file, a Scenario, or None (the default scenario).
+      outdir: str or Path of the output folder.
+      force: overwrite existing outputs.
+      time_limit: wall-clock budget of the planner [s]; None: the scenario default.
+      seed: int, seed of the randomized search.
+      certify: extra seconds after the time limit for a tighter certificate (0: none).
+      plots: write the PNG figures.
+      progress: show progress bars.
+      aem: write one CCSDS AEM per satellite (and check the flown joins).
+      aem_step: sampling step of the AEM files [s].
+    Returns:
+      :class:`jaxspline.engine.result.PlanResult`.
+    Raises:
+      FileExistsError: an output exists and ``force`` is false.
+      ValueError: a bad scenario file (naming the field).
     """
     from jaxspline.aem import aem_file_name, write_aems
     from jaxspline.engine.attitude_history import attitude_history

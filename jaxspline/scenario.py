@@ -351,9 +351,15 @@ def parse_scenario(
 ) -> Scenario:
     """Build a :class:`Scenario` from parsed TOML ``data`` (schema: module docstring).
 
-    ``text`` (the raw TOML) lets errors cite line numbers; ``base_dir`` is the folder
-    that relative CSV paths start from (None: the working directory). Raises
-    ValueError naming the field.
+    Args:
+      data: dict, the parsed TOML.
+      source: name of the source in error messages.
+      text: the raw TOML, lets errors cite line numbers.
+      base_dir: folder that relative CSV paths start from (None: the working directory).
+    Returns:
+      Scenario.
+    Raises:
+      ValueError: naming the field.
     """
     ctx = FieldContext(source, text)
     if not isinstance(data, dict):
@@ -395,9 +401,17 @@ def parse_scenario(
 
 
 def load_scenario(path) -> Scenario:
-    """Load a scenario TOML file (ValueError naming the field / TOML line on bad content).
+    """Load a scenario TOML file.
 
     Relative CSV paths in the file start from the file's folder.
+
+    Args:
+      path: str or Path of the TOML file.
+    Returns:
+      Scenario.
+    Raises:
+      FileNotFoundError: the file is missing.
+      ValueError: invalid TOML, or bad content (naming the field / TOML line).
     """
     path = Path(path)
     try:
@@ -418,5 +432,8 @@ def default_scenario() -> Scenario:
     per-channel, two eigen-axis with batteries, one of them infrared, two flexible),
     epoch 2026-04-14 00:00 UTC, six hours; ~1500 city point targets
     (``data/cities.csv``) and 200 random land strips 20-60 km long.
+
+    Returns:
+      Scenario.
     """
     return load_scenario(DEFAULT_SCENARIO_PATH)

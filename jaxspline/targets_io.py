@@ -103,10 +103,16 @@ def scenario_targets(ctx, data: dict, base_dir=None) -> Targets:
     """All targets of a parsed scenario table ``data``, in the order they are read.
 
     First the ``[[targets]]`` (or ``[[routes]]``) tables, then the CSV files of
-    ``targets_csv`` and ``[targets_file]`` (relative paths start from ``base_dir``;
-    None: the working directory), then ``[random_targets]``. ``ctx`` is the
-    :class:`jaxspline._fields.FieldContext` of the file. Raises ValueError naming the
-    field, also when the file gives no targets at all.
+    ``targets_csv`` and ``[targets_file]``, then ``[random_targets]``.
+
+    Args:
+      ctx: :class:`jaxspline._fields.FieldContext` of the file.
+      data: dict, the parsed scenario TOML.
+      base_dir: folder that relative CSV paths start from (None: the working directory).
+    Returns:
+      Targets (angles in radians, lengths in metres, times in seconds from the epoch).
+    Raises:
+      ValueError: naming the field, also when the file gives no targets at all.
     """
     parts = []
     explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"))
@@ -215,8 +221,13 @@ def _toml_targets(ctx, items) -> Targets | None:
 def load_targets_csv(path) -> Targets:
     """Targets from a CSV file (columns and units: module docstring; angles in degrees).
 
-    Raises FileNotFoundError for a missing file and ValueError naming the file, the
-    row (line number) and the column for bad content.
+    Args:
+      path: str or Path of the CSV file.
+    Returns:
+      Targets (converted to radians).
+    Raises:
+      FileNotFoundError: the file is missing.
+      ValueError: naming the file, the row (line number) and the column for bad content.
     """
     path = Path(path)
     label = path.name
