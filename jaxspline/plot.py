@@ -25,7 +25,12 @@ def _plt():
 
 
 def save_figure(fig, path) -> None:
-    """Save ``fig`` to ``path`` atomically (temp file in the same directory + os.replace)."""
+    """Save ``fig`` to ``path`` atomically (temp file in the same directory + os.replace).
+
+    Args:
+      fig: matplotlib Figure; it is closed afterwards, also on failure.
+      path: str or Path; written as PNG at 110 dpi.
+    """
     try:
         with atomic_path(path, suffix=".tmp.png") as tmp:
             fig.savefig(tmp, dpi=110)
@@ -49,10 +54,19 @@ def plot_ground_track(
 ):
     """Ground track with candidate routes (grey; invisible ones faint) and chosen ones (numbered).
 
-    track_lat/lon [M]: sub-satellite points [rad]; cand_* [R]: route start (and strip end)
-    points [rad], cand_kind [R] 0 point / 1 strip; chosen [K] route indices in plan order;
-    visible [R] bool (routes with at least one feasible option); track_t [M] times [s]
-    of the track points (labelled every 100 s).
+    Args:
+      path: str or Path of the image.
+      track_lat: float [M], sub-satellite latitudes [rad].
+      track_lon: float [M], sub-satellite longitudes [rad].
+      cand_lat: float [R], route start latitudes [rad].
+      cand_lon: float [R], route start longitudes [rad].
+      cand_kind: int [R], 0 point / 1 strip.
+      cand_end_lat: float [R], strip end latitudes [rad].
+      cand_end_lon: float [R], strip end longitudes [rad].
+      chosen: int [K], route indices in plan order.
+      title: figure title.
+      visible: bool [R], routes with at least one feasible option (None: all).
+      track_t: float [M], times of the track points [s] (labelled every 100 s).
     """
     plt = _plt()
     fig, ax = plt.subplots(figsize=(10, 8))
@@ -138,8 +152,16 @@ def plot_ground_track(
 def plot_attitude(path, t, angle, rate, accel, rate_limit, accel_limit, scans, title=""):
     """Angle, rate and acceleration of each channel over time against the limits.
 
-    t [M] [s]; angle/rate/accel [M, 3] [rad, rad/s, rad/s^2] (NaN breaks the line);
-    rate_limit/accel_limit [3]; scans: list of (t_start, t_end) shaded as imaging.
+    Args:
+      path: str or Path of the image.
+      t: float [M], times [s].
+      angle: float [M, 3], channel angles [rad] (NaN breaks the line).
+      rate: float [M, 3], channel rates [rad/s].
+      accel: float [M, 3], channel accelerations [rad/s^2].
+      rate_limit: float [3], rate bounds [rad/s].
+      accel_limit: float [3], acceleration bounds [rad/s^2].
+      scans: list of (t_start, t_end) [s], shaded as imaging.
+      title: figure title.
     """
     plt = _plt()
     fig, axes = plt.subplots(3, 3, figsize=(13, 8), sharex=True)
@@ -172,10 +194,15 @@ def plot_attitude(path, t, angle, rate, accel, rate_limit, accel_limit, scans, t
 
 
 def plot_margins(path, margins, chosen_before=None, chosen_after=None, title=""):
-    """Histogram of reach margins [rad] of the feasible screened transitions (degrees, log y).
+    """Histogram of reach margins of the feasible screened transitions (degrees, log y).
 
-    chosen_before / chosen_after [K-1]: margins of the plan's transitions before and after
-    refinement, drawn as rug marks.
+    Args:
+      path: str or Path of the image.
+      margins: float [N], margins [rad] (non-finite ones dropped).
+      chosen_before: float [K-1], margins of the plan's transitions before refinement
+        [rad], drawn as rug marks (None: none).
+      chosen_after: float [K-1], the same after refinement [rad].
+      title: figure title.
     """
     plt = _plt()
     fig, ax = plt.subplots(figsize=(8, 4.5))

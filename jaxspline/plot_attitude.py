@@ -31,9 +31,17 @@ _JOIN = PHASES.index("join")
 
 
 def flown_ratios(scene, k: int, sat, hist) -> np.ndarray:
-    """[N, 3] checked rate, acceleration, jerk of a history as fractions of the limits.
+    """Checked rate, acceleration and jerk of a history as fractions of the limits.
 
     NaN in the jerk column where the model has no jerk limit (see module docstring).
+
+    Args:
+      scene: Scene of the plan's satellites.
+      k: int, satellite index in the scene.
+      sat: Satellite (its limits).
+      hist: AttitudeHistory of the satellite (N samples).
+    Returns:
+      numpy float [N, 3], ratios (dimensionless; <= 1 within the limits).
     """
     norm, chan = join_limits(sat)
     n = hist.t.size
@@ -54,7 +62,13 @@ def flown_ratios(scene, k: int, sat, hist) -> np.ndarray:
 
 
 def plot_attitude_profile(result, attitude, path) -> None:
-    """Write the flown-profile figure of ``attitude`` (:class:`PlanAttitude`) to ``path``."""
+    """Write the flown-profile figure of ``attitude`` to ``path``.
+
+    Args:
+      result: PlanResult.
+      attitude: :class:`PlanAttitude` of the plan.
+      path: str or Path of the image (written atomically).
+    """
     plt = _plt()
     sc = result.scenario
     with jax.enable_x64(True):

@@ -113,9 +113,14 @@ def plot_plan_ground_tracks(result, path, *, step: float = 30.0) -> None:
     """World map (equirectangular) of the satellites' ground tracks and the targets.
 
     Coastlines from :func:`land_fraction`; each satellite's sub-satellite track over
-    the horizon in its colour (sampled every ``step`` seconds [s], broken at the
-    antimeridian); targets as small grey dots, imaged ones in the colour of the
-    (first) satellite imaging them. Title: observations, value, bound and gap.
+    the horizon in its colour (broken at the antimeridian); targets as small grey dots,
+    imaged ones in the colour of the (first) satellite imaging them. Title:
+    observations, value, bound and gap.
+
+    Args:
+      result: PlanResult.
+      path: str or Path of the image.
+      step: track sampling step [s].
     """
     plt = _plt()
     sc = result.scenario
@@ -168,6 +173,10 @@ def plot_plan_timeline(result, path) -> None:
     Imaging intervals are bars in the satellite's colour, the maneuver ending at each
     start a thin dark bar before it; x in hours from the epoch. A second panel draws
     ``result.battery`` (satellite name -> (t [s], level [Wh])) when it is not empty.
+
+    Args:
+      result: PlanResult.
+      path: str or Path of the image.
     """
     plt = _plt()
     sc = result.scenario
@@ -231,11 +240,15 @@ def plot_plan_timeline(result, path) -> None:
 
 
 def plot_plan_slack(result, path) -> None:
-    """Histogram of the observations' slack [s] (gap minus required maneuver), per model.
+    """Histogram of the observations' slack (gap minus required maneuver) [s], per model.
 
     One step histogram per maneuver model. The x axis is logarithmic when all slacks
     are >= 0 and the positive ones span more than :data:`LOG_SLACK_RATIO`; slacks below
     :data:`SLACK_FLOOR` are then counted at the floor. Non-finite slacks are dropped.
+
+    Args:
+      result: PlanResult.
+      path: str or Path of the image.
     """
     plt = _plt()
     sc = result.scenario
