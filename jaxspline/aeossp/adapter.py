@@ -49,7 +49,18 @@ AEOSSP_MARGINS = Margins(
 
 
 def case_scenario(case, *, margins: Margins = AEOSSP_MARGINS, time_limit: float = 60.0):
-    """The :class:`Scenario` of a loaded case (or a case directory)."""
+    """The :class:`Scenario` of a loaded case (or a case directory).
+
+    Every satellite becomes an eigen-axis satellite with its battery; every task a
+    point target.
+
+    Args:
+      case: Case, or a path of a case directory.
+      margins: Margins of the planner.
+      time_limit: default planner time budget [s].
+    Returns:
+      Scenario (angles converted to radians).
+    """
     if not hasattr(case, "tasks"):
         case = load_case(case)
     sats = tuple(
@@ -106,7 +117,14 @@ def case_scenario(case, *, margins: Margins = AEOSSP_MARGINS, time_limit: float 
 
 
 def solution_from_result(case, result) -> dict:
-    """The benchmark's solution document ``{"actions": [...]}`` of a PlanResult."""
+    """The benchmark's solution document ``{"actions": [...]}`` of a PlanResult.
+
+    Args:
+      case: Case the result was planned for.
+      result: PlanResult.
+    Returns:
+      dict, JSON-ready.
+    """
     o = result.observations
     acts = []
     for i in range(len(o)):
@@ -129,7 +147,17 @@ def solve_case(
     seed: int = 0,
     max_iters: int | None = None,
 ):
-    """Plan one case through :func:`jaxspline.plan`; returns ``(solution, result)``."""
+    """Plan one case through :func:`jaxspline.plan`.
+
+    Args:
+      case_dir: path of a case directory, or a loaded Case.
+      time_limit: planner time budget [s].
+      progress: show progress lines.
+      seed: int, seed of the randomized search.
+      max_iters: cap on search iterations (reproducible runs); None: the deadline alone.
+    Returns:
+      ``(solution dict, PlanResult)``.
+    """
     from jaxspline.engine.planner import plan
 
     case = load_case(case_dir) if isinstance(case_dir, str | Path) else case_dir

@@ -40,7 +40,14 @@ def parse_time(text: str, *, where: str = "time") -> datetime:
     """Parse an ISO 8601 UTC time (``2026-04-14T04:00:00Z``) to an aware ``datetime``.
 
     A string without an offset is taken as UTC; an offset other than UTC is converted.
-    ``where`` names the field in the ``ValueError`` raised for malformed input.
+
+    Args:
+      text: the time string.
+      where: names the field in the error message.
+    Returns:
+      datetime in UTC.
+    Raises:
+      ValueError: malformed input (naming ``where``).
     """
     if isinstance(text, datetime):
         value = text
@@ -60,7 +67,13 @@ def parse_time(text: str, *, where: str = "time") -> datetime:
 
 
 def format_time(value: datetime) -> str:
-    """Format an aware (or naive = UTC) ``datetime`` as ``YYYY-MM-DDTHH:MM:SS[.ffffff]Z``."""
+    """Format an aware (or naive = UTC) ``datetime`` as ``YYYY-MM-DDTHH:MM:SS[.ffffff]Z``.
+
+    Args:
+      value: datetime.
+    Returns:
+      str.
+    """
     if value.tzinfo is None:
         value = value.replace(tzinfo=UTC)
     value = value.astimezone(UTC)
@@ -72,7 +85,24 @@ def format_time(value: datetime) -> str:
 class Satellite:
     """One satellite of a case: TLE, sensor, attitude and battery model.
 
-    Units: degrees, degrees/s, degrees/s², seconds, watt-hours, watts (as in the files).
+    Units as in the files (degrees, seconds, watt-hours, watts).
+
+    Attributes:
+      satellite_id: identifier.
+      norad_id: NORAD catalogue number.
+      tle_line1: TLE line 1.
+      tle_line2: TLE line 2.
+      sensor_type: sensor type.
+      max_slew_rate_deg_s: eigen-axis rate bound [deg/s].
+      max_slew_accel_deg_s2: eigen-axis acceleration bound [deg/s²].
+      settling_time_s: settling time after a slew [s].
+      max_off_nadir_deg: pointing limit [deg].
+      battery_capacity_wh: battery capacity [Wh].
+      initial_battery_wh: battery level at the horizon start [Wh].
+      idle_power_w: idle load [W].
+      imaging_power_w: extra load while imaging [W].
+      slew_power_w: extra load while slewing [W].
+      sunlit_charge_power_w: charging power in sunlight [W].
     """
 
     satellite_id: str
@@ -94,7 +124,20 @@ class Satellite:
 
 @dataclass(frozen=True)
 class Task:
-    """One point target: WGS84 geodetic position, time window, duration, sensor, weight."""
+    """One point target: WGS84 geodetic position, time window, duration, sensor, weight.
+
+    Attributes:
+      task_id: identifier.
+      name: label.
+      latitude_deg: geodetic latitude [deg].
+      longitude_deg: longitude [deg].
+      altitude_m: height above the ellipsoid [m].
+      release_time: earliest imaging start (UTC).
+      due_time: latest imaging end (UTC).
+      required_duration_s: imaging time [s].
+      required_sensor_type: sensor type needed.
+      weight: value collected if imaged.
+    """
 
     task_id: str
     name: str
@@ -110,7 +153,18 @@ class Task:
 
 @dataclass(frozen=True)
 class Case:
-    """A loaded aeossp_standard case (horizon, grids, satellites, tasks)."""
+    """A loaded aeossp_standard case (horizon, grids, satellites, tasks).
+
+    Attributes:
+      case_id: identifier.
+      horizon_start: start of the horizon (UTC).
+      horizon_end: end of the horizon (UTC).
+      action_step_s: grid of action times [s].
+      geometry_step_s: grid of the geometry checks [s].
+      resource_step_s: grid of the battery recursion [s].
+      satellites: the satellites.
+      tasks: the tasks.
+    """
 
     case_id: str
     horizon_start: datetime
@@ -280,8 +334,14 @@ def _load_task(raw: Any, where: str) -> Task:
 def load_case(case_dir: str | os.PathLike) -> Case:
     """Load and validate one aeossp_standard case directory.
 
-    Raises ``FileNotFoundError`` for a missing file and ``ValueError`` naming the file
-    and the field for a missing or malformed field, duplicate ids, or a bad horizon.
+    Args:
+      case_dir: path of the case directory.
+    Returns:
+      Case.
+    Raises:
+      FileNotFoundError: a file is missing.
+      ValueError: naming the file and the field for a missing or malformed field,
+        duplicate ids, or a bad horizon.
     """
     case_dir = Path(case_dir)
     if not case_dir.is_dir():
@@ -321,7 +381,15 @@ def load_case(case_dir: str | os.PathLike) -> Case:
 
 
 def load_solution(path: str | os.PathLike) -> dict:
-    """Read a solution JSON file ``{"actions": [...]}``; ValueError if it is not one."""
+    """Read a solution JSON file ``{"actions": [...]}``.
+
+    Args:
+      path: path of the JSON file.
+    Returns:
+      dict, the solution.
+    Raises:
+      ValueError: the file is not valid JSON or not an object with an "actions" list.
+    """
     path = Path(path)
     with open(path, encoding="utf-8") as fh:
         try:
@@ -336,8 +404,14 @@ def load_solution(path: str | os.PathLike) -> dict:
 def write_solution(path: str | os.PathLike, actions, force: bool = False) -> Path:
     """Write ``{"actions": actions}`` atomically (temp file + ``os.replace``).
 
-    ``actions`` is a list of action dicts or a full solution dict with an ``actions``
-    key. Refuses to overwrite an existing file unless ``force`` (``FileExistsError``).
+    Args:
+      path: destination.
+      actions: a list of action dicts or a full solution dict with an ``actions`` key.
+      force: overwrite an existing file.
+    Returns:
+      Path of the written file.
+    Raises:
+      FileExistsError: the file exists and ``force`` is false.
     """
     path = Path(path)
     refuse_overwrite(path, force)

@@ -69,7 +69,16 @@ OFF_NADIR_TOL_DEG = 1e-6
 # --------------------------------------------------------------------------- report
 @dataclass(frozen=True)
 class Violation:
-    """One rule violation: rule number (1-8), action index (None = satellite level)."""
+    """One rule violation.
+
+    Attributes:
+      rule: rule number of RULES.md (1-8).
+      message: what is wrong, with the numbers.
+      action_index: index into the solution's actions (None = satellite level).
+      satellite_id: satellite concerned, if any.
+      task_id: task concerned, if any.
+      time: ISO time of the violation, if any.
+    """
 
     rule: int
     message: str
@@ -87,7 +96,21 @@ class Violation:
 
 @dataclass
 class CheckReport:
-    """Result of ``check_solution``: validity, violations, official metrics, diagnostics."""
+    """Result of ``check_solution``: validity, violations, official metrics, diagnostics.
+
+    Attributes:
+      case_id: the case.
+      valid: no violation.
+      violations: the violations.
+      metrics: official metrics (CR, WCR, TAT [s], PC [Wh]; zeros / None when invalid).
+      accepted_metrics: the same over the actions that passed.
+      n_actions: number of actions in the solution.
+      n_accepted: number of actions that passed.
+      satellites: per-satellite battery summaries.
+      maneuvers: the maneuver windows.
+      margins: tightest off-nadir slack [deg], slew-gap slack [s], lowest battery [Wh]
+        over accepted actions.
+    """
 
     case_id: str
     valid: bool
@@ -412,11 +435,13 @@ def _metrics(case: Case, acts: list[_Action], pc: float) -> dict[str, Any]:
 def check_solution(case: Case, solution: dict) -> CheckReport:
     """Check a solution dict ``{"actions": [...]}`` against every rule of RULES.md.
 
-    Returns a ``CheckReport``: ``valid`` (no violation), the violations (rule, action
-    index, satellite/task, numbers), official ``metrics`` (CR, WCR, TAT [s], PC [Wh];
-    zeros / None when invalid), ``accepted_metrics`` over the actions that passed,
-    per-satellite battery summaries, the maneuver windows and ``margins`` (tightest
-    off-nadir slack [deg], slew-gap slack [s], lowest battery [Wh] over accepted actions).
+    Args:
+      case: Case.
+      solution: dict ``{"actions": [...]}``.
+    Returns:
+      CheckReport (``valid``, violations with rule, action index, satellite/task and
+      numbers, official metrics, accepted metrics, battery summaries, maneuver windows
+      and margins).
     """
     if not isinstance(solution, dict) or not isinstance(solution.get("actions", []), list):
         raise ValueError("solution: expected an object with an 'actions' list")
@@ -468,7 +493,14 @@ def check_solution(case: Case, solution: dict) -> CheckReport:
 
 
 def format_report(report: CheckReport, max_violations: int = 50) -> str:
-    """Readable multi-line text of a ``CheckReport``."""
+    """Readable multi-line text of a ``CheckReport``.
+
+    Args:
+      report: CheckReport.
+      max_violations: violations listed; the rest is counted in one line.
+    Returns:
+      str.
+    """
     lines = [
         f"case {report.case_id}: {'VALID' if report.valid else 'INVALID'} "
         f"({report.n_accepted}/{report.n_actions} actions accepted, "

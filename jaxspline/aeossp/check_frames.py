@@ -69,11 +69,16 @@ def _days_since_j2000(unix_s: np.ndarray) -> np.ndarray:
 
 
 def gmst82(unix_s) -> np.ndarray:
-    """Greenwich mean sidereal time, IAU 1982 (rad, in [0, 2π)), UT1 = UTC.
+    """Greenwich mean sidereal time, IAU 1982, UT1 = UTC.
 
     ``GMST = 67310.54841 + (876600·3600 + 8640184.812866) T + 0.093104 T² − 6.2e-6 T³``
     seconds of time, T in Julian centuries UT1 since J2000 (Vallado et al. 2006, AIAA
-    2006-6753, eq. for TEME -> PEF). ``unix_s``: UTC as Unix seconds.
+    2006-6753, eq. for TEME -> PEF).
+
+    Args:
+      unix_s: float [...], UTC as Unix seconds.
+    Returns:
+      float [...], GMST [rad] in [0, 2π).
     """
     t = _days_since_j2000(unix_s) / 36525.0
     sec = 67310.54841 + (876600.0 * 3600.0 + 8640184.812866) * t + 0.093104 * t**2 - 6.2e-6 * t**3
@@ -81,7 +86,14 @@ def gmst82(unix_s) -> np.ndarray:
 
 
 def teme_to_ecef(r_teme: np.ndarray, unix_s) -> np.ndarray:
-    """TEME -> Earth-fixed position (zero polar motion): ``R3(GMST82) r`` (same units)."""
+    """TEME -> Earth-fixed position (zero polar motion): ``R3(GMST82) r``.
+
+    Args:
+      r_teme: float [..., 3], TEME position (any unit).
+      unix_s: float [...], UTC as Unix seconds.
+    Returns:
+      float [..., 3], Earth-fixed position (unit of r_teme).
+    """
     return np.einsum("...ij,...j->...i", _rot3(gmst82(unix_s)), r_teme)
 
 
@@ -101,11 +113,16 @@ def _nutation(t_tt: np.ndarray):
 
 
 def ecef_to_gcrf_matrix(unix_s) -> np.ndarray:
-    """Rotation Earth-fixed -> inertial (J2000 ≈ GCRF), stacked (..., 3, 3).
+    """Rotation Earth-fixed -> inertial (J2000 ≈ GCRF).
 
     ``M = P^T N^T R3(−GAST)`` with IAU 1976 precession P (ζ, θ, z polynomials, Lieske
     1977), IAU 1980 nutation N truncated to 4 terms, GAST = GMST82 + Δψ cos ε; zero
     EOP (UT1 = UTC, no polar motion), TT = UTC + 69.184 s.
+
+    Args:
+      unix_s: float [...], UTC as Unix seconds.
+    Returns:
+      float [..., 3, 3], M.
     """
     unix_s = np.asarray(unix_s, dtype=float)
     t = _days_since_j2000(unix_s + TT_MINUS_UTC_S) / 36525.0
@@ -121,11 +138,16 @@ def ecef_to_gcrf_matrix(unix_s) -> np.ndarray:
 
 
 def sun_position_gcrf(unix_s) -> np.ndarray:
-    """Sun position (m), J2000 equatorial, low precision (Montenbruck & Gill 2012, p. 70).
+    """Sun position, J2000 equatorial, low precision (Montenbruck & Gill 2012, p. 70).
 
     ``M = 2π frac(0.9931267 + 99.9973583 T)``, ``L = 2π frac(0.7859444 + M/2π +
     (6892 sin M + 72 sin 2M)/1296e3)``, ``r = 149.619e9 − 2.499e9 cos M − 0.021e9 cos 2M``,
     rotated from the ecliptic by ε = 23.43929111°; T in centuries TT since J2000.
+
+    Args:
+      unix_s: float [...], UTC as Unix seconds.
+    Returns:
+      float [..., 3], position [m].
     """
     t = _days_since_j2000(np.asarray(unix_s, dtype=float) + TT_MINUS_UTC_S) / 36525.0
     m = 2 * math.pi * np.mod(0.9931267 + 99.9973583 * t, 1.0)
@@ -144,7 +166,14 @@ def sun_position_gcrf(unix_s) -> np.ndarray:
 
 
 def sunlit(r_gcrf: np.ndarray, unix_s) -> np.ndarray:
-    """Cylindrical shadow: sunlit unless behind the Earth (r·ŝ < 0) and |r − (r·ŝ)ŝ| < R."""
+    """Cylindrical shadow: sunlit unless behind the Earth (r·ŝ < 0) and |r − (r·ŝ)ŝ| < R.
+
+    Args:
+      r_gcrf: float [..., 3], satellite position, GCRF [m].
+      unix_s: float [...], UTC as Unix seconds.
+    Returns:
+      bool [...].
+    """
     sun = sun_position_gcrf(unix_s)
     shat = sun / np.linalg.norm(sun, axis=-1, keepdims=True)
     proj = np.sum(r_gcrf * shat, axis=-1)
@@ -153,7 +182,15 @@ def sunlit(r_gcrf: np.ndarray, unix_s) -> np.ndarray:
 
 
 def geodetic_to_ecef(lat_deg, lon_deg, alt_m) -> np.ndarray:
-    """WGS84 geodetic (deg, deg, m) -> Earth-fixed Cartesian (m), shape (..., 3)."""
+    """WGS84 geodetic coordinates -> Earth-fixed Cartesian position.
+
+    Args:
+      lat_deg: float [...], geodetic latitude [deg].
+      lon_deg: float [...], longitude [deg].
+      alt_m: float [...], height above the ellipsoid [m].
+    Returns:
+      float [..., 3], position [m].
+    """
     lat, lon = np.radians(lat_deg), np.radians(lon_deg)
     e2 = WGS84_F * (2.0 - WGS84_F)
     n = WGS84_A / np.sqrt(1.0 - e2 * np.sin(lat) ** 2)
@@ -169,15 +206,32 @@ def geodetic_to_ecef(lat_deg, lon_deg, alt_m) -> np.ndarray:
 
 
 def angle_deg(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Angle between vectors (deg), ``atan2(|u×v|, u·v)`` (accurate at small angles)."""
+    """Angle between vectors, ``atan2(|u×v|, u·v)`` (accurate at small angles).
+
+    Args:
+      u: float [..., 3].
+      v: float [..., 3].
+    Returns:
+      float [...], angle [deg].
+    """
     return np.degrees(np.arctan2(np.linalg.norm(np.cross(u, v), axis=-1), np.sum(u * v, axis=-1)))
 
 
 class Ephemeris:
     """SGP4 positions of one satellite at times given as seconds from ``horizon_start``.
 
-    ``gravity``: ``"wgs84"`` (official) or ``"wgs72"`` (sgp4's classic default, for the
-    frame-difference study). Positions in metres; TEME, Earth-fixed and GCRF.
+    Positions in metres; TEME, Earth-fixed and GCRF.
+
+    Args:
+      sat: Satellite of the case (TLE).
+      horizon_start: datetime of offset 0 (UTC).
+      gravity: ``"wgs84"`` (official) or ``"wgs72"`` (sgp4's classic default, for the
+        frame-difference study).
+
+    Attributes:
+      satellite_id: the satellite.
+      rec: the sgp4 ``Satrec``.
+      t0_unix: Unix seconds of ``horizon_start``.
     """
 
     def __init__(self, sat: Satellite, horizon_start: datetime, gravity: str = "wgs84"):
@@ -212,9 +266,16 @@ class Ephemeris:
 
 
 def bang_coast_bang_time(theta_deg: float, rate: float, accel: float) -> float:
-    """Rest-to-rest time (s) for angle θ (deg), max rate v (deg/s), max accel a (deg/s²).
+    """Rest-to-rest time for angle θ, max rate v, max accel a (RULES.md 7).
 
-    ``2 sqrt(θ/a)`` if θ <= v²/a else ``2v/a + (θ − v²/a)/v``; 0 for θ <= 1e-9 (RULES.md 7).
+    ``2 sqrt(θ/a)`` if θ <= v²/a else ``2v/a + (θ − v²/a)/v``; 0 for θ <= 1e-9.
+
+    Args:
+      theta_deg: angle θ [deg].
+      rate: max rate v [deg/s].
+      accel: max acceleration a [deg/s²].
+    Returns:
+      float, time [s].
     """
     theta = max(0.0, float(theta_deg))
     if theta <= EPS:

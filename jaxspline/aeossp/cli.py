@@ -72,7 +72,11 @@ def _cmd_solve(args) -> int:
 
 
 def register(sub) -> None:
-    """Register ``aeossp check`` and ``aeossp solve`` on the ``jaxspline`` sub-parsers."""
+    """Register ``aeossp check`` and ``aeossp solve`` on the ``jaxspline`` sub-parsers.
+
+    Args:
+      sub: the ``argparse`` sub-parsers object of the ``jaxspline`` command.
+    """
     p = sub.add_parser("aeossp", help="aeossp_standard benchmark: solve or check a case")
     asub = p.add_subparsers(dest="aeossp_command", required=True)
 
