@@ -52,7 +52,13 @@ class FieldContext:
         return None
 
     def line_of(self, field: str) -> int | None:
-        """1-based TOML line of ``field`` (``table[index].key...``), or None."""
+        """1-based TOML line of a field, or None when unknown.
+
+        Args:
+          field: dotted field label (``table[index].key...``).
+        Returns:
+          int or None.
+        """
         if self.lines is None:
             return None
         parts = re.findall(_IDENT + r"|\[\d+\]", field)
@@ -88,7 +94,14 @@ class FieldContext:
         return start + 1
 
     def error(self, field: str, msg: str) -> ValueError:
-        """A ValueError ``source: field (line N): msg``."""
+        """A ValueError ``source: field (line N): msg``.
+
+        Args:
+          field: dotted field label.
+          msg: what is wrong.
+        Returns:
+          ValueError (to be raised by the caller).
+        """
         line = self.line_of(field)
         where = f" (line {line})" if line is not None else ""
         return ValueError(f"{self.source}: {field}{where}: {msg}")

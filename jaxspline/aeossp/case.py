@@ -181,11 +181,23 @@ class Case:
         return (self.horizon_end - self.horizon_start).total_seconds()
 
     def seconds(self, value: datetime) -> float:
-        """Seconds from ``horizon_start`` to ``value``."""
+        """Seconds from ``horizon_start`` to ``value``.
+
+        Args:
+          value: aware datetime.
+        Returns:
+          float [s].
+        """
         return (value - self.horizon_start).total_seconds()
 
     def at(self, seconds: float) -> datetime:
-        """The instant ``seconds`` after ``horizon_start``."""
+        """The instant ``seconds`` after ``horizon_start``.
+
+        Args:
+          seconds: float [s].
+        Returns:
+          datetime (UTC).
+        """
         return self.horizon_start + timedelta(seconds=float(seconds))
 
     @property
@@ -201,8 +213,9 @@ class Case:
     def task_table(self) -> dict[str, np.ndarray]:
         """Tasks as struct-of-arrays (float64; times in seconds from ``horizon_start``).
 
-        Keys: ``latitude_deg``, ``longitude_deg``, ``altitude_m``, ``release_s``,
-        ``due_s``, ``duration_s``, ``weight``, ``infrared`` (bool).
+        Returns:
+          dict of arrays [T]: ``latitude_deg``, ``longitude_deg``, ``altitude_m``,
+          ``release_s``, ``due_s``, ``duration_s``, ``weight``, ``infrared`` (bool).
         """
         ts = self.tasks
         return {

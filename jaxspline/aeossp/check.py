@@ -124,13 +124,23 @@ class CheckReport:
     margins: dict[str, Any] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain JSON-serialisable dictionary."""
+        """Plain JSON-serialisable dictionary.
+
+        Returns:
+          dict (violations as dicts).
+        """
         d = asdict(self)
         d["violations"] = [asdict(v) for v in self.violations]
         return d
 
     def to_json(self, indent: int | None = 2) -> str:
-        """JSON text of ``to_dict()``."""
+        """JSON text of ``to_dict()``.
+
+        Args:
+          indent: JSON indentation (None: compact).
+        Returns:
+          str.
+        """
         return json.dumps(self.to_dict(), indent=indent)
 
 

@@ -241,11 +241,25 @@ class Ephemeris:
         self.t0_unix = (horizon_start - _EPOCH).total_seconds()
 
     def unix(self, seconds) -> np.ndarray:
-        """Unix seconds (UTC) of offsets ``seconds`` from ``horizon_start``."""
+        """Unix seconds (UTC) of offsets from ``horizon_start``.
+
+        Args:
+          seconds: float [...], offsets [s].
+        Returns:
+          float [...], Unix seconds.
+        """
         return self.t0_unix + np.asarray(seconds, dtype=float)
 
     def teme(self, seconds) -> np.ndarray:
-        """TEME position (m), shape (..., 3)."""
+        """TEME position by SGP4.
+
+        Args:
+          seconds: float [...], offsets from ``horizon_start`` [s].
+        Returns:
+          float [..., 3], position [m].
+        Raises:
+          ValueError: SGP4 reports an error (naming the satellite and the code).
+        """
         s = np.atleast_1d(np.asarray(seconds, dtype=float))
         days = (self.t0_unix + s) / 86400.0
         jd = np.floor(days) + 2440587.5
@@ -256,11 +270,23 @@ class Ephemeris:
         return (r * 1000.0).reshape(np.shape(seconds) + (3,))
 
     def ecef(self, seconds) -> np.ndarray:
-        """Earth-fixed position (m): ``R3(GMST82) r_teme``."""
+        """Earth-fixed position: ``R3(GMST82) r_teme``.
+
+        Args:
+          seconds: float [...], offsets from ``horizon_start`` [s].
+        Returns:
+          float [..., 3], position [m].
+        """
         return teme_to_ecef(self.teme(seconds), self.unix(seconds))
 
     def gcrf(self, seconds) -> np.ndarray:
-        """Inertial (GCRF) position (m) via the Earth-fixed frame (official route)."""
+        """Inertial (GCRF) position via the Earth-fixed frame (official route).
+
+        Args:
+          seconds: float [...], offsets from ``horizon_start`` [s].
+        Returns:
+          float [..., 3], position [m].
+        """
         m = ecef_to_gcrf_matrix(self.unix(seconds))
         return np.einsum("...ij,...j->...i", m, self.ecef(seconds))
 

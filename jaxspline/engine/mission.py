@@ -199,7 +199,13 @@ class Targets:
         return int(self.kind.shape[0])
 
     def concat(self, other: Targets) -> Targets:
-        """The targets of ``self`` followed by those of ``other``."""
+        """The targets of ``self`` followed by those of ``other``.
+
+        Args:
+          other: Targets.
+        Returns:
+          Targets of R + R' entries.
+        """
         return Targets(
             **{
                 f.name: np.concatenate([getattr(self, f.name), getattr(other, f.name)])
@@ -403,5 +409,11 @@ class Scenario:
         return julian_date(self.epoch)
 
     def at(self, seconds: float) -> _dt.datetime:
-        """The UTC instant ``seconds`` after the epoch."""
+        """The UTC instant ``seconds`` after the epoch.
+
+        Args:
+          seconds: float [s].
+        Returns:
+          datetime (UTC).
+        """
         return self.epoch + _dt.timedelta(seconds=float(seconds))

@@ -69,7 +69,13 @@ class SlewTable(NamedTuple):
         return self.time[k.astype(np.int64)]
 
     def scalar(self, theta: float) -> float:
-        """Same as calling the table, for one Python float (the search's hot loop)."""
+        """Same as calling the table, for one Python float (the search's hot loop).
+
+        Args:
+          theta: float, slew angle [rad] (clipped to [0, pi]).
+        Returns:
+          float, required time [s].
+        """
         k = math.ceil(self.size * math.sqrt(min(max(theta, 0.0), math.pi) / math.pi) - 1e-12)
         return float(self.time[min(k, self.size)])
 

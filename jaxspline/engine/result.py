@@ -89,7 +89,15 @@ class PlanResult:
         return float(np.sum(self.scenario.targets.value))
 
     def timeline(self, sat: int | str) -> Observations:
-        """The observations of one satellite (index or name), in time order."""
+        """The observations of one satellite, in time order.
+
+        Args:
+          sat: satellite index or name.
+        Returns:
+          Observations of that satellite.
+        Raises:
+          ValueError: unknown satellite name.
+        """
         if isinstance(sat, str):
             names = [s.name for s in self.scenario.satellites]
             if sat not in names:
@@ -99,7 +107,11 @@ class PlanResult:
         return Observations(*(x[m] for x in self.observations))
 
     def rows(self) -> list[dict]:
-        """One dict per observation (names, ISO times, seconds, maneuver, slack, value)."""
+        """One dict per observation (names, ISO times, seconds, maneuver, slack, value).
+
+        Returns:
+          list of dict, JSON-ready.
+        """
         sc = self.scenario
         o = self.observations
         out = []
@@ -125,7 +137,11 @@ class PlanResult:
         return out
 
     def summary(self) -> dict:
-        """Headline figures (JSON-ready)."""
+        """Headline figures (JSON-ready).
+
+        Returns:
+          dict.
+        """
         return {
             "scenario": self.scenario.name,
             "satellites": len(self.scenario.satellites),
@@ -140,7 +156,14 @@ class PlanResult:
         }
 
     def to_json(self, path, *, force: bool = False):
-        """Write summary, report, stats, timings and the observations as JSON (atomic)."""
+        """Write summary, report, stats, timings and the observations as JSON (atomic).
+
+        Args:
+          path: str or Path.
+          force: overwrite an existing file.
+        Raises:
+          FileExistsError: the file exists and ``force`` is false.
+        """
         doc = {
             "summary": self.summary(),
             "report": self.report,
@@ -151,7 +174,14 @@ class PlanResult:
         return atomic_write_text(path, json.dumps(_clean(doc), indent=2) + "\n", force=force)
 
     def to_csv(self, path, *, force: bool = False):
-        """Write one CSV row per observation (atomic)."""
+        """Write one CSV row per observation (atomic).
+
+        Args:
+          path: str or Path.
+          force: overwrite an existing file.
+        Raises:
+          FileExistsError: the file exists and ``force`` is false.
+        """
         rows = self.rows()
         buf = io.StringIO()
         fields = list(rows[0]) if rows else ["satellite", "target", "start_utc", "end_utc"]

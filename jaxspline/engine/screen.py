@@ -8,8 +8,8 @@ seconds under ``|f'| <= rate[c]``, ``|f''| <= accel[c]``; the per-channel
 exact-T kernels of :mod:`jaxspline.kernels.reach` decide it (SPEC section 1; feasible
 durations are not an interval, so ``T >= t_min`` is not enough).
 
-Engine layout
--------------
+Engine layout:
+
 * Candidate generation is chunked: valid options (``scan_ok``) are sorted by
   ``t_start``; for each source i the admissible destinations form one
   contiguous run of that order (``t_end[i] < t_start[j] <= t_end[i] + max_gap``,

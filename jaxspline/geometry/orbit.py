@@ -408,7 +408,14 @@ class OrbitTable(NamedTuple):
     ok: np.ndarray
 
     def usable(self, sat, t):
-        """True where time t [s] of satellite ``sat`` lies between two good knots (numpy)."""
+        """True where time t of satellite ``sat`` lies between two good knots (numpy).
+
+        Args:
+          sat: int [...], satellite indices.
+          t: float [...], seconds from the epoch.
+        Returns:
+          bool [...].
+        """
         tk = np.asarray(self.orbit.t)
         h = tk[1] - tk[0]
         k = np.clip(

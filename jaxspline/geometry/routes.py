@@ -246,10 +246,16 @@ class RouteSet(NamedTuple):
     azimuth: jnp.ndarray
 
     def states(self, route, t0):
-        """(t_end [K], start_angle [K,C], start_rate [K,C], end_angle [K,C], end_rate [K,C]).
+        """Exact pointing-law states at t0 and t_end = t0 + duration.
 
-        Exact pointing-law states at t0 and t_end = t0 + duration (rad, rad/s);
-        jit-able and differentiable in t0 (RouteModel protocol).
+        Jit-able and differentiable in t0 (RouteModel protocol).
+
+        Args:
+          route: int [K], route indices.
+          t0: float [K], start times [s from the epoch].
+        Returns:
+          (t_end float [K] [s], start_angle [rad], start_rate [rad/s], end_angle [rad],
+          end_rate [rad/s], float [K, C] each).
         """
         t0 = jnp.asarray(t0)
         if not jnp.issubdtype(t0.dtype, jnp.floating):
@@ -257,18 +263,36 @@ class RouteSet(NamedTuple):
         return _states_jit(self.scene, self.params, self.duration, jnp.asarray(route), t0)
 
     def window(self, route):
-        """(t0_min [K], t0_max [K]) [s] of the given routes."""
+        """Start-time windows of the given routes.
+
+        Args:
+          route: int [K], route indices.
+        Returns:
+          (t0_min, t0_max), float [K] each [s].
+        """
         return self.t0_min[route], self.t0_max[route]
 
     def value_of(self, route):
-        """Value [K] of the given routes."""
+        """Values of the given routes.
+
+        Args:
+          route: int [K], route indices.
+        Returns:
+          float [K].
+        """
         return self.value[route]
 
     def with_speeds(self, route, speed) -> RouteSet:
-        """A copy with strips ``route`` [K] scanned at ground speed ``speed`` [K] [m/s].
+        """A copy with some strips scanned at new ground speeds.
 
         Use before refinement so ``states`` reproduces the chosen options' scan speeds
         (points ignore the speed).
+
+        Args:
+          route: int [K], route indices.
+          speed: float [K], ground speeds [m/s].
+        Returns:
+          RouteSet.
         """
         route = np.asarray(route, dtype=np.int64)
         speed = np.broadcast_to(np.asarray(speed, np.float64), route.shape)
@@ -419,7 +443,15 @@ class TabulatedRouteModel(NamedTuple):
     value: jnp.ndarray
 
     def states(self, route, t0):
-        """(t_end, start_angle, start_rate, end_angle, end_rate), shapes [K] and [K, 3]."""
+        """Interpolated boundary states (RouteModel protocol).
+
+        Args:
+          route: int [K], route indices.
+          t0: float [K], start times [s from the epoch].
+        Returns:
+          (t_end float [K] [s], start_angle [rad], start_rate [rad/s], end_angle [rad],
+          end_rate [rad/s], float [K, 3] each).
+        """
         t0 = jnp.asarray(t0)
         r = self.row[route]
         m = self.knots.shape[1]
@@ -445,11 +477,23 @@ class TabulatedRouteModel(NamedTuple):
         return t0 + self.duration[r].astype(t0.dtype), y[:, :3], y[:, 3:6], y[:, 6:9], y[:, 9:]
 
     def window(self, route):
-        """(t0_min [K], t0_max [K]) [s]."""
+        """Start-time windows of the given routes.
+
+        Args:
+          route: int [K], route indices.
+        Returns:
+          (t0_min, t0_max), float [K] each [s].
+        """
         return self.t0_min[route], self.t0_max[route]
 
     def value_of(self, route):
-        """Value [K]."""
+        """Values of the given routes.
+
+        Args:
+          route: int [K], route indices.
+        Returns:
+          float [K].
+        """
         return self.value[route]
 
 

@@ -60,11 +60,23 @@ class BatteryModel:
                 self.base[k] = (ok[k] * p.charge_w - p.idle_w) * h
 
     def has(self, sat: int) -> bool:
-        """True if satellite ``sat`` has a power model."""
+        """True if satellite ``sat`` has a power model.
+
+        Args:
+          sat: int, satellite index.
+        Returns:
+          bool.
+        """
         return self.powers[sat] is not None
 
     def step_index(self, t: float) -> int:
-        """Index of the step containing time t [s] (floor)."""
+        """Index of the step containing time t (floor).
+
+        Args:
+          t: float, seconds from the epoch.
+        Returns:
+          int.
+        """
         return int(np.floor(t / self.dt + _EPS_STEPS))
 
     def loads(self, sat: int, starts, ends, maneuver):
@@ -92,15 +104,33 @@ class BatteryModel:
         return np.cumsum(d)[:n]
 
     def profile(self, sat: int, starts, ends, maneuver):
-        """Battery level [Wh] at the grid instants 0..n (length n+1) for these observations."""
+        """Battery level at the grid instants 0..n for these observations.
+
+        Args:
+          sat: int, satellite index.
+          starts: float [K], observation starts [s].
+          ends: float [K], observation ends [s].
+          maneuver: float [K], maneuver time before each observation [s].
+        Returns:
+          float [n + 1], level [Wh].
+        """
         p = self.powers[sat]
         net = self.base[sat] - self.loads(sat, starts, ends, maneuver)
         s = p.initial_wh + np.concatenate([[0.0], np.cumsum(net)])
         return s - np.maximum.accumulate(np.maximum(s - p.capacity_wh, 0.0))
 
     def extra_energy(self, sat: int, imaging_s: float, slew_s: float) -> float:
-        """Upper bound [Wh] of the load added by imaging_s seconds of imaging and slew_s
-        seconds of maneuvers (at most two windows), each widened to whole steps."""
+        """Upper bound of the load added by imaging and maneuvers.
+
+        Each of at most two windows is widened to whole steps.
+
+        Args:
+          sat: int, satellite index.
+          imaging_s: imaging time [s].
+          slew_s: maneuver time [s].
+        Returns:
+          float, energy [Wh].
+        """
         p = self.powers[sat]
         return (
             p.imaging_w * (imaging_s + 2.0 * self.dt) + p.slew_w * (slew_s + 4.0 * self.dt)

@@ -104,7 +104,13 @@ class EnergyBudgets:
         return r[1:, :e_n]
 
     def penalties(self, nu: np.ndarray):
-        """Per option and per near pair (``pb.near_src`` order) price of their energy."""
+        """Per option and per near pair (``pb.near_src`` order) price of their energy.
+
+        Args:
+          nu: float [B], multipliers of the B energy budgets (>= 0).
+        Returns:
+          (node float [N], arc float [P]) prices.
+        """
         node = np.zeros(self.n_options)
         arc = np.zeros(self.n_near)
         for sk in self.sats:
@@ -118,8 +124,14 @@ class EnergyBudgets:
         return node, arc
 
     def usage(self, nodes: np.ndarray, arcs: np.ndarray) -> np.ndarray:
-        """Scaled energy per constraint of the chosen options and near pairs (bool masks
-        over all options / near pairs)."""
+        """Scaled energy per constraint of the chosen options and near pairs.
+
+        Args:
+          nodes: bool [N], chosen options.
+          arcs: bool [P], chosen near pairs.
+        Returns:
+          float [B], usage of each budget as a fraction of it.
+        """
         out = np.zeros(self.m)
         for sk in self.sats:
             u = self._usage(sk, nodes[sk["lo"] : sk["hi"]], arcs[sk["pk"]])

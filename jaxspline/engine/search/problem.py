@@ -73,7 +73,14 @@ class Problem:
         return len(self.c_task)
 
     def need(self, i: int, j: int) -> float:
-        """Required time [s] between the end of option i and the start of option j (same sat)."""
+        """Required time between the end of option i and the start of option j (same satellite).
+
+        Args:
+          i: int, option id.
+          j: int, option id.
+        Returns:
+          float [s]; inf when (i, j) is not a feasible near pair of a per-channel satellite.
+        """
         k = self.c_sat[j]
         table = self.tables[k]
         if table is not None:

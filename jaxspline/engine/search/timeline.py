@@ -65,7 +65,14 @@ class Timeline:
 
     # ------------------------------------------------------------ transitions
     def need(self, i: int, j: int) -> float:
-        """Required time [s] from option i to option j (memoized :meth:`Problem.need`)."""
+        """Required time from option i to option j (memoized :meth:`Problem.need`).
+
+        Args:
+          i: int, option id.
+          j: int, option id.
+        Returns:
+          float [s].
+        """
         key = i * self.pb.n_options + j
         v = self.cache.get(key)
         if v is None:
@@ -76,12 +83,23 @@ class Timeline:
         return v
 
     def maneuver_into(self, k: int, pos: int) -> float:
-        """Required time [s] of the maneuver into position ``pos`` of satellite k's timeline."""
+        """Required time of the maneuver into position ``pos`` of satellite k's timeline.
+
+        Args:
+          k: int, satellite index.
+          pos: int, position in its timeline.
+        Returns:
+          float [s].
+        """
         tl = self.tl[k]
         return self.pb.c_first[tl[pos]] if pos == 0 else self.need(tl[pos - 1], tl[pos])
 
     def score(self):
-        """Comparable quality: (value, count, -sum of end times)."""
+        """Comparable quality: (value, count, -sum of end times).
+
+        Returns:
+          tuple, larger is better.
+        """
         return (round(self.W, 9), self.N, -round(self.tat, 6))
 
     # ------------------------------------------------------------ battery
@@ -124,7 +142,13 @@ class Timeline:
 
     # ------------------------------------------------------------ moves
     def check(self, c: int):
-        """Feasibility of inserting option c: the time it consumes [s], or None."""
+        """Feasibility of inserting option c.
+
+        Args:
+          c: int, option id.
+        Returns:
+          float, the time it consumes [s], or None when infeasible.
+        """
         pb = self.pb
         k = pb.c_sat[c]
         if self.assigned[pb.c_task[c]] >= 0:
@@ -161,7 +185,11 @@ class Timeline:
         return n_in + (e - s) + n_out - n_old
 
     def insert(self, c: int):
-        """Insert option c (feasibility is the caller's business: :meth:`check`)."""
+        """Insert option c (feasibility is the caller's business: :meth:`check`).
+
+        Args:
+          c: int, option id.
+        """
         pb = self.pb
         k, t = pb.c_sat[c], pb.c_task[c]
         pos = bisect.bisect_left(self.tl_s[k], pb.c_start[c])
@@ -180,7 +208,11 @@ class Timeline:
         self.log.append(("i", c))
 
     def remove(self, c: int):
-        """Remove option c from its satellite's timeline."""
+        """Remove option c from its satellite's timeline.
+
+        Args:
+          c: int, option id.
+        """
         pb = self.pb
         k, t = pb.c_sat[c], pb.c_task[c]
         tl = self.tl[k]
@@ -198,8 +230,17 @@ class Timeline:
         self.log.append(("r", c))
 
     def removal_ok(self, k: int, pos: int) -> bool:
-        """After removing a block at index ``pos`` of satellite k: the new transition into
-        ``tl[pos]`` and the battery still hold."""
+        """Whether a removal at index ``pos`` of satellite k keeps the plan feasible.
+
+        After removing a block at ``pos``: the new transition into ``tl[pos]`` and the
+        battery still hold.
+
+        Args:
+          k: int, satellite index.
+          pos: int, position in its timeline.
+        Returns:
+          bool.
+        """
         pb = self.pb
         tl = self.tl[k]
         if pos < len(tl):
@@ -221,7 +262,11 @@ class Timeline:
         self.saved.clear()
 
     def undo_to(self, mark: int):
-        """Undo the changes logged after ``mark``; at mark 0 the battery bounds come back too."""
+        """Undo the changes logged after ``mark``; at mark 0 the battery bounds come back too.
+
+        Args:
+          mark: int, length of the log to return to.
+        """
         while len(self.log) > mark:
             op, c = self.log.pop()
             if op == "i":
@@ -235,7 +280,14 @@ class Timeline:
             self.saved.clear()
 
     def best_insert(self, t: int, rng=None) -> bool:
-        """Insert task t at its cheapest feasible option (noisy costs with ``rng``)."""
+        """Insert task t at its cheapest feasible option (noisy costs with ``rng``).
+
+        Args:
+          t: int, task index.
+          rng: numpy Generator for randomized costs, or None.
+        Returns:
+          bool, whether the task was inserted.
+        """
         pb = self.pb
         best, best_cost = -1, math.inf
         for c in pb.task_cands[t]:
@@ -253,7 +305,11 @@ class Timeline:
         return False
 
     def restore(self, assigned):
-        """Reset to the given task -> option assignment (-1: unassigned)."""
+        """Reset to the given task -> option assignment (-1: unassigned).
+
+        Args:
+          assigned: list of option ids per task.
+        """
         pb = self.pb
         for k in range(pb.n_sats):
             self.tl[k], self.tl_s[k] = [], []
