@@ -93,6 +93,18 @@ class EnergyBudgets:
             self.sats.append(sk)
         self.m = m
 
+    def restrict(self, keep: np.ndarray) -> None:
+        """Keep only the constraints where ``keep`` (bool [m]) is True (any subset of
+        the budgets is still a relaxation of the battery rule)."""
+        m = 0
+        for sk in self.sats:
+            mine = keep[sk["off"] : sk["off"] + sk["budget"].size]
+            kept = sk["kept"].copy()
+            kept[kept] = mine
+            sk["kept"], sk["budget"], sk["off"] = kept, sk["budget"][mine], m
+            m += int(mine.sum())
+        self.m = m
+
     @staticmethod
     def _usage(sk, nodes, arcs):
         """[A, E] energy inside each interval of the chosen options / near pairs (masks)."""

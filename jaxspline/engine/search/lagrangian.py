@@ -244,6 +244,11 @@ class _Prices:
         self.W = np.asarray(pb.weight, np.float64)
         self.ctask = np.asarray(pb.c_task, np.int64)
         self.en = EnergyBudgets(pb) if energy else None
+        if self.en is not None and self.en.m:
+            # price only the budgets the unpriced optimum overdraws (any subset is valid;
+            # the others rarely bind and would slow every iteration)
+            paths, _ = dp_paths(pb, self.d, self.W[self.ctask], None, used := [])
+            self.en.restrict(self._energy_usage(paths, used) > 1.0)
         m = self.en.m if self.en is not None else 0
         # prices: tasks (in [0, w]) then energy budgets (>= 0, see search.energy)
         self.hi = np.r_[self.W, np.full(m, np.inf)]
@@ -275,11 +280,14 @@ class _Prices:
             np.add.at(cnt, self.ctask[p], 1.0)
         if self.used is None:
             return cnt - 1.0
+        return np.r_[cnt, self._energy_usage(self.paths, self.used)] - 1.0
+
+    def _energy_usage(self, paths, used) -> np.ndarray:
         nodes = np.zeros(self.pb.n_options, bool)
-        nodes[[c for p in self.paths for c in p]] = True
+        nodes[[c for p in paths for c in p]] = True
         arcs = np.zeros(self.en.n_near, bool)
-        arcs[self.used] = True
-        return np.r_[cnt, self.en.usage(nodes, arcs)] - 1.0
+        arcs[used] = True
+        return self.en.usage(nodes, arcs)
 
     def step(self, target: float) -> bool:
         """Move the prices toward ``target``; False when the iteration has converged."""
