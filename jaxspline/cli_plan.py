@@ -211,7 +211,7 @@ def _print_summary(r, out: Path, names) -> None:
                     }
                 )
             ]
-            if r.report.get("joins")
+            if "joins" in (r.report.get("joins") or {})
             else []
         ),
         "wall time [s]  " + ", ".join(f"{k} {v:.2f}" for k, v in r.timings.items()),
