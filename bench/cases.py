@@ -84,11 +84,13 @@ def workloads() -> list[Workload]:
     """All benchmarked workloads (kernels imported from jaxspline)."""
     import jaxspline.kernels.joins as J
     import jaxspline.kernels.reach as R
+    import jaxspline.kernels.reach_durations as RD
     import jaxspline.kernels.slew as S
     from bench import baselines as B
     from bench.numpy_port import numpy_module
 
     NR = numpy_module("jaxspline.kernels.reach")  # same formulas, numpy arrays
+    NRD = numpy_module("jaxspline.kernels.reach_durations")
     NS = numpy_module("jaxspline.kernels.slew")
     b, d = RATE, ACCEL
     ws = [
@@ -120,15 +122,15 @@ def workloads() -> list[Workload]:
             "min_transfer_time",
             reach_inputs,
             ("a1", "b1", "a2", "b2"),
-            lambda a1, b1, a2, b2: R.min_transfer_time_kernel(a1, b1, a2, b2, b, d),
-            numpy_fn=lambda a1, b1, a2, b2: NR.min_transfer_time_kernel(a1, b1, a2, b2, b, d),
+            lambda a1, b1, a2, b2: RD.min_transfer_time_kernel(a1, b1, a2, b2, b, d),
+            numpy_fn=lambda a1, b1, a2, b2: NRD.min_transfer_time_kernel(a1, b1, a2, b2, b, d),
         ),
         Workload(
             "min_peak_accel",
             reach_inputs,
             ("a1", "b1", "a2", "b2", "T"),
-            lambda a1, b1, a2, b2, T: R.min_peak_accel_kernel(a1, b1, a2, b2, T, b),
-            numpy_fn=lambda a1, b1, a2, b2, T: NR.min_peak_accel_kernel(a1, b1, a2, b2, T, b),
+            lambda a1, b1, a2, b2, T: RD.min_peak_accel_kernel(a1, b1, a2, b2, T, b),
+            numpy_fn=lambda a1, b1, a2, b2, T: NRD.min_peak_accel_kernel(a1, b1, a2, b2, T, b),
         ),
         Workload(
             "bang_coast_bang_time",

@@ -179,7 +179,8 @@ def first_requirements(sat, options, idx, table: SlewTable | None = None):
         return np.zeros(0)
     if sat.model in REST_TO_REST:
         return _rest_to_rest(table, options.start_nadir, idx, options.start_los, idx, t0)
-    from jaxspline.kernels.reach import is_reachable, min_transfer_time
+    from jaxspline.kernels.reach import is_reachable
+    from jaxspline.kernels.reach_durations import min_transfer_time
 
     n = idx.size
     size = round_up(n, _PAD)

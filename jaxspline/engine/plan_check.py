@@ -29,7 +29,7 @@ from jaxspline.engine.options import RouteOptions, take_options
 from jaxspline.engine.steps_check import check_steps
 from jaxspline.geometry.frames import angle_between
 from jaxspline.kernels._batch import pad_rows, round_up
-from jaxspline.kernels.reach import min_transfer_time
+from jaxspline.kernels.reach_durations import min_transfer_time
 
 __all__ = ["check_plan"]
 

@@ -10,7 +10,7 @@ cost built from the exact-T reach kernels (SPEC section 1):
   m >= 0 iff the transfer in exactly T is feasible):
   loss = tau * log(sum exp(-m / tau)) (>= -min m, equal as tau -> 0);
 * ``"effort"`` — minimize the summed required peak acceleration
-  sum_k max_c d*_kc / accel_c (``reach.min_peak_accel_kernel``; seed
+  sum_k max_c d*_kc / accel_c (``reach_durations.min_peak_accel_kernel``; seed
   retarget-scan eq. 13), for plans that are already feasible.
 
 Start times are the parameters u = (t0 - t0_min)/(t0_max - t0_min) in [0, 1],
@@ -71,11 +71,11 @@ class RefineResult(NamedTuple):
 
 
 def _kernels():
-    from jaxspline.kernels import reach
+    from jaxspline.kernels import reach, reach_durations
 
     return (
         jnp.vectorize(reach.reach_margin_kernel),
-        jnp.vectorize(reach.min_peak_accel_kernel),
+        jnp.vectorize(reach_durations.min_peak_accel_kernel),
     )
 
 
@@ -85,7 +85,7 @@ def plan_costs(model, route, t0, rate, accel):
     m = ``reach.reach_margin_kernel`` at T_k = t0[k+1] - t_end[k]; for
     T_k <= eps the margin is continued linearly, m(eps) - (eps - T_k) rate (a
     negative, differentiable penalty for overlapping steps). e = d*/accel
-    (``reach.min_peak_accel_kernel``), +inf where impossible for any d.
+    (``reach_durations.min_peak_accel_kernel``), +inf where impossible for any d.
     Differentiable in t0 (jit-able; ``model`` must be jit-able).
 
     Args:

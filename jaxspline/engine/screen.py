@@ -84,11 +84,11 @@ class Transitions(NamedTuple):
         ``reach.reach_margin_kernel`` (>= 0 iff feasible, up to rounding).
       effort: [M] max over channels of d*_c / accel_c, where d*_c is the least
         acceleration bound that makes channel c feasible in T
-        (``reach.min_peak_accel_kernel``; SPEC section 1, dual problem,
+        (``reach_durations.min_peak_accel_kernel``; SPEC section 1, dual problem,
         seed retarget-scan eq. 13): <= 1 iff feasible; +inf if the rate bound
         alone forbids it.
       t_min: [M] max over channels of the shortest transfer time [s]
-        (``reach.min_transfer_time_kernel``); a necessary bound only.
+        (``reach_durations.min_transfer_time_kernel``); a necessary bound only.
       n_screened: number of candidates screened by this call (this process).
     """
 
@@ -107,11 +107,25 @@ class Transitions(NamedTuple):
 # ----------------------------------------------------------------------------
 
 
-def _reach():
-    """The kernel module (indirection so tests can substitute a stand-in)."""
-    from jaxspline.kernels import reach
+class _ReachKernels(NamedTuple):
+    """The per-candidate kernels the engine screens with (hashable: keys the compile cache)."""
 
-    return reach
+    is_reachable_kernel: object
+    reach_margin_kernel: object
+    min_peak_accel_kernel: object
+    min_transfer_time_kernel: object
+
+
+def _reach() -> _ReachKernels:
+    """The reach kernels (indirection so tests can substitute stand-ins)."""
+    from jaxspline.kernels import reach, reach_durations
+
+    return _ReachKernels(
+        reach.is_reachable_kernel,
+        reach.reach_margin_kernel,
+        reach_durations.min_peak_accel_kernel,
+        reach_durations.min_transfer_time_kernel,
+    )
 
 
 def _channel_limits(limits: AxisLimits, c: int, dtype):

@@ -1,6 +1,7 @@
 """Kernels: the per-candidate mathematics of the papers, one candidate each, batched once.
 
 ``limits`` (parameter bundles), ``reach`` (per-channel reachable sets, SPEC §1),
+``reach_durations`` (feasible durations, minimum transfer time and peak acceleration),
 ``slew`` (eigen-axis slew profiles, SPEC §2), ``flex`` (flexible-mode residual),
 ``attitude`` (quaternions, MRPs), ``joins`` (degree-7 joins, spatial maneuvers),
 ``retarget_channel`` / ``retarget`` (minimum-peak control: one channel, 3-D).
@@ -14,6 +15,7 @@ from jaxspline.kernels import (
     joins,
     limits,
     reach,
+    reach_durations,
     retarget,
     retarget_channel,
     slew,
@@ -23,9 +25,10 @@ from jaxspline.kernels.flex import *  # noqa: F403
 from jaxspline.kernels.joins import *  # noqa: F403
 from jaxspline.kernels.limits import *  # noqa: F403
 from jaxspline.kernels.reach import *  # noqa: F403
+from jaxspline.kernels.reach_durations import *  # noqa: F403
 from jaxspline.kernels.retarget import *  # noqa: F403
 from jaxspline.kernels.retarget_channel import *  # noqa: F403
 from jaxspline.kernels.slew import *  # noqa: F403
 
-_MODULES = (limits, reach, slew, flex, attitude, joins, retarget_channel, retarget)
+_MODULES = (limits, reach, reach_durations, slew, flex, attitude, joins, retarget_channel, retarget)
 __all__ = [name for m in _MODULES for name in m.__all__]

@@ -15,7 +15,7 @@ rate bound the optimum is bang–bang with one switch and (D = a2 - a1 - T(b1+b2
     d* = (2|D| + sqrt(4 D² + T² Δ²)) / T².
 
 With a rate bound |f'| <= rate the optimum is bang–coast–bang on the envelope curve of
-SPEC §1 that passes through a2 (d* from ``reach.min_peak_accel``). Every optimal
+SPEC §1 that passes through a2 (d* from ``reach_durations.min_peak_accel``). Every optimal
 channel control has the form ``a(t) = s d`` on [0, t1), ``0`` on [t1, t2),
 ``-s d`` on [t2, T] (:class:`ChannelControl`).
 

@@ -24,7 +24,7 @@ from jaxspline.kernels._validate import (
     float_dtype_of,
     is_concrete,
 )
-from jaxspline.kernels.reach import min_peak_accel_kernel
+from jaxspline.kernels.reach_durations import min_peak_accel_kernel
 
 __all__ = [
     "ARCSEC",
@@ -94,7 +94,7 @@ def min_peak_channel_kernel(a1, b1, a2, b2, T, rate):
     Minimises ``max_t |f''(t)|`` over f with f(0) = a1, f'(0) = b1, f(T) = a2,
     f'(T) = b2 and ``|f'| <= rate`` (``rate = inf``: no bound). Without a rate bound
     ``d* = (2|D| + sqrt(4D² + T²Δ²))/T²`` with D = a2 − a1 − T(b1 + b2)/2, Δ = b2 − b1
-    (paper eqs. 13, 21 for one channel); with a finite rate, d* = reach.min_peak_accel.
+    (paper eqs. 13, 21 for one channel); with a finite rate, d* = reach_durations.min_peak_accel.
     The optimal control runs along the upper (s = +1) or lower (s = −1) envelope of
     SPEC §1 for d = d*: apex tA = (T + s Δ/d)/2, t1 = min((rate − s b1)/d, tA),
     t2 = max(T − (rate − s b2)/d, tA).

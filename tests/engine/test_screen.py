@@ -45,10 +45,10 @@ def ref_reachable(a1, b1, a2, b2, T, b, d, tol=0.0):
 
 @pytest.fixture
 def reach_kernels():
-    """The kernel module the engine screens with (``jaxspline.kernels.reach``)."""
-    from jaxspline.kernels import reach
+    """The kernels the engine screens with (``jaxspline.kernels``: reach, reach_durations)."""
+    from jaxspline import kernels
 
-    return reach
+    return kernels
 
 
 def synthetic_options(

@@ -13,18 +13,21 @@ import numpy as np
 import pytest
 from jax.test_util import check_grads
 
+from jaxspline import kernels
 from jaxspline.kernels import reach
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.reach import (
     angle_interval,
     envelopes,
-    feasible_durations,
     is_reachable,
-    min_peak_accel,
-    min_transfer_time,
     rate_interval,
     reach_margin,
     transfer,
+)
+from jaxspline.kernels.reach_durations import (
+    feasible_durations,
+    min_peak_accel,
+    min_transfer_time,
 )
 
 LIM = AxisLimits(1.0, 1.0)
@@ -361,14 +364,14 @@ def _cases_matrix(n=64, seed=13):
     return [a1, b1, a2, b2, T, b, d]
 
 
-_JIT_VMAP = {name: jax.jit(jax.vmap(getattr(reach, name))) for name in KERNEL_ARGS}
+_JIT_VMAP = {name: jax.jit(jax.vmap(getattr(kernels, name))) for name in KERNEL_ARGS}
 # min_transfer_time_kernel is feasible_durations_kernel[0]; skip it in the costly tests
 HEAVY = sorted(set(KERNEL_ARGS) - {"min_transfer_time_kernel"})
 
 
 @pytest.mark.parametrize("name", sorted(KERNEL_ARGS))
 def test_scalar_jit_vmap_agree(name):
-    kern = getattr(reach, name)
+    kern = getattr(kernels, name)
     cols = KERNEL_ARGS[name](_cases_matrix())
     batched = _JIT_VMAP[name](*(jnp.asarray(c) for c in cols))
     batched = batched if isinstance(batched, tuple) else (batched,)
@@ -447,7 +450,7 @@ BOUNDARY_CASES = [
 def test_gradients_finite_at_boundaries(name):
     if name == "is_reachable_kernel":
         return
-    kern = getattr(reach, name)
+    kern = getattr(kernels, name)
     # the boundary table plus random cases (a2 partly outside [lo, hi])
     table = np.concatenate([np.array(BOUNDARY_CASES).T, np.array(_cases_matrix())], axis=1)
     cols = KERNEL_ARGS[name](list(table))
@@ -476,7 +479,7 @@ SMOOTH_POINTS = {
 
 @pytest.mark.parametrize("name", sorted(SMOOTH_POINTS))
 def test_check_grads_away_from_kinks(name):
-    kern = getattr(reach, name)
+    kern = getattr(kernels, name)
     args = tuple(jnp.float64(x) for x in SMOOTH_POINTS[name])
     check_grads(kern, args, order=1, modes=["rev"], eps=1e-6, atol=1e-5, rtol=1e-5)
 

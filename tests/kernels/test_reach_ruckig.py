@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.kernels.reach import feasible_durations, is_reachable, reach_margin
+from jaxspline.kernels.reach import is_reachable, reach_margin
+from jaxspline.kernels.reach_durations import feasible_durations
 
 ruckig = pytest.importorskip("ruckig")
 

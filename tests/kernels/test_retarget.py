@@ -2,7 +2,7 @@
 
 References: hand-computed cases; bisection over d with a feasibility check by dense
 numerical quadrature of the envelope curves; dense integration of the produced
-controls; reach.min_peak_accel; scipy DOP853 integration of the rigid-body model written
+controls; reach_durations.min_peak_accel; scipy DOP853 integration of the rigid-body model written
 with a direction-cosine matrix, absolute body rate and Euler's equations (no Euler-angle
 kinematics), with attitudes converted by scipy's Rotation; optax direct optimisation
 (slow).
@@ -18,7 +18,7 @@ from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
 from jaxspline import kernels as R  # retarget and retarget_channel
-from jaxspline.kernels import reach
+from jaxspline.kernels import reach_durations
 
 DEG = np.pi / 180.0
 AS = R.ARCSEC
@@ -125,14 +125,14 @@ def test_channel_control_is_admissible(bounded):
 
 
 def test_channel_consistent_with_reach():
-    """Bounded: same d* as reach.min_peak_accel; unbounded closed form = reach at huge rate."""
+    """Bounded: same d* as reach_durations.min_peak_accel; unbounded: reach at huge rate."""
     args = _random_cases(200, 4, True)
     c = R.min_peak_channel(*args)
-    ref = reach.min_peak_accel(*args)
+    ref = reach_durations.min_peak_accel(*args)
     np.testing.assert_allclose(np.asarray(c.peak), np.asarray(ref), rtol=1e-12)
     a1, b1, a2, b2, T, _ = _random_cases(200, 5, False)
     c = R.min_peak_channel(a1, b1, a2, b2, T)
-    ref = reach.min_peak_accel(a1, b1, a2, b2, T, 1e4)
+    ref = reach_durations.min_peak_accel(a1, b1, a2, b2, T, 1e4)
     np.testing.assert_allclose(np.asarray(c.peak), np.asarray(ref), rtol=1e-10)
 
 
