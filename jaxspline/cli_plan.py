@@ -194,27 +194,15 @@ def _print_summary(r, out: Path, names) -> None:
         f"bound         {s['bound']:.6g} ({st['bound_status']}); gap {s['gap']:.6g} "
         f"({100 * s['gap'] / max(s['bound'], 1e-300):.2f} % of the bound)",
         f"check         {'valid' if s['valid'] else 'INVALID'} ({r.report['dropped']} dropped)",
-        *(
-            [
-                "joins         {joins} degree-7 joins, {retimed} re-timed, {rejected} "
-                "rejected; peak "
-                "ratios rate {max_rate_ratio:.3f}, accel {max_accel_ratio:.3f}, jerk "
-                "{max_jerk_ratio:.3f}".format(
-                    **{
-                        "joins": 0,
-                        "retimed": 0,
-                        "rejected": 0,
-                        "max_rate_ratio": 0.0,
-                        "max_accel_ratio": 0.0,
-                        "max_jerk_ratio": 0.0,
-                        **r.report.get("joins", {}),
-                    }
-                )
-            ]
-            if "joins" in (r.report.get("joins") or {})
-            else []
-        ),
         "wall time [s]  " + ", ".join(f"{k} {v:.2f}" for k, v in r.timings.items()),
         f"outputs       {out}/ ({', '.join(names)})",
     ]
+    j = r.report.get("joins")  # only when the flown joins were checked (--aem)
+    if j:
+        lines.insert(
+            5,
+            f"joins         {j['joins']} degree-7 joins, {j['retimed']} re-timed, "
+            f"{j['rejected']} rejected; peak ratios rate {j['max_rate_ratio']:.3f}, "
+            f"accel {j['max_accel_ratio']:.3f}, jerk {j['max_jerk_ratio']:.3f}",
+        )
     print("\n".join(lines), file=sys.stdout)

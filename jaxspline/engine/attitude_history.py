@@ -26,8 +26,7 @@ from jaxspline.engine.attitude_laws import LAW_POINTING, LAW_ZERO_YAW, NADIR_LAW
 from jaxspline.engine.mission import STRIP
 from jaxspline.engine.opportunities import _aim_laws
 from jaxspline.engine.plan_joins import NADIR, Joins, join_summary, plan_joins
-from jaxspline.geometry.frames import gmst
-from jaxspline.geometry.orbit import tabulate_orbits
+from jaxspline.engine.planner import orbit_scene
 from jaxspline.geometry.pointing import Scene
 from jaxspline.kernels.joins import Maneuver, maneuver_eval
 
@@ -86,11 +85,7 @@ def plan_scene(sc) -> Scene:
     Returns:
       Scene with a HermiteOrbit of all satellites.
     """
-    pc = sc.planner
-    table = tabulate_orbits(
-        [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, pc.geometry_step
-    )
-    return Scene(table.orbit, np.float64(gmst(sc.epoch_jd)))
+    return orbit_scene(sc)[1]
 
 
 def observation_laws(sc, target, speed) -> np.ndarray:

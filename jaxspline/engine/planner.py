@@ -47,7 +47,7 @@ from jaxspline.geometry.pointing import Scene
 from jaxspline.geometry.windows import visibility_windows_all
 from jaxspline.kernels._batch import ragged_positions
 
-__all__ = ["Prepared", "build_problem", "plan"]
+__all__ = ["Prepared", "build_problem", "orbit_scene", "plan"]
 
 _RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
 _RESERVE_MIN = 1.0  # [s]
@@ -151,12 +151,23 @@ def plan(
         )
 
 
+def orbit_scene(sc: Scenario):
+    """Orbit table and :class:`Scene` of a scenario's satellites, as :func:`plan` builds them.
+
+    Args:
+      sc: Scenario.
+    Returns:
+      (OrbitTable on the common geometry-step knots, Scene of all satellites).
+    """
+    table = tabulate_orbits(
+        [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, sc.planner.geometry_step
+    )
+    return table, Scene(table.orbit, np.float64(gmst(sc.epoch_jd)))
+
+
 def _orbits(sc: Scenario):
     pc = sc.planner
-    table = tabulate_orbits(
-        [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, pc.geometry_step
-    )
-    scene = Scene(table.orbit, np.float64(gmst(sc.epoch_jd)))
+    table, scene = orbit_scene(sc)
     t = np.asarray(table.orbit.t)
     knots = (t >= -1e-9) & (t <= sc.duration + pc.geometry_step + 1e-9)
     jd, fr = jd_split(sc.epoch_jd, t[knots])
@@ -350,14 +361,14 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
         if not bad:
             break
         dropped += len(bad)
-        chosen = [c for c in chosen if c not in set(bad)]
+        drop = set(bad)
+        chosen = [c for c in chosen if c not in drop]
         det = None
     else:
         chosen = []
         bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
-    clock.lap(
-        "check", f"{len(chosen)} observations valid, {dropped} dropped ({len(rejected)} joins)"
-    )
+    flown = f" ({len(rejected)} for their joins)" if flown_joins else ""
+    clock.lap("check", f"{len(chosen)} observations valid, {dropped} dropped{flown}")
     idx = np.asarray(det["order"], np.int64)
     obs = Observations(
         sat=np.asarray(o.sat)[idx],
@@ -396,8 +407,9 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
         "violations": det["violations"],
         "min_slack_s": float(obs.slack.min()) if len(obs) else None,
         "min_battery_wh": det["battery_min"],
-        "joins": {**joins, "rejected": len(rejected)},
     }
+    if flown_joins:
+        report["joins"] = {**joins, "rejected": len(rejected)}
     stats = {
         "windows": len(windows),
         "options": len(opp),

@@ -231,11 +231,14 @@ class BoundResult:
 
 
 class _Prices:
-    """Projected Polyak subgradient iteration on the task prices (shared by both users).
+    """Projected Polyak subgradient iteration on the prices (shared by both users).
 
-    ``lam += mu (UB - target) / |g|^2 g`` with ``g = takers - 1``, projected on
-    ``[0, w]``; after :data:`_STALL_ITERS` iterations without a better bound ``mu``
-    halves and the prices restart from the best ones seen.
+    ``lam`` holds the task prices, then (``energy``) the prices of the energy budgets
+    the unpriced DP optimum overdraws (:mod:`jaxspline.engine.search.energy`).
+    ``lam += mu (UB - target) / |g|^2 g`` with ``g = takers - 1`` (tasks) and
+    ``g = scaled usage - 1`` (budgets), projected on ``[0, w]`` / ``[0, inf)``; after
+    :data:`_STALL_ITERS` iterations without a better bound ``mu`` halves and the prices
+    restart from the best ones seen.
     """
 
     def __init__(self, pb: Problem, energy: bool = False):
@@ -244,11 +247,14 @@ class _Prices:
         self.W = np.asarray(pb.weight, np.float64)
         self.ctask = np.asarray(pb.c_task, np.int64)
         self.en = EnergyBudgets(pb) if energy else None
-        if self.en is not None and self.en.m:
-            # price only the budgets the unpriced optimum overdraws (any subset is valid;
-            # the others rarely bind and would slow every iteration)
-            paths, _ = dp_paths(pb, self.d, self.W[self.ctask], None, used := [])
-            self.en.restrict(self._energy_usage(paths, used) > 1.0)
+        if self.en is not None:
+            if self.en.m:
+                # price only the budgets the unpriced optimum overdraws (any subset is
+                # valid; the others rarely bind and would slow every iteration)
+                paths, _ = dp_paths(pb, self.d, self.W[self.ctask], None, used := [])
+                self.en.restrict(self._energy_usage(paths, used) > 1.0)
+            if not self.en.m:
+                self.en = None
         m = self.en.m if self.en is not None else 0
         # prices: tasks (in [0, w]) then energy budgets (>= 0, see search.energy)
         self.hi = np.r_[self.W, np.full(m, np.inf)]
@@ -262,7 +268,7 @@ class _Prices:
         n_t = self.W.size
         w = self.W[self.ctask] - self.lam[self.ctask]
         arc, self.used = None, None
-        if self.en is not None and self.en.m:
+        if self.en is not None:
             node_pen, arc_pen = self.en.penalties(self.lam[n_t:])
             w, arc, self.used = w - node_pen, arc_pen[self.d.pair], []
         paths, vals = dp_paths(self.pb, self.d, w, arc, self.used)
