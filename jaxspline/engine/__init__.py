@@ -1,15 +1,16 @@
 """Engine: option tables, screening, maneuver models, search, refinement, checks, the planner.
 
 ``mission`` (the scenario's types) and ``options`` (the option table) in;
-``opportunities`` -> ``screen`` / ``models`` -> ``sequence`` and ``search/``
+``opportunities`` -> ``screen`` / ``models`` (and ``join_screen`` for flown joins)
+-> ``sequence`` and ``search/``
 (greedy, Lagrangian/DP bound, exact, LNS, battery) -> ``refine`` /
 ``refine_starts`` -> ``steps_check`` / ``plan_check`` (independent re-checks);
 ``planner.plan`` runs the pipeline and returns a ``result.PlanResult``. The
 engine never imports the product layer.
 
 Re-exported here (and from :mod:`jaxspline`): the public modules in ``_MODULES``.
-The planner's internal stages (``opportunities``, ``models``, ``refine_starts``,
-``plan_check``) and ``search`` (whose ``greedy`` is not the sequencer's) stay
+The planner's internal stages (``opportunities``, ``models``, ``join_screen``,
+``refine_starts``, ``plan_check``) and ``search`` (whose ``greedy`` is not the sequencer's) stay
 namespaces: ``jaxspline.engine.search.solve``.
 """
 

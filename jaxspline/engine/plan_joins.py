@@ -50,7 +50,7 @@ from jaxspline.engine.attitude_laws import (
     state_angles,
 )
 from jaxspline.engine.models import flex_tau
-from jaxspline.kernels._batch import pad_rows
+from jaxspline.kernels._batch import map_chunked
 from jaxspline.kernels.joins import Maneuver, maneuver_check, maneuver_eval, maneuver_plan
 from jaxspline.kernels.limits import AxisLimits
 
@@ -75,7 +75,8 @@ RETIME_MAX_SHARE = 0.5  # at most this share of a join is given to the extension
 SAMPLING_MARGIN = 2e-3
 NO_LIMIT = float(np.finfo(np.float64).max)  # a norm that is not limited (finite for validation)
 NADIR = -1  # observation index of the nadir law
-_PAD = 1 << 10  # smallest padded kernel batch (batches are padded to powers of two)
+_JOIN_CHUNK = 1 << 11  # joins per compiled plan / check call (fixed shape: one compile)
+_SAMPLE_CHUNK = 1 << 15  # join samples per compiled evaluation
 
 
 class Joins(NamedTuple):
@@ -176,18 +177,26 @@ def _laws(idx, start, params, mode):
     return law, s0
 
 
-def _padded(n: int) -> int:
-    """Batch size for n rows: a power of two >= _PAD (one compiled shape per octave)."""
-    return max(_PAD, 1 << (max(n, 1) - 1).bit_length())
+def _plan_rows(q0, w0, e0, j0, q1, w1, e1, j1, T):
+    return maneuver_plan(q0, w0, e0, q1, w1, e1, T, j0=j0, j1=j1)
+
+
+def _check_chunk(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk):
+    lim = AxisLimits(rate, accel, jerk)
+    return maneuver_check(q0, w0, e0, q1, w1, e1, T, lim, j0=j0, j1=j1, n_samples=JOIN_SAMPLES)
+
+
+def _eval_rows(q_ref, coeffs, T, t):
+    return maneuver_eval(Maneuver(q_ref, coeffs, T), t)
 
 
 def _check_rows(scene, sats, sat, law0, s0, law1, s1, ta, tb):
     """Plan and check joins [ta, tb] between laws (law0 from s0, law1 from s1); all [n] rows.
 
+    Kernels run in chunks of fixed size (one compilation each, whatever n).
     Returns (Maneuver rows, peaks [n, 3] of |ω|, |ε|, |ε'|, ratios [n, 3], ok [n]).
     """
     n = sat.size
-    m = _padded(n)
     st = law_states(
         scene,
         np.concatenate([sat, sat]),
@@ -195,34 +204,30 @@ def _check_rows(scene, sats, sat, law0, s0, law1, s1, ta, tb):
         np.concatenate([s0, s1]),
         np.concatenate([ta, tb]),
     )
-    b0 = [pad_rows(x[:n], m) for x in st]
-    b1 = [pad_rows(x[n:], m) for x in st]
-    T = pad_rows(tb - ta, m)
-    man = maneuver_plan(b0[0], b0[1], b0[2], b1[0], b1[1], b1[2], T, j0=b0[3], j1=b1[3])
+    ends = [x[:n] for x in st] + [x[n:] for x in st] + [tb - ta]
+    man = Maneuver(*map_chunked(_plan_rows, ends, _JOIN_CHUNK))
     lims = [join_limits(s) for s in sats]
-    norm = np.array([list(lims[k][0]) for k in sat], np.float64).reshape(n, 3)
-    chk = maneuver_check(
-        b0[0], b0[1], b0[2], b1[0], b1[1], b1[2], T,
-        AxisLimits(*pad_rows(norm, m).T), j0=b0[3], j1=b1[3], n_samples=JOIN_SAMPLES,
-    )  # fmt: skip
-    peaks = np.stack([np.asarray(x, np.float64)[:n] for x in chk[:3]], -1)
+    norm = np.array([list(x[0]) for x in lims], np.float64).reshape(-1, 3)[sat]
+    chk = map_chunked(_check_chunk, [*ends, *norm.T], _JOIN_CHUNK)
+    peaks = np.stack([np.asarray(x, np.float64) for x in chk[:3]], -1)
     ratio = np.where(np.isinf(norm), 0.0, peaks / norm)
-    pc = np.flatnonzero([lims[k][1] is not None for k in sat])
+    pc = np.flatnonzero(np.array([x[1] is not None for x in lims], bool)[sat])
     if pc.size:
         own = np.repeat(pc, JOIN_SAMPLES)
-        tau = np.tile(np.linspace(0.0, 1.0, JOIN_SAMPLES), pc.size) * T[own]
-        k = _padded(own.size)
-        rows = Maneuver(*(pad_rows(np.asarray(x)[own], k) for x in man))
-        q, w, e, _ = (np.asarray(x)[: own.size] for x in maneuver_eval(rows, pad_rows(tau, k)))
+        tau = np.tile(np.linspace(0.0, 1.0, JOIN_SAMPLES), pc.size) * man.duration[own]
+        q, w, e, _ = map_chunked(
+            _eval_rows, [man.q_ref[own], man.coeffs[own], man.duration[own], tau], _SAMPLE_CHUNK
+        )
         _, rate, acc = state_angles(scene, sat[own], q, w, e, ta[own] + tau)
-        r_lim = np.stack([np.broadcast_to(lims[j][1].rate, (3,)) for j in sat[own]])
-        a_lim = np.stack([np.broadcast_to(lims[j][1].accel, (3,)) for j in sat[own]])
+        per = [x[1] or AxisLimits(np.nan, np.nan) for x in lims]
+        r_lim = np.stack([np.broadcast_to(x.rate, (3,)) for x in per])[sat[own]]
+        a_lim = np.stack([np.broadcast_to(x.accel, (3,)) for x in per])[sat[own]]
         for col, x in ((0, np.abs(rate) / r_lim), (1, np.abs(acc) / a_lim)):
             worst = np.zeros(n)
             np.maximum.at(worst, own, np.where(np.isfinite(x), x, np.inf).max(-1))
             ratio[pc, col] = worst[pc]
     ok = np.all(ratio <= 1.0 - SAMPLING_MARGIN, -1) & np.isfinite(peaks).all(-1)
-    return Maneuver(*(np.asarray(x)[:n] for x in man)), peaks, ratio, ok
+    return man, peaks, ratio, ok
 
 
 def plan_joins(scene, sats, sat, start, end, params) -> Joins:

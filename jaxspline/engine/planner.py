@@ -27,6 +27,12 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
+from jaxspline.engine.join_screen import (
+    channel_states,
+    join_far_gap,
+    screen_first_joins,
+    screen_joins,
+)
 from jaxspline.engine.mission import Scenario
 from jaxspline.engine.models import (
     REST_TO_REST,
@@ -236,12 +242,18 @@ class Prepared(NamedTuple):
     far: np.ndarray
 
 
-def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) -> Prepared:
+def build_problem(
+    scenario: Scenario, *, progress: bool = False, joins: bool = False, _clock=None
+) -> Prepared:
     """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
 
     Args:
       scenario: Scenario.
       progress: show progress bars.
+      joins: also screen every transition with the degree-7 join the plan will fly
+        (:mod:`jaxspline.engine.join_screen`): pairs up to the join far gap are
+        screened and kept only when both the model and the join screen pass them,
+        and an option is a first observation only when the join from nadir passes.
       _clock: private; the stage timer of an enclosing :func:`plan` call.
     Returns:
       Prepared, the inputs of the search stage.
@@ -285,10 +297,21 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
             far[k] = far_gap(s, o, ids, float(omega[k]), tables[k])
             first[ids] = first_requirements(s, o, ids, tables[k])
         slack = float(np.min(o.t_end - o.t_start)) if len(opp) else 0.0
+        lookup = None
+        if joins and len(opp):
+            states = channel_states(scene, sats, opp)
+            far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
+            first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
+            lookup = np.ones(len(sats), bool)
         near = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK)
+        screened = ""
+        if lookup is not None:
+            keep = screen_joins(sats, opp, states, near[0], near[1])
+            near = tuple(x[keep] for x in near)
+            screened = f" ({int((~keep).sum())} removed by the join screen)"
         clock.lap(
             "screening",
-            f"{near[0].size} feasible near pairs; far gaps "
+            f"{near[0].size} feasible near pairs{screened}; far gaps "
             f"{far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s",
         )
         battery = BatteryModel(
@@ -298,7 +321,7 @@ def build_problem(scenario: Scenario, *, progress: bool = False, _clock=None) ->
             pc.margins.battery_wh,
             pc.margins.shadow_guard,
         )
-        pb = Problem.build(opp, sats, first, near, far, tables, battery, tg.value)
+        pb = Problem.build(opp, sats, first, near, far, tables, battery, tg.value, lookup)
         pb.near_slack = slack
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
@@ -311,7 +334,7 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     refining = pc.refine_steps > 0 and any(s.model == "per_channel" for s in sats)
     reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit) + refining * _REFINE_SHARE * limit
     tg = sc.targets
-    prep = build_problem(sc, _clock=clock)
+    prep = build_problem(sc, joins=flown_joins, _clock=clock)
     pb, opp, windows, scene, table, battery, far = prep
     o = opp.options
     clock.bar = clock.search_bar(deadline - reserve - time.monotonic())

@@ -4,6 +4,7 @@
 ``reach_durations`` (feasible durations, minimum transfer time and peak acceleration),
 ``slew`` (eigen-axis slew profiles, SPEC §2), ``flex`` (flexible-mode residual),
 ``attitude`` (quaternions, MRPs), ``joins`` (degree-7 joins, spatial maneuvers),
+``channel_join`` (peaks of the channel-wise degree-7 join),
 ``retarget_channel`` / ``retarget`` (minimum-peak control: one channel, 3-D).
 Private helpers: ``_safe`` (numerical guards), ``_validate`` (eager input checks),
 ``_batch`` (batching, padding, chunks). Kernels import nothing above this package.
@@ -11,6 +12,7 @@ Private helpers: ``_safe`` (numerical guards), ``_validate`` (eager input checks
 
 from jaxspline.kernels import (
     attitude,
+    channel_join,
     flex,
     joins,
     limits,
@@ -21,6 +23,7 @@ from jaxspline.kernels import (
     slew,
 )
 from jaxspline.kernels.attitude import *  # noqa: F403
+from jaxspline.kernels.channel_join import *  # noqa: F403
 from jaxspline.kernels.flex import *  # noqa: F403
 from jaxspline.kernels.joins import *  # noqa: F403
 from jaxspline.kernels.limits import *  # noqa: F403
@@ -30,5 +33,16 @@ from jaxspline.kernels.retarget import *  # noqa: F403
 from jaxspline.kernels.retarget_channel import *  # noqa: F403
 from jaxspline.kernels.slew import *  # noqa: F403
 
-_MODULES = (limits, reach, reach_durations, slew, flex, attitude, joins, retarget_channel, retarget)
+_MODULES = (
+    limits,
+    reach,
+    reach_durations,
+    slew,
+    flex,
+    attitude,
+    joins,
+    channel_join,
+    retarget_channel,
+    retarget,
+)
 __all__ = [name for m in _MODULES for name in m.__all__]

@@ -5,7 +5,9 @@ transition rule between two options i -> j of one satellite is the required time
 ``need(i, j)`` (:mod:`jaxspline.engine.models`): feasible iff ``t_start[j] - t_end[i] >=
 need``. Rest-to-rest satellites evaluate it from the lines of sight through their
 slew table (cheap, any pair); per-channel satellites look it up among the screened
-near pairs; pairs at least ``far[sat]`` apart are always feasible.
+near pairs; pairs at least ``far[sat]`` apart are always feasible. When the engine
+also screened the flown joins (:mod:`jaxspline.engine.join_screen`), every satellite
+looks its near pairs up (``lookup``): a pair the join screen removed is infeasible.
 """
 
 from __future__ import annotations
@@ -43,6 +45,9 @@ class Problem:
       sat_starts: per satellite the sorted starts of its options.
       near_slack: the near pairs include every feasible pair with gap < far + this [s]
         (at least the shortest observation: the DP's block width, see ``dp_prepare``).
+      lookup: per satellite, True when pairs closer than ``far`` are feasible only if
+        they are among the near pairs (per-channel satellites, and every satellite
+        whose joins were screened).
     """
 
     n_sats: int
@@ -66,6 +71,11 @@ class Problem:
     sat_hi: list
     sat_starts: list
     near_slack: float = 0.0
+    lookup: list | None = None
+
+    def __post_init__(self):
+        if self.lookup is None:  # the model alone decides: tables where there are tables
+            self.lookup = [t is None for t in self.tables]
 
     @property
     def n_options(self) -> int:
@@ -83,7 +93,8 @@ class Problem:
         """
         k = self.c_sat[j]
         table = self.tables[k]
-        if table is not None:
+        gap = self.c_start[j] - self.c_end[i]
+        if table is not None and (gap >= self.far[k] or not self.lookup[k]):
             a, b = self.c_le[i], self.c_ls[j]
             cx = a[1] * b[2] - a[2] * b[1]
             cy = a[2] * b[0] - a[0] * b[2]
@@ -92,13 +103,12 @@ class Problem:
                 math.sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
             )
             return table.scalar(th)
-        gap = self.c_start[j] - self.c_end[i]
         if gap >= self.far[k]:
             return self.far[k]
         return self.near.get(i * len(self.c_task) + j, math.inf)
 
     @classmethod
-    def build(cls, opp, sats, first, near_pairs, far, tables, battery, weights):
+    def build(cls, opp, sats, first, near_pairs, far, tables, battery, weights, lookup=None):
         """Assemble from numpy data.
 
         Args:
@@ -110,6 +120,8 @@ class Problem:
           tables: per satellite SlewTable or None.
           battery: :class:`BatteryModel`.
           weights: per target value.
+          lookup: [S] bool, satellites whose near pairs are authoritative (default:
+            the per-channel ones).
         """
         o = opp.options
         sat = np.asarray(o.sat, np.int64)
@@ -125,7 +137,8 @@ class Problem:
         starts = np.asarray(o.t_start, np.float64).tolist()
         src, dst, need = near_pairs
         pc = np.array([s.model == "per_channel" for s in sats], bool)
-        m = pc[sat[dst]] if n else np.zeros(0, bool)
+        look = pc if lookup is None else np.asarray(lookup, bool) | pc
+        m = look[sat[dst]] if n else np.zeros(0, bool)
         near = dict(zip((src[m] * n + dst[m]).tolist(), need[m].tolist(), strict=True))
         return cls(
             n_sats=n_s,
@@ -148,4 +161,5 @@ class Problem:
             sat_lo=lo,
             sat_hi=hi,
             sat_starts=[starts[a:b] for a, b in zip(lo, hi, strict=True)],
+            lookup=look.tolist(),
         )
