@@ -8,10 +8,12 @@ calls :func:`jaxspline.plan` and writes into the output directory:
 * ``plan.czml`` - satellites, targets and imaging intervals for Cesium;
 * ``ground_track.png`` (world map with coastlines), ``timeline.png`` (per-satellite
   Gantt chart and battery), ``slack.png`` (maneuver slack per model);
-* with ``--aem`` (a flyable plan: observations whose degree-7 joins exceed a limit
-  are dropped) also ``attitude_<satellite>.aem.xml``, one CCSDS AEM per satellite
-  (:mod:`jaxspline.aem`) sampled every ``--aem-step`` seconds plus every junction
-  instant, and ``attitude.png`` (flown rate / acceleration / jerk against the limits).
+* by default (``--aem``; ``--no-aem`` skips it) a flyable plan: transitions are
+  screened with the degree-7 joins the spacecraft flies and the joins of the plan
+  are checked (observations whose join still exceeds a limit are dropped), and
+  ``attitude_<satellite>.aem.xml``, one CCSDS AEM per satellite (:mod:`jaxspline.aem`)
+  sampled every ``--aem-step`` seconds plus every junction instant, and
+  ``attitude.png`` (flown rate / acceleration / jerk against the limits).
 
 Existing outputs are never overwritten unless ``--force``; every file is written
 atomically.
@@ -19,6 +21,7 @@ atomically.
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 from pathlib import Path
@@ -39,7 +42,7 @@ OUTPUT_FILES = (
     "timeline.png",
     "slack.png",
 )
-ATTITUDE_FIGURE = "attitude.png"  # with --aem
+ATTITUDE_FIGURE = "attitude.png"  # with --aem (the default)
 _PLOTS = OUTPUT_FILES[3:]
 
 
@@ -71,9 +74,11 @@ def register(sub) -> None:
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     p.add_argument(
         "--aem",
-        action="store_true",
-        help="flyable plan: drop observations whose degree-7 joins exceed the limits, "
-        "write one CCSDS AEM per satellite and attitude.png",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help="flyable plan: screen and check the degree-7 joins against the limits, "
+        "write one CCSDS AEM per satellite and attitude.png (default; --no-aem: the "
+        "maneuver models alone, no attitude files)",
     )
     p.add_argument(
         "--aem-step",
@@ -111,7 +116,7 @@ def run_plan(
     certify: float = 0.0,
     plots: bool = True,
     progress: bool = True,
-    aem: bool = False,
+    aem: bool = True,
     aem_step: float = AEM_STEP_S,
 ):
     """Load ``scenario``, plan it, write the outputs.

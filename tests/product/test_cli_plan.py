@@ -85,7 +85,7 @@ time_limit_s = 15.0
 N_TARGETS = 32
 QUICK = ["--time-limit", "3", "--quiet"]
 AEMS = tuple(aem_file_name(n) for n in ("eo-tle", "eo-agile"))  # one file a satellite
-FULL = OUTPUT_FILES + (ATTITUDE_FIGURE,) + AEMS  # with --aem
+FULL = OUTPUT_FILES + (ATTITUDE_FIGURE,) + AEMS  # the default (--aem)
 
 
 @pytest.fixture(scope="module")
@@ -94,9 +94,10 @@ def runs(tmp_path_factory):
     scen = d / "small.toml"
     scen.write_text(SMALL, encoding="utf-8")
     no_plots = d / "no_plots"
-    code_no_plots = main(["plan", str(scen), "-o", str(no_plots), "--no-plots", *QUICK])
+    args = ["plan", str(scen), "-o", str(no_plots), "--no-plots", "--no-aem", *QUICK]
+    code_no_plots = main(args)
     out = d / "out"
-    code = main(["plan", str(scen), "-o", str(out), "--aem"])
+    code = main(["plan", str(scen), "-o", str(out)])  # the default: flown joins and AEMs
     return {"scen": scen, "out": out, "code": code, "no_plots": (code_no_plots, no_plots)}
 
 
@@ -177,11 +178,11 @@ def test_plan_force_overwrites(runs):
     assert main(["plan", str(scen), "-o", str(out), "--force", *QUICK]) == 0
     for name in OUTPUT_FILES:
         assert (out / name).stat().st_mtime_ns > before[name], name
-    assert sorted(p.name for p in out.iterdir()) == sorted(FULL)  # AEMs kept from before
+    assert sorted(p.name for p in out.iterdir()) == sorted(FULL)
     assert json.loads((out / "plan.json").read_text())["summary"]["valid"] is True
 
 
-def test_plan_no_plots_writes_data_files_only(runs):
+def test_plan_no_plots_no_aem_writes_data_files_only(runs):
     code, out = runs["no_plots"]
     assert code == 0
     assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES[:3])
@@ -213,3 +214,16 @@ def test_plan_missing_scenario_file(tmp_path, capsys):
     missing = tmp_path / "missing.toml"
     assert main(["plan", str(missing), "-o", str(tmp_path / "out")]) == 2
     assert "scenario file not found" in capsys.readouterr().err
+
+
+def test_compile_cache_directory_from_the_environment(monkeypatch, tmp_path):
+    from jaxspline.cli import CACHE_ENV, cache_dir
+
+    monkeypatch.setenv(CACHE_ENV, str(tmp_path / "xla"))
+    assert cache_dir() == tmp_path / "xla"
+    for off in ("off", "", "OFF", "none"):
+        monkeypatch.setenv(CACHE_ENV, off)
+        assert cache_dir() is None
+    monkeypatch.delenv(CACHE_ENV)
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
+    assert cache_dir() == tmp_path / "jaxspline" / "xla"
