@@ -391,3 +391,74 @@ def test_prefaulted_columns_are_plain_writable_arrays():
         a[:] = 1
         a[-1] = 0
         assert a[:-1].all() and not a[-1] and a[: n // 2].base is not None
+
+
+_DIST_SCRIPT = textwrap.dedent(
+    """
+    import json, sys
+    import jax
+    jax.config.update("jax_enable_x64", True)
+    jax.distributed.initialize(
+        coordinator_address="127.0.0.1:{port}", num_processes=2, process_id=int(sys.argv[1])
+    )
+    import numpy as np
+    sys.path.insert(0, {tests!r})
+    import test_screen as ts
+    from jaxspline.engine import screen
+    opt = ts.synthetic_options(np.random.default_rng(5), n_routes=12, per_route=4)
+    # process_index / process_count come from jax.distributed
+    tr = screen.screen_transitions(opt, ts.LIMITS, progress=False, chunk_size=64)
+    print(json.dumps({{"index": jax.process_index(), "count": jax.process_count(),
+                      "src": tr.src.tolist(), "dst": tr.dst.tolist(),
+                      "feasible": tr.feasible.tolist(), "margin": tr.margin.tolist()}}))
+    jax.distributed.shutdown()
+    """
+)
+
+
+def _free_port() -> int:
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_two_distributed_processes_split_the_candidates():
+    """Two local CPU processes under jax.distributed: the union of parts is the whole."""
+    env = dict(os.environ, JAX_PLATFORMS="cpu", XLA_FLAGS="")
+    script = _DIST_SCRIPT.format(port=_free_port(), tests=os.path.dirname(__file__))
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", script, str(k)],
+            env=env,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for k in (0, 1)
+    ]
+    parts = []
+    for p in procs:
+        out, err = p.communicate(timeout=300)
+        assert p.returncode == 0, err[-3000:]
+        parts.append(json.loads(out.strip().splitlines()[-1]))
+    assert sorted((q["index"], q["count"]) for q in parts) == [(0, 2), (1, 2)]
+    assert all(q["src"] for q in parts)  # both processes screened something
+    opt = synthetic_options(np.random.default_rng(5), n_routes=12, per_route=4)
+    whole = screen.screen_transitions(opt, LIMITS, progress=False, chunk_size=64)
+    ref = {
+        (s, d): (f, m)
+        for s, d, f, m in zip(
+            whole.src.tolist(), whole.dst.tolist(), whole.feasible.tolist(),
+            whole.margin.tolist(), strict=True,
+        )
+    }  # fmt: skip
+    got = {}
+    for q in parts:
+        for s, d, f, m in zip(q["src"], q["dst"], q["feasible"], q["margin"], strict=True):
+            assert (s, d) not in got  # no candidate screened twice
+            got[(s, d)] = (f, m)
+    assert got.keys() == ref.keys()
+    for key, (f, m) in ref.items():
+        assert got[key][0] == f and got[key][1] == pytest.approx(m, rel=1e-12, abs=1e-15)
