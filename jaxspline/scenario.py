@@ -57,6 +57,14 @@ Only ``[scenario]``, at least one satellite and at least one target are required
     priority = 5.0                      # value if imaged (> 0, default 1)
     window_s = [100.0, 900.0]           # start >= lo and end <= hi [s from the epoch]
     sensor = ""                         # required sensor type ("" = any, the default)
+    desired_s = 450.0                   # desired time of the imaging midpoint (start +
+    tolerance_s = 30.0                  # end) / 2 [s from the epoch] and its tolerance
+                                        # [s]: the midpoint lies in desired +- tolerance
+                                        # (tolerance_s required with desired_s)
+    min_duration_s = 8.0                # shortest imaging time end - start [s] (default
+                                        # 0); strips: only scan speeds with length /
+                                        # speed >= it; points: duration_s defaults to
+                                        # max(10, min_duration_s) and must reach it
 
     [targets_file]                      # alternative to targets_csv
     path = "more_targets.csv"

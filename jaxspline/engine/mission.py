@@ -180,6 +180,11 @@ class Targets:
       value: priority / weight collected if imaged (> 0).
       t_lo, t_hi: imaging window [s]: start >= t_lo and end <= t_hi (-inf/+inf: free).
       sensor: required sensor type [R] ("" = any).
+      mid_lo, mid_hi: window of the imaging midpoint [s]: ``mid_lo <= (start + end) / 2
+        <= mid_hi`` (-inf/+inf: free); a desired time ``d`` with tolerance ``tol`` is
+        ``[d - tol, d + tol]``.
+      min_duration: shortest accepted imaging time ``end - start`` [s] (0: any); a
+        strip's scan speeds whose ``length / speed`` is shorter are not used.
     """
 
     name: np.ndarray
@@ -194,6 +199,9 @@ class Targets:
     t_lo: np.ndarray
     t_hi: np.ndarray
     sensor: np.ndarray
+    mid_lo: np.ndarray
+    mid_hi: np.ndarray
+    min_duration: np.ndarray
 
     def __len__(self) -> int:
         return int(self.kind.shape[0])
@@ -228,6 +236,9 @@ def make_targets(
     t_hi=np.inf,
     sensor="",
     name=None,
+    mid_lo=-np.inf,
+    mid_hi=np.inf,
+    min_duration=0.0,
 ) -> Targets:
     """Validate and broadcast target fields into :class:`Targets`.
 
@@ -246,6 +257,10 @@ def make_targets(
       t_hi: float [R], imaging window end [s from the epoch] (+inf: free), >= t_lo.
       sensor: str [R], required sensor type ("" = any).
       name: str [R]; None gives "t0", "t1", ...
+      mid_lo: float [R], earliest imaging midpoint [s from the epoch] (-inf: free).
+      mid_hi: float [R], latest imaging midpoint [s from the epoch] (+inf: free), >= mid_lo.
+      min_duration: float [R], shortest imaging time [s], >= 0; a point's ``duration``
+        must reach it.
     Returns:
       Targets.
     Raises:
@@ -262,6 +277,9 @@ def make_targets(
         "value": value,
         "t_lo": t_lo,
         "t_hi": t_hi,
+        "mid_lo": mid_lo,
+        "mid_hi": mid_hi,
+        "min_duration": min_duration,
     }
     try:
         arrs = np.broadcast_arrays(kind, *(np.asarray(v, np.float64) for v in num.values()))
@@ -283,6 +301,17 @@ def make_targets(
     bad("length", (kind == STRIP) & (out["length"] <= 0), "must be > 0 for a strip")
     bad("duration", (kind == POINT) & (out["duration"] <= 0), "must be > 0 for a point")
     bad("t_hi", ~(out["t_lo"] <= out["t_hi"]), "must be >= t_lo")
+    bad("mid_hi", ~(out["mid_lo"] <= out["mid_hi"]), "must be >= mid_lo")
+    bad(
+        "min_duration",
+        ~(np.isfinite(out["min_duration"]) & (out["min_duration"] >= 0)),
+        "must be finite and >= 0",
+    )
+    bad(
+        "duration",
+        (kind == POINT) & (out["duration"] < out["min_duration"]),
+        "must be >= min_duration for a point",
+    )
     sensor = np.broadcast_to(np.asarray(sensor, dtype=object), (n,)).astype(str)
     names = np.array([f"t{i}" for i in range(n)]) if name is None else np.asarray(name, str)
     if names.shape != (n,):
