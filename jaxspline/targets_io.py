@@ -118,10 +118,12 @@ def scenario_targets(ctx, data: dict, base_dir=None, required: bool = True) -> T
       ctx: :class:`jaxspline._fields.FieldContext` of the file.
       data: dict, the parsed scenario TOML.
       base_dir: folder that relative CSV paths start from (None: the working directory).
+      required: raise when the file gives no targets (else return None).
     Returns:
-      Targets (angles in radians, lengths in metres, times in seconds from the epoch).
+      Targets (angles in radians, lengths in metres, times in seconds from the epoch),
+      or None (no targets and not ``required``).
     Raises:
-      ValueError: naming the field, also when the file gives no targets at all.
+      ValueError: naming the field, also when ``required`` and the file gives no targets.
     """
     parts = []
     explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"))
@@ -130,6 +132,8 @@ def scenario_targets(ctx, data: dict, base_dir=None, required: bool = True) -> T
     parts += [load_targets_csv(p) for p in _csv_paths(ctx, data, base_dir)]
     if "random_targets" in data:
         parts.append(_random_targets(ctx, data["random_targets"]))
+    if not parts and not required:
+        return None
     if not parts:
         raise ctx.error(
             "targets", "no targets: give [[targets]], targets_csv and/or [random_targets]"

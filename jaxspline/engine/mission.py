@@ -32,7 +32,9 @@ from jaxspline.geometry.routes import POINT, STRIP
 from jaxspline.kernels.limits import AxisLimits
 
 __all__ = [
+    "DEFAULT_SWATH",
     "MODELS",
+    "Area",
     "FlexMode",
     "Margins",
     "PlannerConfig",
@@ -44,6 +46,7 @@ __all__ = [
 ]
 
 MODELS = ("per_channel", "eigen_axis", "flexible")
+DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
 
 
 def _positive(name: str, value, allow_zero: bool = False) -> float:
@@ -119,6 +122,9 @@ class Satellite:
       settle: settling time after a rest-to-rest slew [s] (eigen_axis, flexible).
       flex: :class:`FlexMode` (required for ``"flexible"``).
       power: :class:`Power` or None (no battery constraint).
+      swath: ground width imaged across the scan direction [m] (> 0), taken as
+        independent of the viewing angle; area targets are cut into strips this wide,
+        and the CZML draws footprints of this width.
     """
 
     name: str
@@ -130,6 +136,7 @@ class Satellite:
     settle: float = 0.0
     flex: FlexMode | None = None
     power: Power | None = None
+    swath: float = DEFAULT_SWATH
 
     def __post_init__(self):
         who = f"satellite {self.name!r}"
@@ -160,6 +167,7 @@ class Satellite:
                 f"{who}: off_nadir_max must be in (0, pi/2), got {self.off_nadir_max!r}"
             )
         _positive(f"{who}: settle", self.settle, allow_zero=True)
+        _positive(f"{who}: swath", self.swath)
         if self.model == "flexible" and self.flex is None:
             raise ValueError(f"{who}: model 'flexible' needs flex=FlexMode(...)")
 
@@ -323,6 +331,65 @@ def make_targets(
 
 
 @dataclasses.dataclass(frozen=True)
+class Area:
+    """A polygon area target, cut into strip targets of the scenario (plain data).
+
+    Built by the product layer (:mod:`jaxspline.areas`, which holds the geometry); the
+    engine plans its strips like any other target and never looks at the polygon.
+
+    Attributes:
+      name: label (unique among the scenario's areas).
+      geometry: GeoJSON geometry dict, ``{"type": "Polygon" | "MultiPolygon",
+        "coordinates": ...}``, positions ``[lon, lat]`` in degrees (RFC 7946).
+      value: priority of the whole area (> 0), split over each cutting's strips by
+        their share of the area.
+      swath: strip width [m] (> 0).
+      targets: int [K], indices of the area's strip targets in ``scenario.targets``.
+      share: float [K], fraction of the polygon's area inside each strip's band (sums
+        to 1 over the strips of one cutting).
+      cutting: int [K], the cutting (ground-track direction, 0..C-1) of each strip.
+      azimuth: float [C], strip direction of each cutting at the area's centre,
+        clockwise from north [rad], in [0, pi) (a strip is scanned either way).
+      passes: int [C], satellite passes over the area whose ground track gave each
+        cutting.
+    """
+
+    name: str
+    geometry: dict
+    value: float
+    swath: float
+    targets: np.ndarray
+    share: np.ndarray
+    cutting: np.ndarray
+    azimuth: np.ndarray
+    passes: np.ndarray
+
+    def __post_init__(self):
+        who = f"area {self.name!r}"
+        if not isinstance(self.geometry, dict) or self.geometry.get("type") not in (
+            "Polygon",
+            "MultiPolygon",
+        ):
+            raise ValueError(f"{who}: geometry must be a GeoJSON Polygon or MultiPolygon dict")
+        _positive(f"{who}: value", self.value)
+        _positive(f"{who}: swath", self.swath)
+        k = np.shape(self.targets)
+        for f in ("share", "cutting"):
+            if np.shape(getattr(self, f)) != k:
+                raise ValueError(
+                    f"{who}: {f} must have shape {k}, got {np.shape(getattr(self, f))}"
+                )
+        c = np.shape(self.azimuth)
+        if np.shape(self.passes) != c or len(c) != 1:
+            raise ValueError(
+                f"{who}: azimuth and passes must be [C], got {c}, {np.shape(self.passes)}"
+            )
+        cut = np.asarray(self.cutting)
+        if cut.size and (cut.min() < 0 or cut.max() >= c[0]):
+            raise ValueError(f"{who}: cutting must be in [0, {c[0]}), got {cut.tolist()}")
+
+
+@dataclasses.dataclass(frozen=True)
 class Margins:
     """Safety margins of the planner (what it keeps back from each limit).
 
@@ -406,6 +473,7 @@ class Scenario:
       satellites: tuple of :class:`Satellite` (unique names).
       targets: :class:`Targets`.
       planner: :class:`PlannerConfig`.
+      areas: tuple of :class:`Area` whose strips are among ``targets`` (unique names).
     """
 
     name: str
@@ -414,6 +482,7 @@ class Scenario:
     satellites: tuple
     targets: Targets
     planner: PlannerConfig = PlannerConfig()
+    areas: tuple = ()
 
     def __post_init__(self):
         if not isinstance(self.epoch, _dt.datetime):
@@ -431,6 +500,20 @@ class Scenario:
         object.__setattr__(self, "satellites", sats)
         if not isinstance(self.targets, Targets):
             raise ValueError(f"targets must be a Targets, got {type(self.targets).__name__}")
+        areas = tuple(self.areas)
+        seen = set()
+        for a in areas:
+            if not isinstance(a, Area):
+                raise ValueError(f"areas: every entry must be an Area, got {type(a).__name__}")
+            if a.name in seen:
+                raise ValueError(f"areas: duplicate name {a.name!r}")
+            seen.add(a.name)
+            idx = np.asarray(a.targets)
+            if idx.size and (idx.min() < 0 or idx.max() >= len(self.targets)):
+                raise ValueError(f"area {a.name!r}: targets must index scenario.targets")
+            if idx.size and np.any(self.targets.kind[idx] != STRIP):
+                raise ValueError(f"area {a.name!r}: targets must be strips")
+        object.__setattr__(self, "areas", areas)
 
     @property
     def epoch_jd(self) -> float:

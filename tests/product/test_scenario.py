@@ -207,12 +207,15 @@ def test_targets_csv_relative_to_the_toml(tmp_path, monkeypatch):
     assert list(sc.targets.name) == ["target_1", "a", "b", "c"]
 
 
-def test_imaging_time_fields(tmp_path):
-    text = HEAD + SAT + POINT_TARGET + "desired_s = 300.0\ntolerance_s = 20.0\n"
+def test_imaging_time_fields_and_swath(tmp_path):
+    text = (
+        HEAD + SAT + "swath_km = 12.5\n" + POINT_TARGET + "desired_s = 300.0\ntolerance_s = 20.0\n"
+    )
     text += "[[targets]]\nkind = 'strip'\nlat_deg = 1.0\nlon_deg = 2.0\nlength_km = 30.0\n"
     text += "min_duration_s = 6.0\n"
     text += POINT_TARGET + "min_duration_s = 15.0\n"
     sc = load_scenario(_write(tmp_path, text))
+    assert sc.satellites[0].swath == 12.5e3
     tg = sc.targets
     assert (tg.mid_lo[0], tg.mid_hi[0]) == (280.0, 320.0)
     assert (tg.mid_lo[1], tg.mid_hi[1]) == (-np.inf, np.inf)
@@ -404,6 +407,7 @@ BAD = [
         10,
         "multiple",
     ),
+    (HEAD + SAT + "swath_km = 0\n" + POINT_TARGET, "satellites[0].swath_km", 6, "> 0"),
     (HEAD + SAT + POINT_TARGET + "desired_s = 100\n", "targets[0].tolerance_s", 6, "missing"),
     (
         HEAD + SAT + POINT_TARGET + "window_s = [0, 50]\ndesired_s = 100\ntolerance_s = 5\n",
