@@ -18,6 +18,7 @@ from shapely.geometry import LineString, Polygon
 
 from jaxspline.areas import area_coverage, coverage_line
 from jaxspline.areas_io import read_geojson
+from jaxspline.cli import main
 from jaxspline.engine.planner import orbit_scene, plan
 from jaxspline.geometry.frames import (
     earth_rotation_angle,
@@ -206,6 +207,29 @@ def test_coverage_matches_shapely_on_observed_footprints(scenario, planned):
         rep["value_planned"], planned.value, rtol=1e-12
     )  # only area strips here
     assert "karst" in coverage_line([rep]) and "strips" in coverage_line([rep])
+
+
+def test_plan_command_reports_coverage_and_czml(tmp_path, capsys):
+    scen = _write(tmp_path, HEAD + AREA)
+    out = tmp_path / "out"
+    code = main(["plan", str(scen), "-o", str(out), "--no-plots", "--quiet", "--time-limit", "5"])
+    assert code == 0
+    doc = json.loads((out / "plan.json").read_text())
+    (rep,) = doc["report"]["areas"]
+    assert rep["area"] == "karst" and 0.0 <= rep["covered_fraction"] <= 1.0
+    assert "areas         1 area covered: karst" in capsys.readouterr().out
+    czml = json.loads((out / "plan.czml").read_text())
+    ids = {p["id"] for p in czml}
+    assert "area-0-0" in ids
+    n_obs = len(doc["observations"])
+    assert {f"footprint-{i}" for i in range(n_obs)} <= ids
+    taken = [p for p in czml if p["id"].startswith("taken-")]
+    assert len(taken) == n_obs  # every observation is an area strip here
+    area_pkt = next(p for p in czml if p["id"] == "area-0-0")
+    ring = np.reshape(area_pkt["polygon"]["positions"]["cartographicDegrees"], (-1, 3))
+    np.testing.assert_allclose(ring[: len(RING), :2], RING)
+    fp = next(p for p in czml if p["id"] == "footprint-0")["polygon"]["positions"]
+    assert len(fp) == 8 and all("interval" in f for f in fp)  # grows while imaged
 
 
 # --- files and errors ---
