@@ -4,7 +4,8 @@ A scenario file is TOML; angles are degrees in the file and radians in the
 :class:`jaxspline.engine.mission.Scenario` it becomes; times are seconds from the epoch.
 Unknown keys are errors (typos fail loudly); every error is a ``ValueError`` naming
 the field (``satellites[1].rate_deg_s``) and, where it can be located, the TOML line.
-Only ``[scenario]``, at least one satellite and at least one target are required::
+Only ``[scenario]``, at least one satellite and at least one target (or area) are
+required::
 
     targets_csv = "cities.csv"          # top-level key (before any [table]): a CSV of
                                         # targets, path relative to this file's folder;
