@@ -420,7 +420,7 @@ def area_coverage(result) -> list[dict]:
 
 
 def coverage_line(areas: list[dict], limit: int = 6) -> str:
-    """One summary line of :func:`area_coverage` (the first ``limit`` areas by name).
+    """One summary line of :func:`area_coverage` (the first ``limit`` areas, scenario order).
 
     Args:
       areas: list of dict from :func:`area_coverage`.
