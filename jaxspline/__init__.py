@@ -12,18 +12,21 @@ The package is layered (README "Architecture"); imports point down only:
 
 Every public name of the three layers is re-exported here once: ``__all__`` is the
 union of the layers' ``__all__`` (each the union of its modules'), plus the
-scenario loaders (:mod:`jaxspline.scenario`) and the AEM writer/reader
+scenario loaders (:mod:`jaxspline.scenario`), the area targets and their coverage
+(:mod:`jaxspline.areas`, :mod:`jaxspline.areas_io`) and the AEM writer/reader
 (:mod:`jaxspline.aem`). The library never enables float64 on
 import or globally: :func:`plan` runs inside ``jax.enable_x64(True)``; for the kernels,
 use that context manager (or ``jax.config.update("jax_enable_x64", True)``) yourself.
 """
 
-from jaxspline import aem, engine, geometry, kernels, scenario
+from jaxspline import aem, areas, areas_io, engine, geometry, kernels, scenario
 
 __all__ = [*kernels.__all__, *geometry.__all__, *engine.__all__]
-__all__ += [n for m in (scenario, aem) for n in m.__all__ if n not in __all__]
+__all__ += [n for m in (scenario, areas_io, areas, aem) for n in m.__all__ if n not in __all__]
 
 from jaxspline.aem import *  # noqa: E402, F403
+from jaxspline.areas import *  # noqa: E402, F403
+from jaxspline.areas_io import *  # noqa: E402, F403
 from jaxspline.engine import *  # noqa: E402, F403
 from jaxspline.geometry import *  # noqa: E402, F403
 from jaxspline.kernels import *  # noqa: E402, F403

@@ -3,9 +3,11 @@
 Parses the arguments, loads the scenario (default: the built-in constellation job),
 calls :func:`jaxspline.plan` and writes into the output directory:
 
-* ``plan.json`` - summary, bound and gap, check report, statistics, stage timings and
-  every observation; ``plan.csv`` - one row per observation;
-* ``plan.czml`` - satellites, targets and imaging intervals for Cesium;
+* ``plan.json`` - summary, bound and gap, check report (with ``areas``: the covered
+  fraction of every area target, :func:`jaxspline.areas.area_coverage`), statistics,
+  stage timings and every observation; ``plan.csv`` - one row per observation;
+* ``plan.czml`` - satellites, targets, areas, imaging intervals and sensor footprints
+  for Cesium;
 * ``ground_track.png`` (world map with coastlines), ``timeline.png`` (per-satellite
   Gantt chart and battery), ``slack.png`` (maneuver slack per model);
 * by default (``--aem``; ``--no-aem`` skips it) a flyable plan: transitions are
@@ -162,6 +164,12 @@ def run_plan(
     result = plan(
         sc, time_limit=time_limit, seed=seed, progress=progress, certify=certify, flown_joins=aem
     )
+    if sc.areas:  # covered fraction per area, into plan.json's report
+        from jaxspline.areas import area_coverage
+
+        t0 = time.monotonic()
+        result.report["areas"] = area_coverage(result)
+        result.timings["coverage"] = round(time.monotonic() - t0, 3)
     if aem:
         t0 = time.monotonic()
         attitude = attitude_history(result, aem_step)
@@ -202,6 +210,10 @@ def _print_summary(r, out: Path, names) -> None:
         "wall time [s]  " + ", ".join(f"{k} {v:.2f}" for k, v in r.timings.items()),
         f"outputs       {out}/ ({', '.join(names)})",
     ]
+    if r.report.get("areas"):
+        from jaxspline.areas import coverage_line
+
+        lines.insert(5, f"areas         {coverage_line(r.report['areas'])}")
     j = r.report.get("joins")  # only when the flown joins were checked (--aem)
     if j:
         lines.insert(

@@ -1,4 +1,4 @@
-"""CZML export of a plan: satellites, targets and observations for a Cesium viewer.
+"""CZML export of a plan: satellites, targets, areas, observations and footprints for Cesium.
 
 :func:`write_czml` turns a :class:`jaxspline.engine.result.PlanResult` into a CZML document
 (built with the ``czml3`` package, imported lazily) that opens in Cesium
@@ -12,7 +12,15 @@ on https://sandcastle.cesium.com):
 * one packet per target (id ``target-<r>``): a point at its geodetic position
   (cartographic degrees), green if the plan images it, grey otherwise;
 * one packet per observation (id ``obs-<i>``): a straight line from the satellite to
-  the target, available only during the imaging interval ``[start, end]``.
+  the target, available only during the imaging interval ``[start, end]``;
+* one sensor footprint per observation (id ``footprint-<i>``), during ``[start, end]``:
+  for a strip the imaged ground so far, the footprint swept by the satellite's swath
+  from the strip's start (:func:`jaxspline.areas.footprint_lonlat`), growing in
+  :data:`FOOTPRINT_FRAMES` steps; for a point a disc as wide as the swath;
+* one packet per part of every area target (id ``area-<a>-<p>``): the polygon with its
+  holes, translucent, its covered fraction in the description; and per planned strip of
+  an area (id ``taken-<i>``) its footprint in the satellite's colour from the start of
+  its imaging to the end of the horizon (the strips taken).
 
 Satellite positions come from :func:`jaxspline.geometry.orbit.tabulate_orbits` (SGP4 for TLEs,
 analytic for circular orbits) and are rotated to Earth-fixed coordinates by the Earth
@@ -58,6 +66,12 @@ LINK_WIDTH = 2.0  # satellite-to-target line width [px]
 LABEL_FONT = "11pt sans-serif"
 LABEL_OFFSET_PX = (12.0, 0.0)  # label offset right of the satellite point [px]
 POSITION_DECIMALS = 3  # metres rounded to millimetres in the file
+DEGREE_DECIMALS = 7  # longitudes / latitudes rounded to ~1 cm in the file
+FOOTPRINT_FRAMES = 8  # a strip's footprint grows in this many steps while it is imaged
+FOOTPRINT_ALPHA = 160  # opacity of a footprint during imaging (0..255)
+TAKEN_ALPHA = 110  # opacity of an area's strip once taken
+AREA_RGBA = (255, 215, 0, 60)  # area fill (gold, translucent)
+AREA_OUTLINE_RGBA = (255, 215, 0, 255)
 
 # one XLA program per table shape (eager dispatch would compile every primitive)
 _orbit_position = jax.jit(orbit_position)
@@ -260,7 +274,164 @@ def czml_document(result, *, step: float = 60.0):
                 ),
             )
         )
+    packets += _footprint_packets(result, horizon)
+    packets += _area_packets(result)
     return Document(packets=packets)
+
+
+def _degrees_list(lon, lat) -> list[float]:
+    """``[lon, lat, 0, lon, lat, 0, ...]`` [deg] of a ring (CZML cartographicDegrees)."""
+    pts = np.column_stack([lon, lat, np.zeros(len(lon))])
+    return np.round(pts, DEGREE_DECIMALS).ravel().tolist()
+
+
+def _footprint_packets(result, horizon) -> list:
+    """Sensor footprints of every observation and the taken strips of the areas."""
+    from czml3 import Packet
+    from czml3.properties import (
+        Color,
+        Ellipse,
+        Material,
+        Polygon,
+        Position,
+        PositionList,
+        SolidColorMaterial,
+    )
+    from czml3.types import IntervalValue, TimeInterval, TimeIntervalCollection
+
+    from jaxspline.areas import footprint_lonlat
+
+    sc = result.scenario
+    obs = result.observations
+    tg = sc.targets
+    in_area = {int(r) for a in sc.areas for r in np.asarray(a.targets)}
+    out = []
+    for i in range(len(obs)):
+        k, j = int(obs.sat[i]), int(obs.target[i])
+        sat = sc.satellites[k]
+        color = SATELLITE_COLORS[k % len(SATELLITE_COLORS)]
+        t0, t1 = float(obs.start[i]), float(obs.end[i])
+        fill = Material(
+            solidColor=SolidColorMaterial(color=Color(rgba=_rgba(color, FOOTPRINT_ALPHA)))
+        )
+        name = f"footprint {sat.name} -> {tg.name[j]}"
+        if int(tg.kind[j]) != 1:
+            out.append(
+                Packet(
+                    id=f"footprint-{i}",
+                    name=name,
+                    availability=TimeInterval(start=sc.at(t0), end=sc.at(t1)),
+                    position=Position(
+                        cartographicDegrees=[
+                            math.degrees(float(tg.lon[j])),
+                            math.degrees(float(tg.lat[j])),
+                            0.0,
+                        ]
+                    ),
+                    ellipse=Ellipse(
+                        semiMajorAxis=sat.swath / 2, semiMinorAxis=sat.swath / 2, material=fill
+                    ),
+                )
+            )
+            continue
+        frames = []
+        for f in range(FOOTPRINT_FRAMES):
+            a, b = (
+                t0 + (t1 - t0) * f / FOOTPRINT_FRAMES,
+                t0 + (t1 - t0) * (f + 1) / FOOTPRINT_FRAMES,
+            )
+            lon, lat = footprint_lonlat(tg, j, sat.swath, (f + 1) / FOOTPRINT_FRAMES)
+            frames.append(
+                IntervalValue(
+                    start=sc.at(a),
+                    end=sc.at(b),
+                    value=PositionList(cartographicDegrees=_degrees_list(lon, lat)),
+                )
+            )
+        out.append(
+            Packet(
+                id=f"footprint-{i}",
+                name=name,
+                availability=TimeInterval(start=sc.at(t0), end=sc.at(t1)),
+                polygon=Polygon(positions=TimeIntervalCollection(values=frames), material=fill),
+            )
+        )
+        if j in in_area:
+            lon, lat = footprint_lonlat(tg, j, sat.swath)
+            taken = _rgba(color, TAKEN_ALPHA)
+            out.append(
+                Packet(
+                    id=f"taken-{i}",
+                    name=f"strip {tg.name[j]} ({sat.name})",
+                    availability=TimeInterval(start=sc.at(t0), end=horizon.end),
+                    polygon=Polygon(
+                        positions=PositionList(cartographicDegrees=_degrees_list(lon, lat)),
+                        material=Material(solidColor=SolidColorMaterial(color=Color(rgba=taken))),
+                        outline=True,
+                        outlineColor=Color(rgba=_rgba(color)),
+                    ),
+                )
+            )
+    return out
+
+
+def _polygon_parts(geometry: dict):
+    """(exterior, holes) rings of a GeoJSON Polygon / MultiPolygon, [lon, lat] lists."""
+    polys = geometry["coordinates"]
+    if geometry["type"] == "Polygon":
+        polys = [polys]
+    return [(rings[0], rings[1:]) for rings in polys]
+
+
+def _area_packets(result) -> list:
+    """One translucent polygon per part of every area, its coverage in the description."""
+    from czml3 import Packet
+    from czml3.properties import (
+        Color,
+        Material,
+        Polygon,
+        PositionList,
+        PositionListOfLists,
+        SolidColorMaterial,
+    )
+
+    sc = result.scenario
+    if not sc.areas:
+        return []
+    cover = result.report.get("areas")
+    if cover is None:
+        from jaxspline.areas import area_coverage
+
+        cover = area_coverage(result)
+    out = []
+    for a_i, (area, cov) in enumerate(zip(sc.areas, cover, strict=True)):
+        desc = (
+            f"area {area.name}: priority {area.value:g}, swath {area.swath / 1e3:g} km, "
+            f"{cov['strips_planned']}/{cov['strips']} strips planned, "
+            f"{100 * cov['covered_fraction']:.1f} % of {cov['area_km2']:.1f} km2 covered"
+        )
+        for p_i, (ext, holes) in enumerate(_polygon_parts(area.geometry)):
+            ring = np.asarray(ext, np.float64)
+            hole_lists = [_degrees_list(*np.asarray(h, np.float64).T) for h in holes]
+            out.append(
+                Packet(
+                    id=f"area-{a_i}-{p_i}",
+                    name=area.name,
+                    description=desc,
+                    polygon=Polygon(
+                        positions=PositionList(cartographicDegrees=_degrees_list(*ring.T)),
+                        holes=PositionListOfLists(cartographicDegrees=hole_lists)
+                        if hole_lists
+                        else None,
+                        material=Material(
+                            solidColor=SolidColorMaterial(color=Color(rgba=list(AREA_RGBA)))
+                        ),
+                        outline=True,
+                        outlineColor=Color(rgba=list(AREA_OUTLINE_RGBA)),
+                    ),
+                )
+            )
+    return out
 
 
 def write_czml(result, path, *, force: bool = False, step: float = 60.0) -> Path:

@@ -4,7 +4,8 @@ A scenario file is TOML; angles are degrees in the file and radians in the
 :class:`jaxspline.engine.mission.Scenario` it becomes; times are seconds from the epoch.
 Unknown keys are errors (typos fail loudly); every error is a ``ValueError`` naming
 the field (``satellites[1].rate_deg_s``) and, where it can be located, the TOML line.
-Only ``[scenario]``, at least one satellite and at least one target are required::
+Only ``[scenario]``, at least one satellite and at least one target (or area) are
+required::
 
     targets_csv = "cities.csv"          # top-level key (before any [table]): a CSV of
                                         # targets, path relative to this file's folder;
@@ -34,6 +35,8 @@ Only ``[scenario]``, at least one satellite and at least one target are required
     off_nadir_max_deg = 45.0            # pointing limit [deg] (default 45)
     sensor = "visible"                  # sensor type (default "visible")
     settle_s = 0.0                      # settling time after a rest-to-rest slew [s]
+    swath_km = 20.0                     # ground width imaged across a strip [km] (default
+                                        # 20): default strip width of areas, footprints
     flex = { freq_hz = 0.5, damping = 0.01, tolerance_deg = 1e-4 }
                                         # structural mode (model "flexible" only, required
                                         # there): frequency [Hz] (2 pi f rad/s inside),
@@ -57,6 +60,30 @@ Only ``[scenario]``, at least one satellite and at least one target are required
     priority = 5.0                      # value if imaged (> 0, default 1)
     window_s = [100.0, 900.0]           # start >= lo and end <= hi [s from the epoch]
     sensor = ""                         # required sensor type ("" = any, the default)
+    desired_s = 450.0                   # desired time of the imaging midpoint (start +
+    tolerance_s = 30.0                  # end) / 2 [s from the epoch] and its tolerance
+                                        # [s]: the midpoint lies in desired +- tolerance
+                                        # (tolerance_s required with desired_s)
+    min_duration_s = 8.0                # shortest imaging time end - start [s] (default
+                                        # 0); strips: only scan speeds with length /
+                                        # speed >= it; points: duration_s defaults to
+                                        # max(10, min_duration_s) and must reach it
+
+    [[areas]]                           # polygon area targets (jaxspline.areas), cut into
+                                        # strips along the ground tracks of the passes
+    name = "karst"                      # default "area_1", "area_2", ... (unique)
+    geojson = "karst.geojson"           # GeoJSON file (relative to this file's folder):
+                                        # Polygon / MultiPolygon, Feature or
+                                        # FeatureCollection (its polygons united), [lon, lat]
+    lonlat_deg = [[13.6, 45.6], [14.2, 45.6], [14.2, 45.9], [13.6, 45.9]]
+                                        # or one ring of [lon, lat] [deg] (not both)
+    priority = 20.0                     # value of the whole area (> 0, default 1), split
+                                        # over the strips of a cutting by area share
+    swath_km = 15.0                     # strip width [km]; default: the narrowest swath_km
+                                        # of the satellites whose sensor the area accepts
+    max_length_km = 60.0                # longer strips are split [km] (default: no limit)
+    sensor = ""                         # required sensor type ("" = any)
+    window_s = [0.0, 3600.0]            # imaging window of every strip [s from the epoch]
 
     [targets_file]                      # alternative to targets_csv
     path = "more_targets.csv"
@@ -91,7 +118,10 @@ Only ``[scenario]``, at least one satellite and at least one target are required
 The target sections (``targets_csv``, ``[[targets]]``/``[[routes]]``,
 ``[targets_file]``, ``[random_targets]``) are read by :mod:`jaxspline.targets_io`,
 whose docstring lists the CSV columns with their units and how random targets are
-drawn; :func:`load_targets_csv` is re-exported here.
+drawn; :func:`load_targets_csv` is re-exported here. ``[[areas]]`` (alias ``[area]``)
+are read by :mod:`jaxspline.areas_io` and cut into strip targets by
+:mod:`jaxspline.areas` (method there); their
+strips follow every other target, and a file with areas needs no other targets.
 
 :func:`default_scenario` loads the packaged ``data/default.toml``: six satellites over
 six hours with about 1500 city targets (``data/cities.csv``, made by
@@ -118,6 +148,7 @@ from jaxspline._fields import (
     field_tables,
 )
 from jaxspline.engine.mission import (
+    DEFAULT_SWATH,
     MODELS,
     FlexMode,
     Margins,
@@ -125,6 +156,7 @@ from jaxspline.engine.mission import (
     Power,
     Satellite,
     Scenario,
+    make_targets,
 )
 from jaxspline.geometry.frames import gmst, jd_split, julian_date
 from jaxspline.geometry.orbit import circular_orbit, circular_orbit_over, propagate_tle
@@ -151,10 +183,11 @@ DEFAULT_ACCEL_DEG_S2 = 1.0
 DEFAULT_OFF_NADIR_DEG = 45.0
 MAX_OFF_NADIR_DEG = 80.0
 DEFAULT_SENSOR = "visible"
+DEFAULT_SWATH_KM = DEFAULT_SWATH / 1e3
 
 _ORBIT_KEYS = ("altitude_km", "inclination_deg", "raan_deg", "arg_lat_deg", "over")
 _SAT_MODEL_KEYS = (
-    "name tle model rate_deg_s accel_deg_s2 off_nadir_max_deg sensor settle_s flex power"
+    "name tle model rate_deg_s accel_deg_s2 off_nadir_max_deg sensor settle_s flex power swath_km"
 )
 _KEYS = {
     name: frozenset(keys.split())
@@ -169,7 +202,7 @@ _KEYS = {
         "exact_max_options lagrangian_share refine_steps time_limit_s",
     }.items()
 }
-_TOP = frozenset("scenario satellites satellite planner".split()) | TARGET_SECTIONS
+_TOP = frozenset("scenario satellites satellite planner areas area".split()) | TARGET_SECTIONS
 
 
 # --- satellites ---
@@ -279,9 +312,12 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
             power = Power(**vals)
         except ValueError as exc:
             raise ctx.error(f"{f}.power", str(exc)) from None
+    swath = field_number(ctx, f"{f}.swath_km", sat.get("swath_km", DEFAULT_SWATH_KM), positive=True)
     limits = AxisLimits(rate, accel)
     try:
-        return Satellite(name, orbit, model, limits, math.radians(off), sensor, settle, flex, power)
+        return Satellite(
+            name, orbit, model, limits, math.radians(off), sensor, settle, flex, power, 1e3 * swath
+        )
     except ValueError as exc:
         raise ctx.error(f, str(exc)) from None
 
@@ -394,10 +430,26 @@ def parse_scenario(
         names[s.name] = f
         sats.append(s)
 
-    targets = scenario_targets(ctx, data, base_dir)
-
+    has_areas = "areas" in data or "area" in data
+    targets = scenario_targets(ctx, data, base_dir, required=not has_areas)
     planner = _planner(ctx, data.get("planner", {}))
-    return Scenario(name, epoch, duration, tuple(sats), targets, planner)
+    if not has_areas:
+        return Scenario(name, epoch, duration, tuple(sats), targets, planner)
+
+    from jaxspline.areas import cut_areas
+    from jaxspline.areas_io import parse_areas
+
+    specs = parse_areas(ctx, data, base_dir, sats)
+    if targets is None:
+        targets = make_targets(
+            np.zeros(0, np.int64), np.zeros(0), np.zeros(0), name=np.zeros(0, str)
+        )
+    sc = cut_areas(Scenario(name, epoch, duration, tuple(sats), targets, planner), specs)
+    if len(sc.targets) == 0:
+        raise ctx.error(
+            "areas", "no targets: no satellite passes over any area and no other targets are given"
+        )
+    return sc
 
 
 def load_scenario(path) -> Scenario:

@@ -28,6 +28,14 @@ column            unit   meaning
 ``window_hi_s``   s      imaging ends at or before this time from the epoch (default: none);
                          needs ``window_hi_s - window_lo_s >=`` the point's imaging time
 ``sensor``        -      required sensor type (empty = any sensor, the default)
+``desired_s``     s      desired time of the imaging midpoint ``(start + end) / 2`` from the
+                         epoch (default: none); needs ``tolerance_s``
+``tolerance_s``   s      the midpoint must lie within ``desired_s +- tolerance_s`` (>= 0;
+                         only with ``desired_s``)
+``min_duration_s`` s     shortest accepted imaging time ``end - start`` (default 0): a strip
+                         is only scanned at speeds with ``length / speed >=`` it; a point's
+                         ``duration_s`` defaults to ``max(10, min_duration_s)`` and must
+                         reach it
 ================  =====  ==================================================================
 
 A bad cell raises e.g. ``cities.csv row 17, column 'lat_deg': must be within [-90, 90],
@@ -83,12 +91,13 @@ LAND_BATCH_MIN = 1024
 TARGET_SECTIONS = frozenset("targets routes targets_csv targets_file random_targets".split())
 CSV_REQUIRED = ("name", "lat_deg", "lon_deg", "priority")
 CSV_OPTIONAL = tuple(
-    "kind alt_m duration_s length_km azimuth_deg window_lo_s window_hi_s sensor".split()
+    "kind alt_m duration_s length_km azimuth_deg window_lo_s window_hi_s sensor desired_s "
+    "tolerance_s min_duration_s".split()
 )
 _KEYS = {
     "target": frozenset(
         "kind name lat_deg lon_deg alt_m duration_s length_km azimuth_deg priority "
-        "window_s sensor".split()
+        "window_s sensor desired_s tolerance_s min_duration_s".split()
     ),
     "targets_file": frozenset(["path"]),
     "random_targets": frozenset(
@@ -99,7 +108,7 @@ _KEYS = {
 _KINDS = {"point": POINT, "strip": STRIP}
 
 
-def scenario_targets(ctx, data: dict, base_dir=None) -> Targets:
+def scenario_targets(ctx, data: dict, base_dir=None, required: bool = True) -> Targets | None:
     """All targets of a parsed scenario table ``data``, in the order they are read.
 
     First the ``[[targets]]`` (or ``[[routes]]``) tables, then the CSV files of
@@ -109,10 +118,12 @@ def scenario_targets(ctx, data: dict, base_dir=None) -> Targets:
       ctx: :class:`jaxspline._fields.FieldContext` of the file.
       data: dict, the parsed scenario TOML.
       base_dir: folder that relative CSV paths start from (None: the working directory).
+      required: raise when the file gives no targets (else return None).
     Returns:
-      Targets (angles in radians, lengths in metres, times in seconds from the epoch).
+      Targets (angles in radians, lengths in metres, times in seconds from the epoch),
+      or None (no targets and not ``required``).
     Raises:
-      ValueError: naming the field, also when the file gives no targets at all.
+      ValueError: naming the field, also when ``required`` and the file gives no targets.
     """
     parts = []
     explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"))
@@ -121,6 +132,8 @@ def scenario_targets(ctx, data: dict, base_dir=None) -> Targets:
     parts += [load_targets_csv(p) for p in _csv_paths(ctx, data, base_dir)]
     if "random_targets" in data:
         parts.append(_random_targets(ctx, data["random_targets"]))
+    if not parts and not required:
+        return None
     if not parts:
         raise ctx.error(
             "targets", "no targets: give [[targets]], targets_csv and/or [random_targets]"
@@ -135,7 +148,8 @@ def _target_row(get, err, default_name, text=False) -> tuple:
     """One target from ``get(column) -> raw or None``; ``err(column)(msg)`` builds errors.
 
     Columns as in the CSV format. Returns (name, kind, lat, lon, alt, duration, length,
-    azimuth, priority, t_lo, t_hi, sensor) in degrees, metres, seconds.
+    azimuth, priority, t_lo, t_hi, mid_lo, mid_hi, min_duration, sensor) in degrees,
+    metres, seconds.
     """
 
     def num(col, **kw):
@@ -157,6 +171,7 @@ def _target_row(get, err, default_name, text=False) -> tuple:
     lon = num("lon_deg", lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
     alt = num("alt_m", default=0.0)
     prio = num("priority", default=1.0, positive=True)
+    min_dur = num("min_duration_s", default=0.0, nonneg=True)
     if kind == "strip":
         if get("duration_s") is not None:
             raise err("duration_s")("a strip has no duration_s (it is length / scan speed)")
@@ -167,7 +182,10 @@ def _target_row(get, err, default_name, text=False) -> tuple:
         for col in ("length_km", "azimuth_deg"):
             if get(col) is not None:
                 raise err(col)("a point has no length_km / azimuth_deg (use kind 'strip')")
-        dur, length, az = num("duration_s", default=DEFAULT_POINT_DURATION_S, positive=True), 0, 0
+        default_dur = max(DEFAULT_POINT_DURATION_S, min_dur)
+        dur, length, az = num("duration_s", default=default_dur, positive=True), 0, 0
+        if dur < min_dur:
+            raise err("duration_s")(f"must be >= min_duration_s = {min_dur:g}, got {dur:g}")
     t_lo = num("window_lo_s", default=-np.inf)
     t_hi = num("window_hi_s", default=np.inf)
     if t_hi < t_lo:
@@ -176,14 +194,43 @@ def _target_row(get, err, default_name, text=False) -> tuple:
         raise err("window_hi_s")(
             f"window [{t_lo:g}, {t_hi:g}] s is shorter than the imaging time {dur:g} s"
         )
+    mid_lo, mid_hi = -np.inf, np.inf
+    if get("tolerance_s") is not None and get("desired_s") is None:
+        raise err("tolerance_s")("only with desired_s (the desired imaging time)")
+    if get("desired_s") is not None:
+        desired = num("desired_s")
+        if get("tolerance_s") is None:
+            raise err("tolerance_s")("missing (required with desired_s) [s]")
+        tol = num("tolerance_s", nonneg=True)
+        mid_lo, mid_hi = desired - tol, desired + tol
+        if mid_hi < t_lo + dur / 2 or mid_lo > t_hi - dur / 2:
+            raise err("desired_s")(
+                f"desired time {desired:g} +- {tol:g} s misses the window [{t_lo:g}, {t_hi:g}] s"
+            )
     sensor = string("sensor", "")
-    return (name, _KINDS[kind], lat, lon, alt, dur, length, az, prio, t_lo, t_hi, sensor)
+    return (
+        name,
+        _KINDS[kind],
+        lat,
+        lon,
+        alt,
+        dur,
+        length,
+        az,
+        prio,
+        t_lo,
+        t_hi,
+        mid_lo,
+        mid_hi,
+        min_dur,
+        sensor,
+    )
 
 
 def _targets_from_rows(rows) -> Targets:
     cols = list(zip(*rows, strict=True))
-    num = [np.asarray(c, np.float64) for c in cols[2:11]]
-    lat, lon, alt, dur, length, az, prio, t_lo, t_hi = num
+    num = [np.asarray(c, np.float64) for c in cols[2:14]]
+    lat, lon, alt, dur, length, az, prio, t_lo, t_hi, mid_lo, mid_hi, min_dur = num
     return make_targets(
         np.asarray(cols[1], np.int64),
         np.radians(lat),
@@ -195,8 +242,11 @@ def _targets_from_rows(rows) -> Targets:
         value=prio,
         t_lo=t_lo,
         t_hi=t_hi,
-        sensor=np.asarray(cols[11], dtype=object),
+        sensor=np.asarray(cols[14], dtype=object),
         name=np.asarray(cols[0], dtype=str),
+        mid_lo=mid_lo,
+        mid_hi=mid_hi,
+        min_duration=min_dur,
     )
 
 

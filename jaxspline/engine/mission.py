@@ -32,7 +32,9 @@ from jaxspline.geometry.routes import POINT, STRIP
 from jaxspline.kernels.limits import AxisLimits
 
 __all__ = [
+    "DEFAULT_SWATH",
     "MODELS",
+    "Area",
     "FlexMode",
     "Margins",
     "PlannerConfig",
@@ -44,6 +46,7 @@ __all__ = [
 ]
 
 MODELS = ("per_channel", "eigen_axis", "flexible")
+DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
 
 
 def _positive(name: str, value, allow_zero: bool = False) -> float:
@@ -119,6 +122,9 @@ class Satellite:
       settle: settling time after a rest-to-rest slew [s] (eigen_axis, flexible).
       flex: :class:`FlexMode` (required for ``"flexible"``).
       power: :class:`Power` or None (no battery constraint).
+      swath: ground width imaged across the scan direction [m] (> 0), taken as
+        independent of the viewing angle; area targets are cut into strips this wide,
+        and the CZML draws footprints of this width.
     """
 
     name: str
@@ -130,6 +136,7 @@ class Satellite:
     settle: float = 0.0
     flex: FlexMode | None = None
     power: Power | None = None
+    swath: float = DEFAULT_SWATH
 
     def __post_init__(self):
         who = f"satellite {self.name!r}"
@@ -160,6 +167,7 @@ class Satellite:
                 f"{who}: off_nadir_max must be in (0, pi/2), got {self.off_nadir_max!r}"
             )
         _positive(f"{who}: settle", self.settle, allow_zero=True)
+        _positive(f"{who}: swath", self.swath)
         if self.model == "flexible" and self.flex is None:
             raise ValueError(f"{who}: model 'flexible' needs flex=FlexMode(...)")
 
@@ -180,6 +188,11 @@ class Targets:
       value: priority / weight collected if imaged (> 0).
       t_lo, t_hi: imaging window [s]: start >= t_lo and end <= t_hi (-inf/+inf: free).
       sensor: required sensor type [R] ("" = any).
+      mid_lo, mid_hi: window of the imaging midpoint [s]: ``mid_lo <= (start + end) / 2
+        <= mid_hi`` (-inf/+inf: free); a desired time ``d`` with tolerance ``tol`` is
+        ``[d - tol, d + tol]``.
+      min_duration: shortest accepted imaging time ``end - start`` [s] (0: any); a
+        strip's scan speeds whose ``length / speed`` is shorter are not used.
     """
 
     name: np.ndarray
@@ -194,6 +207,9 @@ class Targets:
     t_lo: np.ndarray
     t_hi: np.ndarray
     sensor: np.ndarray
+    mid_lo: np.ndarray
+    mid_hi: np.ndarray
+    min_duration: np.ndarray
 
     def __len__(self) -> int:
         return int(self.kind.shape[0])
@@ -228,6 +244,9 @@ def make_targets(
     t_hi=np.inf,
     sensor="",
     name=None,
+    mid_lo=-np.inf,
+    mid_hi=np.inf,
+    min_duration=0.0,
 ) -> Targets:
     """Validate and broadcast target fields into :class:`Targets`.
 
@@ -246,6 +265,10 @@ def make_targets(
       t_hi: float [R], imaging window end [s from the epoch] (+inf: free), >= t_lo.
       sensor: str [R], required sensor type ("" = any).
       name: str [R]; None gives "t0", "t1", ...
+      mid_lo: float [R], earliest imaging midpoint [s from the epoch] (-inf: free).
+      mid_hi: float [R], latest imaging midpoint [s from the epoch] (+inf: free), >= mid_lo.
+      min_duration: float [R], shortest imaging time [s], >= 0; a point's ``duration``
+        must reach it.
     Returns:
       Targets.
     Raises:
@@ -262,6 +285,9 @@ def make_targets(
         "value": value,
         "t_lo": t_lo,
         "t_hi": t_hi,
+        "mid_lo": mid_lo,
+        "mid_hi": mid_hi,
+        "min_duration": min_duration,
     }
     try:
         arrs = np.broadcast_arrays(kind, *(np.asarray(v, np.float64) for v in num.values()))
@@ -283,6 +309,17 @@ def make_targets(
     bad("length", (kind == STRIP) & (out["length"] <= 0), "must be > 0 for a strip")
     bad("duration", (kind == POINT) & (out["duration"] <= 0), "must be > 0 for a point")
     bad("t_hi", ~(out["t_lo"] <= out["t_hi"]), "must be >= t_lo")
+    bad("mid_hi", ~(out["mid_lo"] <= out["mid_hi"]), "must be >= mid_lo")
+    bad(
+        "min_duration",
+        ~(np.isfinite(out["min_duration"]) & (out["min_duration"] >= 0)),
+        "must be finite and >= 0",
+    )
+    bad(
+        "duration",
+        (kind == POINT) & (out["duration"] < out["min_duration"]),
+        "must be >= min_duration for a point",
+    )
     sensor = np.broadcast_to(np.asarray(sensor, dtype=object), (n,)).astype(str)
     names = np.array([f"t{i}" for i in range(n)]) if name is None else np.asarray(name, str)
     if names.shape != (n,):
@@ -291,6 +328,65 @@ def make_targets(
     out["length"] = np.where(kind == STRIP, out["length"], 0.0)
     out["azimuth"] = np.where(kind == STRIP, out["azimuth"], 0.0)
     return Targets(name=names, kind=np.array(kind), sensor=sensor, **out)
+
+
+@dataclasses.dataclass(frozen=True)
+class Area:
+    """A polygon area target, cut into strip targets of the scenario (plain data).
+
+    Built by the product layer (:mod:`jaxspline.areas`, which holds the geometry); the
+    engine plans its strips like any other target and never looks at the polygon.
+
+    Attributes:
+      name: label (unique among the scenario's areas).
+      geometry: GeoJSON geometry dict, ``{"type": "Polygon" | "MultiPolygon",
+        "coordinates": ...}``, positions ``[lon, lat]`` in degrees (RFC 7946).
+      value: priority of the whole area (> 0), split over each cutting's strips by
+        their share of the area.
+      swath: strip width [m] (> 0).
+      targets: int [K], indices of the area's strip targets in ``scenario.targets``.
+      share: float [K], fraction of the polygon's area inside each strip's band (sums
+        to 1 over the strips of one cutting).
+      cutting: int [K], the cutting (ground-track direction, 0..C-1) of each strip.
+      azimuth: float [C], strip direction of each cutting at the area's centre,
+        clockwise from north [rad], in [0, pi) (a strip is scanned either way).
+      passes: int [C], satellite passes over the area whose ground track gave each
+        cutting.
+    """
+
+    name: str
+    geometry: dict
+    value: float
+    swath: float
+    targets: np.ndarray
+    share: np.ndarray
+    cutting: np.ndarray
+    azimuth: np.ndarray
+    passes: np.ndarray
+
+    def __post_init__(self):
+        who = f"area {self.name!r}"
+        if not isinstance(self.geometry, dict) or self.geometry.get("type") not in (
+            "Polygon",
+            "MultiPolygon",
+        ):
+            raise ValueError(f"{who}: geometry must be a GeoJSON Polygon or MultiPolygon dict")
+        _positive(f"{who}: value", self.value)
+        _positive(f"{who}: swath", self.swath)
+        k = np.shape(self.targets)
+        for f in ("share", "cutting"):
+            if np.shape(getattr(self, f)) != k:
+                raise ValueError(
+                    f"{who}: {f} must have shape {k}, got {np.shape(getattr(self, f))}"
+                )
+        c = np.shape(self.azimuth)
+        if np.shape(self.passes) != c or len(c) != 1:
+            raise ValueError(
+                f"{who}: azimuth and passes must be [C], got {c}, {np.shape(self.passes)}"
+            )
+        cut = np.asarray(self.cutting)
+        if cut.size and (cut.min() < 0 or cut.max() >= c[0]):
+            raise ValueError(f"{who}: cutting must be in [0, {c[0]}), got {cut.tolist()}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -377,6 +473,7 @@ class Scenario:
       satellites: tuple of :class:`Satellite` (unique names).
       targets: :class:`Targets`.
       planner: :class:`PlannerConfig`.
+      areas: tuple of :class:`Area` whose strips are among ``targets`` (unique names).
     """
 
     name: str
@@ -385,6 +482,7 @@ class Scenario:
     satellites: tuple
     targets: Targets
     planner: PlannerConfig = PlannerConfig()
+    areas: tuple = ()
 
     def __post_init__(self):
         if not isinstance(self.epoch, _dt.datetime):
@@ -402,6 +500,20 @@ class Scenario:
         object.__setattr__(self, "satellites", sats)
         if not isinstance(self.targets, Targets):
             raise ValueError(f"targets must be a Targets, got {type(self.targets).__name__}")
+        areas = tuple(self.areas)
+        seen = set()
+        for a in areas:
+            if not isinstance(a, Area):
+                raise ValueError(f"areas: every entry must be an Area, got {type(a).__name__}")
+            if a.name in seen:
+                raise ValueError(f"areas: duplicate name {a.name!r}")
+            seen.add(a.name)
+            idx = np.asarray(a.targets)
+            if idx.size and (idx.min() < 0 or idx.max() >= len(self.targets)):
+                raise ValueError(f"area {a.name!r}: targets must index scenario.targets")
+            if idx.size and np.any(self.targets.kind[idx] != STRIP):
+                raise ValueError(f"area {a.name!r}: targets must be strips")
+        object.__setattr__(self, "areas", areas)
 
     @property
     def epoch_jd(self) -> float:

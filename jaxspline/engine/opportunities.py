@@ -6,7 +6,9 @@ gives the starts ``k * time_step`` whose observation fits it. An option is kept 
 at every *sample* of the observation (its start, every geometry knot inside it, its
 end), the aim point is above its horizon and inside the off-nadir cone (limit minus
 margin), the target's imaging window and the horizon [0, duration] hold, the Sun is
-high enough at the start (``sun_elevation_min``), and, for ``per_channel``
+high enough at the start (``sun_elevation_min``), the imaging midpoint lies in the
+target's ``[mid_lo, mid_hi]`` (a desired time with its tolerance), the imaging time
+reaches the target's ``min_duration`` (for strips: per scan speed), and, for ``per_channel``
 satellites, every channel's rate and acceleration stay within the limits (the scan
 itself must be flyable). Point options whose start and end are knots of the window
 are exact already (the window was computed on every knot) and skip the resampling.
@@ -53,6 +55,7 @@ __all__ = [
 _CHUNK = 1 << 13  # candidates per compiled evaluation (padded)
 _GRID_TOL = 1e-6  # [s] a time within this of a knot is on the knot
 _KNOT_TOL = 1e-6  # [steps] knots this close to a start / end are left to that sample
+_DURATION_TOL = 1e-9  # [s] an imaging time this much short of min_duration still counts
 _LIMIT_TOL = 1e-9  # relative tolerance of the scan's rate / acceleration test
 _NADIR_RATE_SAFETY = 1e-6  # relative excess of the nadir turn rate over the knots' maximum
 
@@ -208,6 +211,10 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
         lo = np.maximum(windows.lo[keep] - half, tg.t_lo[w_tgt])
         hi = np.minimum(windows.hi[keep] + half, tg.t_hi[w_tgt])
         hi = np.minimum(hi, sc.duration) - dur
+        # the imaging midpoint start + dur / 2 within [mid_lo, mid_hi]; long enough
+        lo = np.maximum(lo, tg.mid_lo[w_tgt] - dur / 2.0)
+        hi = np.minimum(hi, tg.mid_hi[w_tgt] - dur / 2.0)
+        hi = np.where(dur >= tg.min_duration[w_tgt] - _DURATION_TOL, hi, -step)
         k_lo = np.ceil(np.maximum(lo, 0.0) / step - 1e-9).astype(np.int64)
         k_hi = np.floor(hi / step + 1e-9).astype(np.int64)
         wi, off = ragged_positions(np.maximum(k_hi - k_lo + 1, 0))

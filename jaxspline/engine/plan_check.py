@@ -8,6 +8,9 @@ every constraint of the scenario *without* margins from the kernels:
   off-nadir angle is within the satellite's limit
   (:func:`jaxspline.geometry.pointing.aim_geometry`); imaging windows, the horizon and the
   sensor type hold;
+* imaging time: the midpoint ``(start + end) / 2`` lies in the target's
+  ``[mid_lo, mid_hi]`` (desired time +- tolerance) and ``end - start`` reaches its
+  ``min_duration`` (both to 1e-6 s);
 * maneuvers: rest-to-rest models need the exact slew time
   (:func:`jaxspline.engine.models.slew_time`) plus settling within the gap; per-channel
   satellites' transfers (from rest at zero angles at t = 0 for the first one) are
@@ -34,6 +37,7 @@ from jaxspline.kernels.reach_durations import min_transfer_time
 __all__ = ["check_plan"]
 
 _SAMPLES = 201  # Theorem-1 samples per per-channel maneuver
+_TIME_TOL = 1e-6  # [s] slack of the midpoint-window and minimum-duration tests
 _PAD = 1 << 10  # kernel batches are padded to multiples of this (few compiled shapes)
 
 
@@ -87,6 +91,20 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
     for i in np.flatnonzero(~(geo_ok & time_ok)):
         bad.add(int(chosen[i]))
         viol.append(f"{sc.satellites[sat[i]].name} {tg.name[tgt[i]]}: geometry / window")
+    mid = 0.5 * (t0 + t1)
+    mid_ok = (mid >= tg.mid_lo[tgt] - _TIME_TOL) & (mid <= tg.mid_hi[tgt] + _TIME_TOL)
+    for i in np.flatnonzero(~mid_ok):
+        bad.add(int(chosen[i]))
+        viol.append(
+            f"{sc.satellites[sat[i]].name} {tg.name[tgt[i]]}: imaging midpoint {mid[i]:.3f} s "
+            f"outside the desired time window [{tg.mid_lo[tgt[i]]:g}, {tg.mid_hi[tgt[i]]:g}] s"
+        )
+    for i in np.flatnonzero(t1 - t0 < tg.min_duration[tgt] - _TIME_TOL):
+        bad.add(int(chosen[i]))
+        viol.append(
+            f"{sc.satellites[sat[i]].name} {tg.name[tgt[i]]}: imaging time "
+            f"{t1[i] - t0[i]:.3f} s < min_duration {tg.min_duration[tgt[i]]:g} s"
+        )
     dup = np.unique(tgt, return_counts=True)
     for r in dup[0][dup[1] > 1]:
         viol.append(f"target {tg.name[r]} imaged more than once")

@@ -92,7 +92,7 @@ def test_czml_document_clock(result, czml):
     ids = [p["id"] for p in doc]
     assert len(ids) == len(set(ids))
     n_sat, n_tgt, n_obs = 2, len(result.scenario.targets), len(result.observations)
-    assert len(doc) == 1 + n_sat + n_tgt + n_obs
+    assert len(doc) == 1 + n_sat + n_tgt + 2 * n_obs  # + a sensor footprint per observation
 
 
 def test_czml_satellites(result, czml):
@@ -130,6 +130,31 @@ def test_czml_targets_and_observations(result, czml):
         assert p["availability"] == want
         refs = p["polyline"]["positions"]["references"]
         assert refs == [f"sat-{obs.sat[i]}#position", f"target-{obs.target[i]}#position"]
+
+
+def test_czml_sensor_footprints(result, czml):
+    """Points: a disc as wide as the swath; strips: the swept footprint, growing in frames."""
+    _, doc = czml
+    packets = {p["id"]: p for p in doc}
+    sc, obs = result.scenario, result.observations
+    for i in range(len(obs)):
+        p = packets[f"footprint-{i}"]
+        assert p["availability"] == f"{_iso(sc.at(obs.start[i]))}/{_iso(sc.at(obs.end[i]))}"
+        r, sat = int(obs.target[i]), sc.satellites[int(obs.sat[i])]
+        if sc.targets.kind[r] == 0:
+            assert p["ellipse"]["semiMajorAxis"] == sat.swath / 2
+            continue
+        frames = p["polygon"]["positions"]
+        assert frames[0]["interval"].startswith(_iso(sc.at(obs.start[i])))
+        assert frames[-1]["interval"].endswith(_iso(sc.at(obs.end[i])))
+        first, last = (
+            np.reshape(f["cartographicDegrees"], (-1, 3)) for f in (frames[0], frames[-1])
+        )
+        assert len(last) > len(first) >= 5  # the footprint grows along the strip
+        # the start of the strip lies inside the footprint's first ring (between its sides)
+        lon0, lat0 = np.degrees(sc.targets.lon[r]), np.degrees(sc.targets.lat[r])
+        assert np.abs(first[:, 0] - lon0).min() < 0.2 and np.abs(first[:, 1] - lat0).min() < 0.2
+    assert not any(k.startswith(("area-", "taken-")) for k in packets)  # no areas here
 
 
 def test_czml_refuses_overwrite(result, czml):

@@ -207,6 +207,31 @@ def test_targets_csv_relative_to_the_toml(tmp_path, monkeypatch):
     assert list(sc.targets.name) == ["target_1", "a", "b", "c"]
 
 
+def test_imaging_time_fields_and_swath(tmp_path):
+    text = (
+        HEAD + SAT + "swath_km = 12.5\n" + POINT_TARGET + "desired_s = 300.0\ntolerance_s = 20.0\n"
+    )
+    text += "[[targets]]\nkind = 'strip'\nlat_deg = 1.0\nlon_deg = 2.0\nlength_km = 30.0\n"
+    text += "min_duration_s = 6.0\n"
+    text += POINT_TARGET + "min_duration_s = 15.0\n"
+    sc = load_scenario(_write(tmp_path, text))
+    assert sc.satellites[0].swath == 12.5e3
+    tg = sc.targets
+    assert (tg.mid_lo[0], tg.mid_hi[0]) == (280.0, 320.0)
+    assert (tg.mid_lo[1], tg.mid_hi[1]) == (-np.inf, np.inf)
+    assert list(tg.min_duration) == [0.0, 6.0, 15.0]
+    assert tg.duration[2] == 15.0  # a point's duration defaults to max(10, min_duration_s)
+    (tmp_path / "t.csv").write_text(
+        "name,lat_deg,lon_deg,priority,desired_s,tolerance_s,min_duration_s,duration_s\n"
+        "a,10,20,1,500,0,,\nb,10,20,1,,,12,\nc,10,20,1,,,,\n",
+        encoding="utf-8",
+    )
+    tg = load_targets_csv(tmp_path / "t.csv")
+    assert (tg.mid_lo[0], tg.mid_hi[0]) == (500.0, 500.0)
+    assert list(tg.duration) == [10.0, 12.0, 10.0] and list(tg.min_duration) == [0.0, 12.0, 0.0]
+    assert tg.mid_lo[2] == -np.inf and tg.mid_hi[2] == np.inf
+
+
 CSV_BAD = [
     ("name,lat_deg,lon_deg,priority\nx,1,2,1\ny,95.2,2,1\n", 3, "lat_deg", "[-90, 90]", "'95.2'"),
     ("name,lat_deg,lon_deg,priority\nx,1,abc,1\n", 2, "lon_deg", "a number", "'abc'"),
@@ -220,6 +245,30 @@ CSV_BAD = [
         2,
         "window_hi_s",
         "shorter than the imaging time",
+        "",
+    ),
+    ("name,lat_deg,lon_deg,priority,desired_s\nx,1,2,1,100\n", 2, "tolerance_s", "missing", ""),
+    ("name,lat_deg,lon_deg,priority,tolerance_s\nx,1,2,1,5\n", 2, "tolerance_s", "only with", ""),
+    (
+        "name,lat_deg,lon_deg,priority,desired_s,tolerance_s\nx,1,2,1,9,-1\n",
+        2,
+        "tolerance_s",
+        ">= 0",
+        "",
+    ),
+    (
+        "name,lat_deg,lon_deg,priority,duration_s,min_duration_s\nx,1,2,1,5,8\n",
+        2,
+        "duration_s",
+        "min_duration_s",
+        "",
+    ),
+    (
+        "name,lat_deg,lon_deg,priority,window_lo_s,window_hi_s,desired_s,tolerance_s\n"
+        "x,1,2,1,100,200,400,10\n",
+        2,
+        "desired_s",
+        "misses the window",
         "",
     ),
 ]
@@ -357,6 +406,14 @@ BAD = [
         "planner.time_step_s",
         10,
         "multiple",
+    ),
+    (HEAD + SAT + "swath_km = 0\n" + POINT_TARGET, "satellites[0].swath_km", 6, "> 0"),
+    (HEAD + SAT + POINT_TARGET + "desired_s = 100\n", "targets[0].tolerance_s", 6, "missing"),
+    (
+        HEAD + SAT + POINT_TARGET + "window_s = [0, 50]\ndesired_s = 100\ntolerance_s = 5\n",
+        "targets[0].desired_s",
+        10,
+        "misses the window",
     ),
     (
         HEAD + SAT + POINT_TARGET + "[planner]\nbeam_width = 16\n",
