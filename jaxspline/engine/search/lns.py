@@ -20,6 +20,7 @@ import bisect
 import itertools
 import time
 
+from jaxspline.engine.search.lns_energy import EnergyRank, make_room
 from jaxspline.engine.search.timeline import Timeline
 
 __all__ = ["earliest_pass", "greedy", "greedy_order", "lns"]
@@ -107,6 +108,7 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
         return 0
     un = [t for t in has if tl.assigned[t] < 0]
     cw = list(itertools.accumulate(pb.weight[t] for t in un))
+    er = EnergyRank(pb)
     it = improved = 0
     dirty = False
     last = time.monotonic()
@@ -135,15 +137,28 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
         if removed is None:
             tl.undo_to(mark)
             continue
-        if forced >= 0 and tl.check(forced) is not None:
-            tl.insert(forced)
+        if forced >= 0:
+            if tl.check(forced) is not None:
+                tl.insert(forced)
+            elif tl.battery_failed:
+                m2 = len(tl.log)
+                room = make_room(tl, forced, er, rng)
+                if room is None:
+                    tl.undo_to(m2)
+                else:
+                    removed += room
+                    tl.insert(forced)
         pool = {pb.c_task[c] for c in removed}
         a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
         b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
         for c in range(a, b):
             if tl.assigned[pb.c_task[c]] < 0:
                 pool.add(pb.c_task[c])
-        for t in sorted(pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t)):
+        if er.binds(tl, k):
+            pool = er.order(pool, rng)
+        else:
+            pool = sorted(pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t))
+        for t in pool:
             if tl.assigned[t] < 0:
                 tl.best_insert(t, rng=rng)
         if max_iters is not None:

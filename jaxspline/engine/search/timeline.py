@@ -110,6 +110,16 @@ class Timeline:
         tl = self.tl[k]
         return self.pb.c_first[tl[pos]] if pos == 0 else self.need(tl[pos - 1], tl[pos])
 
+    def insert_position(self, c: int) -> int:
+        """Position option c would take in its satellite's timeline.
+
+        Args:
+          c: int, option id.
+        Returns:
+          int.
+        """
+        return bisect.bisect_left(self.tl_s[self.pb.c_sat[c]], self.pb.c_start[c])
+
     def score(self):
         """Comparable quality: (value, count, -sum of end times).
 
