@@ -106,9 +106,9 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
     has = [t for t in range(len(pb.weight)) if pb.task_cands[t]]
     if not has:
         return 0
-    un = [t for t in has if tl.assigned[t] < 0]
-    cw = list(itertools.accumulate(pb.weight[t] for t in un))
     er = EnergyRank(pb)
+    un = [t for t in has if tl.assigned[t] < 0]
+    cw = list(itertools.accumulate(er.target_weights(tl, un)))
     it = improved = 0
     dirty = False
     last = time.monotonic()
@@ -157,7 +157,9 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
         if er.binds(tl, k):
             pool = er.order(pool, rng)
         else:
-            pool = sorted(pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t))
+            pool = sorted(
+                pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t)
+            )
         for t in pool:
             if tl.assigned[t] < 0:
                 tl.best_insert(t, rng=rng)
@@ -172,7 +174,7 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
             dirty |= tl.score() != base
             if dirty and it % _REFRESH_EVERY == 0:
                 un = [t for t in has if tl.assigned[t] < 0]
-                cw = list(itertools.accumulate(pb.weight[t] for t in un))
+                cw = list(itertools.accumulate(er.target_weights(tl, un)))
                 dirty = False
             if (tl.W, tl.N) > best_key:
                 improved += 1

@@ -51,9 +51,7 @@ class EnergyRank:
         ]
         self.task_wh = []
         for cands in pb.task_cands:
-            wh = [
-                self.option_wh(c, _SLEW_REF_S) for c in cands if bat.has(pb.c_sat[c])
-            ]
+            wh = [self.option_wh(c, _SLEW_REF_S) for c in cands if bat.has(pb.c_sat[c])]
             self.task_wh.append(min(wh) if len(wh) == len(cands) and wh else 0.0)
 
     def option_wh(self, c: int, maneuver: float) -> float:
@@ -82,6 +80,32 @@ class EnergyRank:
         """
         lev = tl.battery_level(k)
         return lev is not None and bool(lev.min() < tl.pb.battery.margin_wh + self.tight_wh[k])
+
+    def target_weights(self, tl: Timeline, tasks):
+        """Odds of picking each task as a target of the LNS.
+
+        Its value, times its value per Wh relative to the mean over all tasks when
+        every satellite that can image it binds.
+
+        Args:
+          tl: Timeline.
+          tasks: list of task indices.
+        Returns:
+          list of floats.
+        """
+        pb = self.pb
+        bound = [self.binds(tl, k) for k in range(pb.n_sats)]
+        if not any(bound):
+            return [pb.weight[t] for t in tasks]
+        dens = [pb.weight[t] / wh if wh > 0.0 else 0.0 for t, wh in enumerate(self.task_wh)]
+        mean = sum(dens) / max(1, sum(d > 0.0 for d in dens))
+        out = []
+        for t in tasks:
+            w = pb.weight[t]
+            if dens[t] > 0.0 and all(bound[pb.c_sat[c]] for c in pb.task_cands[t]):
+                w *= dens[t] / mean
+            out.append(w)
+        return out
 
     def order(self, tasks, rng):
         """Tasks by value per Wh, best first, with relative noise (ties: task id).

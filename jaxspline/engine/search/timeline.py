@@ -25,8 +25,6 @@ from __future__ import annotations
 import bisect
 import math
 
-import numpy as np
-
 from jaxspline.engine.search.problem import Problem
 
 __all__ = ["Timeline"]

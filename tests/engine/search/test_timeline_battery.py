@@ -3,17 +3,21 @@
 References: a step-by-step re-simulation of the clamped battery recursion written
 here from the rules (charge while sunlit at both ends of a step, idle always, imaging
 on the steps an observation meets, slew on the maneuver window's steps, clamp at
-capacity), over the whole horizon, for every tested insertion.
+capacity), over the whole horizon, for every tested insertion; for a complete
+battery-bound plan, the independent aeossp checker.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from jaxspline.aeossp.adapter import AEOSSP_MARGINS
 from jaxspline.engine.mission import Power
 from jaxspline.engine.search import BatteryModel, Problem, Timeline
 
@@ -240,3 +244,34 @@ def test_timeline_check_matches_brute_force(seed):
         if py.random() < 0.5:
             tl.commit()
     assert compared > 1000 and battery_cut > 50
+
+
+DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
+
+
+@pytest.mark.skipif(not DATA.is_dir(), reason="aeossp training data not available")
+def test_battery_bound_plan_is_valid_under_the_checker():
+    """3 satellites, 200 tasks, 12 h, 30 % initial charge and 40 % charging: the battery
+    binds, the plan stays valid under the independent aeossp checker."""
+    from jaxspline.aeossp.adapter import solve_case
+    from jaxspline.aeossp.case import load_case
+    from jaxspline.aeossp.check import check_solution
+
+    case = load_case(DATA)
+    sats = tuple(
+        dataclasses.replace(
+            s,
+            initial_battery_wh=0.3 * s.initial_battery_wh,
+            sunlit_charge_power_w=0.4 * s.sunlit_charge_power_w,
+        )
+        for s in case.satellites[:3]
+    )
+    case = dataclasses.replace(case, case_id="bound", satellites=sats, tasks=case.tasks[::5])
+    sol, res = solve_case(case, time_limit=60.0, progress=False, max_iters=800)
+    assert res.report["valid"] and res.report["dropped"] == 0
+    assert res.stats["greedy_value"] <= res.value <= res.bound
+    rep = check_solution(case, sol)
+    assert rep.valid, [v.message for v in rep.violations[:5]]
+    assert len(sol["actions"]) > 20
+    low = min(v["min_battery_wh"] for v in rep.satellites.values())
+    assert 0.0 <= low < AEOSSP_MARGINS.battery_wh + 5.0  # the battery binds
