@@ -130,7 +130,7 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
             k = rng.randrange(pb.n_sats)
             if not tl.tl[k]:
                 continue
-            c0 = rng.choice(tl.tl[k])
+            c0 = er.cheap_pick(tl, k, rng) if er.binds(tl, k) else rng.choice(tl.tl[k])
             rad = rng.choice(_RAD_RANDOM)
             lo, hi = pb.c_start[c0] - rad, pb.c_end[c0] + rad
         removed = _destroy(tl, k, lo, hi)

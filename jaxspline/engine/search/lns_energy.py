@@ -4,6 +4,8 @@ When a satellite's battery binds (its lowest level is within the energy of
 :data:`_TIGHT_S` seconds of imaging and slewing of the margin), energy, not time, is
 the scarce resource on it:
 
+* destroy around a scheduled observation: the one of least value per Wh among
+  :data:`_TOURNAMENT` random ones of the satellite;
 * re-insertion order: tasks by value per Wh (:meth:`EnergyRank.order`) instead of
   value, so that the energy goes to the observations that pay most for it;
 * making room (:func:`make_room`): an option that fails on the battery alone gets
@@ -13,9 +15,10 @@ the scarce resource on it:
   level would drop below the margin. Removal stops as soon as the option fits, and
   gives up when the removed value reaches the option's.
 
-The energy of an observation is its imaging energy plus the slew energy of the
-maneuver into it (:meth:`EnergyRank.option_wh`); a task is ranked by its cheapest
-option with a maneuver of :data:`_SLEW_REF_S` seconds.
+The energy of a scheduled observation is what its removal frees: imaging plus the
+maneuvers into and out of it less the one that replaces them
+(:meth:`EnergyRank.removal_wh`); an unscheduled task is ranked by its cheapest option
+with a maneuver of :data:`_SLEW_REF_S` seconds.
 """
 
 from __future__ import annotations
@@ -33,6 +36,8 @@ _SLEW_REF_S = 30.0  # [s] maneuver per observation when ranking tasks by value p
 _RANK_NOISE = 0.2  # relative noise of the value-per-Wh ranks
 _FULL_TOL = 1e-9  # [Wh] a level this close to capacity counts as full
 _WH = 1.0 / 3600.0  # [Wh / J]
+_TOURNAMENT = 3  # observations drawn when a destroy move starts at a cheap one
+_MIN_WH = 1e-9  # [Wh] floor of an energy in a value-per-Wh ratio
 
 
 class EnergyRank:
@@ -69,6 +74,46 @@ class EnergyRank:
             return 0.0
         return (p.imaging_w * (pb.c_end[c] - pb.c_start[c]) + p.slew_w * maneuver) * _WH
 
+    def removal_wh(self, tl: Timeline, k: int, i: int) -> float:
+        """Energy freed by removing position i of satellite k's timeline.
+
+        Its imaging, the maneuvers into it and out of it, less the maneuver that
+        replaces them (into the successor from the predecessor).
+
+        Args:
+          tl: Timeline.
+          k: int, satellite index.
+          i: int, position.
+        Returns:
+          float [Wh], at least the imaging energy.
+        """
+        pb = self.pb
+        line = tl.tl[k]
+        man = tl.maneuver_into(k, i)
+        if i + 1 < len(line):
+            q = line[i + 1]
+            new = pb.c_first[q] if i == 0 else tl.need(line[i - 1], q)
+            man += tl.maneuver_into(k, i + 1) - new
+        return self.option_wh(line[i], max(man, 0.0))
+
+    def cheap_pick(self, tl: Timeline, k: int, rng) -> int:
+        """The observation of least value per Wh among :data:`_TOURNAMENT` random ones.
+
+        Args:
+          tl: Timeline.
+          k: int, satellite index (with observations).
+          rng: ``random.Random``.
+        Returns:
+          int, option id.
+        """
+        line = tl.tl[k]
+        pick = [rng.randrange(len(line)) for _ in range(_TOURNAMENT)]
+        w = self.pb.weight
+        c_task = self.pb.c_task
+        return line[
+            min(pick, key=lambda i: w[c_task[line[i]]] / max(self.removal_wh(tl, k, i), _MIN_WH))
+        ]
+
     def binds(self, tl: Timeline, k: int) -> bool:
         """Whether satellite k's battery binds in the current plan (module docstring).
 
@@ -78,8 +123,8 @@ class EnergyRank:
         Returns:
           bool.
         """
-        lev = tl.battery_level(k)
-        return lev is not None and bool(lev.min() < tl.pb.battery.margin_wh + self.tight_wh[k])
+        low = tl.battery_low(k)
+        return low is not None and low < tl.pb.battery.margin_wh + self.tight_wh[k]
 
     def target_weights(self, tl: Timeline, tasks):
         """Odds of picking each task as a target of the LNS.
@@ -163,7 +208,7 @@ def make_room(tl: Timeline, c: int, er: EnergyRank, rng):
     cands = []
     for i, x in enumerate(line):
         if lo <= pb.c_start[x] < hi:
-            wh = er.option_wh(x, tl.maneuver_into(k, i))
+            wh = er.removal_wh(tl, k, i)
             dens = pb.weight[pb.c_task[x]] / wh if wh > 0.0 else math.inf
             cands.append((dens * (1.0 + _RANK_NOISE * rng.random()), x))
     cands.sort()

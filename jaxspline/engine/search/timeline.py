@@ -157,6 +157,20 @@ class Timeline:
         """
         return self._levels(k).level if self.pb.battery.has(k) else None
 
+    def battery_low(self, k: int):
+        """Lowest battery level of satellite k, from the last computed profile (cheap:
+        no re-simulation unless none exists; a heuristic's view, not a feasibility test).
+
+        Args:
+          k: int, satellite index.
+        Returns:
+          float [Wh], or None without a power model.
+        """
+        if not self.pb.battery.has(k):
+            return None
+        lv = self.levels[k] if self.levels[k] is not None else self._levels(k)
+        return float(lv.tail_min[0])
+
     def _battery_ok(self, k, c, n_in, q, n_out, n_old):
         """Battery test of inserting c (maneuver n_in) before q (maneuver n_out, was n_old)."""
         pb = self.pb
