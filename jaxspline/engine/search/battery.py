@@ -177,21 +177,22 @@ class BatteryModel:
             np.minimum.accumulate(raw[::-1])[::-1],
         )
 
-    def steps(self, start: float, end: float):
-        """Step windows of one observation, as :meth:`loads` charges them.
+    def steps_of(self, starts, ends) -> list:
+        """Step windows of observations, as :meth:`loads` charges them.
 
         Args:
-          start, end: observation interval [s].
+          starts, ends: float [K], observation intervals [s].
         Returns:
-          ``(s0, e0, s1)``: imaging loads the steps ``[s0, e0)``, the maneuver into it
-          ends before step ``s1``.
+          list of K tuples ``(s0, e0, s1)``: imaging loads the steps ``[s0, e0)``, the
+          maneuver into the observation ends before step ``s1``.
         """
         n, dt = self.n, self.dt
-        return (
-            min(max(math.floor(start / dt + _EPS_STEPS), 0), n),
-            min(max(math.ceil(end / dt - _EPS_STEPS), 0), n),
-            min(max(math.ceil(start / dt - _EPS_STEPS), 0), n),
-        )
+        s = np.asarray(starts, np.float64)
+        e = np.asarray(ends, np.float64)
+        s0 = np.clip(np.floor(s / dt + _EPS_STEPS), 0, n).astype(np.int64)
+        e0 = np.clip(np.ceil(e / dt - _EPS_STEPS), 0, n).astype(np.int64)
+        s1 = np.clip(np.ceil(s / dt - _EPS_STEPS), 0, n).astype(np.int64)
+        return list(zip(s0.tolist(), e0.tolist(), s1.tolist(), strict=True))
 
     def slew_step(self, start: float, maneuver: float) -> int:
         """First step of the maneuver window ``[start - maneuver, start)``, as in :meth:`loads`.

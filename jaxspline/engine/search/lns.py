@@ -10,7 +10,11 @@
   then re-insert the removed tasks anywhere together with the unscheduled tasks that
   have options in the window, heaviest first with 20 % noise; threshold acceptance
   (a step may lose up to ``temp * U(0, 1)`` value early on, nothing at the end); the
-  best plan is kept.
+  best plan is kept. Where a battery binds, the moves weigh energy
+  (:mod:`jaxspline.engine.search.lns_energy`): targets by value times value per Wh,
+  the destroy around the cheapest of a few observations, re-insertion by value per Wh,
+  and a forced option that fails on the battery alone gets room by removing the
+  observations of least value per Wh that can reach it.
 * Earliest pass: each observation moves to the earliest feasible option of its task.
 """
 

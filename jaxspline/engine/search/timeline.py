@@ -65,11 +65,7 @@ class Timeline:
         self.debt = [0.0] * n_s
         self.stale = [True] * n_s
         self.battery_failed = False
-        bat = pb.battery
-        self._win = [  # battery step windows per option (see BatteryModel.steps)
-            bat.steps(s, e) if bat.has(k) else None
-            for s, e, k in zip(pb.c_start, pb.c_end, pb.c_sat, strict=True)
-        ]
+        self._win = pb.battery.steps_of(pb.c_start, pb.c_end)  # per option (s0, e0, s1)
         self.W = 0.0
         self.N = 0
         self.tat = 0.0
