@@ -2,7 +2,9 @@
 
 :func:`solve` runs the stages on a :class:`Problem` until a deadline:
 
-1. greedy construction (:func:`greedy`; always completed, even past the deadline);
+1. greedy construction (:func:`greedy`; always completed, even past the deadline), by
+   value; when a battery binds, also by value per Wh (:class:`EnergyRank`), the better
+   plan kept;
 2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
    task prices, repaired plans, and the upper bound (:func:`lagrangian`);
 3. exact branch and bound when the instance is tiny (``exact_max_options``);
@@ -27,6 +29,7 @@ from jaxspline.engine.search.lagrangian import (
     upper_bound,
 )
 from jaxspline.engine.search.lns import earliest_pass, greedy, greedy_order, lns
+from jaxspline.engine.search.lns_energy import EnergyRank
 from jaxspline.engine.search.mip import MipBound, mip_bound
 from jaxspline.engine.search.problem import Problem
 from jaxspline.engine.search.timeline import Timeline
@@ -106,6 +109,13 @@ def solve(
     now = time.monotonic()
     tail = min(_EARLIEST_MAX, _EARLIEST_SHARE * max(0.0, deadline - now))
     greedy(tl, math.inf, order)  # always complete: a plan even when the budget is spent
+    er = EnergyRank(pb)
+    if any(er.binds(tl, k) for k in range(pb.n_sats)):  # energy is scarce: value per Wh
+        tl2 = Timeline(pb)
+        order2 = er.order(order, None)
+        greedy(tl2, deadline - tail, order2)
+        if tl2.score() > tl.score():
+            tl, order = tl2, order2
     stats = {"greedy_value": tl.W}
     say("greedy", f"value {tl.W:.6g}")
     t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())

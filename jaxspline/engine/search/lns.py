@@ -10,7 +10,11 @@
   then re-insert the removed tasks anywhere together with the unscheduled tasks that
   have options in the window, heaviest first with 20 % noise; threshold acceptance
   (a step may lose up to ``temp * U(0, 1)`` value early on, nothing at the end); the
-  best plan is kept.
+  best plan is kept. Where a battery binds, the moves weigh energy
+  (:mod:`jaxspline.engine.search.lns_energy`): targets by value times value per Wh,
+  the destroy around the cheapest of a few observations, re-insertion by value per Wh,
+  and a forced option that fails on the battery alone gets room by removing the
+  observations of least value per Wh that can reach it.
 * Earliest pass: each observation moves to the earliest feasible option of its task.
 """
 
@@ -20,6 +24,7 @@ import bisect
 import itertools
 import time
 
+from jaxspline.engine.search.lns_energy import EnergyRank, make_room
 from jaxspline.engine.search.timeline import Timeline
 
 __all__ = ["earliest_pass", "greedy", "greedy_order", "lns"]
@@ -105,8 +110,9 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
     has = [t for t in range(len(pb.weight)) if pb.task_cands[t]]
     if not has:
         return 0
+    er = EnergyRank(pb)
     un = [t for t in has if tl.assigned[t] < 0]
-    cw = list(itertools.accumulate(pb.weight[t] for t in un))
+    cw = list(itertools.accumulate(er.target_weights(tl, un)))
     it = improved = 0
     dirty = False
     last = time.monotonic()
@@ -128,22 +134,37 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
             k = rng.randrange(pb.n_sats)
             if not tl.tl[k]:
                 continue
-            c0 = rng.choice(tl.tl[k])
+            c0 = er.cheap_pick(tl, k, rng) if er.binds(tl, k) else rng.choice(tl.tl[k])
             rad = rng.choice(_RAD_RANDOM)
             lo, hi = pb.c_start[c0] - rad, pb.c_end[c0] + rad
         removed = _destroy(tl, k, lo, hi)
         if removed is None:
             tl.undo_to(mark)
             continue
-        if forced >= 0 and tl.check(forced) is not None:
-            tl.insert(forced)
+        if forced >= 0:
+            if tl.check(forced) is not None:
+                tl.insert(forced)
+            elif tl.battery_failed:
+                m2 = len(tl.log)
+                room = make_room(tl, forced, er, rng)
+                if room is None:
+                    tl.undo_to(m2)
+                else:
+                    removed += room
+                    tl.insert(forced)
         pool = {pb.c_task[c] for c in removed}
         a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
         b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
         for c in range(a, b):
             if tl.assigned[pb.c_task[c]] < 0:
                 pool.add(pb.c_task[c])
-        for t in sorted(pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t)):
+        if er.binds(tl, k):
+            pool = er.order(pool, rng)
+        else:
+            pool = sorted(
+                pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t)
+            )
+        for t in pool:
             if tl.assigned[t] < 0:
                 tl.best_insert(t, rng=rng)
         if max_iters is not None:
@@ -157,7 +178,7 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
             dirty |= tl.score() != base
             if dirty and it % _REFRESH_EVERY == 0:
                 un = [t for t in has if tl.assigned[t] < 0]
-                cw = list(itertools.accumulate(pb.weight[t] for t in un))
+                cw = list(itertools.accumulate(er.target_weights(tl, un)))
                 dirty = False
             if (tl.W, tl.N) > best_key:
                 improved += 1

@@ -6,19 +6,24 @@ tests one insertion: no overlap, the transition from the predecessor (or the fir
 maneuver) and to the successor fit their gaps, and the battery stays above its margin.
 Every change is logged so a search step can be undone.
 
-Battery bookkeeping: ``level_min[k]`` is the exact suffix minimum of satellite k's
-battery level for a past state of its timeline and ``debt[k]`` an upper bound of the
-load energy added since (the clamped battery recursion is monotone in its inputs, so
-``level_min - debt`` is a lower bound of the current suffix minimum); the exact
-profile is recomputed only when that bound is tight.
+Battery bookkeeping, cheapest test first:
+
+1. ``levels[k]`` (:class:`jaxspline.engine.search.battery.Levels`) is satellite k's
+   profile for a past state of its timeline and ``debt[k]`` an upper bound of the load
+   energy added since (the clamped battery recursion is monotone in its inputs, so
+   ``tail_min - debt`` is a lower bound of the current suffix minimum): an insertion
+   whose energy bound fits under it is accepted in O(1);
+2. otherwise the profile is refreshed (once per change of the timeline) and the
+   insertion's exact load change (imaging, the maneuver into it, the successor's new
+   maneuver) is tested on its window alone (:meth:`BatteryModel.change_ok`), spill
+   at capacity included;
+3. a full re-simulation only when that test cannot tell (the old profile infeasible).
 """
 
 from __future__ import annotations
 
 import bisect
 import math
-
-import numpy as np
 
 from jaxspline.engine.search.problem import Problem
 
@@ -37,9 +42,11 @@ class Timeline:
       tl: per satellite, its option ids in start order.
       tl_s: per satellite, their start times [s].
       assigned: per task, the option that images it (-1: none).
-      level_min: per satellite, the battery suffix minimum [Wh] of a past state (None:
-        not computed).
+      levels: per satellite, the battery :class:`Levels` of a past state (None: not
+        computed).
       debt: per satellite, an upper bound of the load energy added since [Wh].
+      stale: per satellite, whether its timeline changed since ``levels``.
+      battery_failed: whether the last :meth:`check` failed on the battery alone.
       W: total value of the plan.
       N: number of observations.
       tat: sum of the observations' end times [s] (tie-break).
@@ -54,8 +61,11 @@ class Timeline:
         self.tl = [[] for _ in range(n_s)]  # option ids by start
         self.tl_s = [[] for _ in range(n_s)]  # their starts
         self.assigned = [-1] * len(pb.weight)
-        self.level_min = [None] * n_s
+        self.levels = [None] * n_s
         self.debt = [0.0] * n_s
+        self.stale = [True] * n_s
+        self.battery_failed = False
+        self._win = pb.battery.steps_of(pb.c_start, pb.c_end)  # per option (s0, e0, s1)
         self.W = 0.0
         self.N = 0
         self.tat = 0.0
@@ -94,6 +104,16 @@ class Timeline:
         tl = self.tl[k]
         return self.pb.c_first[tl[pos]] if pos == 0 else self.need(tl[pos - 1], tl[pos])
 
+    def insert_position(self, c: int) -> int:
+        """Position option c would take in its satellite's timeline.
+
+        Args:
+          c: int, option id.
+        Returns:
+          int.
+        """
+        return bisect.bisect_left(self.tl_s[self.pb.c_sat[c]], self.pb.c_start[c])
+
     def score(self):
         """Comparable quality: (value, count, -sum of end times).
 
@@ -103,36 +123,80 @@ class Timeline:
         return (round(self.W, 9), self.N, -round(self.tat, 6))
 
     # ------------------------------------------------------------ battery
-    def _profile(self, k, extra=None):
+    def _timeline_loads(self, k, extra=None):
+        """(starts, ends, maneuvers) of satellite k's timeline, with option ``extra``."""
         pb = self.pb
         tl = list(self.tl[k])
         if extra is not None:
-            tl.insert(bisect.bisect_left([pb.c_start[c] for c in tl], pb.c_start[extra]), extra)
+            tl.insert(bisect.bisect_left(self.tl_s[k], pb.c_start[extra]), extra)
         man, prev = [], -1
         for c in tl:
             man.append(pb.c_first[c] if prev < 0 else self.need(prev, c))
             prev = c
-        return pb.battery.profile(k, [pb.c_start[c] for c in tl], [pb.c_end[c] for c in tl], man)
+        return [pb.c_start[c] for c in tl], [pb.c_end[c] for c in tl], man
 
-    def _suffix_min(self, k):
-        if self.level_min[k] is None:
-            lev = self._profile(k)
-            self.level_min[k] = np.minimum.accumulate(lev[::-1])[::-1]
+    def _levels(self, k):
+        """Satellite k's current battery Levels (recomputed when stale)."""
+        if self.stale[k] or self.levels[k] is None:
+            self.levels[k] = self.pb.battery.levels(k, *self._timeline_loads(k))
             self.debt[k] = 0.0
-        return self.level_min[k]
+            self.stale[k] = False
+        return self.levels[k]
 
-    def _battery_ok(self, k, c, k0, de):
-        bat = self.pb.battery
-        if not bat.has(k):
-            return True
-        smin = self._suffix_min(k)
-        if smin[k0] - self.debt[k] - de >= bat.margin_wh:
-            return True
-        if self.debt[k] > 0.0:
-            self.level_min[k] = None
-            if self._suffix_min(k)[k0] - de >= bat.margin_wh:
+    def battery_level(self, k: int):
+        """Battery level of satellite k's current timeline at the grid instants.
+
+        Args:
+          k: int, satellite index.
+        Returns:
+          float [n + 1] [Wh], or None without a power model.
+        """
+        return self._levels(k).level if self.pb.battery.has(k) else None
+
+    def battery_low(self, k: int):
+        """Lowest battery level of satellite k, from the last computed profile (cheap:
+        no re-simulation unless none exists; a heuristic's view, not a feasibility test).
+
+        Args:
+          k: int, satellite index.
+        Returns:
+          float [Wh], or None without a power model.
+        """
+        if not self.pb.battery.has(k):
+            return None
+        lv = self.levels[k] if self.levels[k] is not None else self._levels(k)
+        return float(lv.tail_min[0])
+
+    def _battery_ok(self, k, c, n_in, q, n_out, n_old):
+        """Battery test of inserting c (maneuver n_in) before q (maneuver n_out, was n_old)."""
+        pb = self.pb
+        bat = pb.battery
+        lv = self.levels[k]
+        if lv is not None:
+            k0 = bat.slew_step(pb.c_start[c], n_in)
+            de = self._energy(k, c, n_in, n_out)
+            if lv.tail_min[k0] - self.debt[k] - de >= bat.margin_wh:
                 return True
-        return bool(self._profile(k, extra=c).min() >= bat.margin_wh)
+        ok = bat.change_ok(k, self._levels(k), self._changes(k, c, n_in, q, n_out, n_old))
+        if ok is None:
+            ok = bool(bat.profile(k, *self._timeline_loads(k, extra=c)).min() >= bat.margin_wh)
+        return ok
+
+    def _changes(self, k, c, n_in, q, n_out, n_old):
+        """Load changes ``(lo, hi, watts)`` of inserting c (maneuver n_in) before q."""
+        pb = self.pb
+        bat = pb.battery
+        p = bat.powers[k]
+        s0, e0, s1 = self._win[c]
+        out = [(s0, e0, p.imaging_w), (bat.slew_step(pb.c_start[c], n_in), s1, p.slew_w)]
+        if q >= 0:
+            a_new = bat.slew_step(pb.c_start[q], n_out)
+            a_old = bat.slew_step(pb.c_start[q], n_old)
+            if a_new < a_old:
+                out.append((a_new, a_old, p.slew_w))
+            elif a_old < a_new:
+                out.append((a_old, a_new, -p.slew_w))
+        return out
 
     def _energy(self, k, c, n_in, n_out):
         pb = self.pb
@@ -151,6 +215,7 @@ class Timeline:
         """
         pb = self.pb
         k = pb.c_sat[c]
+        self.battery_failed = False
         if self.assigned[pb.c_task[c]] >= 0:
             return None
         s, e = pb.c_start[c], pb.c_end[c]
@@ -177,11 +242,11 @@ class Timeline:
                 return None
             n_old = pb.c_first[q] if p < 0 else self.need(p, q)
         else:
+            q = -1
             n_out = n_old = 0.0
-        if pb.battery.has(k):
-            k0 = max(0, pb.battery.step_index(s - n_in))
-            if not self._battery_ok(k, c, k0, self._energy(k, c, n_in, n_out)):
-                return None
+        if pb.battery.has(k) and not self._battery_ok(k, c, n_in, q, n_out, n_old):
+            self.battery_failed = True
+            return None
         return n_in + (e - s) + n_out - n_old
 
     def insert(self, c: int):
@@ -195,7 +260,8 @@ class Timeline:
         pos = bisect.bisect_left(self.tl_s[k], pb.c_start[c])
         tl = self.tl[k]
         if k not in self.saved:
-            self.saved[k] = (self.level_min[k], self.debt[k])
+            self.saved[k] = (self.levels[k], self.debt[k], self.stale[k])
+        self.stale[k] = True
         n_in = pb.c_first[c] if pos == 0 else self.need(tl[pos - 1], c)
         n_out = self.need(c, tl[pos]) if pos < len(tl) else 0.0
         self.debt[k] += self._energy(k, c, n_in, n_out)
@@ -217,7 +283,8 @@ class Timeline:
         k, t = pb.c_sat[c], pb.c_task[c]
         tl = self.tl[k]
         if k not in self.saved:
-            self.saved[k] = (self.level_min[k], self.debt[k])
+            self.saved[k] = (self.levels[k], self.debt[k], self.stale[k])
+        self.stale[k] = True
         pos = tl.index(c)
         del tl[pos]
         del self.tl_s[k][pos]
@@ -251,10 +318,10 @@ class Timeline:
         if not pb.battery.has(k):
             return True
         margin = pb.battery.margin_wh
-        if self._suffix_min(k)[0] - self.debt[k] >= margin:
+        lv = self.levels[k]
+        if lv is not None and lv.tail_min[0] - self.debt[k] >= margin:
             return True
-        self.level_min[k] = None
-        return bool(self._suffix_min(k)[0] >= margin)
+        return bool(self._levels(k).tail_min[0] >= margin)
 
     def commit(self):
         """Forget the undo log (the current state becomes the base of the next step)."""
@@ -275,8 +342,8 @@ class Timeline:
                 self.insert(c)
             self.log.pop()
         if mark == 0:
-            for k, (lm, debt) in self.saved.items():
-                self.level_min[k], self.debt[k] = lm, debt
+            for k, (lv, debt, stale) in self.saved.items():
+                self.levels[k], self.debt[k], self.stale[k] = lv, debt, stale
             self.saved.clear()
 
     def best_insert(self, t: int, rng=None) -> bool:
@@ -313,7 +380,7 @@ class Timeline:
         pb = self.pb
         for k in range(pb.n_sats):
             self.tl[k], self.tl_s[k] = [], []
-            self.level_min[k], self.debt[k] = None, 0.0
+            self.levels[k], self.debt[k], self.stale[k] = None, 0.0, True
         self.assigned = [-1] * len(pb.weight)
         self.W, self.N, self.tat = 0.0, 0, 0.0
         for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.c_start[c]):
