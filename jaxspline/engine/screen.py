@@ -60,7 +60,7 @@ from jax.sharding import Mesh, NamedSharding
 from jax.sharding import PartitionSpec as P
 
 from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
-from jaxspline.kernels._batch import padded_size
+from jaxspline.kernels._batch import padded_size, ragged_positions, round_up
 from jaxspline.kernels._validate import check_positive
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
@@ -257,6 +257,195 @@ class _Screener:
 
 
 # ----------------------------------------------------------------------------
+# the fused path: pairs generated and results compacted inside the program
+# ----------------------------------------------------------------------------
+
+#: Row widths tried for the [rows, width] candidate layout, widest first.
+_WIDTHS = (256, 128, 64, 32, 16, 8, 4, 2, 1)
+
+
+def _row_width(counts: np.ndarray, chunk_size: int) -> int:
+    """Widest row (power of two <= 256 and <= chunk_size) padding the runs by <= 6 %.
+
+    A source's run of ``counts[k]`` destinations occupies ``ceil(counts[k] / w)``
+    rows of ``w`` slots; wide rows make the per-candidate index arithmetic a
+    broadcast, narrow rows waste fewer slots on short runs.
+    """
+    total = int(counts.sum())
+    fits = [w for w in _WIDTHS if w <= chunk_size]
+    for w in fits:
+        if int((-(-counts // w)).sum()) * w <= 1.06 * total:
+            return w
+    return fits[-1]
+
+
+def _compact(sel, cols):
+    """Rows of ``cols`` where ``sel``, moved to the front (order kept), and their count.
+
+    ``slot[j]`` is the flat index of the j-th selected row: a prefix sum gives each
+    selected row its output position, one int32 scatter inverts it, and every
+    column is one gather. Slots past the count hold row 0 (callers read ``[:count]``).
+    """
+    s = sel.size
+    pos = jnp.cumsum(sel, dtype=jnp.int32) - 1
+    idx = jnp.where(sel, pos, s)
+    slot = (
+        jnp.zeros(s, jnp.int32)
+        .at[idx]
+        .set(jnp.arange(s, dtype=jnp.int32), mode="drop", unique_indices=True)
+    )
+    return pos[-1] + 1, [c[slot] for c in cols]
+
+
+@functools.lru_cache(maxsize=16)
+def _fused_program(reach, rows: int, width: int, feasible_only: bool, mesh):
+    """jit program screening rows ``r0 .. r0 + rows`` of the row table.
+
+    Row r is source position ``row_k[r]`` (time-sorted valid options) and the
+    destinations ``row_d[r] + 0 .. row_n[r] - 1`` of the same order. Per slot: the
+    same-route exclusion, ``T = t_start[dst] - t_end[src]`` in float64 (then cast to
+    the table dtype, as the host path does), the per-channel exact-T kernels and the
+    channel reductions of :func:`_chunk_program`; then the kept rows (feasible ones
+    with ``feasible_only``, else all live different-route pairs) are compacted to the
+    front. Returns ``(count, n_pairs, (src, dst, T, feasible, margin, effort, t_min))``.
+    """
+    cand = NamedSharding(mesh, P("cand"))
+
+    def run(tab, rate, accel, row_k, row_d, row_n, r0):
+        ea, er, sa, sr, te, ts, route, order = tab
+        nv = te.shape[0]
+        k = jax.lax.with_sharding_constraint(jax.lax.dynamic_slice_in_dim(row_k, r0, rows), cand)
+        d0 = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)
+        n = jax.lax.dynamic_slice_in_dim(row_n, r0, rows)
+        j = jnp.arange(width, dtype=d0.dtype)
+        live = j < n[:, None]
+        d = jnp.minimum(d0[:, None] + j, nv - 1)  # [rows, width]; padded slots clamped
+        kb = k[:, None]  # the source is constant along a row: gathered once per row
+        keep = live & (route[kb] != route[d])
+        T = jnp.where(keep, ts[d] - te[kb], 0.0).astype(ea.dtype)
+        outs = []
+        for c in range(ea.shape[0]):
+            a1, b1 = ea[c][kb], er[c][kb]
+            a2, b2 = sa[c][d], sr[c][d]
+            outs.append(_channel(reach, a1, b1, a2, b2, T, rate[c], accel[c]))
+        cols = list(zip(*outs, strict=True))
+        ok = functools.reduce(jnp.logical_and, cols[0])
+        m = functools.reduce(jnp.minimum, cols[1])
+        eff = functools.reduce(jnp.maximum, cols[2])
+        tmin = functools.reduce(jnp.maximum, cols[3])
+        pos = T > 0
+        feasible = ok & pos
+        margin = jnp.where(pos, m, -jnp.inf)
+        effort = jnp.where(pos, eff, jnp.inf)
+        src = jnp.broadcast_to(order[kb], d.shape)
+        out = [x.reshape(-1) for x in (src, order[d], T, feasible, margin, effort, tmin)]
+        sel = (feasible if feasible_only else keep).reshape(-1)
+        count, out = _compact(sel, out)
+        return count, keep.sum(dtype=jnp.int32), out
+
+    return jax.jit(run)
+
+
+class _Runs(NamedTuple):
+    """Candidate runs: valid options sorted by t_start; source k's destinations are
+    sorted positions ``lo[k] .. lo[k] + counts[k] - 1``."""
+
+    order: np.ndarray
+    lo: np.ndarray
+    counts: np.ndarray
+
+
+def _runs(options: RouteOptions, max_gap) -> _Runs:
+    t_start = np.asarray(options.t_start, np.float64)
+    t_end = np.asarray(options.t_end, np.float64)
+    valid = np.flatnonzero(np.asarray(options.scan_ok, bool))
+    order = valid[np.argsort(t_start[valid], kind="stable")]
+    ts_sorted = t_start[order]
+    te_src = t_end[order]
+    lo = np.searchsorted(ts_sorted, te_src, side="right")
+    if max_gap is None:
+        hi = np.full_like(lo, order.size)
+    else:
+        hi = np.searchsorted(ts_sorted, te_src + float(max_gap), side="right")
+    return _Runs(order, lo, np.maximum(hi - lo, 0).astype(np.int64))
+
+
+def _screen_transitions_fused(
+    options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc
+) -> Transitions:
+    """Fused path of :func:`screen_transitions` (arguments already validated).
+
+    The time-sorted option table and a row table (source, first destination, count;
+    a source's run is cut into rows of ``width`` slots) go to the devices once; chunk
+    k is rows ``k * rows .. (k + 1) * rows - 1`` and costs one scalar argument. Only
+    the compacted rows come back.
+    """
+    c = validate_options(options)
+    dtype = options_dtype(options)
+    runs = _runs(options, max_gap)
+    total = int(runs.counts.sum())
+    if total == 0:
+        return _empty(dtype)
+    mesh = _mesh()
+    ndev = mesh.devices.size
+    width = _row_width(runs.counts, chunk_size)
+    nrows = -(-runs.counts // width)
+    row_k, first = ragged_positions(nrows)
+    first = first * width
+    row_d = runs.lo[row_k] + first
+    row_n = np.minimum(runs.counts[row_k] - first, width)
+    rows = round_up(padded_size(-(-total // width), max(1, chunk_size // width)), ndev)
+    nchunks = -(-row_k.size // rows)
+    pad = nchunks * rows - row_k.size
+    itype = np.int32 if row_k.size < 2**31 and runs.order.size < 2**31 else np.int64
+    rep = NamedSharding(mesh, P())
+
+    def put(a, dt=None):
+        return jax.device_put(jnp.asarray(a, dt), rep)
+
+    row_k, row_d, row_n = (
+        put(np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype))
+        for a in (row_k, row_d, row_n)
+    )
+    o = runs.order
+    tab = (
+        *(put(np.ascontiguousarray(np.asarray(getattr(options, f))[o].T), dtype)
+          for f in ("end_angle", "end_rate", "start_angle", "start_rate")),
+        put(np.asarray(options.t_end, np.float64)[o]),
+        put(np.asarray(options.t_start, np.float64)[o]),
+        put(np.asarray(options.route)[o]),
+        put(o.astype(np.int64)),
+    )  # fmt: skip
+    rate, accel = (put(x) for x in _channel_limits(limits, c, dtype))
+    program = _fused_program(_reach(), rows, width, bool(feasible_only), mesh)
+    per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
+    sink = _Sink(total, dtype, feasible_only)
+    n_screened = 0
+    pending = None
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
+
+    def collect(p):
+        count, kept, out = p
+        m = int(count)
+        sink.add_rows([np.asarray(x)[:m] for x in out])
+        return int(kept)
+
+    for k in range(nchunks):
+        if k % pc == pi:
+            nxt = program(tab, rate, accel, row_k, row_d, row_n, itype(k * rows))
+            if pending is not None:
+                n_screened += collect(pending)
+            pending = nxt
+        bar.update(int(per_chunk[k]))
+    if pending is not None:
+        n_screened += collect(pending)
+    bar.close()
+    return sink.result(n_screened)
+
+
+# ----------------------------------------------------------------------------
 # public entry points
 # ----------------------------------------------------------------------------
 
@@ -303,6 +492,11 @@ def screen_transitions(
     Returns:
       Transitions (numpy arrays), in the order (source by t_start, then
       destination by t_start).
+
+    Pairs are generated inside the compiled program from the time-sorted option
+    table and per-source run offsets, and only the kept rows (all different-route
+    pairs, or the feasible ones with ``feasible_only``) are compacted on the device
+    and returned. With x64 off, the host-generated path runs instead (same results).
     """
     c = validate_options(options)
     validate_limits(limits)
@@ -314,8 +508,23 @@ def screen_transitions(
     pc = jax.process_count() if process_count is None else int(process_count)
     if not (pc >= 1 and 0 <= pi < pc):
         raise ValueError(f"process_index must be in [0, process_count), got {pi}, {pc}")
-    screener = _Screener(options, limits)
     del c
+    args = (options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc)
+    if jax.config.jax_enable_x64:
+        return _screen_transitions_fused(*args)
+    return _screen_transitions_host(*args)  # T needs float64 on the device
+
+
+def _screen_transitions_host(
+    options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc
+) -> Transitions:
+    """The host-generated path (pairs built with ``np.repeat`` per chunk, every row returned).
+
+    Kept private for one release as the reference and benchmark baseline of the fused
+    path, and as the fallback when x64 is off (the fused path forms T in float64 on
+    the device). Arguments as :func:`screen_transitions`, already validated.
+    """
+    screener = _Screener(options, limits)
 
     route = np.asarray(options.route)
     valid = np.flatnonzero(np.asarray(options.scan_ok, bool))
@@ -407,8 +616,16 @@ class _Sink:
             self.cols = [_prefaulted(total, t) for t in (np.int64, np.int64, f, bool, f, f, f)]
 
     def add(self, cols):
+        """Add a screened chunk (every row; only the feasible ones are kept if asked)."""
         if self.feasible_only:
             self.parts.append(tuple(a[cols[3]] for a in cols))
+            return
+        self.add_rows(cols)
+
+    def add_rows(self, cols):
+        """Add rows that are kept as they are (already compacted on the device)."""
+        if self.feasible_only:
+            self.parts.append(tuple(np.array(a) for a in cols))  # copies: frees the chunk buffer
             return
         n = cols[0].size
         for buf, a in zip(self.cols, cols, strict=True):
@@ -420,7 +637,11 @@ class _Sink:
             return Transitions(*(c[: self.w] for c in self.cols), n_screened=n_screened)
         if not self.parts:
             return _empty(self.cols_dtype)._replace(n_screened=n_screened)
-        cols = [np.concatenate(col) for col in zip(*self.parts, strict=True)]
+        cols = []
+        for k in range(7):  # column by column, freeing the parts: peak = rows + one column
+            cols.append(np.concatenate([p[k] for p in self.parts]))
+            self.parts = [p[:k] + (None,) + p[k + 1 :] for p in self.parts]
+        self.parts = []
         return Transitions(*cols, n_screened=n_screened)
 
 
