@@ -279,49 +279,31 @@ def _row_width(counts: np.ndarray, chunk_size: int) -> int:
     return fits[-1]
 
 
-def _compact(sel, cols):
-    """Rows of ``cols`` where ``sel``, moved to the front (order kept), and their count.
-
-    ``slot[j]`` is the flat index of the j-th selected row: a prefix sum gives each
-    selected row its output position, one int32 scatter inverts it, and every
-    column is one gather. Slots past the count hold row 0 (callers read ``[:count]``).
-    """
-    s = sel.size
-    pos = jnp.cumsum(sel, dtype=jnp.int32) - 1
-    idx = jnp.where(sel, pos, s)
-    slot = (
-        jnp.zeros(s, jnp.int32)
-        .at[idx]
-        .set(jnp.arange(s, dtype=jnp.int32), mode="drop", unique_indices=True)
-    )
-    return pos[-1] + 1, [c[slot] for c in cols]
-
-
 @functools.lru_cache(maxsize=16)
-def _fused_program(reach, rows: int, width: int, feasible_only: bool, mesh):
+def _fused_program(reach, rows: int, width: int, mesh):
     """jit program screening rows ``r0 .. r0 + rows`` of the row table.
 
     Row r is source position ``row_k[r]`` (time-sorted valid options) and the
     destinations ``row_d[r] + 0 .. row_n[r] - 1`` of the same order. Per slot: the
     same-route exclusion, ``T = t_start[dst] - t_end[src]`` in float64 (then cast to
     the table dtype, as the host path does), the per-channel exact-T kernels and the
-    channel reductions of :func:`_chunk_program`; then the kept rows (feasible ones
-    with ``feasible_only``, else all live different-route pairs) are compacted to the
-    front. Returns ``(count, n_pairs, (src, dst, T, feasible, margin, effort, t_min))``.
+    channel reductions of :func:`_chunk_program`. The source is constant along a
+    row, so its state is gathered once per row. Returns ``(keep, T, feasible,
+    margin, effort, t_min)``, each [rows, width]; ``keep`` marks live
+    different-route slots (a dropped slot has T = 0 and is infeasible).
     """
     cand = NamedSharding(mesh, P("cand"))
 
     def run(tab, rate, accel, row_k, row_d, row_n, r0):
-        ea, er, sa, sr, te, ts, route, order = tab
+        ea, er, sa, sr, te, ts, route, _ = tab
         nv = te.shape[0]
         k = jax.lax.with_sharding_constraint(jax.lax.dynamic_slice_in_dim(row_k, r0, rows), cand)
         d0 = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)
         n = jax.lax.dynamic_slice_in_dim(row_n, r0, rows)
         j = jnp.arange(width, dtype=d0.dtype)
-        live = j < n[:, None]
         d = jnp.minimum(d0[:, None] + j, nv - 1)  # [rows, width]; padded slots clamped
-        kb = k[:, None]  # the source is constant along a row: gathered once per row
-        keep = live & (route[kb] != route[d])
+        kb = k[:, None]
+        keep = (j < n[:, None]) & (route[kb] != route[d])
         T = jnp.where(keep, ts[d] - te[kb], 0.0).astype(ea.dtype)
         outs = []
         for c in range(ea.shape[0]):
@@ -334,14 +316,48 @@ def _fused_program(reach, rows: int, width: int, feasible_only: bool, mesh):
         eff = functools.reduce(jnp.maximum, cols[2])
         tmin = functools.reduce(jnp.maximum, cols[3])
         pos = T > 0
-        feasible = ok & pos
-        margin = jnp.where(pos, m, -jnp.inf)
-        effort = jnp.where(pos, eff, jnp.inf)
-        src = jnp.broadcast_to(order[kb], d.shape)
-        out = [x.reshape(-1) for x in (src, order[d], T, feasible, margin, effort, tmin)]
+        return (
+            keep,
+            T,
+            ok & pos,
+            jnp.where(pos, m, -jnp.inf),
+            jnp.where(pos, eff, jnp.inf),
+            tmin,
+        )
+
+    return jax.jit(run)
+
+
+@functools.lru_cache(maxsize=16)
+def _compact_program(rows: int, width: int, feasible_only: bool):
+    """jit program moving the kept slots of one screened chunk to the front (order kept).
+
+    A separate program on purpose: fused into the screening program, XLA's CPU
+    backend inlines the elementwise kernels into every consumer of the compaction
+    (and recomputes them there); as its own program it reads materialized columns.
+    ``slot[q]``, the flat index of the q-th kept slot, comes from a prefix sum and
+    one int32 scatter; each column is then one gather, and ``src``/``dst`` are
+    rebuilt from the slot's row. Kept = feasible (``feasible_only``) or ``keep``.
+    Returns ``(n_pairs, count, src, dst, T, feasible, margin, effort, t_min)``;
+    entries past ``count`` are filler.
+    """
+
+    def run(order, row_k, row_d, r0, keep, T, feasible, margin, effort, tmin):
         sel = (feasible if feasible_only else keep).reshape(-1)
-        count, out = _compact(sel, out)
-        return count, keep.sum(dtype=jnp.int32), out
+        s = sel.size
+        pos = jnp.cumsum(sel, dtype=jnp.int32) - 1
+        slot = (
+            jnp.zeros(s, jnp.int32)
+            .at[jnp.where(sel, pos, s)]
+            .set(jnp.arange(s, dtype=jnp.int32), mode="drop", unique_indices=True)
+        )
+        row, col = slot // width, slot % width
+        k = jax.lax.dynamic_slice_in_dim(row_k, r0, rows)[row]
+        d = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)[row] + col
+        nv = order.shape[0]
+        src, dst = order[k], order[jnp.minimum(d, nv - 1)]
+        cols = [x.reshape(-1)[slot] for x in (T, feasible, margin, effort, tmin)]
+        return keep.sum(dtype=jnp.int32), pos[-1] + 1, src, dst, *cols
 
     return jax.jit(run)
 
@@ -417,7 +433,8 @@ def _screen_transitions_fused(
         put(o.astype(np.int64)),
     )  # fmt: skip
     rate, accel = (put(x) for x in _channel_limits(limits, c, dtype))
-    program = _fused_program(_reach(), rows, width, bool(feasible_only), mesh)
+    program = _fused_program(_reach(), rows, width, mesh)
+    compact = _compact_program(rows, width, bool(feasible_only))
     per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
     sink = _Sink(total, dtype, feasible_only)
     n_screened = 0
@@ -427,14 +444,16 @@ def _screen_transitions_fused(
     bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
 
     def collect(p):
-        count, kept, out = p
+        kept, count, *cols = p
         m = int(count)
-        sink.add_rows([np.asarray(x)[:m] for x in out])
+        sink.add_rows([np.asarray(x)[:m] for x in cols])
         return int(kept)
 
     for k in range(nchunks):
         if k % pc == pi:
-            nxt = program(tab, rate, accel, row_k, row_d, row_n, itype(k * rows))
+            r0 = itype(k * rows)
+            out = program(tab, rate, accel, row_k, row_d, row_n, r0)
+            nxt = compact(tab[-1], row_k, row_d, r0, *out)
             if pending is not None:
                 n_screened += collect(pending)
             pending = nxt
