@@ -529,7 +529,7 @@ def screen_transitions(
         raise ValueError(f"process_index must be in [0, process_count), got {pi}, {pc}")
     del c
     args = (options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc)
-    if jax.config.jax_enable_x64:
+    if jax.dtypes.canonicalize_dtype(np.float64) == np.float64:  # x64 on (also in a context)
         return _screen_transitions_fused(*args)
     return _screen_transitions_host(*args)  # T needs float64 on the device
 
