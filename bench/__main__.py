@@ -44,6 +44,12 @@ def _parse(argv):
         metavar="KERNEL",
         help="benchmark only these kernels, e.g. is_reachable (repeatable)",
     )
+    p.add_argument(
+        "--routes",
+        action="append",
+        type=int,
+        help="screening section: route counts (repeatable; default 1000 2000 5000 10000)",
+    )
     p.add_argument("--child", help=argparse.SUPPRESS)  # internal: run one measurement, print JSON
     return p.parse_args(argv)
 
@@ -266,6 +272,8 @@ def bench_screening(route_counts: list[int], reps: int) -> dict:
         spec = {"kind": "screening_speed", "routes": r, "reps": reps, "modes": modes}
         if r <= HOST_FO_MAX_ROUTES:
             speed.append(_run_child(spec))
+            if not speed[-1]["modes"]:
+                print(f"  screening {r} routes: skipped (memory)", flush=True)
             for m in speed[-1]["modes"]:
                 print(
                     f"  screening {r} routes, feasible_only={m['feasible_only']}: "
@@ -328,7 +336,7 @@ def main(argv=None) -> int:
     if "threads" in sections:
         report["threads"] = bench_threads(args.reps, 10**5 if args.quick else 10**7)
     if "screening" in sections:
-        counts = [300, 1000] if args.quick else SCREEN_ROUTES
+        counts = args.routes or ([300, 1000] if args.quick else SCREEN_ROUTES)
         report["screening"] = bench_screening(counts, max(3, args.reps // 2))
     report["total_s"] = time.perf_counter() - t_all
     from bench.report import write_outputs

@@ -122,6 +122,12 @@ def screening_table(sc) -> list[str]:
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for m in sc.get("rss", []):
+        if "skipped" in m:
+            lines.append(
+                f"| {m['routes']} | {m['path']} | {m['feasible_only']} | "
+                f"{m['candidates']:.3g} | not run: {m['skipped']} | | | | |"
+            )
+            continue
         if "error" in m:
             lines.append(
                 f"| {m['routes']} | {m['path']} | {m['feasible_only']} | failed: "
