@@ -10,25 +10,37 @@ durations are not an interval, so ``T >= t_min`` is not enough).
 
 Engine layout:
 
-* Candidate generation is chunked: valid options (``scan_ok``) are sorted by
-  ``t_start``; for each source i the admissible destinations form one
-  contiguous run of that order (``t_end[i] < t_start[j] <= t_end[i] + max_gap``,
-  found by ``searchsorted``). The runs are laid end to end in a virtual index
-  space of all pairs which is cut into chunks of ``chunk_size``; a chunk is
-  materialized run by run (``np.repeat`` over the sources it covers, O(chunk_size)
-  memory), same-route pairs are dropped and the rest is padded to a fixed length
-  so one compiled program serves all chunks. N^2 pairs are never held at once.
-* Each chunk is screened by one ``jax.jit`` program that gathers boundary states
-  from the option table on the device and applies the elementwise reach kernels
-  to whole candidate vectors, channel by channel: the table is stored
-  channel-major ([C, N] per field), the loop over the C channels is a Python
-  loop (C is static) and the channel reductions are min/max chains, so every
-  operation runs on contiguous [n] vectors (SIMD-friendly on CPU; a vmap over
-  channels inside a vmap over candidates would make C = 2-3 the minor axis and
-  ran ~5x slower).
+* Candidate runs: valid options (``scan_ok``) are sorted by ``t_start``; for
+  each source i the admissible destinations form one contiguous run of that
+  order (``t_end[i] < t_start[j] <= t_end[i] + max_gap``, found by
+  ``searchsorted``). N^2 pairs are never held at once.
+* Fused path (default; :func:`_screen_transitions_fused`): each run is cut into
+  rows of ``width`` slots (a power of two <= 256 chosen so padding stays <= 6 %),
+  and the time-sorted option table plus the row table (source, first
+  destination, count) go to the devices once. Chunk k is ``rows`` consecutive
+  rows and costs one scalar argument: the screening program builds the slots'
+  destination indices by broadcasting (no per-candidate search: XLA's CPU
+  ``searchsorted`` ran at 2e7/s), applies the same-route exclusion, forms
+  ``T = t_start[dst] - t_end[src]`` in float64 and cast to the table dtype
+  (bit-identical to the host path), and runs the per-channel kernels. A second
+  program compacts the kept rows (all different-route pairs, or the feasible
+  ones with ``feasible_only``) to the front of the chunk, so only they reach the
+  result. The two programs are separate on purpose: fused, XLA's CPU backend
+  inlined the kernels into the compaction's gathers and recomputed them (0.3x).
+* Host path (private, :func:`_screen_transitions_host`; the reference and
+  benchmark baseline for one release, and the fallback with x64 off): a chunk of
+  ``chunk_size`` pairs is materialized on the host run by run (``np.repeat``),
+  same-route pairs dropped, padded to a fixed length and screened by
+  :func:`_chunk_program`, which gathers boundary states from the option table on
+  the device.
+* Both screen channel-major: the table is stored [C, N] per field, the loop over
+  the C channels is a Python loop (C is static) and the channel reductions are
+  min/max chains, so every operation runs on contiguous vectors (SIMD-friendly
+  on CPU; a vmap over channels inside a vmap over candidates would make C = 2-3
+  the minor axis and ran ~5x slower).
 * Results are written chunk by chunk into preallocated output columns (no final
-  concatenation copy); with ``feasible_only`` only the kept rows are stored.
-  The output itself takes 49 bytes per candidate (float64).
+  concatenation copy); with ``feasible_only`` only the kept rows are stored. The
+  output itself takes 49 bytes per row (float64).
 * Sharding: the candidate axis of every chunk is split over all local devices
   with a 1-D :class:`jax.sharding.Mesh` and ``NamedSharding(mesh, P("cand"))``;
   the option table is replicated. On CPU, try it with
@@ -41,8 +53,8 @@ Engine layout:
   ``jax.experimental.multihost_utils.process_allgather`` or through files).
   No cluster code lives here.
 * Precision follows the option table: float64 tables (``jax_enable_x64``) are
-  screened in float64, float32 tables in float32 (T is formed on the host in
-  float64 first, then cast).
+  screened in float64, float32 tables in float32 (T is formed in float64 first,
+  then cast: on the device by the fused path, on the host with x64 off).
 
 Units: radians, seconds.
 """
