@@ -474,7 +474,7 @@ def _screen_transitions_fused(
     program = _fused_program(_reach(), rows, width, mesh)
     compact = _compact_program(rows, width, bool(feasible_only))
     per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
-    sink = _Sink(total, dtype, feasible_only)
+    sink = _Sink(total, dtype, feasible_only, lazy=True)
     n_screened = 0
     pending = None
     from tqdm.auto import tqdm
@@ -661,16 +661,30 @@ def _prefaulted(n: int, dtype) -> np.ndarray:
 
 class _Sink:
     """Collects screened chunks: into preallocated columns (no final concatenation copy,
-    bounded by the candidate count) or, with ``feasible_only``, as a list of the kept rows."""
+    bounded by the candidate count) or, with ``feasible_only``, as a list of the kept rows.
 
-    def __init__(self, total: int, dtype, feasible_only: bool):
+    ``lazy`` (the fused path's ``feasible_only``): the columns are reserved for all
+    candidates with ``np.empty``, whose pages become resident only when written, so
+    the kept rows are written once, in place, and the peak is the kept rows, not the
+    parts plus their concatenation (2x with the list; freed parts also stay in the
+    allocator's heap). Falls back to the list if the reservation is refused.
+    """
+
+    def __init__(self, total: int, dtype, feasible_only: bool, lazy: bool = False):
         self.feasible_only = feasible_only
         self.cols_dtype = dtype
         self.parts = []
         self.w = 0
+        self.cols = None
+        f = np.dtype(dtype)
+        types = (np.int64, np.int64, f, bool, f, f, f)
         if not feasible_only:
-            f = np.dtype(dtype)
-            self.cols = [_prefaulted(total, t) for t in (np.int64, np.int64, f, bool, f, f, f)]
+            self.cols = [_prefaulted(total, t) for t in types]
+        elif lazy:
+            try:
+                self.cols = [np.empty(total, t) for t in types]
+            except MemoryError:
+                self.cols = None
 
     def add(self, cols):
         """Add a screened chunk (every row; only the feasible ones are kept if asked)."""
@@ -681,7 +695,7 @@ class _Sink:
 
     def add_rows(self, cols):
         """Add rows that are kept as they are (already compacted on the device)."""
-        if self.feasible_only:
+        if self.cols is None:
             self.parts.append(tuple(np.array(a) for a in cols))  # copies: frees the chunk buffer
             return
         n = cols[0].size
@@ -690,15 +704,11 @@ class _Sink:
         self.w += n
 
     def result(self, n_screened: int) -> Transitions:
-        if not self.feasible_only:
+        if self.cols is not None:
             return Transitions(*(c[: self.w] for c in self.cols), n_screened=n_screened)
         if not self.parts:
             return _empty(self.cols_dtype)._replace(n_screened=n_screened)
-        cols = []
-        for k in range(7):  # column by column, freeing the parts: peak = rows + one column
-            cols.append(np.concatenate([p[k] for p in self.parts]))
-            self.parts = [p[:k] + (None,) + p[k + 1 :] for p in self.parts]
-        self.parts = []
+        cols = [np.concatenate(col) for col in zip(*self.parts, strict=True)]
         return Transitions(*cols, n_screened=n_screened)
 
 

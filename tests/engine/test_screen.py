@@ -577,3 +577,29 @@ def test_x64_off_falls_back_to_the_host_path():
     ref = screen._screen_transitions_host(opt, LIMITS, None, 2**18, False, False, 0, 1)
     np.testing.assert_array_equal(tr.src, ref.src)
     np.testing.assert_array_equal(tr.feasible, ref.feasible)
+
+
+def test_sink_lazy_columns_and_list_fallback_agree():
+    """The fused path's feasible_only sink writes kept rows in place into lazily
+    reserved columns; without the reservation it keeps copies and concatenates."""
+    rng = np.random.default_rng(24)
+    chunks = [
+        [
+            rng.integers(0, 9, n),
+            rng.integers(0, 9, n),
+            rng.normal(size=n),
+            rng.uniform(size=n) > 0.5,
+        ]
+        + [rng.normal(size=n) for _ in range(3)]
+        for n in (5, 0, 7)
+    ]
+    lazy = screen._Sink(12, np.float64, True, lazy=True)
+    plain = screen._Sink(12, np.float64, True)
+    for c in chunks:
+        lazy.add_rows(c)
+        plain.add_rows(c)
+    a, b = lazy.result(12), plain.result(12)
+    assert lazy.cols is not None and plain.cols is None
+    for x, y in zip(a[:7], b[:7], strict=True):
+        np.testing.assert_array_equal(x, y)
+        assert x.size == 12 and x.dtype == y.dtype
