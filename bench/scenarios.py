@@ -147,7 +147,7 @@ def _meminfo(key: str) -> float:
     with open("/proc/meminfo") as fh:
         for line in fh:
             if line.startswith(key + ":"):
-                return int(line.split()[1]) / 1024
+                return int(line.split()[1]) * 1024 / 1e6
     return float("inf")
 
 
@@ -239,9 +239,9 @@ def screening_rss(n_routes: int, path: str, feasible_only: bool) -> dict:
 
 
 def _status(key: str) -> float:
-    """A ``/proc/self/status`` memory field in MB."""
+    """A ``/proc/self/status`` memory field in MB (1e6 bytes, like ``result_MB``)."""
     with open("/proc/self/status") as fh:
         for line in fh:
             if line.startswith(key + ":"):
-                return int(line.split()[1]) / 1024
+                return int(line.split()[1]) * 1024 / 1e6  # kB (KiB) -> MB
     return float("nan")
