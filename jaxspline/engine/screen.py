@@ -539,10 +539,11 @@ def screen_transitions(
         of SPEC section 1 has none).
       max_gap: optional upper bound on T [s]; bounds the work to the pairs that
         lie within ``max_gap`` of each other in time.
-      chunk_size: candidates per compiled batch (memory ~ 100 bytes each).
+      chunk_size: candidates per compiled batch (memory ~ 150 bytes each; the
+        fused path rounds it to whole rows of up to 256 slots).
       progress: show a tqdm bar over candidates.
-      feasible_only: keep only feasible candidates in the result (saves memory
-        when most candidates fail).
+      feasible_only: keep only feasible candidates in the result (compacted on
+        the device; saves memory when most candidates fail).
       process_index, process_count: multi-host split of chunks (defaults:
         ``jax.process_index()``, ``jax.process_count()``).
 
