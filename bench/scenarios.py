@@ -69,9 +69,9 @@ def synthetic_options(n_routes: int, seed: int = 0):
 
 
 def _paths():
-    from jaxspline.engine import screen
+    from jaxspline.engine import screen, screen_fused
 
-    return {"host": screen._screen_transitions_host, "fused": screen._screen_transitions_fused}
+    return {"host": screen._screen_transitions_host, "fused": screen_fused.screen_transitions_fused}
 
 
 def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
@@ -84,10 +84,10 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     import jax.numpy as jnp
     import numpy as np
 
-    from jaxspline.engine import screen
+    from jaxspline.engine import screen, screen_fused
     from jaxspline.kernels._batch import ragged_positions
 
-    runs = screen._runs(opts, MAX_GAP)
+    runs = screen_fused._runs(opts, MAX_GAP)
     k, p = ragged_positions(runs.counts)
     src, dst = runs.order[k[:n]], runs.order[runs.lo[k[:n]] + p[:n]]
     keep = np.asarray(opts.route)[src] != np.asarray(opts.route)[dst]
@@ -129,9 +129,9 @@ def _fits(opts, feasible_only: bool, path: str = "host") -> dict | None:
     even with ``feasible_only``. Upper bounds: every candidate kept (49 B each), times
     2 for the host path's ``feasible_only`` (masked parts plus their concatenation).
     """
-    from jaxspline.engine import screen
+    from jaxspline.engine import screen_fused
 
-    n = int(screen._runs(opts, MAX_GAP).counts.sum())
+    n = int(screen_fused._runs(opts, MAX_GAP).counts.sum())
     factor = 2.0 if (feasible_only and path == "host") else 1.0
     need = n * 49 * factor / 1e6
     avail = _meminfo("MemAvailable")

@@ -15,7 +15,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from jaxspline.engine import screen
+from jaxspline.engine import screen, screen_fused
 from jaxspline.engine.options import RouteOptions, take_options
 from jaxspline.kernels.limits import AxisLimits
 
@@ -477,7 +477,7 @@ def _fused_and_host(opt, limits=LIMITS, **kw):
     order = ("max_gap", "chunk_size", "progress", "feasible_only", "pi", "pc")
     a = [args[k] for k in order]
     return (
-        screen._screen_transitions_fused(opt, limits, *a),
+        screen_fused.screen_transitions_fused(opt, limits, *a),
         screen._screen_transitions_host(opt, limits, *a),
     )
 
