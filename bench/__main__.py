@@ -44,6 +44,12 @@ def _parse(argv):
         metavar="KERNEL",
         help="benchmark only these kernels, e.g. is_reachable (repeatable)",
     )
+    p.add_argument(
+        "--routes",
+        action="append",
+        type=int,
+        help="screening section: route counts (repeatable; default 1000 2000 5000 10000)",
+    )
     p.add_argument("--child", help=argparse.SUPPRESS)  # internal: run one measurement, print JSON
     return p.parse_args(argv)
 
@@ -189,6 +195,17 @@ def _agree(a, b) -> dict:
 def _child(spec: str) -> None:
     """Run one measurement described by JSON ``spec`` and print a JSON line (subprocess use)."""
     s = json.loads(spec)
+    if s.get("kind") == "screening_speed":
+        from bench.scenarios import screening_compare
+
+        res = screening_compare(s["routes"], s["reps"], s["modes"])
+        print("RESULT " + json.dumps(res))
+        return
+    if s.get("kind") == "screening_rss":
+        from bench.scenarios import screening_rss
+
+        print("RESULT " + json.dumps(screening_rss(s["routes"], s["path"], s["fo"])))
+        return
     from bench.cases import workloads
 
     w = {w.name: w for w in workloads()}[s["workload"]]
@@ -233,19 +250,49 @@ def bench_threads(reps: int, n: int) -> dict:
 
 
 # ------------------------------------------------------------------ end-to-end screening
-def bench_screening(route_counts: list[int], reps: int) -> list[dict]:
-    """End-to-end screening of all transitions of synthetic scenarios vs number of routes."""
-    from bench.scenarios import screening_case
+#: Route counts of the screening section (synthetic single pass, see bench.scenarios).
+SCREEN_ROUTES = [1000, 2000, 5000, 10000]
+#: Largest route count run with every row returned (10,000 routes: 3e8 rows, 15 GB).
+FULL_MAX_ROUTES = 5000
+#: Largest route count for the host path with feasible_only (it holds the masked parts
+#: and their concatenation at once: ~2x the result).
+HOST_FO_MAX_ROUTES = 5000
 
-    rows = []
+
+def bench_screening(route_counts: list[int], reps: int) -> dict:
+    """End-to-end screening, host vs fused path vs ceiling, and peak RSS per run.
+
+    Speed: one subprocess per route count, interleaved repetitions of both paths and
+    the ceiling (``bench.scenarios.screening_compare``). Memory: one subprocess per
+    (routes, path, mode), ``VmHWM`` of one call (``bench.scenarios.screening_rss``).
+    """
+    speed, rss = [], []
     for r in route_counts:
-        rows.append(screening_case(r, reps=reps))
-        print(
-            f"  screening {r} routes: {rows[-1]['median_s']:.2f} s "
-            f"({rows[-1]['n_screened']:.3g} candidates)",
-            flush=True,
-        )
-    return rows
+        modes = [False, True] if r <= FULL_MAX_ROUTES else [True]
+        spec = {"kind": "screening_speed", "routes": r, "reps": reps, "modes": modes}
+        if r <= HOST_FO_MAX_ROUTES:
+            speed.append(_run_child(spec))
+            if not speed[-1]["modes"]:
+                print(f"  screening {r} routes: skipped (memory)", flush=True)
+            for m in speed[-1]["modes"]:
+                print(
+                    f"  screening {r} routes, feasible_only={m['feasible_only']}: "
+                    f"{m['n_screened']:.3g} candidates, fused {m['rate']['fused']:.3g}/s, "
+                    f"host {m['rate']['host']:.3g}/s (fused/host {m['fused_over_host']:.2f}x), "
+                    f"ceiling {m['rate']['ceiling']:.3g}/s",
+                    flush=True,
+                )
+        for fo in modes:
+            for path in ("host", "fused"):
+                if path == "host" and r > HOST_FO_MAX_ROUTES:
+                    continue
+                spec = {"kind": "screening_rss", "routes": r, "path": path, "fo": fo}
+                try:
+                    rss.append(_run_child(spec))
+                except subprocess.CalledProcessError as exc:
+                    rss.append({"routes": r, "path": path, "feasible_only": fo, "error": str(exc)})
+                print(f"  rss {rss[-1]}", flush=True)
+    return {"speed": speed, "rss": rss}
 
 
 # ------------------------------------------------------------------ driver
@@ -289,8 +336,8 @@ def main(argv=None) -> int:
     if "threads" in sections:
         report["threads"] = bench_threads(args.reps, 10**5 if args.quick else 10**7)
     if "screening" in sections:
-        counts = [100, 300] if args.quick else [100, 300, 1000, 2000, 5000]
-        report["screening"] = bench_screening(counts, max(1, args.reps // 2))
+        counts = args.routes or ([300, 1000] if args.quick else SCREEN_ROUTES)
+        report["screening"] = bench_screening(counts, max(3, args.reps // 2))
     report["total_s"] = time.perf_counter() - t_all
     from bench.report import write_outputs
 

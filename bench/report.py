@@ -96,18 +96,50 @@ def table(report) -> str:
             )
         )
     if report.get("screening"):
-        lines += [
-            "\n| routes | options | candidates screened | feasible | time after compile (s) | "
-            "candidates/s | compile s |",
-            "|---|---|---|---|---|---|---|",
-        ]
-        for s in report["screening"]:
-            lines.append(
-                f"| {s['routes']} | {s['options']} | {s['n_screened']:.3g} | "
-                f"{s['n_feasible']:.3g} | {s['median_s']:.2f} | "
-                f"{s['n_screened'] / s['median_s']:.3g} | {s['compile_s']:.1f} |"
-            )
+        lines += screening_table(report["screening"])
     return "\n".join(lines)
+
+
+def screening_table(sc) -> list[str]:
+    """Markdown rows: speed (host vs fused vs ceiling, same run) and peak RSS per call."""
+    lines = [
+        "\n| routes | options | feasible_only | candidates | feasible | host cand/s | "
+        "fused cand/s | fused/host | ceiling cand/s | fused/ceiling |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for s in sc.get("speed", []):
+        for m in s["modes"]:
+            r = m["rate"]
+            lines.append(
+                f"| {s['routes']} | {s['options']} | {m['feasible_only']} | "
+                f"{m['n_screened']:.3g} | {m['n_feasible'] / m['n_screened']:.0%} | "
+                f"{r['host']:.3g} | {r['fused']:.3g} | {m['fused_over_host']:.2f}× | "
+                f"{r['ceiling']:.3g} | {m['fused_over_ceiling']:.0%} |"
+            )
+    lines += [
+        "\n| routes | path | feasible_only | candidates | rows returned | result MB | "
+        "RSS before MB | peak RSS MB | s (incl. compile) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for m in sc.get("rss", []):
+        if "skipped" in m:
+            lines.append(
+                f"| {m['routes']} | {m['path']} | {m['feasible_only']} | "
+                f"{m['candidates']:.3g} | not run: {m['skipped']} | | | | |"
+            )
+            continue
+        if "error" in m:
+            lines.append(
+                f"| {m['routes']} | {m['path']} | {m['feasible_only']} | failed: "
+                f"{m['error'][:60]} | | | | | |"
+            )
+            continue
+        lines.append(
+            f"| {m['routes']} | {m['path']} | {m['feasible_only']} | {m['n_screened']:.3g} | "
+            f"{m['rows']:.3g} | {m['result_MB']:.0f} | {m['rss_before_MB']:.0f} | "
+            f"{m['peak_MB']:.0f} | {m['seconds_incl_compile']:.1f} |"
+        )
+    return lines
 
 
 def plot(report, path: Path) -> None:

@@ -1,67 +1,247 @@
-"""End-to-end screening workload: the default scenario's geometry with N targets.
+"""End-to-end screening workload: one synthetic pass of N routes.
 
-Builds the options of the default constellation restricted to its first N targets
-through :func:`jaxspline.engine.planner.build_problem` (timed apart: orbits, windows and options
-are the geometry stage), then screens ALL transitions of the first per-channel
-satellite's options within ``MAX_GAP`` seconds with ``screen_transitions`` - the
-first call compiles, the following calls are timed.
+The packaged default scenario has ~1,700 targets (2,330 options of a per-channel
+satellite over six hours), too few for the 1,000-10,000-route sizes of issue 9, so
+the workload is a synthetic single pass at the density of the former single-pass
+default scenario (:func:`synthetic_options`). ALL transitions within ``MAX_GAP``
+seconds are screened by the host-generated path, the fused path and the compute
+ceiling (:func:`screening_compare`), and peak memory is taken per call in a fresh
+process (:func:`screening_rss`).
 """
 
 from __future__ import annotations
 
-import dataclasses
 import statistics
 import time
 
 MAX_GAP = 120.0  # [s] longest transition screened
 
 
-def screening_case(n_routes: int, reps: int = 2) -> dict:
-    """Screen every transition of one per-channel satellite with ``n_routes`` targets."""
+HORIZON_S = 1375.0  # [s] synthetic pass: 5,000 routes give ~7.5e7 candidates at MAX_GAP
+PER_ROUTE = 6  # options per route (the former single-pass scenario had 5.9)
+SPREAD = (1.4, 1.4, 0.6)  # [rad] start-angle spread per channel
+SCAN_RATE = 0.7  # [deg/s] largest scan rate (channels 1-2; channel 3 the same)
+
+
+def synthetic_options(n_routes: int, seed: int = 0):
+    """RouteOptions of ``n_routes`` routes in one ``HORIZON_S`` pass, 3 channels.
+
+    The density of the former single-pass default scenario (29,329 options and
+    7.5e7 candidates within ``MAX_GAP`` at 5,000 routes), for route counts the
+    packaged scenario (~1,700 targets) cannot reach: each route has ``PER_ROUTE``
+    start options 6 s apart around a random centre, 5-20 s scans, start angles
+    within +-SPREAD rad per channel drifting slowly, constant scan rates within
+    +-0.7 deg/s; the default scenario's per-channel limits (3, 3, 2 deg/s;
+    1.5, 1.5, 1 deg/s^2). Returns (RouteOptions, AxisLimits).
+    """
+    import numpy as np
+
+    from jaxspline.engine.options import RouteOptions
+    from jaxspline.kernels.limits import AxisLimits
+
+    rng = np.random.default_rng(seed)
+    c = 3
+    centre = rng.uniform(0, HORIZON_S, n_routes)
+    base = rng.uniform(-1.0, 1.0, (n_routes, c)) * np.asarray(SPREAD)
+    slope = rng.uniform(-0.005, 0.005, (n_routes, c))
+    dur = rng.uniform(5.0, 20.0, n_routes)
+    srate = np.deg2rad(rng.uniform(-1.0, 1.0, (n_routes, c))) * SCAN_RATE
+    off = (np.arange(PER_ROUTE) - (PER_ROUTE - 1) / 2) * 6.0
+    route = np.repeat(np.arange(n_routes, dtype=np.int32), PER_ROUTE)
+    ts = (centre[:, None] + off).reshape(-1)
+    sa = (base[:, None, :] + slope[:, None, :] * off[None, :, None]).reshape(-1, c)
+    sr = np.repeat(srate, PER_ROUTE, axis=0)
+    te = ts + np.repeat(dur, PER_ROUTE)
+    ea = sa + sr * (te - ts)[:, None]
+    opts = RouteOptions(
+        route=route,
+        t_start=ts,
+        t_end=te,
+        start_angle=sa,
+        start_rate=sr,
+        end_angle=ea,
+        end_rate=sr.copy(),
+        value=rng.uniform(1, 10, route.size),
+        scan_ok=np.ones(route.size, bool),
+    )
+    limits = AxisLimits(rate=np.deg2rad([3.0, 3.0, 2.0]), accel=np.deg2rad([1.5, 1.5, 1.0]))
+    return opts, limits
+
+
+def _paths():
+    from jaxspline.engine import screen, screen_fused
+
+    return {"host": screen._screen_transitions_host, "fused": screen_fused.screen_transitions_fused}
+
+
+def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
+    """The host path's chunk program over ``n`` materialized candidates (device arrays).
+
+    The compute ceiling of the same per-candidate work with no pair generation, no
+    compaction and no result copies. Returns a function that screens them once.
+    """
+    import jax
+    import jax.numpy as jnp
+    import numpy as np
+
+    from jaxspline.engine import screen, screen_fused
+    from jaxspline.kernels._batch import ragged_positions
+
+    runs = screen_fused._runs(opts, MAX_GAP)
+    k, p = ragged_positions(runs.counts)
+    src, dst = runs.order[k[:n]], runs.order[runs.lo[k[:n]] + p[:n]]
+    keep = np.asarray(opts.route)[src] != np.asarray(opts.route)[dst]
+    src, dst = src[keep], dst[keep]
+    sc = screen._Screener(opts, limits)
+    T = sc.t_start[dst] - sc.t_end[src]
+    chunks = [
+        tuple(
+            jax.device_put(jnp.asarray(a[i : i + chunk], dt), sc.cand)
+            for a, dt in ((src, jnp.int32), (dst, jnp.int32), (T, sc.dtype))
+        )
+        for i in range(0, src.size - chunk + 1, chunk)
+    ]
+
+    def run():
+        return [sc.program(*sc.table, *sc.limits, *c) for c in chunks]
+
+    return run, len(chunks) * chunk
+
+
+def screening_compare(n_routes: int, reps: int = 3, modes=(False, True)) -> dict:
+    """Host path vs fused path vs compute ceiling, interleaved repetitions, one process.
+
+    Synthetic pass of ``n_routes`` routes (:func:`synthetic_options`), float64,
+    ``MAX_GAP``; for each ``feasible_only`` mode both paths run once to compile, then
+    ``reps`` rounds of (host, fused, ceiling). Rates are candidates screened per second
+    (median); ratios are of medians measured in the same rounds.
+    """
+    import jax
+
+    with jax.enable_x64(True):
+        return _screening_compare(n_routes, reps, modes)
+
+
+def _fits(opts, feasible_only: bool, path: str = "host") -> dict | None:
+    """None if this screen's result fits in 3/4 of MemAvailable, else why it is skipped.
+
+    The machine is shared: a 10,000-route screen returns ~2.3e8 feasible rows (11 GB)
+    even with ``feasible_only``. Upper bounds: every candidate kept (49 B each), times
+    2 for the host path's ``feasible_only`` (masked parts plus their concatenation).
+    """
+    from jaxspline.engine import screen_fused
+
+    n = int(screen_fused._runs(opts, MAX_GAP).counts.sum())
+    factor = 2.0 if (feasible_only and path == "host") else 1.0
+    need = n * 49 * factor / 1e6
+    avail = _meminfo("MemAvailable")
+    if need <= 0.75 * avail:
+        return None
+    return {
+        "skipped": f"estimated {need:.0f} MB > 3/4 of MemAvailable ({avail:.0f} MB)",
+        "candidates": n,
+    }
+
+
+def _meminfo(key: str) -> float:
+    with open("/proc/meminfo") as fh:
+        for line in fh:
+            if line.startswith(key + ":"):
+                return int(line.split()[1]) * 1024 / 1e6
+    return float("inf")
+
+
+def _screening_compare(n_routes, reps, modes):
     import jax
     import numpy as np
 
-    from jaxspline.engine.options import take_options
-    from jaxspline.engine.planner import build_problem
-    from jaxspline.engine.screen import screen_transitions
-    from jaxspline.scenario import default_scenario
-
-    sc = default_scenario()
-    n = min(n_routes, len(sc.targets))
-    tg = type(sc.targets)(
-        **{f.name: getattr(sc.targets, f.name)[:n] for f in dataclasses.fields(sc.targets)}
-    )
-    sc = dataclasses.replace(sc, targets=tg)
-    k = next(i for i, s in enumerate(sc.satellites) if s.model == "per_channel")
-    t0 = time.perf_counter()
-    prep = build_problem(sc)
-    geometry_s = time.perf_counter() - t0
-    o = prep.opportunities.options
-    opts = take_options(o, np.flatnonzero(o.sat == k))
-    limits = sc.satellites[k].limits
-    with jax.enable_x64(True):
-
-        def run():
-            return screen_transitions(opts, limits, max_gap=MAX_GAP, progress=False)
-
-        t0 = time.perf_counter()
-        tr = run()
-        first_s = time.perf_counter() - t0
-        times = []
-        for _ in range(reps):
+    opts, limits = synthetic_options(n_routes)
+    modes = [fo for fo in modes if _fits(opts, fo, "host") is None]
+    ceiling, n_ceil = _ceiling(opts, limits)
+    jax.block_until_ready(ceiling())
+    out = {"routes": n_routes, "options": int(np.shape(opts.t_start)[0]), "modes": []}
+    for fo in modes:
+        times = {"host": [], "fused": [], "ceiling": []}
+        first = {}
+        res = None
+        for name, f in _paths().items():
             t0 = time.perf_counter()
-            tr = run()
-            times.append(time.perf_counter() - t0)
-    med = statistics.median(times)
+            res = f(opts, limits, MAX_GAP, 2**18, False, fo, 0, 1)
+            first[name] = time.perf_counter() - t0
+        n = int(res.n_screened)
+        n_feasible = int(np.sum(res.feasible))
+        del res
+        for _ in range(reps):
+            for name, f in _paths().items():
+                t0 = time.perf_counter()
+                r = f(opts, limits, MAX_GAP, 2**18, False, fo, 0, 1)
+                times[name].append(time.perf_counter() - t0)
+                del r
+            t0 = time.perf_counter()
+            jax.block_until_ready(ceiling())
+            times["ceiling"].append(time.perf_counter() - t0)
+        med = {k: statistics.median(v) for k, v in times.items()}
+        rate = {
+            "host": n / med["host"],
+            "fused": n / med["fused"],
+            "ceiling": n_ceil / med["ceiling"],
+        }
+        out["modes"].append(
+            {
+                "feasible_only": fo,
+                "n_screened": n,
+                "n_feasible": n_feasible,
+                "median_s": med,
+                "times_s": times,
+                "first_s": first,
+                "rate": rate,
+                "fused_over_host": med["host"] / med["fused"],
+                "fused_over_ceiling": rate["fused"] / rate["ceiling"],
+            }
+        )
+    return out
+
+
+def screening_rss(n_routes: int, path: str, feasible_only: bool) -> dict:
+    """Peak RSS of one screening call (compile included) in a fresh process.
+
+    Run as a subprocess per (routes, path, mode) so peaks do not mix. The peak
+    (``VmHWM``) is reset after the options are built (``clear_refs`` 5), so it is the
+    screening's own peak on top of the process's resident set at that point.
+    """
+    import jax
+
+    with jax.enable_x64(True):
+        opts, limits = synthetic_options(n_routes)
+        skip = _fits(opts, feasible_only, path)
+        if skip is not None:
+            return {"routes": n_routes, "path": path, "feasible_only": feasible_only, **skip}
+        base = _status("VmRSS")
+        try:
+            with open("/proc/self/clear_refs", "w") as fh:
+                fh.write("5")
+        except OSError:
+            pass
+        t0 = time.perf_counter()
+        r = _paths()[path](opts, limits, MAX_GAP, 2**18, False, feasible_only, 0, 1)
+        dt = time.perf_counter() - t0
     return {
-        "routes": n,
-        "options": int(np.shape(opts.t_start)[0]),
-        "n_screened": int(tr.n_screened),
-        "n_feasible": int(np.sum(tr.feasible)),
-        "median_s": med,
-        "min_s": min(times),
-        "max_s": max(times),
-        "compile_s": max(first_s - med, 0.0),
-        "geometry_s": geometry_s,
-        "max_gap_s": MAX_GAP,
+        "routes": n_routes,
+        "path": path,
+        "feasible_only": feasible_only,
+        "n_screened": int(r.n_screened),
+        "rows": int(r.src.size),
+        "result_MB": sum(a.nbytes for a in r[:7]) / 1e6,
+        "rss_before_MB": base,
+        "peak_MB": _status("VmHWM"),
+        "seconds_incl_compile": dt,
     }
+
+
+def _status(key: str) -> float:
+    """A ``/proc/self/status`` memory field in MB (1e6 bytes, like ``result_MB``)."""
+    with open("/proc/self/status") as fh:
+        for line in fh:
+            if line.startswith(key + ":"):
+                return int(line.split()[1]) * 1024 / 1e6  # kB (KiB) -> MB
+    return float("nan")

@@ -10,25 +10,37 @@ durations are not an interval, so ``T >= t_min`` is not enough).
 
 Engine layout:
 
-* Candidate generation is chunked: valid options (``scan_ok``) are sorted by
-  ``t_start``; for each source i the admissible destinations form one
-  contiguous run of that order (``t_end[i] < t_start[j] <= t_end[i] + max_gap``,
-  found by ``searchsorted``). The runs are laid end to end in a virtual index
-  space of all pairs which is cut into chunks of ``chunk_size``; a chunk is
-  materialized run by run (``np.repeat`` over the sources it covers, O(chunk_size)
-  memory), same-route pairs are dropped and the rest is padded to a fixed length
-  so one compiled program serves all chunks. N^2 pairs are never held at once.
-* Each chunk is screened by one ``jax.jit`` program that gathers boundary states
-  from the option table on the device and applies the elementwise reach kernels
-  to whole candidate vectors, channel by channel: the table is stored
-  channel-major ([C, N] per field), the loop over the C channels is a Python
-  loop (C is static) and the channel reductions are min/max chains, so every
-  operation runs on contiguous [n] vectors (SIMD-friendly on CPU; a vmap over
-  channels inside a vmap over candidates would make C = 2-3 the minor axis and
-  ran ~5x slower).
+* Candidate runs: valid options (``scan_ok``) are sorted by ``t_start``; for
+  each source i the admissible destinations form one contiguous run of that
+  order (``t_end[i] < t_start[j] <= t_end[i] + max_gap``, found by
+  ``searchsorted``). N^2 pairs are never held at once.
+* Fused path (default; :mod:`jaxspline.engine.screen_fused`): each run is cut into
+  rows of ``width`` slots (a power of two <= 256 chosen so padding stays <= 6 %),
+  and the time-sorted option table plus the row table (source, first
+  destination, count) go to the devices once. Chunk k is ``rows`` consecutive
+  rows and costs one scalar argument: the screening program builds the slots'
+  destination indices by broadcasting (no per-candidate search: XLA's CPU
+  ``searchsorted`` ran at 2e7/s), applies the same-route exclusion, forms
+  ``T = t_start[dst] - t_end[src]`` in float64 and cast to the table dtype
+  (bit-identical to the host path), and runs the per-channel kernels. A second
+  program compacts the kept rows (all different-route pairs, or the feasible
+  ones with ``feasible_only``) to the front of the chunk, so only they reach the
+  result. The two programs are separate on purpose: fused, XLA's CPU backend
+  inlined the kernels into the compaction's gathers and recomputed them (0.3x).
+* Host path (private, :func:`_screen_transitions_host`; the reference and
+  benchmark baseline for one release, and the fallback with x64 off): a chunk of
+  ``chunk_size`` pairs is materialized on the host run by run (``np.repeat``),
+  same-route pairs dropped, padded to a fixed length and screened by
+  :func:`_chunk_program`, which gathers boundary states from the option table on
+  the device.
+* Both screen channel-major: the table is stored [C, N] per field, the loop over
+  the C channels is a Python loop (C is static) and the channel reductions are
+  min/max chains, so every operation runs on contiguous vectors (SIMD-friendly
+  on CPU; a vmap over channels inside a vmap over candidates would make C = 2-3
+  the minor axis and ran ~5x slower).
 * Results are written chunk by chunk into preallocated output columns (no final
-  concatenation copy); with ``feasible_only`` only the kept rows are stored.
-  The output itself takes 49 bytes per candidate (float64).
+  concatenation copy); with ``feasible_only`` only the kept rows are stored. The
+  output itself takes 49 bytes per row (float64).
 * Sharding: the candidate axis of every chunk is split over all local devices
   with a 1-D :class:`jax.sharding.Mesh` and ``NamedSharding(mesh, P("cand"))``;
   the option table is replicated. On CPU, try it with
@@ -41,8 +53,8 @@ Engine layout:
   ``jax.experimental.multihost_utils.process_allgather`` or through files).
   No cluster code lives here.
 * Precision follows the option table: float64 tables (``jax_enable_x64``) are
-  screened in float64, float32 tables in float32 (T is formed on the host in
-  float64 first, then cast).
+  screened in float64, float32 tables in float32 (T is formed in float64 first,
+  then cast: on the device by the fused path, on the host with x64 off).
 
 Units: radians, seconds.
 """
@@ -293,16 +305,22 @@ def screen_transitions(
         of SPEC section 1 has none).
       max_gap: optional upper bound on T [s]; bounds the work to the pairs that
         lie within ``max_gap`` of each other in time.
-      chunk_size: candidates per compiled batch (memory ~ 100 bytes each).
+      chunk_size: candidates per compiled batch (memory ~ 150 bytes each; the
+        fused path rounds it to whole rows of up to 256 slots).
       progress: show a tqdm bar over candidates.
-      feasible_only: keep only feasible candidates in the result (saves memory
-        when most candidates fail).
+      feasible_only: keep only feasible candidates in the result (compacted on
+        the device; saves memory when most candidates fail).
       process_index, process_count: multi-host split of chunks (defaults:
         ``jax.process_index()``, ``jax.process_count()``).
 
     Returns:
       Transitions (numpy arrays), in the order (source by t_start, then
       destination by t_start).
+
+    Pairs are generated inside the compiled program from the time-sorted option
+    table and per-source run offsets, and only the kept rows (all different-route
+    pairs, or the feasible ones with ``feasible_only``) are compacted on the device
+    and returned. With x64 off, the host-generated path runs instead (same results).
     """
     c = validate_options(options)
     validate_limits(limits)
@@ -314,8 +332,25 @@ def screen_transitions(
     pc = jax.process_count() if process_count is None else int(process_count)
     if not (pc >= 1 and 0 <= pi < pc):
         raise ValueError(f"process_index must be in [0, process_count), got {pi}, {pc}")
-    screener = _Screener(options, limits)
     del c
+    args = (options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc)
+    if jax.dtypes.canonicalize_dtype(np.float64) == np.float64:  # x64 on (also in a context)
+        from jaxspline.engine.screen_fused import screen_transitions_fused
+
+        return screen_transitions_fused(*args)
+    return _screen_transitions_host(*args)  # T needs float64 on the device
+
+
+def _screen_transitions_host(
+    options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc
+) -> Transitions:
+    """The host-generated path (pairs built with ``np.repeat`` per chunk, every row returned).
+
+    Kept private for one release as the reference and benchmark baseline of the fused
+    path, and as the fallback when x64 is off (the fused path forms T in float64 on
+    the device). Arguments as :func:`screen_transitions`, already validated.
+    """
+    screener = _Screener(options, limits)
 
     route = np.asarray(options.route)
     valid = np.flatnonzero(np.asarray(options.scan_ok, bool))
@@ -395,20 +430,42 @@ def _prefaulted(n: int, dtype) -> np.ndarray:
 
 class _Sink:
     """Collects screened chunks: into preallocated columns (no final concatenation copy,
-    bounded by the candidate count) or, with ``feasible_only``, as a list of the kept rows."""
+    bounded by the candidate count) or, with ``feasible_only``, as a list of the kept rows.
 
-    def __init__(self, total: int, dtype, feasible_only: bool):
+    ``lazy`` (the fused path's ``feasible_only``): the columns are reserved for all
+    candidates with ``np.empty``, whose pages become resident only when written, so
+    the kept rows are written once, in place, and the peak is the kept rows, not the
+    parts plus their concatenation (2x with the list; freed parts also stay in the
+    allocator's heap). Falls back to the list if the reservation is refused.
+    """
+
+    def __init__(self, total: int, dtype, feasible_only: bool, lazy: bool = False):
         self.feasible_only = feasible_only
         self.cols_dtype = dtype
         self.parts = []
         self.w = 0
+        self.cols = None
+        f = np.dtype(dtype)
+        types = (np.int64, np.int64, f, bool, f, f, f)
         if not feasible_only:
-            f = np.dtype(dtype)
-            self.cols = [_prefaulted(total, t) for t in (np.int64, np.int64, f, bool, f, f, f)]
+            self.cols = [_prefaulted(total, t) for t in types]
+        elif lazy:
+            try:
+                self.cols = [np.empty(total, t) for t in types]
+            except MemoryError:
+                self.cols = None
 
     def add(self, cols):
+        """Add a screened chunk (every row; only the feasible ones are kept if asked)."""
         if self.feasible_only:
             self.parts.append(tuple(a[cols[3]] for a in cols))
+            return
+        self.add_rows(cols)
+
+    def add_rows(self, cols):
+        """Add rows that are kept as they are (already compacted on the device)."""
+        if self.cols is None:
+            self.parts.append(tuple(np.array(a) for a in cols))  # copies: frees the chunk buffer
             return
         n = cols[0].size
         for buf, a in zip(self.cols, cols, strict=True):
@@ -416,7 +473,7 @@ class _Sink:
         self.w += n
 
     def result(self, n_screened: int) -> Transitions:
-        if not self.feasible_only:
+        if self.cols is not None:
             return Transitions(*(c[: self.w] for c in self.cols), n_screened=n_screened)
         if not self.parts:
             return _empty(self.cols_dtype)._replace(n_screened=n_screened)

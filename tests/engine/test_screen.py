@@ -15,7 +15,7 @@ import textwrap
 import numpy as np
 import pytest
 
-from jaxspline.engine import screen
+from jaxspline.engine import screen, screen_fused
 from jaxspline.engine.options import RouteOptions, take_options
 from jaxspline.kernels.limits import AxisLimits
 
@@ -462,3 +462,144 @@ def test_two_distributed_processes_split_the_candidates():
     assert got.keys() == ref.keys()
     for key, (f, m) in ref.items():
         assert got[key][0] == f and got[key][1] == pytest.approx(m, rel=1e-12, abs=1e-15)
+
+
+# ----------------------------------------------------------------------------
+# fused path (pairs generated and compacted on the device) vs the host path
+# ----------------------------------------------------------------------------
+
+_COLS = ("src", "dst", "T", "feasible", "margin", "effort", "t_min")
+
+
+def _fused_and_host(opt, limits=LIMITS, **kw):
+    args = dict(max_gap=None, chunk_size=2**18, progress=False, feasible_only=False, pi=0, pc=1)
+    args.update(kw)
+    order = ("max_gap", "chunk_size", "progress", "feasible_only", "pi", "pc")
+    a = [args[k] for k in order]
+    return (
+        screen_fused.screen_transitions_fused(opt, limits, *a),
+        screen._screen_transitions_host(opt, limits, *a),
+    )
+
+
+def _assert_same(f, h, rtol=1e-12):
+    assert f.n_screened == h.n_screened
+    for k in ("src", "dst", "T", "feasible"):
+        np.testing.assert_array_equal(getattr(f, k), getattr(h, k), err_msg=k)
+        assert getattr(f, k).dtype == getattr(h, k).dtype
+    for k in ("margin", "effort", "t_min"):
+        np.testing.assert_allclose(getattr(f, k), getattr(h, k), rtol=rtol, atol=1e-15, err_msg=k)
+
+
+@pytest.mark.parametrize(
+    "kw",
+    [
+        {},
+        {"max_gap": 100.0},
+        {"feasible_only": True},
+        {"max_gap": 100.0, "feasible_only": True, "chunk_size": 100},
+        {"chunk_size": 1},
+        {"chunk_size": 700},
+    ],
+)
+def test_fused_path_equals_host_path_and_brute_force(kw):
+    """Thousands of random candidates: fused == host path (feasibility bit-identical,
+    margins to 1e-12) == numpy brute force, incl. max_gap, feasible_only, scan_ok and
+    same-route exclusion, chunk edges inside runs."""
+    rng = np.random.default_rng(21)
+    opt = synthetic_options(rng, n_routes=30, per_route=4, horizon=500.0, spread=0.8)
+    opt = opt._replace(scan_ok=rng.uniform(size=len(opt.route)) > 0.1)
+    if kw.get("chunk_size") == 1:  # one candidate per program: a smaller table
+        opt = take_options(opt, np.arange(40))
+    f, h = _fused_and_host(opt, **kw)
+    _assert_same(f, h)
+    ref = brute_candidates(opt, kw.get("max_gap"))
+    assert f.n_screened == len(ref) > (100 if kw.get("chunk_size") == 1 else 1500)
+    pairs = list(zip(f.src.tolist(), f.dst.tolist(), strict=True))
+    verdict = {p: brute_feasible(opt, LIMITS, *p) for p in ref}
+    if kw.get("feasible_only"):
+        assert f.feasible.all() and set(pairs) == {p for p, v in verdict.items() if v}
+    else:
+        assert set(pairs) == ref and len(pairs) == len(ref)
+        assert [verdict[p] for p in pairs] == f.feasible.tolist()
+        assert 0 < f.feasible.sum() < f.feasible.size
+
+
+def test_fused_path_float32_and_process_split():
+    rng = np.random.default_rng(22)
+    opt64 = synthetic_options(rng, n_routes=25, per_route=4, horizon=400.0, spread=0.8)
+    opt32 = RouteOptions(
+        *(a.astype(np.float32) if a is not None and a.dtype == np.float64 else a for a in opt64)
+    )
+    # float32: the fused path against the float32 host path (T is formed in float64 and
+    # cast by both, so it is bit-identical; the kernels' float32 rounding may differ in
+    # the last ulp between the two programs' vectorizations)
+    f, h = _fused_and_host(opt32, chunk_size=512)
+    assert f.margin.dtype == np.float32 and f.src.size > 2000
+    for k in ("src", "dst", "T"):
+        np.testing.assert_array_equal(getattr(f, k), getattr(h, k))
+    clear = np.abs(h.margin) > 1e-5
+    np.testing.assert_array_equal(f.feasible[clear], h.feasible[clear])
+    np.testing.assert_allclose(f.margin, h.margin, rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(f.effort, h.effort, rtol=1e-5)
+    # multi-process split: chunk k to process k % P; the parts add up to the whole,
+    # in order, and each part equals the host path's part where chunks coincide
+    whole = screen.screen_transitions(opt64, LIMITS, progress=False)
+    for pc in (2, 3):
+        parts = [
+            screen.screen_transitions(
+                opt64, LIMITS, progress=False, chunk_size=256, process_index=i, process_count=pc
+            )
+            for i in range(pc)
+        ]
+        assert sum(q.n_screened for q in parts) == whole.n_screened
+        got = {}
+        for q in parts:
+            for row in zip(*(getattr(q, k).tolist() for k in _COLS), strict=True):
+                assert row[:2] not in got
+                got[row[:2]] = row
+        cols = (getattr(whole, k).tolist() for k in _COLS)
+        ref = {row[:2]: row for row in zip(*cols, strict=True)}
+        assert got.keys() == ref.keys()
+        assert all(got[p][3] == ref[p][3] for p in ref)
+        np.testing.assert_allclose(
+            [got[p][4] for p in ref], [ref[p][4] for p in ref], rtol=1e-12, atol=1e-15
+        )
+
+
+def test_x64_off_falls_back_to_the_host_path():
+    import jax
+
+    rng = np.random.default_rng(23)
+    opt = synthetic_options(rng, n_routes=6, per_route=3, dtype=np.float32)
+    with jax.enable_x64(False):
+        tr = screen.screen_transitions(opt, LIMITS, progress=False)
+    ref = screen._screen_transitions_host(opt, LIMITS, None, 2**18, False, False, 0, 1)
+    np.testing.assert_array_equal(tr.src, ref.src)
+    np.testing.assert_array_equal(tr.feasible, ref.feasible)
+
+
+def test_sink_lazy_columns_and_list_fallback_agree():
+    """The fused path's feasible_only sink writes kept rows in place into lazily
+    reserved columns; without the reservation it keeps copies and concatenates."""
+    rng = np.random.default_rng(24)
+    chunks = [
+        [
+            rng.integers(0, 9, n),
+            rng.integers(0, 9, n),
+            rng.normal(size=n),
+            rng.uniform(size=n) > 0.5,
+        ]
+        + [rng.normal(size=n) for _ in range(3)]
+        for n in (5, 0, 7)
+    ]
+    lazy = screen._Sink(12, np.float64, True, lazy=True)
+    plain = screen._Sink(12, np.float64, True)
+    for c in chunks:
+        lazy.add_rows(c)
+        plain.add_rows(c)
+    a, b = lazy.result(12), plain.result(12)
+    assert lazy.cols is not None and plain.cols is None
+    for x, y in zip(a[:7], b[:7], strict=True):
+        np.testing.assert_array_equal(x, y)
+        assert x.size == 12 and x.dtype == y.dtype

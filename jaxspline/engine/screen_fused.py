@@ -1,0 +1,265 @@
+"""The fused screening path (issue 9): pairs generated and rows compacted on the device.
+
+:func:`jaxspline.engine.screen.screen_transitions` runs :func:`screen_transitions_fused`
+when x64 is on (see that module's docstring for the layout). Each source's run of
+destinations is cut into rows of ``width`` slots; the time-sorted option table and
+the row table go to the devices once, and chunk k costs one scalar argument. One
+program screens a chunk (same kernels and channel reductions as
+``screen._chunk_program``), a second compacts the kept rows to the front.
+
+Units: radians, seconds.
+"""
+
+from __future__ import annotations
+
+import functools
+from typing import NamedTuple
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+from jax.sharding import NamedSharding
+from jax.sharding import PartitionSpec as P
+
+from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
+from jaxspline.engine.screen import (
+    Transitions,
+    _channel,
+    _channel_limits,
+    _empty,
+    _mesh,
+    _reach,
+    _Sink,
+)
+from jaxspline.kernels._batch import ragged_positions, round_up
+
+__all__ = ["screen_transitions_fused"]
+
+#: Row widths tried for the [rows, width] candidate layout, widest first.
+_WIDTHS = (256, 128, 64, 32, 16, 8, 4, 2, 1)
+
+
+def _row_width(counts: np.ndarray, chunk_size: int) -> int:
+    """Widest row (power of two <= 256 and <= chunk_size) padding the runs by <= 6 %.
+
+    A source's run of ``counts[k]`` destinations occupies ``ceil(counts[k] / w)``
+    rows of ``w`` slots; wide rows make the per-candidate index arithmetic a
+    broadcast, narrow rows waste fewer slots on short runs.
+    """
+    total = int(counts.sum())
+    fits = [w for w in _WIDTHS if w <= chunk_size]
+    for w in fits:
+        if int((-(-counts // w)).sum()) * w <= 1.06 * total:
+            return w
+    return fits[-1]
+
+
+@functools.lru_cache(maxsize=16)
+def _fused_program(reach, rows: int, width: int, mesh):
+    """jit program screening rows ``r0 .. r0 + rows`` of the row table.
+
+    Row r is source position ``row_k[r]`` (time-sorted valid options) and the
+    destinations ``row_d[r] + 0 .. row_n[r] - 1`` of the same order. Per slot: the
+    same-route exclusion, ``T = t_start[dst] - t_end[src]`` in float64 (then cast to
+    the table dtype, as the host path does), the per-channel exact-T kernels and the
+    channel reductions of :func:`_chunk_program`. The source is constant along a
+    row, so its state is gathered once per row. Returns ``(keep, T, feasible,
+    margin, effort, t_min)``, each [rows, width]; ``keep`` marks live
+    different-route slots (a dropped slot has T = 0 and is infeasible).
+    """
+    cand = NamedSharding(mesh, P("cand"))
+
+    def run(tab, rate, accel, row_k, row_d, row_n, r0):
+        ea, er, sa, sr, te, ts, route, _ = tab
+        nv = te.shape[0]
+        k = jax.lax.with_sharding_constraint(jax.lax.dynamic_slice_in_dim(row_k, r0, rows), cand)
+        d0 = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)
+        n = jax.lax.dynamic_slice_in_dim(row_n, r0, rows)
+        j = jnp.arange(width, dtype=d0.dtype)
+        d = jnp.minimum(d0[:, None] + j, nv - 1)  # [rows, width]; padded slots clamped
+        kb = k[:, None]
+        keep = (j < n[:, None]) & (route[kb] != route[d])
+        T = jnp.where(keep, ts[d] - te[kb], 0.0).astype(ea.dtype)
+        outs = []
+        for c in range(ea.shape[0]):
+            a1, b1 = ea[c][kb], er[c][kb]
+            a2, b2 = sa[c][d], sr[c][d]
+            outs.append(_channel(reach, a1, b1, a2, b2, T, rate[c], accel[c]))
+        cols = list(zip(*outs, strict=True))
+        ok = functools.reduce(jnp.logical_and, cols[0])
+        m = functools.reduce(jnp.minimum, cols[1])
+        eff = functools.reduce(jnp.maximum, cols[2])
+        tmin = functools.reduce(jnp.maximum, cols[3])
+        pos = T > 0
+        return (
+            keep,
+            T,
+            ok & pos,
+            jnp.where(pos, m, -jnp.inf),
+            jnp.where(pos, eff, jnp.inf),
+            tmin,
+        )
+
+    return jax.jit(run)
+
+
+def _prefix_count(sel, block: int = 16):
+    """Inclusive prefix count of a bool vector (int32), like ``jnp.cumsum(sel)``.
+
+    XLA's CPU cumsum (a reduce-window) ran at ~3e7 elements/s; here the in-block
+    prefix of ``block`` elements is a small float32 matmul with a triangular matrix
+    (exact: counts <= block) and only the block totals go through ``cumsum``, ~3x
+    faster overall.
+    """
+    s = sel.size
+    if s % block:
+        return jnp.cumsum(sel, dtype=jnp.int32)
+    x = sel.reshape(-1, block).astype(jnp.float32)
+    inner = (x @ jnp.triu(jnp.ones((block, block), jnp.float32))).astype(jnp.int32)
+    tot = inner[:, -1]
+    return ((jnp.cumsum(tot) - tot)[:, None] + inner).reshape(-1)
+
+
+@functools.lru_cache(maxsize=16)
+def _compact_program(rows: int, width: int, feasible_only: bool):
+    """jit program moving the kept slots of one screened chunk to the front (order kept).
+
+    A separate program on purpose: fused into the screening program, XLA's CPU
+    backend inlines the elementwise kernels into every consumer of the compaction
+    (and recomputes them there); as its own program it reads materialized columns.
+    ``slot[q]``, the flat index of the q-th kept slot, comes from a prefix sum and
+    one int32 scatter; each column is then one gather, and ``src``/``dst`` are
+    rebuilt from the slot's row. Kept = feasible (``feasible_only``) or ``keep``.
+    Returns ``(n_pairs, count, src, dst, T, feasible, margin, effort, t_min)``;
+    entries past ``count`` are filler.
+    """
+
+    def run(order, row_k, row_d, r0, keep, T, feasible, margin, effort, tmin):
+        sel = (feasible if feasible_only else keep).reshape(-1)
+        s = sel.size
+        pos = _prefix_count(sel) - 1
+        slot = (
+            jnp.zeros(s, jnp.int32)
+            .at[jnp.where(sel, pos, s)]
+            .set(jnp.arange(s, dtype=jnp.int32), mode="drop", unique_indices=True)
+        )
+        row, col = slot // width, slot % width
+        k = jax.lax.dynamic_slice_in_dim(row_k, r0, rows)[row]
+        d = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)[row] + col
+        nv = order.shape[0]
+        src, dst = order[k], order[jnp.minimum(d, nv - 1)]
+        cols = [x.reshape(-1)[slot] for x in (T, feasible, margin, effort, tmin)]
+        return keep.sum(dtype=jnp.int32), pos[-1] + 1, src, dst, *cols
+
+    return jax.jit(run)
+
+
+def _bucket(n: int, maximum: int) -> int:
+    """Rows per chunk: ``maximum``, or for a single-chunk problem n rounded up to 1/16 of
+    its power of two (<= 6 % padding; at most 16 compiled shapes per octave)."""
+    if n >= maximum:
+        return maximum
+    p = 1 << (max(int(n), 1) - 1).bit_length()
+    return min(maximum, round_up(n, max(1, p // 16)))
+
+
+class _Runs(NamedTuple):
+    """Candidate runs: valid options sorted by t_start; source k's destinations are
+    sorted positions ``lo[k] .. lo[k] + counts[k] - 1``."""
+
+    order: np.ndarray
+    lo: np.ndarray
+    counts: np.ndarray
+
+
+def _runs(options: RouteOptions, max_gap) -> _Runs:
+    t_start = np.asarray(options.t_start, np.float64)
+    t_end = np.asarray(options.t_end, np.float64)
+    valid = np.flatnonzero(np.asarray(options.scan_ok, bool))
+    order = valid[np.argsort(t_start[valid], kind="stable")]
+    ts_sorted = t_start[order]
+    te_src = t_end[order]
+    lo = np.searchsorted(ts_sorted, te_src, side="right")
+    if max_gap is None:
+        hi = np.full_like(lo, order.size)
+    else:
+        hi = np.searchsorted(ts_sorted, te_src + float(max_gap), side="right")
+    return _Runs(order, lo, np.maximum(hi - lo, 0).astype(np.int64))
+
+
+def screen_transitions_fused(
+    options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc
+) -> Transitions:
+    """Fused path of :func:`~jaxspline.engine.screen.screen_transitions` (arguments validated).
+
+    The time-sorted option table and a row table (source, first destination, count;
+    a source's run is cut into rows of ``width`` slots) go to the devices once; chunk
+    k is rows ``k * rows .. (k + 1) * rows - 1`` and costs one scalar argument. Only
+    the compacted rows come back.
+    """
+    c = validate_options(options)
+    dtype = options_dtype(options)
+    runs = _runs(options, max_gap)
+    total = int(runs.counts.sum())
+    if total == 0:
+        return _empty(dtype)
+    mesh = _mesh()
+    ndev = mesh.devices.size
+    width = _row_width(runs.counts, chunk_size)
+    nrows = -(-runs.counts // width)
+    row_k, first = ragged_positions(nrows)
+    first = first * width
+    row_d = runs.lo[row_k] + first
+    row_n = np.minimum(runs.counts[row_k] - first, width)
+    rows = round_up(_bucket(nrows.sum(), max(1, chunk_size // width)), ndev)
+    nchunks = -(-row_k.size // rows)
+    pad = nchunks * rows - row_k.size
+    itype = np.int32 if row_k.size < 2**31 and runs.order.size < 2**31 else np.int64
+    rep = NamedSharding(mesh, P())
+
+    def put(a, dt=None):
+        return jax.device_put(jnp.asarray(a, dt), rep)
+
+    row_k, row_d, row_n = (
+        put(np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype))
+        for a in (row_k, row_d, row_n)
+    )
+    o = runs.order
+    tab = (
+        *(put(np.ascontiguousarray(np.asarray(getattr(options, f))[o].T), dtype)
+          for f in ("end_angle", "end_rate", "start_angle", "start_rate")),
+        put(np.asarray(options.t_end, np.float64)[o]),
+        put(np.asarray(options.t_start, np.float64)[o]),
+        put(np.asarray(options.route)[o]),
+        put(o.astype(np.int64)),
+    )  # fmt: skip
+    rate, accel = (put(x) for x in _channel_limits(limits, c, dtype))
+    program = _fused_program(_reach(), rows, width, mesh)
+    compact = _compact_program(rows, width, bool(feasible_only))
+    per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
+    sink = _Sink(total, dtype, feasible_only, lazy=True)
+    n_screened = 0
+    pending = None
+    from tqdm.auto import tqdm
+
+    bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
+
+    def collect(p):
+        kept, count, *cols = p
+        m = int(count)
+        sink.add_rows([np.asarray(x)[:m] for x in cols])
+        return int(kept)
+
+    for k in range(nchunks):
+        if k % pc == pi:
+            r0 = itype(k * rows)
+            out = program(tab, rate, accel, row_k, row_d, row_n, r0)
+            nxt = compact(tab[-1], row_k, row_d, r0, *out)
+            if pending is not None:
+                n_screened += collect(pending)
+            pending = nxt
+        bar.update(int(per_chunk[k]))
+    if pending is not None:
+        n_screened += collect(pending)
+    bar.close()
+    return sink.result(n_screened)
