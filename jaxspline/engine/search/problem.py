@@ -76,6 +76,8 @@ class Problem:
     def __post_init__(self):
         if self.lookup is None:  # the model alone decides: tables where there are tables
             self.lookup = [t is None for t in self.tables]
+        # the hot path of need(): tables of satellites whose near pairs are not looked up
+        self._free = [None if look else t for t, look in zip(self.tables, self.lookup, strict=True)]
 
     @property
     def n_options(self) -> int:
@@ -92,20 +94,22 @@ class Problem:
           float [s]; inf when (i, j) is not a feasible near pair of a per-channel satellite.
         """
         k = self.c_sat[j]
-        table = self.tables[k]
-        gap = self.c_start[j] - self.c_end[i]
-        if table is not None and (gap >= self.far[k] or not self.lookup[k]):
-            a, b = self.c_le[i], self.c_ls[j]
-            cx = a[1] * b[2] - a[2] * b[1]
-            cy = a[2] * b[0] - a[0] * b[2]
-            cz = a[0] * b[1] - a[1] * b[0]
-            th = math.atan2(
-                math.sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-            )
-            return table.scalar(th)
-        if gap >= self.far[k]:
-            return self.far[k]
-        return self.near.get(i * len(self.c_task) + j, math.inf)
+        table = self._free[k]
+        if table is None:
+            gap = self.c_start[j] - self.c_end[i]
+            if gap < self.far[k]:
+                return self.near.get(i * len(self.c_task) + j, math.inf)
+            table = self.tables[k]
+            if table is None:
+                return self.far[k]
+        a, b = self.c_le[i], self.c_ls[j]
+        cx = a[1] * b[2] - a[2] * b[1]
+        cy = a[2] * b[0] - a[0] * b[2]
+        cz = a[0] * b[1] - a[1] * b[0]
+        th = math.atan2(
+            math.sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+        )
+        return table.scalar(th)
 
     @classmethod
     def build(cls, opp, sats, first, near_pairs, far, tables, battery, weights, lookup=None):
