@@ -18,7 +18,6 @@ __all__ = ["CACHE_ENV", "cache_dir", "main"]
 
 CACHE_ENV = "JAXSPLINE_CACHE_DIR"
 _CACHE_OFF = ("", "off", "0", "none")
-_CACHE_MAX_BYTES = 1 << 30  # the cache evicts least-recently-used programs beyond this
 
 
 def cache_dir() -> Path | None:
@@ -49,7 +48,6 @@ def _enable_compile_cache() -> None:
     jax.config.update("jax_compilation_cache_dir", str(path))
     jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
     jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
-    jax.config.update("jax_compilation_cache_max_size", _CACHE_MAX_BYTES)
 
 
 # Each module registers its own sub-commands with ``register(subparsers)``; the module
