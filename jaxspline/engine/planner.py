@@ -59,7 +59,6 @@ _RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and ou
 _RESERVE_MIN = 1.0  # [s]
 _REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
 _REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
-_JOINS_SHARE = 0.2  # share of the time limit kept for the flown-join check (cold: ~10 s)
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _PAIR_BLOCK = 1 << 20  # option pairs per screening block
 _MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
@@ -140,9 +139,8 @@ def plan(
         the limits after re-timing (:func:`jaxspline.engine.plan_joins.reject_unflyable`),
         so the plan is flyable as :func:`jaxspline.engine.attitude_history.attitude_history`
         exports it; off by default: the satellites' maneuver models alone decide (as the
-        aeossp rules). The transitions are then also screened with the joins
-        (:mod:`jaxspline.engine.join_screen`), and a share of ``time_limit`` is kept
-        for the check (its first call compiles the join kernels).
+        aeossp rules).
+        Its time (first call: compilation) is not part of ``time_limit``.
     Returns:
       :class:`jaxspline.engine.result.PlanResult`.
     """
@@ -335,7 +333,6 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     sats = sc.satellites
     refining = pc.refine_steps > 0 and any(s.model == "per_channel" for s in sats)
     reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit) + refining * _REFINE_SHARE * limit
-    reserve += flown_joins * _JOINS_SHARE * limit
     tg = sc.targets
     prep = build_problem(sc, joins=flown_joins, _clock=clock)
     pb, opp, windows, scene, table, battery, far = prep
