@@ -139,8 +139,9 @@ def plan(
         the limits after re-timing (:func:`jaxspline.engine.plan_joins.reject_unflyable`),
         so the plan is flyable as :func:`jaxspline.engine.attitude_history.attitude_history`
         exports it; off by default: the satellites' maneuver models alone decide (as the
-        aeossp rules).
-        Its time (first call: compilation) is not part of ``time_limit``.
+        aeossp rules). The transitions are then also screened with the joins
+        (:mod:`jaxspline.engine.join_screen`). The check's time (first call:
+        compilation of the join kernels) is not part of ``time_limit``.
     Returns:
       :class:`jaxspline.engine.result.PlanResult`.
     """
