@@ -95,6 +95,9 @@ def plot_attitude_profile(result, attitude, path) -> None:
             if limited:
                 ax.axhline(1.0, color="k", ls="--", lw=0.8)
                 ax.set_ylim(0.0, max(1.1, float(np.nanmax(y)) * 1.05))
+            else:
+                ax.text(0.99, 0.95, "|ε'| [deg/s³], no limit", transform=ax.transAxes,
+                        ha="right", va="top", fontsize=7)  # fmt: skip
             ax.grid(alpha=0.3)
             if k == 0:
                 ax.set_title(titles[c], fontsize=9)
