@@ -46,7 +46,7 @@ from jaxspline.engine.plan_check import check_plan
 from jaxspline.engine.plan_joins import reject_unflyable
 from jaxspline.engine.refine_starts import refine_starts
 from jaxspline.engine.result import Observations, PlanResult
-from jaxspline.engine.search import BatteryModel, Problem, mip_bound, solve
+from jaxspline.engine.search import BatteryModel, Problem, greedy, mip_bound, solve
 from jaxspline.geometry.frames import gmst, in_shadow, jd_split, sun_direction
 from jaxspline.geometry.orbit import tabulate_orbits
 from jaxspline.geometry.pointing import Scene
@@ -62,6 +62,8 @@ _REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold 
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _PAIR_BLOCK = 1 << 20  # option pairs per screening block
 _MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
+_REFILL_ROUNDS = 2  # join rejections followed by a greedy refill (later rounds only drop)
+_REFILL_S = 2.0  # [s] budget of one refill
 
 
 class _Clock:
@@ -327,6 +329,29 @@ def build_problem(
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
 
+def _refill(tl, chosen, rejected):
+    """Drop the observations whose joins failed and fill the freed time greedily.
+
+    The rejected options are withdrawn from their tasks for good, so the refill cannot
+    bring the same join back; everything the refill adds is checked again by the
+    caller (maneuvers, battery, joins). Returns (option ids of the plan, refilled count).
+    """
+    pb = tl.pb
+    for c in rejected:
+        cands = pb.task_cands[pb.c_task[c]]
+        if c in cands:
+            cands.remove(c)
+    gone = set(rejected)
+    kept = [c for c in chosen if c not in gone]
+    assigned = [-1] * len(pb.weight)
+    for c in kept:
+        assigned[pb.c_task[c]] = c
+    tl.restore(assigned)
+    greedy(tl, time.monotonic() + _REFILL_S)
+    new = [c for c in tl.assigned if c >= 0]
+    return new, len(new) - len(kept)
+
+
 def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
     clock = _Clock(sc.name, progress)
     deadline = clock.t0 + limit
@@ -375,13 +400,18 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
         for v in refined.values():
             v["kept"] = kept
         clock.lap("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
-    dropped, rejected, joins = 0, [], {}
-    for _ in range(_MAX_DROP_ROUNDS):
+    dropped, rejected, joins, refilled = 0, [], {}, 0
+    for rnd in range(_MAX_DROP_ROUNDS):
         if det is None:
             bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
         if not bad and flown_joins:  # the flown profile: degree-7 joins within the limits
             bad, joins = reject_unflyable(sc, scene, opp, chosen)
             rejected += bad
+            if bad and rnd < _REFILL_ROUNDS:
+                chosen, gain = _refill(tl, chosen, bad)
+                refilled += gain
+                det = None
+                continue
         if not bad:
             break
         dropped += len(bad)
@@ -391,7 +421,7 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     else:
         chosen = []
         bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
-    flown = f" ({len(rejected)} for their joins)" if flown_joins else ""
+    flown = f" ({len(rejected)} for their joins, {refilled} refilled)" if flown_joins else ""
     clock.lap("check", f"{len(chosen)} observations valid, {dropped} dropped{flown}")
     idx = np.asarray(det["order"], np.int64)
     obs = Observations(
@@ -433,7 +463,7 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
         "min_battery_wh": det["battery_min"],
     }
     if flown_joins:
-        report["joins"] = {**joins, "rejected": len(rejected)}
+        report["joins"] = {**joins, "rejected": len(rejected), "refilled": refilled}
     stats = {
         "windows": len(windows),
         "options": len(opp),

@@ -122,6 +122,7 @@ def test_plan_json_summary_bound_and_gap(runs):
     assert doc["report"]["violations"] == [] and doc["report"]["checked"] == len(obs)
     joins = doc["report"]["joins"]  # with --aem the command checks the flown joins
     assert joins["violating"] == 0 and joins["joins"] >= len(obs)
+    assert joins["refilled"] >= 0 and joins["rejected"] >= 0
     assert max(joins["max_rate_ratio"], joins["max_accel_ratio"]) < 1.0
     assert (s["satellites"], s["targets"], s["observations"]) == (2, N_TARGETS, len(obs))
     assert s["bound"] >= s["value"] > 0
