@@ -171,6 +171,28 @@ def _channel(reach, a1, b1, a2, b2, T, rate, accel):
     return ok, m, eff, tmin
 
 
+def _all_channels(reach, table, src, dst, T, rate, accel):
+    """(feasible, margin, effort, t_min) of candidates src -> dst over every channel.
+
+    ``table`` = (end_angle, end_rate, start_angle, start_rate), channel-major [C, N];
+    ``src`` / ``dst`` index its columns (any shape broadcasting with T). Channels are
+    reduced by min/max chains; a candidate with T <= 0 is infeasible.
+    """
+    end_angle, end_rate, start_angle, start_rate = table
+    outs = []
+    for c in range(end_angle.shape[0]):
+        a1, b1 = end_angle[c][src], end_rate[c][src]
+        a2, b2 = start_angle[c][dst], start_rate[c][dst]
+        outs.append(_channel(reach, a1, b1, a2, b2, T, rate[c], accel[c]))
+    cols = list(zip(*outs, strict=True))
+    ok = functools.reduce(jnp.logical_and, cols[0])
+    m = functools.reduce(jnp.minimum, cols[1])
+    eff = functools.reduce(jnp.maximum, cols[2])
+    tmin = functools.reduce(jnp.maximum, cols[3])
+    pos = T > 0
+    return ok & pos, jnp.where(pos, m, -jnp.inf), jnp.where(pos, eff, jnp.inf), tmin
+
+
 @functools.lru_cache(maxsize=8)
 def _chunk_program(reach):
     """jit program screening one chunk: (feasible, margin, effort, t_min), each [n].
@@ -183,21 +205,8 @@ def _chunk_program(reach):
     """
 
     def run(end_angle, end_rate, start_angle, start_rate, rate, accel, src, dst, T):
-        outs = []
-        for c in range(end_angle.shape[0]):
-            a1, b1 = end_angle[c][src], end_rate[c][src]
-            a2, b2 = start_angle[c][dst], start_rate[c][dst]
-            outs.append(_channel(reach, a1, b1, a2, b2, T, rate[c], accel[c]))
-        cols = list(zip(*outs, strict=True))
-        ok = functools.reduce(jnp.logical_and, cols[0])
-        m = functools.reduce(jnp.minimum, cols[1])
-        eff = functools.reduce(jnp.maximum, cols[2])
-        tmin = functools.reduce(jnp.maximum, cols[3])
-        pos = T > 0
-        feasible = ok & pos
-        margin = jnp.where(pos, m, -jnp.inf)
-        effort = jnp.where(pos, eff, jnp.inf)
-        return feasible, margin, effort, tmin
+        table = (end_angle, end_rate, start_angle, start_rate)
+        return _all_channels(reach, table, src, dst, T, rate, accel)
 
     return jax.jit(run)
 

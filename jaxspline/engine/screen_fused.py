@@ -24,7 +24,7 @@ from jax.sharding import PartitionSpec as P
 from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
 from jaxspline.engine.screen import (
     Transitions,
-    _channel,
+    _all_channels,
     _channel_limits,
     _empty,
     _mesh,
@@ -80,25 +80,7 @@ def _fused_program(reach, rows: int, width: int, mesh):
         kb = k[:, None]
         keep = (j < n[:, None]) & (route[kb] != route[d])
         T = jnp.where(keep, ts[d] - te[kb], 0.0).astype(ea.dtype)
-        outs = []
-        for c in range(ea.shape[0]):
-            a1, b1 = ea[c][kb], er[c][kb]
-            a2, b2 = sa[c][d], sr[c][d]
-            outs.append(_channel(reach, a1, b1, a2, b2, T, rate[c], accel[c]))
-        cols = list(zip(*outs, strict=True))
-        ok = functools.reduce(jnp.logical_and, cols[0])
-        m = functools.reduce(jnp.minimum, cols[1])
-        eff = functools.reduce(jnp.maximum, cols[2])
-        tmin = functools.reduce(jnp.maximum, cols[3])
-        pos = T > 0
-        return (
-            keep,
-            T,
-            ok & pos,
-            jnp.where(pos, m, -jnp.inf),
-            jnp.where(pos, eff, jnp.inf),
-            tmin,
-        )
+        return (keep, T, *_all_channels(reach, (ea, er, sa, sr), kb, d, T, rate, accel))
 
     return jax.jit(run)
 
