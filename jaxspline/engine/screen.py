@@ -77,6 +77,7 @@ from jaxspline.kernels._validate import check_positive
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 __all__ = [
+    "best_per_source",
     "Transitions",
     "screen_transitions",
     "screen_sequences",
@@ -298,6 +299,7 @@ def screen_transitions(
     feasible_only: bool = False,
     process_index: int | None = None,
     process_count: int | None = None,
+    top_k: int | None = None,
 ) -> Transitions:
     """Screen every candidate transition between options of different routes.
 
@@ -321,10 +323,16 @@ def screen_transitions(
         the device; saves memory when most candidates fail).
       process_index, process_count: multi-host split of chunks (defaults:
         ``jax.process_index()``, ``jax.process_count()``).
+      top_k: keep for every source only its ``top_k`` feasible successors of
+        largest margin (implies ``feasible_only``). Selected per row of up to 256
+        destinations on the device and merged per source on the host, so memory
+        is O(rows x top_k) instead of O(candidates). With several processes, each
+        returns the best of its own chunks: merge the parts with
+        :func:`best_per_source`.
 
     Returns:
       Transitions (numpy arrays), in the order (source by t_start, then
-      destination by t_start).
+      destination by t_start); with ``top_k``, per source by decreasing margin.
 
     Pairs are generated inside the compiled program from the time-sorted option
     table and per-source run offsets, and only the kept rows (all different-route
@@ -336,18 +344,53 @@ def screen_transitions(
     check_positive("chunk_size", chunk_size)
     if max_gap is not None:
         check_positive("max_gap", max_gap)
+    if top_k is not None and not (isinstance(top_k, int | np.integer) and top_k >= 1):
+        raise ValueError(f"top_k must be a positive int or None, got {top_k!r}")
     chunk_size = int(chunk_size)
     pi = jax.process_index() if process_index is None else int(process_index)
     pc = jax.process_count() if process_count is None else int(process_count)
     if not (pc >= 1 and 0 <= pi < pc):
         raise ValueError(f"process_index must be in [0, process_count), got {pi}, {pc}")
     del c
+    feasible_only = feasible_only or top_k is not None
     args = (options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc)
     if jax.dtypes.canonicalize_dtype(np.float64) == np.float64:  # x64 on (also in a context)
         from jaxspline.engine.screen_fused import screen_transitions_fused
 
-        return screen_transitions_fused(*args)
-    return _screen_transitions_host(*args)  # T needs float64 on the device
+        return screen_transitions_fused(*args, top_k=top_k)
+    tr = _screen_transitions_host(*args)  # T needs float64 on the device
+    if top_k is None:
+        return tr
+    valid = np.flatnonzero(np.asarray(options.scan_ok, bool))
+    order = valid[np.argsort(np.asarray(options.t_start)[valid], kind="stable")]
+    rank = np.empty(len(options.t_start), np.int64)  # sources in t_start order, as fused
+    rank[order] = np.arange(order.size)
+    keep = best_per_source(rank[tr.src], tr.margin, int(top_k))
+    return Transitions(*(x[keep] for x in tr[:-1]), n_screened=tr.n_screened)
+
+
+def best_per_source(src, margin, k: int) -> np.ndarray:
+    """Indices of the ``k`` rows of largest margin of every source, grouped by source.
+
+    Rows come out sorted by source (ascending) and, within a source, by decreasing
+    margin (ties: earlier rows first). Merges the parts of a multi-process
+    ``top_k`` screen as well: concatenate them and select again.
+
+    Args:
+      src: int [M], source key of every row (e.g. option id or time rank).
+      margin: float [M], the margin to rank by.
+      k: int >= 1, rows kept per source.
+    Returns:
+      int [<= M], row indices.
+    """
+    src, margin = np.asarray(src), np.asarray(margin)
+    if src.size == 0:
+        return np.zeros(0, np.int64)
+    order = np.lexsort((np.arange(src.size), -margin, src))
+    s = src[order]
+    first = np.r_[0, np.flatnonzero(s[1:] != s[:-1]) + 1]
+    rank = np.arange(s.size) - np.repeat(first, np.diff(np.r_[first, s.size]))
+    return order[rank < k]
 
 
 def _screen_transitions_host(

@@ -30,6 +30,7 @@ from jaxspline.engine.screen import (
     _mesh,
     _reach,
     _Sink,
+    best_per_source,
 )
 from jaxspline.kernels._batch import ragged_positions, round_up
 
@@ -136,6 +137,29 @@ def _compact_program(rows: int, width: int, feasible_only: bool):
     return jax.jit(run)
 
 
+@functools.lru_cache(maxsize=16)
+def _topk_program(rows: int, width: int, k: int):
+    """jit program keeping, per row of one screened chunk, its ``k`` feasible slots of
+    largest margin (``jax.lax.top_k``; infeasible slots score -inf).
+
+    Returns ``(n_pairs, src position, dst, T, feasible, margin, effort, t_min)``, each
+    [rows, k] except the scalar count; ``src position`` is the source's rank in the
+    time-sorted table (the caller merges the rows of one source).
+    """
+
+    def run(order, row_k, row_d, r0, keep, T, feasible, margin, effort, tmin):
+        score = jnp.where(feasible, margin, -jnp.inf)
+        _, col = jax.lax.top_k(score, k)
+        k_pos = jax.lax.dynamic_slice_in_dim(row_k, r0, rows)
+        d = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)[:, None] + col
+        dst = order[jnp.minimum(d, order.shape[0] - 1)]
+        cols = [jnp.take_along_axis(x, col, axis=1) for x in (T, feasible, margin, effort, tmin)]
+        src_pos = jnp.broadcast_to(k_pos[:, None], col.shape)
+        return keep.sum(dtype=jnp.int32), src_pos, dst, *cols
+
+    return jax.jit(run)
+
+
 def _bucket(n: int, maximum: int) -> int:
     """Rows per chunk: ``maximum``, or for a single-chunk problem n rounded up to 1/16 of
     its power of two (<= 6 % padding; at most 16 compiled shapes per octave)."""
@@ -170,7 +194,7 @@ def _runs(options: RouteOptions, max_gap) -> _Runs:
 
 
 def screen_transitions_fused(
-    options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc
+    options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc, top_k=None
 ) -> Transitions:
     """Fused path of :func:`~jaxspline.engine.screen.screen_transitions` (arguments validated).
 
@@ -217,7 +241,10 @@ def screen_transitions_fused(
     )  # fmt: skip
     rate, accel = (put(x) for x in _channel_limits(limits, c, dtype))
     program = _fused_program(_reach(), rows, width, mesh)
-    compact = _compact_program(rows, width, bool(feasible_only))
+    if top_k is not None:
+        compact = _topk_program(rows, width, min(int(top_k), width))
+    else:
+        compact = _compact_program(rows, width, bool(feasible_only))
     per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
     sink = _Sink(total, dtype, feasible_only, lazy=True)
     n_screened = 0
@@ -226,7 +253,24 @@ def screen_transitions_fused(
 
     bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
 
+    # top_k: finished sources' best rows (src position, dst, T, ..., t_min) and the rows of
+    # the last source seen, which the next chunk may continue (rows come in source order)
+    best, carry = [], None
+
     def collect(p):
+        nonlocal carry
+        if top_k is not None:
+            kept, *cols = p
+            cols = [np.asarray(x).reshape(-1) for x in cols]
+            cols = [x[cols[3]] for x in cols]
+            if carry is not None:
+                cols = [np.concatenate([a, b]) for a, b in zip(carry, cols, strict=True)]
+            if cols[0].size:
+                done = cols[0] < cols[0].max()
+                sel = best_per_source(cols[0][done], cols[4][done], int(top_k))
+                best.append([x[done][sel] for x in cols])
+                carry = [x[~done] for x in cols]
+            return int(kept)
         kept, count, *cols = p
         m = int(count)
         sink.add_rows([np.asarray(x)[:m] for x in cols])
@@ -244,4 +288,12 @@ def screen_transitions_fused(
     if pending is not None:
         n_screened += collect(pending)
     bar.close()
+    if top_k is not None:
+        if carry is not None:
+            best.append(carry)
+        if not best:
+            return _empty(dtype)._replace(n_screened=n_screened)
+        pos, *cols = (np.concatenate(c) for c in zip(*best, strict=True))
+        keep = best_per_source(pos, cols[3], int(top_k))
+        return Transitions(runs.order[pos[keep]], *(c[keep] for c in cols), n_screened=n_screened)
     return sink.result(n_screened)

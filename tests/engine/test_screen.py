@@ -603,3 +603,39 @@ def test_sink_lazy_columns_and_list_fallback_agree():
     for x, y in zip(a[:7], b[:7], strict=True):
         np.testing.assert_array_equal(x, y)
         assert x.size == 12 and x.dtype == y.dtype
+
+
+@pytest.mark.parametrize("k, chunk", [(1, 512), (3, 512), (3, 8), (1000, 512)])
+def test_top_k_keeps_the_best_feasible_successors(k, chunk):
+    """top_k equals, per source, the k largest margins among the full screen's feasible rows."""
+    import jax
+
+    opt = synthetic_options(np.random.default_rng(11), n_routes=40, per_route=5, horizon=900.0)
+    full = screen.screen_transitions(opt, LIMITS, progress=False, chunk_size=512)
+    # chunk 8: rows of at most 8 slots, so a source's run spans many rows to merge
+    with jax.enable_x64(False):  # the host fallback takes the same selection
+        host = screen.screen_transitions(
+            opt._replace(**{f: np.asarray(getattr(opt, f), np.float32) for f in
+                            ("t_start", "t_end", "start_angle", "start_rate", "end_angle",
+                             "end_rate", "value")}),
+            LIMITS, progress=False, top_k=k,
+        )  # fmt: skip
+    best = screen.screen_transitions(opt, LIMITS, progress=False, chunk_size=chunk, top_k=k)
+    assert best.n_screened == full.n_screened and best.feasible.all()
+    want = {}
+    for s_, m in zip(full.src[full.feasible], full.margin[full.feasible], strict=True):
+        want.setdefault(int(s_), []).append(float(m))
+    got = {}
+    for s_, m in zip(best.src, best.margin, strict=True):
+        got.setdefault(int(s_), []).append(float(m))
+    assert got.keys() == want.keys()
+    for s_, ms in want.items():
+        assert got[s_] == sorted(ms, reverse=True)[:k], s_  # decreasing margins, k of them
+    assert set(host.src.tolist()) <= set(want) and all(
+        np.sum(host.src == s_) == min(k, len(ms)) for s_, ms in want.items()
+    )
+    # rows of a source stay together, sources in t_start order
+    starts = np.asarray(opt.t_start)[best.src]
+    assert np.all(np.diff(starts) >= 0)
+    with pytest.raises(ValueError, match="top_k"):
+        screen.screen_transitions(opt, LIMITS, progress=False, top_k=0)
