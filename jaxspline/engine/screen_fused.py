@@ -38,6 +38,8 @@ __all__ = ["screen_transitions_fused"]
 
 #: Row widths tried for the [rows, width] candidate layout, widest first.
 _WIDTHS = (256, 128, 64, 32, 16, 8, 4, 2, 1)
+#: Largest k selected per row by argmax rounds (unrolled); above it a stable sort.
+_EXTRACT_MAX_K = 32
 
 
 def _row_width(counts: np.ndarray, chunk_size: int) -> int:
@@ -137,23 +139,53 @@ def _compact_program(rows: int, width: int, feasible_only: bool):
     return jax.jit(run)
 
 
+def _row_top_k(score, k: int):
+    """The ``k`` largest scores of every row: columns [rows, min(k, width)] and whether
+    each pick is real (its score > -inf). Ties go to the lowest column.
+
+    ``k <= _EXTRACT_MAX_K``: ``k`` rounds of a row-wise ``argmax`` (first maximum),
+    each removing its pick, so picks come in decreasing order (XLA's CPU ``top_k``
+    sorts and ran 2-3x slower on rows of 64-256 slots, and breaks exact ties in no
+    fixed order); once a row has no score above -inf left, ``argmax`` may return a
+    column picked before, so such picks are not real. Larger ``k``: a stable sort.
+    ``k >= width``: every column, in column order.
+    """
+    rows, width = score.shape
+    col_ids = jnp.arange(width, dtype=jnp.int32)
+    if k >= width:
+        return jnp.broadcast_to(col_ids, (rows, width)), score > -jnp.inf
+    if k > _EXTRACT_MAX_K:
+        c = jnp.argsort(-score, axis=1, stable=True)[:, :k].astype(jnp.int32)
+        return c, jnp.take_along_axis(score, c, axis=1) > -jnp.inf
+    cols, real = [], []
+    for _ in range(k):
+        c = jnp.argmax(score, axis=1).astype(jnp.int32)
+        v = jnp.take_along_axis(score, c[:, None], axis=1)[:, 0]
+        cols.append(c)
+        real.append(v > -jnp.inf)
+        score = jnp.where(col_ids[None, :] == c[:, None], -jnp.inf, score)
+    return jnp.stack(cols, axis=1), jnp.stack(real, axis=1)
+
+
 @functools.lru_cache(maxsize=16)
 def _topk_program(rows: int, width: int, k: int):
     """jit program keeping, per row of one screened chunk, its ``k`` feasible slots of
-    largest margin (``jax.lax.top_k``; infeasible slots score -inf).
+    largest margin (:func:`_row_top_k`; infeasible slots score -inf).
 
     Returns ``(n_pairs, src position, dst, T, feasible, margin, effort, t_min)``, each
     [rows, k] except the scalar count; ``src position`` is the source's rank in the
-    time-sorted table (the caller merges the rows of one source).
+    time-sorted table (the caller merges the rows of one source). A row with fewer
+    than ``k`` feasible slots fills the rest with picks whose ``feasible`` is False.
     """
 
     def run(order, row_k, row_d, r0, keep, T, feasible, margin, effort, tmin):
         score = jnp.where(feasible, margin, -jnp.inf)
-        _, col = jax.lax.top_k(score, k)
+        col, real = _row_top_k(score, k)
         k_pos = jax.lax.dynamic_slice_in_dim(row_k, r0, rows)
         d = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)[:, None] + col
         dst = order[jnp.minimum(d, order.shape[0] - 1)]
         cols = [jnp.take_along_axis(x, col, axis=1) for x in (T, feasible, margin, effort, tmin)]
+        cols[1] = cols[1] & real
         src_pos = jnp.broadcast_to(k_pos[:, None], col.shape)
         return keep.sum(dtype=jnp.int32), src_pos, dst, *cols
 
