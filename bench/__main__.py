@@ -204,7 +204,12 @@ def _child(spec: str) -> None:
     if s.get("kind") == "screening_rss":
         from bench.scenarios import screening_rss
 
-        print("RESULT " + json.dumps(screening_rss(s["routes"], s["path"], s["fo"])))
+        print("RESULT " + json.dumps(screening_rss(s["routes"], s["path"], s["mode"])))
+        return
+    if s.get("kind") == "screening_stream":
+        from bench.scenarios import screening_stream
+
+        print("RESULT " + json.dumps(screening_stream(s["routes"], s["search"])))
         return
     from bench.cases import workloads
 
@@ -254,45 +259,56 @@ def bench_threads(reps: int, n: int) -> dict:
 SCREEN_ROUTES = [1000, 2000, 5000, 10000]
 #: Largest route count run with every row returned (10,000 routes: 3e8 rows, 15 GB).
 FULL_MAX_ROUTES = 5000
-#: Largest route count for the host path with feasible_only (it holds the masked parts
-#: and their concatenation at once: ~2x the result).
-HOST_FO_MAX_ROUTES = 5000
+#: Largest route count for the host path (it holds every feasible row, 11 GB at 10,000
+#: routes, and ~2x that with feasible_only: masked parts plus their concatenation).
+HOST_MAX_ROUTES = 5000
 
 
 def bench_screening(route_counts: list[int], reps: int) -> dict:
-    """End-to-end screening, host vs fused path vs ceiling, and peak RSS per run.
+    """End-to-end screening: host vs fused path vs ceiling, peak RSS, screen + search.
 
     Speed: one subprocess per route count, interleaved repetitions of both paths and
-    the ceiling (``bench.scenarios.screening_compare``). Memory: one subprocess per
-    (routes, path, mode), ``VmHWM`` of one call (``bench.scenarios.screening_rss``).
+    the ceiling in every mode (``bench.scenarios.screening_compare``). Memory: one
+    subprocess per (routes, path, mode), ``VmHWM`` of one call
+    (``bench.scenarios.screening_rss``). Streaming: one subprocess per (routes,
+    search), the screen's chunks consumed by the search as they come
+    (``bench.scenarios.screening_stream``).
     """
-    speed, rss = [], []
+    from bench.scenarios import MODES
+
+    speed, rss, stream = [], [], []
     for r in route_counts:
-        modes = [False, True] if r <= FULL_MAX_ROUTES else [True]
-        spec = {"kind": "screening_speed", "routes": r, "reps": reps, "modes": modes}
-        if r <= HOST_FO_MAX_ROUTES:
+        modes = list(MODES) if r <= FULL_MAX_ROUTES else ["feasible", "top_k"]
+        if r <= HOST_MAX_ROUTES:
+            spec = {"kind": "screening_speed", "routes": r, "reps": reps, "modes": modes}
             speed.append(_run_child(spec))
-            if not speed[-1]["modes"]:
-                print(f"  screening {r} routes: skipped (memory)", flush=True)
             for m in speed[-1]["modes"]:
                 print(
-                    f"  screening {r} routes, feasible_only={m['feasible_only']}: "
-                    f"{m['n_screened']:.3g} candidates, fused {m['rate']['fused']:.3g}/s, "
-                    f"host {m['rate']['host']:.3g}/s (fused/host {m['fused_over_host']:.2f}x), "
-                    f"ceiling {m['rate']['ceiling']:.3g}/s",
+                    f"  screening {r} routes, {m['mode']}: {m['n_screened']:.3g} candidates, "
+                    f"fused {m['rate']['fused']:.3g}/s, host {m['rate']['host']:.3g}/s "
+                    f"(fused/host {m['fused_over_host']:.2f}x), ceiling "
+                    f"{m['rate']['ceiling']:.3g}/s, identical {m['identical_to_host']}",
                     flush=True,
                 )
-        for fo in modes:
+        for mode in modes:
             for path in ("host", "fused"):
-                if path == "host" and r > HOST_FO_MAX_ROUTES:
+                if path == "host" and r > HOST_MAX_ROUTES:
                     continue
-                spec = {"kind": "screening_rss", "routes": r, "path": path, "fo": fo}
-                try:
-                    rss.append(_run_child(spec))
-                except subprocess.CalledProcessError as exc:
-                    rss.append({"routes": r, "path": path, "feasible_only": fo, "error": str(exc)})
+                spec = {"kind": "screening_rss", "routes": r, "path": path, "mode": mode}
+                rss.append(_child_or_error(spec, {"routes": r, "path": path, "mode": mode}))
                 print(f"  rss {rss[-1]}", flush=True)
-    return {"speed": speed, "rss": rss}
+        for search in ("greedy", "beam"):
+            spec = {"kind": "screening_stream", "routes": r, "search": search}
+            stream.append(_child_or_error(spec, {"routes": r, "search": search}))
+            print(f"  stream {stream[-1]}", flush=True)
+    return {"speed": speed, "rss": rss, "stream": stream}
+
+
+def _child_or_error(spec: dict, tag: dict) -> dict:
+    try:
+        return _run_child(spec)
+    except subprocess.CalledProcessError as exc:
+        return {**tag, "error": (exc.stderr or str(exc))[-300:]}
 
 
 # ------------------------------------------------------------------ driver

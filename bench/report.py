@@ -101,43 +101,55 @@ def table(report) -> str:
 
 
 def screening_table(sc) -> list[str]:
-    """Markdown rows: speed (host vs fused vs ceiling, same run) and peak RSS per call."""
+    """Markdown rows: speed (host vs fused vs ceiling, same run), peak RSS per call, and
+    the streamed screen + search."""
     lines = [
-        "\n| routes | options | feasible_only | candidates | feasible | host cand/s | "
-        "fused cand/s | fused/host | ceiling cand/s | fused/ceiling |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "\n| routes | options | mode | candidates | feasible | rows returned | host cand/s | "
+        "fused cand/s | fused/host | ceiling cand/s | fused/ceiling | same rows as host |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for s in sc.get("speed", []):
         for m in s["modes"]:
             r = m["rate"]
+            feas = m["n_feasible"] / m["n_screened"] if m.get("n_feasible") is not None else None
             lines.append(
-                f"| {s['routes']} | {s['options']} | {m['feasible_only']} | "
-                f"{m['n_screened']:.3g} | {m['n_feasible'] / m['n_screened']:.0%} | "
-                f"{r['host']:.3g} | {r['fused']:.3g} | {m['fused_over_host']:.2f}× | "
-                f"{r['ceiling']:.3g} | {m['fused_over_ceiling']:.0%} |"
+                f"| {s['routes']} | {s['options']} | {m['mode']} | "
+                f"{m['n_screened']:.3g} | {'–' if feas is None else f'{feas:.0%}'} | "
+                f"{m['rows']:.3g} | {r['host']:.3g} | {r['fused']:.3g} | "
+                f"{m['fused_over_host']:.2f}× | {r['ceiling']:.3g} | "
+                f"{m['fused_over_ceiling']:.0%} | {m['identical_to_host']} |"
             )
     lines += [
-        "\n| routes | path | feasible_only | candidates | rows returned | result MB | "
+        "\n| routes | path | mode | candidates | rows returned | result MB | "
         "RSS before MB | peak RSS MB | s (incl. compile) |",
         "|---|---|---|---|---|---|---|---|---|",
     ]
     for m in sc.get("rss", []):
+        head = f"| {m['routes']} | {m['path']} | {m['mode']} |"
         if "skipped" in m:
+            lines.append(f"{head} {m['candidates']:.3g} | not run: {m['skipped']} | | | | |")
+        elif "error" in m:
+            lines.append(f"{head} failed: {m['error'][-60:]!r} | | | | | |")
+        else:
             lines.append(
-                f"| {m['routes']} | {m['path']} | {m['feasible_only']} | "
-                f"{m['candidates']:.3g} | not run: {m['skipped']} | | | | |"
+                f"{head} {m['n_screened']:.3g} | {m['rows']:.3g} | {m['result_MB']:.0f} | "
+                f"{m['rss_before_MB']:.0f} | {m['peak_MB']:.0f} | "
+                f"{m['seconds_incl_compile']:.1f} |"
             )
-            continue
+    lines += [
+        "\n| routes | screen -> search | candidates | rows streamed | plan options | value | "
+        "RSS before MB | peak RSS MB | s (incl. compile) | cand/s |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for m in sc.get("stream", []):
+        what = "all feasible -> greedy" if m["search"] == "greedy" else "top-k -> beam"
         if "error" in m:
-            lines.append(
-                f"| {m['routes']} | {m['path']} | {m['feasible_only']} | failed: "
-                f"{m['error'][:60]} | | | | | |"
-            )
+            lines.append(f"| {m['routes']} | {what} | failed: {m['error'][-60:]!r} |||||||")
             continue
         lines.append(
-            f"| {m['routes']} | {m['path']} | {m['feasible_only']} | {m['n_screened']:.3g} | "
-            f"{m['rows']:.3g} | {m['result_MB']:.0f} | {m['rss_before_MB']:.0f} | "
-            f"{m['peak_MB']:.0f} | {m['seconds_incl_compile']:.1f} |"
+            f"| {m['routes']} | {what} | {m['n_screened']:.3g} | {m['rows_streamed']:.3g} | "
+            f"{m['plan_options']} | {m['value']:.1f} | {m['rss_before_MB']:.0f} | "
+            f"{m['peak_MB']:.0f} | {m['seconds_incl_compile']:.1f} | {m['rate']:.3g} |"
         )
     return lines
 

@@ -5,8 +5,12 @@ satellite over six hours), too few for the 1,000-10,000-route sizes of issue 9, 
 the workload is a synthetic single pass at the density of the former single-pass
 default scenario (:func:`synthetic_options`). ALL transitions within ``MAX_GAP``
 seconds are screened by the host-generated path, the fused path and the compute
-ceiling (:func:`screening_compare`), and peak memory is taken per call in a fresh
-process (:func:`screening_rss`).
+ceiling (:func:`screening_compare`; modes: every row, feasible rows only, the
+``TOP_K`` best successors per option), and peak memory is taken per call in a fresh
+process (:func:`screening_rss`). :func:`screening_stream` screens and searches in one
+pass: the chunks of :func:`jaxspline.screen_chunks` go straight into the streaming
+sequencers (``greedy`` on every feasible row, ``beam_search`` on the top-k rows), so
+no result the size of the candidates is ever held.
 """
 
 from __future__ import annotations
@@ -15,6 +19,10 @@ import statistics
 import time
 
 MAX_GAP = 120.0  # [s] longest transition screened
+TOP_K = 16  # successors kept per option by the top-k screens
+BEAM_WIDTH = 8  # partial plans kept per option by the streamed beam search
+#: Modes of the speed comparison: name -> (feasible_only, top_k).
+MODES = {"all": (False, None), "feasible": (True, None), "top_k": (True, TOP_K)}
 
 
 HORIZON_S = 1375.0  # [s] synthetic pass: 5,000 routes give ~7.5e7 candidates at MAX_GAP
@@ -68,10 +76,30 @@ def synthetic_options(n_routes: int, seed: int = 0):
     return opts, limits
 
 
-def _paths():
-    from jaxspline.engine import screen, screen_fused
+def _host_top_k(opts, limits, max_gap, chunk, progress, feasible_only, pi, pc, top_k=None):
+    """The host path, then the ``top_k`` selection per source on the host (the baseline)."""
 
-    return {"host": screen._screen_transitions_host, "fused": screen_fused.screen_transitions_fused}
+    from jaxspline.engine import screen
+
+    tr = screen._screen_transitions_host(
+        opts, limits, max_gap, chunk, progress, feasible_only, pi, pc
+    )
+    if top_k is None:
+        return tr
+    keep = screen.best_per_source(tr.src, tr.margin, int(top_k))
+    return screen.Transitions(*(x[keep] for x in tr[:-1]), n_screened=tr.n_screened)
+
+
+def _paths():
+    from jaxspline.engine import screen_fused
+
+    return {"host": _host_top_k, "fused": screen_fused.screen_transitions_fused}
+
+
+def _call(f, opts, limits, mode: str):
+    """One screen of ``opts`` by path function ``f`` in comparison mode ``mode``."""
+    feasible_only, top_k = MODES[mode]
+    return f(opts, limits, MAX_GAP, 2**18, False, feasible_only, 0, 1, top_k=top_k)
 
 
 def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
@@ -108,11 +136,11 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     return run, len(chunks) * chunk
 
 
-def screening_compare(n_routes: int, reps: int = 3, modes=(False, True)) -> dict:
+def screening_compare(n_routes: int, reps: int = 3, modes=tuple(MODES)) -> dict:
     """Host path vs fused path vs compute ceiling, interleaved repetitions, one process.
 
     Synthetic pass of ``n_routes`` routes (:func:`synthetic_options`), float64,
-    ``MAX_GAP``; for each ``feasible_only`` mode both paths run once to compile, then
+    ``MAX_GAP``; for each mode of ``MODES`` both paths run once to compile, then
     ``reps`` rounds of (host, fused, ceiling). Rates are candidates screened per second
     (median); ratios are of medians measured in the same rounds.
     """
@@ -122,15 +150,19 @@ def screening_compare(n_routes: int, reps: int = 3, modes=(False, True)) -> dict
         return _screening_compare(n_routes, reps, modes)
 
 
-def _fits(opts, feasible_only: bool, path: str = "host") -> dict | None:
+def _fits(opts, mode: str, path: str = "host") -> dict | None:
     """None if this screen's result fits in 3/4 of MemAvailable, else why it is skipped.
 
     The machine is shared: a 10,000-route screen returns ~2.3e8 feasible rows (11 GB)
     even with ``feasible_only``. Upper bounds: every candidate kept (49 B each), times
-    2 for the host path's ``feasible_only`` (masked parts plus their concatenation).
+    2 for the host path's ``feasible_only`` (masked parts plus their concatenation);
+    the fused top-k screen keeps O(options x TOP_K) rows.
     """
     from jaxspline.engine import screen_fused
 
+    feasible_only, top_k = MODES[mode]
+    if top_k is not None and path == "fused":
+        return None
     n = int(screen_fused._runs(opts, MAX_GAP).counts.sum())
     factor = 2.0 if (feasible_only and path == "host") else 1.0
     need = n * 49 * factor / 1e6
@@ -156,25 +188,27 @@ def _screening_compare(n_routes, reps, modes):
     import numpy as np
 
     opts, limits = synthetic_options(n_routes)
-    modes = [fo for fo in modes if _fits(opts, fo, "host") is None]
+    modes = [m for m in modes if _fits(opts, m, "host") is None]
     ceiling, n_ceil = _ceiling(opts, limits)
     jax.block_until_ready(ceiling())
     out = {"routes": n_routes, "options": int(np.shape(opts.t_start)[0]), "modes": []}
-    for fo in modes:
+    for mode in modes:
         times = {"host": [], "fused": [], "ceiling": []}
         first = {}
-        res = None
+        res = {}
         for name, f in _paths().items():
             t0 = time.perf_counter()
-            res = f(opts, limits, MAX_GAP, 2**18, False, fo, 0, 1)
+            res[name] = _call(f, opts, limits, mode)
             first[name] = time.perf_counter() - t0
-        n = int(res.n_screened)
-        n_feasible = int(np.sum(res.feasible))
+        n = int(res["fused"].n_screened)
+        n_rows = int(res["fused"].src.size)
+        n_feasible = int(np.sum(res["host"].feasible)) if mode != "top_k" else None
+        same = _same_rows(res["host"], res["fused"])
         del res
         for _ in range(reps):
             for name, f in _paths().items():
                 t0 = time.perf_counter()
-                r = f(opts, limits, MAX_GAP, 2**18, False, fo, 0, 1)
+                r = _call(f, opts, limits, mode)
                 times[name].append(time.perf_counter() - t0)
                 del r
             t0 = time.perf_counter()
@@ -188,9 +222,13 @@ def _screening_compare(n_routes, reps, modes):
         }
         out["modes"].append(
             {
-                "feasible_only": fo,
+                "mode": mode,
+                "feasible_only": MODES[mode][0],
+                "top_k": MODES[mode][1],
                 "n_screened": n,
                 "n_feasible": n_feasible,
+                "rows": n_rows,
+                "identical_to_host": same,
                 "median_s": med,
                 "times_s": times,
                 "first_s": first,
@@ -202,7 +240,35 @@ def _screening_compare(n_routes, reps, modes):
     return out
 
 
-def screening_rss(n_routes: int, path: str, feasible_only: bool) -> dict:
+def _same_rows(a, b) -> bool:
+    """Both screens hold the same rows (as sets of (src, dst)) with identical verdicts and
+    margins equal to 1e-12 rad."""
+    import numpy as np
+
+    if a.src.size != b.src.size or a.n_screened != b.n_screened:
+        return False
+    oa, ob = np.lexsort((a.dst, a.src)), np.lexsort((b.dst, b.src))
+    if not (np.array_equal(a.src[oa], b.src[ob]) and np.array_equal(a.dst[oa], b.dst[ob])):
+        return False
+    if not np.array_equal(a.feasible[oa], b.feasible[ob]):
+        return False
+    ma, mb = a.margin[oa], b.margin[ob]
+    fin = np.isfinite(ma)
+    return bool(np.array_equal(fin, np.isfinite(mb)) and np.all(np.abs(ma[fin] - mb[fin]) <= 1e-12))
+
+
+def _reset_peak() -> float:
+    """Reset the process's peak RSS (``clear_refs`` 5); returns the current RSS in MB."""
+    base = _status("VmRSS")
+    try:
+        with open("/proc/self/clear_refs", "w") as fh:
+            fh.write("5")
+    except OSError:
+        pass
+    return base
+
+
+def screening_rss(n_routes: int, path: str, mode: str) -> dict:
     """Peak RSS of one screening call (compile included) in a fresh process.
 
     Run as a subprocess per (routes, path, mode) so peaks do not mix. The peak
@@ -213,28 +279,68 @@ def screening_rss(n_routes: int, path: str, feasible_only: bool) -> dict:
 
     with jax.enable_x64(True):
         opts, limits = synthetic_options(n_routes)
-        skip = _fits(opts, feasible_only, path)
+        skip = _fits(opts, mode, path)
         if skip is not None:
-            return {"routes": n_routes, "path": path, "feasible_only": feasible_only, **skip}
-        base = _status("VmRSS")
-        try:
-            with open("/proc/self/clear_refs", "w") as fh:
-                fh.write("5")
-        except OSError:
-            pass
+            return {"routes": n_routes, "path": path, "mode": mode, **skip}
+        base = _reset_peak()
         t0 = time.perf_counter()
-        r = _paths()[path](opts, limits, MAX_GAP, 2**18, False, feasible_only, 0, 1)
+        r = _call(_paths()[path], opts, limits, mode)
         dt = time.perf_counter() - t0
     return {
         "routes": n_routes,
         "path": path,
-        "feasible_only": feasible_only,
+        "mode": mode,
         "n_screened": int(r.n_screened),
         "rows": int(r.src.size),
         "result_MB": sum(a.nbytes for a in r[:7]) / 1e6,
         "rss_before_MB": base,
         "peak_MB": _status("VmHWM"),
         "seconds_incl_compile": dt,
+    }
+
+
+def screening_stream(n_routes: int, search: str) -> dict:
+    """Screen and search in one pass, in a fresh process: time and peak RSS.
+
+    ``search="greedy"``: every feasible row of :func:`jaxspline.screen_chunks` streams
+    into :func:`jaxspline.greedy`; ``"beam"``: the ``TOP_K`` best successors per option
+    stream into :func:`jaxspline.beam_search` (width ``BEAM_WIDTH``). Compile included.
+    """
+    import jax
+
+    import jaxspline as js
+
+    with jax.enable_x64(True):
+        opts, limits = synthetic_options(n_routes)
+        base = _reset_peak()
+        counts = {"screened": 0, "rows": 0, "chunks": 0}
+
+        def chunks():
+            top_k = TOP_K if search == "beam" else None
+            for c in js.screen_chunks(opts, limits, max_gap=MAX_GAP, top_k=top_k, progress=False):
+                counts["screened"] += int(c.n_screened)
+                counts["rows"] += int(c.src.size)
+                counts["chunks"] += 1
+                yield c
+
+        t0 = time.perf_counter()
+        if search == "greedy":
+            plan = js.greedy(opts, chunks())
+        else:
+            plan = js.beam_search(opts, chunks(), width=BEAM_WIDTH)
+        dt = time.perf_counter() - t0
+    return {
+        "routes": n_routes,
+        "search": search,
+        "n_screened": counts["screened"],
+        "rows_streamed": counts["rows"],
+        "chunks": counts["chunks"],
+        "plan_options": int(plan.chosen.size),
+        "value": float(plan.value),
+        "rss_before_MB": base,
+        "peak_MB": _status("VmHWM"),
+        "seconds_incl_compile": dt,
+        "rate": counts["screened"] / dt,
     }
 
 
