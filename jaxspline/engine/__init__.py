@@ -23,6 +23,7 @@ from jaxspline.engine import (
     refine,
     result,
     screen,
+    screen_sequences,
     sequence,
     steps_check,
 )
@@ -31,6 +32,7 @@ _MODULES = (
     mission,
     options,
     screen,
+    screen_sequences,
     sequence,
     refine,
     steps_check,
@@ -49,5 +51,6 @@ from jaxspline.engine.planner import *  # noqa: E402, F403
 from jaxspline.engine.refine import *  # noqa: E402, F403
 from jaxspline.engine.result import *  # noqa: E402, F403
 from jaxspline.engine.screen import *  # noqa: E402, F403
+from jaxspline.engine.screen_sequences import *  # noqa: E402, F403
 from jaxspline.engine.sequence import *  # noqa: E402, F403
 from jaxspline.engine.steps_check import *  # noqa: E402, F403
