@@ -7,11 +7,15 @@ summed value. Layout of the fused path (x64 on):
 * The option table goes to the devices once, channel-major ([C, N] per boundary
   field, as :mod:`jaxspline.engine.screen_fused` stores it), with ``t_start`` /
   ``t_end`` in float64, dense route ids (int32), ``scan_ok`` and ``value``.
-* The [K, L] sequence table goes in chunks of ``chunk_size`` rows, padded to a
-  fixed shape (rows: ``chunk_size``, or fewer rounded like the fused path's row
-  buckets for a single chunk; columns: L rounded up to 1/8 of its power of two),
-  so a search calling it with similar shapes compiles few programs. JAX dispatch is
-  asynchronous: the host pads chunk k + 1 while the devices screen chunk k.
+* The [K, L] sequence table goes in chunks of rows padded to a fixed shape
+  (columns: L rounded up to 1/8 of its power of two; rows: ``chunk_size // (L - 1)``
+  so a chunk holds ~``chunk_size`` transitions, or fewer rows, rounded up to 1/8 of
+  their power of two, when everything fits in one chunk), so a search calling it
+  with similar shapes compiles few programs. The chunk is sized in transitions
+  because the program's intermediates are per transition: at L = 64 on the 2-core
+  CPU VM, chunks of 2**17 transitions screened ~2x faster than chunks of 2**20.
+  JAX dispatch is asynchronous: the host pads chunk k + 1 while the devices screen
+  chunk k.
 * ONE compiled program per chunk forms every consecutive pair
   ``(seq[:, l - 1], seq[:, l])``, ``T = t_start[dst] - t_end[src]`` in float64 then
   cast to the table dtype (bit-identical to the host path), runs the per-channel
@@ -19,10 +23,12 @@ summed value. Layout of the fused path (x64 on):
   maneuver model stays swappable) and reduces to per-row outputs. Only the three
   [K] columns come back.
 * Repeated routes are found on the device by comparing every position with every
-  earlier one ([L, L] per row, ``_PAIRWISE_MAX_L`` and below) or, for longer rows,
-  by sorting each row's (route, position) pairs and comparing sorted neighbours
-  (O(L log L)). At K = 100,000 on the 2-core CPU VM the comparison costs ~4 % of
-  the chunk program at L = 20 and the sort ~15 %; they break even near L = 64.
+  earlier one ([L, L] per row, padded L up to ``_PAIRWISE_MAX_L``) or, for longer
+  rows, by sorting each row's (route, position) pairs and comparing sorted
+  neighbours (O(L log L)). Measured on chunks of 2**17 transitions (2-core CPU VM,
+  best of 9): the comparison adds ~1 ms to a ~4 ms program at L = 20 and ~4 ms at
+  L = 128, the sort ~10 ms at any L up to 512; the comparison loses from L = 256
+  (+17 ms against +10 ms).
 * Rows are sharded over the local devices (``P("cand")`` on the row axis), the
   option table is replicated.
 * x64 off: T needs float64 on the device, so the host path runs instead
@@ -52,10 +58,10 @@ from jaxspline.kernels.limits import AxisLimits, validate_limits
 __all__ = ["screen_sequences"]
 
 #: Longest (padded) row for the [L, L] route comparison; longer rows sort.
-_PAIRWISE_MAX_L = 64
+_PAIRWISE_MAX_L = 128
 
-#: Default rows (sequences) per compiled chunk.
-_CHUNK_ROWS = 8192
+#: Default transitions per compiled chunk (rows = this // (L - 1)).
+_CHUNK_TRANSITIONS = 2**17
 
 
 def _validate_sequences(options: RouteOptions, sequences) -> np.ndarray:
@@ -83,12 +89,14 @@ def _validate_sequences(options: RouteOptions, sequences) -> np.ndarray:
     return seq
 
 
-def _bucket(n: int, maximum: int) -> int:
-    """``maximum``, or n rounded up to 1/8 of its power of two (<= 12.5 % padding)."""
-    if n >= maximum:
-        return maximum
+def _bucket(n: int, maximum: int | None = None) -> int:
+    """n rounded up to 1/8 of its power of two (<= 12.5 % padding), capped at ``maximum``.
+
+    At most 8 padded sizes per octave: few compilations.
+    """
     p = 1 << (max(int(n), 1) - 1).bit_length()
-    return min(maximum, round_up(n, max(1, p // 8)))
+    size = round_up(max(int(n), 1), max(1, p // 8))
+    return size if maximum is None else min(int(maximum), size)
 
 
 def _first_repeat_pairwise(rid, pad, big):
@@ -152,7 +160,7 @@ def _sequence_program(reach, rows: int, length: int, mesh, repeats: str):
 
 
 def screen_sequences(
-    options: RouteOptions, sequences, limits: AxisLimits, *, chunk_size: int = _CHUNK_ROWS
+    options: RouteOptions, sequences, limits: AxisLimits, *, chunk_size: int = _CHUNK_TRANSITIONS
 ):
     """Screen K whole candidate sequences at once.
 
@@ -162,8 +170,9 @@ def screen_sequences(
         end of a row.
       limits: AxisLimits (per channel, as in
         :func:`~jaxspline.engine.screen.screen_transitions`).
-      chunk_size: rows (sequences) per compiled chunk; memory on the device grows
-        with ``chunk_size * L``.
+      chunk_size: transitions per compiled chunk (a chunk is
+        ``max(1, chunk_size // (L - 1))`` rows; device memory ~ 100 bytes per
+        transition).
 
     Returns:
       ``(feasible [K] bool, first_fail [K] int64, value [K] float64)``.
@@ -211,8 +220,8 @@ def screen_sequences(
         put(np.asarray(options.value, np.float64)),
     )  # fmt: skip
     rate, accel = (put(x) for x in _channel_limits(limits, c, dtype))
-    rows = round_up(_bucket(kk, int(chunk_size)), ndev)
-    length = max(2, round_up(ll, max(1, (1 << (ll - 1).bit_length()) // 8)))
+    length = max(2, _bucket(ll))
+    rows = round_up(_bucket(kk, max(1, int(chunk_size) // (length - 1))), ndev)
     repeats = "pairwise" if length <= _PAIRWISE_MAX_L else "sorted"
     program = _sequence_program(_reach(), rows, length, mesh, repeats)
 
