@@ -132,7 +132,9 @@ def _sequence_program(reach, rows: int, length: int, mesh, repeats: str):
     Per row: ``fail[p]`` = option p is not padding and (``scan_ok`` false, or its
     route occurs at an earlier position, or the transition p-1 -> p is infeasible:
     T <= 0 or not reachable in exactly T on some channel). Returns ``(feasible
-    bool [rows], first_fail int32 [rows] (-1: none), value float64 [rows])``.
+    bool [rows], first_fail int32 [rows] (-1: none), value float64 [rows])``. The
+    value is summed left to right (a chain of adds, not a reduction XLA vectorizes
+    per shape), so a row's value does not depend on the chunk, padding or sharding.
     ``repeats`` is ``"pairwise"`` or ``"sorted"`` (see the module docstring).
     """
     cand = NamedSharding(mesh, P("cand"))
@@ -153,7 +155,8 @@ def _sequence_program(reach, rows: int, length: int, mesh, repeats: str):
         scan = jnp.min(jnp.where(~pad & ~scan_ok[s0], pos, big), axis=1)
         first = jnp.minimum(jnp.minimum(step, scan), first_repeat(rid[s0], pad, big))
         first = jnp.where(first < big, first, -1)
-        total = jnp.sum(jnp.where(pad, 0.0, value[s0]), axis=1)
+        vals = jnp.where(pad, 0.0, value[s0])
+        total = functools.reduce(jnp.add, [vals[:, p] for p in range(length)])  # in order
         return first < 0, first, total
 
     return jax.jit(run)

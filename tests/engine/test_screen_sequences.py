@@ -4,6 +4,11 @@ numpy brute force through the public :func:`jaxspline.kernels.reach.is_reachable
 from __future__ import annotations
 
 import importlib
+import json
+import os
+import subprocess
+import sys
+import textwrap
 
 import jax
 import numpy as np
@@ -159,7 +164,7 @@ def _assert_same(got, want, exact_value=False):
     assert got[0].dtype == bool and got[1].dtype == np.int64 and got[2].dtype == np.float64
     if exact_value:
         np.testing.assert_array_equal(got[2], want[2])
-    else:  # the device sums in another order than numpy's pairwise sum
+    else:  # numpy's pairwise sum (the former implementation) rounds differently
         np.testing.assert_allclose(got[2], want[2], rtol=1e-14, atol=0)
 
 
@@ -174,7 +179,7 @@ def test_equals_former_implementation_and_brute_force():
     got = seqmod.screen_sequences(opt, seq, LIMITS)
     _assert_same(got, reference_screen_sequences(opt, seq, LIMITS))
     feas, first, value, reason = brute_force(opt, seq, LIMITS)
-    _assert_same(got, (feas, first, value))
+    _assert_same(got, (feas, first, value), exact_value=True)  # both sum left to right
     # every failure kind and enough feasible multi-option rows are exercised
     kinds = {w: reason.count(w) for w in ("", "scan", "route", "T", "reach")}
     assert min(kinds.values()) >= 50, kinds
@@ -260,3 +265,39 @@ def test_public_names_and_value_errors():
         f(opt, np.array([[0, 1]]), LIMITS._replace(accel=np.array([0.01, -1.0])))
     with pytest.raises(ValueError, match="t_end"):
         f(opt._replace(t_end=opt.t_start - 1.0), np.array([[0, 1]]), LIMITS)
+
+
+_SHARD_SCRIPT = textwrap.dedent(
+    """
+    import json, sys
+    import jax
+    jax.config.update("jax_enable_x64", True)
+    sys.path.insert(0, {tests!r})
+    import test_screen_sequences as t
+    opt = t._options()
+    seq = t._sequences(opt, k=999)
+    feas, first, value = t.seqmod.screen_sequences(opt, seq, t.LIMITS, chunk_size=7 * 50)
+    print(json.dumps({{"ndev": jax.local_device_count(), "feasible": feas.tolist(),
+                      "first": first.tolist(), "value": value.tolist()}}))
+    """
+)
+
+
+def test_rows_sharded_over_four_devices():
+    """Rows split over 4 CPU devices (chunks of 52 rows, rounded to 4): same answers."""
+    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4")
+    env["JAX_PLATFORMS"] = "cpu"
+    script = _SHARD_SCRIPT.format(tests=os.path.dirname(__file__))
+    out = subprocess.run(
+        [sys.executable, "-c", script], env=env, capture_output=True, text=True, timeout=300
+    )
+    assert out.returncode == 0, out.stderr[-3000:]
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert got["ndev"] == 4
+    opt = _options()
+    want = seqmod.screen_sequences(opt, _sequences(opt, k=999), LIMITS)
+    _assert_same(
+        (np.array(got["feasible"]), np.array(got["first"], np.int64), np.array(got["value"])),
+        want,
+        exact_value=True,
+    )
