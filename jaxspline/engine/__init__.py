@@ -1,8 +1,8 @@
 """Engine: option tables, screening, maneuver models, search, refinement, checks, the planner.
 
 ``mission`` (the scenario's types) and ``options`` (the option table) in;
-``opportunities`` -> ``screen`` / ``models`` (and ``join_screen`` for flown joins)
--> ``sequence`` and ``search/``
+``opportunities`` -> ``screen`` / ``screen_sequences`` / ``models`` (and ``join_screen``
+for flown joins) -> ``sequence`` and ``search/``
 (greedy, Lagrangian/DP bound, exact, LNS, battery) -> ``refine`` /
 ``refine_starts`` -> ``steps_check`` / ``plan_check`` (independent re-checks);
 ``planner.plan`` runs the pipeline and returns a ``result.PlanResult``. The
