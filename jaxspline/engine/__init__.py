@@ -1,8 +1,8 @@
 """Engine: option tables, screening, maneuver models, search, refinement, checks, the planner.
 
 ``mission`` (the scenario's types) and ``options`` (the option table) in;
-``opportunities`` -> ``screen`` / ``models`` (and ``join_screen`` for flown joins)
--> ``sequence`` and ``search/``
+``opportunities`` -> ``screen`` / ``screen_sequences`` / ``models`` (and ``join_screen``
+for flown joins) -> ``sequence`` and ``search/``
 (greedy, Lagrangian/DP bound, exact, LNS, battery) -> ``refine`` /
 ``refine_starts`` -> ``steps_check`` / ``plan_check`` (independent re-checks);
 ``planner.plan`` runs the pipeline and returns a ``result.PlanResult``. The
@@ -23,6 +23,7 @@ from jaxspline.engine import (
     refine,
     result,
     screen,
+    screen_sequences,
     sequence,
     steps_check,
 )
@@ -31,6 +32,7 @@ _MODULES = (
     mission,
     options,
     screen,
+    screen_sequences,
     sequence,
     refine,
     steps_check,
@@ -49,5 +51,6 @@ from jaxspline.engine.planner import *  # noqa: E402, F403
 from jaxspline.engine.refine import *  # noqa: E402, F403
 from jaxspline.engine.result import *  # noqa: E402, F403
 from jaxspline.engine.screen import *  # noqa: E402, F403
+from jaxspline.engine.screen_sequences import *  # noqa: E402, F403
 from jaxspline.engine.sequence import *  # noqa: E402, F403
 from jaxspline.engine.steps_check import *  # noqa: E402, F403

@@ -80,7 +80,6 @@ __all__ = [
     "best_per_source",
     "Transitions",
     "screen_transitions",
-    "screen_sequences",
     "screen_pairs",
 ]
 
@@ -576,55 +575,13 @@ def screen_pairs(
     return Transitions(*cols, n_screened=int(src.size))
 
 
-def screen_sequences(options: RouteOptions, sequences, limits: AxisLimits):
-    """Screen K whole candidate sequences at once.
+def __getattr__(name: str):
+    """``screen.screen_sequences`` lives in :mod:`jaxspline.engine.screen_sequences`.
 
-    Args:
-      options: RouteOptions (N options, C channels).
-      sequences: int [K, L] option indices in time order, padded with -1 at the
-        end of a row.
-      limits: AxisLimits (per channel, as in :func:`screen_transitions`).
-
-    Returns:
-      ``(feasible [K] bool, first_fail [K] int, value [K])``. ``first_fail`` is
-      the position (0..L-1) of the first option that cannot be appended to the
-      prefix before it — its ``scan_ok`` is False, its route already occurs in
-      the prefix, or the transition from the previous option fails (T <= 0 or
-      not reachable in exactly T, SPEC section 1) — and -1 when the whole row is
-      feasible. ``value`` is the summed option value of the row (whether or
-      not it is feasible). An all-padding row is feasible with value 0.
+    Imported on first access: that module builds on this one.
     """
-    validate_options(options)
-    seq = np.asarray(sequences)
-    if seq.ndim != 2 or not np.issubdtype(seq.dtype, np.integer):
-        raise ValueError(f"sequences must be an int array [K, L], got {seq.dtype} {seq.shape}")
-    n = np.shape(options.t_start)[0]
-    if seq.size and (seq.min() < -1 or seq.max() >= n):
-        raise ValueError(
-            f"sequences must hold option indices 0..{n - 1} or -1, got {seq.min()}..{seq.max()}"
-        )
-    pad = seq < 0
-    if (pad[:, :-1] & ~pad[:, 1:]).any():
-        k = int(np.flatnonzero((pad[:, :-1] & ~pad[:, 1:]).any(axis=1))[0])
-        raise ValueError(
-            f"sequences row {k} has -1 padding before an option index: {seq[k].tolist()}"
-        )
-    kk, ll = seq.shape
-    s0 = np.where(pad, 0, seq)
-    scan_ok = np.asarray(options.scan_ok, bool)[s0] | pad
-    route = np.asarray(options.route)[s0]
-    # repeated route: position p whose route appears at an earlier position q < p
-    same = (route[:, :, None] == route[:, None, :]) & ~pad[:, :, None] & ~pad[:, None, :]
-    earlier = np.tril(np.ones((ll, ll), bool), k=-1)
-    repeat = (same & earlier[None]).any(axis=2)
-    # transitions l -> l+1
-    bad_step = np.zeros((kk, ll), bool)
-    if ll > 1:
-        has = ~pad[:, 1:]
-        rows, cols = np.nonzero(has)
-        tr = screen_pairs(options, limits, seq[rows, cols], seq[rows, cols + 1])
-        bad_step[rows, cols + 1] = ~tr.feasible
-    fail = (~scan_ok | repeat | bad_step) & ~pad
-    first = np.where(fail.any(axis=1), np.argmax(fail, axis=1), -1)
-    value = np.where(pad, 0.0, np.asarray(options.value, float)[s0]).sum(axis=1)
-    return first < 0, first.astype(np.int64), value
+    if name == "screen_sequences":
+        from jaxspline.engine.screen_sequences import screen_sequences
+
+        return screen_sequences
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
