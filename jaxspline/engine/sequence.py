@@ -124,18 +124,19 @@ def _take(s: _States, idx) -> _States:
     return _States(*(f[idx] for f in s))
 
 
-def _best_first(dpos, v, gid, k1, k2, width):
-    """Indices of the kept states, sorted by (dpos, -v, k1, k2).
+def _best_first(dpos, v, gid, keys, width):
+    """Indices of the kept states, sorted by (dpos, -v, *keys).
 
-    Per position, the best state of every group ``gid`` (visited set), then the
-    ``width`` best groups (all with width None).
+    Per position, the best state of every group ``gid`` (int64: a visited set),
+    then the ``width`` best groups (all with width None).
     """
-    o = np.lexsort((k2, k1, -v, gid, dpos))
-    d, g = dpos[o], gid[o]
-    first = np.ones(o.size, bool)
-    first[1:] = (d[1:] != d[:-1]) | (g[1:] != g[:-1])
-    o = o[first]
-    o = o[np.lexsort((k2[o], k1[o], -v[o], dpos[o]))]
+    o = np.lexsort((*keys[::-1], -v, dpos))
+    if width is None:  # gid: dense set ids
+        pair = dpos[o] * (int(gid.max()) + 1) + gid[o]
+    else:  # gid: set hashes
+        pair = _mix(gid[o].astype(np.uint64) ^ _mix(dpos[o].astype(np.uint64)))
+    first = np.unique(pair, return_index=True)[1]  # first occurrence: the best one
+    o = o[np.sort(first)]
     if width is not None and o.size:
         d = dpos[o]
         idx = np.arange(d.size)
@@ -163,6 +164,7 @@ class _Search:
         v = order.nodes.size
         self.store = self._empty()
         self.best = np.full(v, -np.inf)  # best value of a plan ending at each position
+        self.floor = np.full(v, -np.inf)  # least value that can still enter a full pool
         self.goff = np.zeros(v, np.int64)  # first state of each position in the parents
         self.parents: list[tuple[np.ndarray, np.ndarray]] = []
         self.total = 0  # final states so far
@@ -193,7 +195,8 @@ class _Search:
             gid = np.unique(s.m, axis=0, return_inverse=True)[1].reshape(-1)
         else:
             gid = s.h
-        return _take(s, _best_first(s.dpos, s.v, gid, s.k1, s.k2, self.width))
+        keys = (s.k1,) if self.width is not None else (s.k1, s.k2)
+        return _take(s, _best_first(s.dpos, s.v, gid, keys, self.width))
 
     def _check_states(self):
         if self.max_states is not None and self.total + self.store.v.size > self.max_states:
@@ -246,24 +249,31 @@ class _Search:
         slot = np.arange(rep.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
         st = first[rep] + slot
         d = dst[rep]
+        v = tab.v[st] + self.value[d]
+        dpos = self.order.pos[d]
         w, bit = self.word[d], self.bit[d]
         old = tab.m[st, w]
-        free = (old & bit) == 0
-        rep, slot, st, d, w, bit, old = (x[free] for x in (rep, slot, st, d, w, bit, old))
+        good = ((old & bit) == 0) & (v >= self.floor[dpos])  # route unvisited, may enter
+        rep, slot, st, d, v, dpos, w, bit, old = (
+            x[good] for x in (rep, slot, st, d, v, dpos, w, bit, old)
+        )
         pn = src[rep]
-        v = tab.v[st] + self.value[d]
         h = tab.h[st] - _mix(old ^ self.salt[w]) + _mix((old | bit) ^ self.salt[w])
         k1, k2 = self._keys(d, pn, slot)
-        dpos = self.order.pos[d]
         if self.width is not None:  # drop the hopeless before building their bit rows
-            o = _best_first(dpos, v, h, k1, k2, self.width)
+            o = _best_first(dpos, v, h, (k1,), self.width)
             st, d, w, bit, pn, slot, v, h, k1, k2, dpos = (
                 x[o] for x in (st, d, w, bit, pn, slot, v, h, k1, k2, dpos)
             )
         m = tab.m[st]
         m[np.arange(st.size), w] |= bit
         new = _States(dpos, v, h, m, pn, slot, k1, k2)
-        self.store = self._prune(_cat([self.store, new]))
+        self.store = s = self._prune(_cat([self.store, new]))
+        if self.width is not None and s.v.size >= self.width:
+            # a pool of `width` distinct sets keeps them: worse candidates cannot enter
+            gs = np.flatnonzero(np.r_[True, s.dpos[1:] != s.dpos[:-1]])
+            gs = gs[np.diff(np.r_[gs, s.v.size]) >= self.width]
+            self.floor[s.dpos[gs]] = s.v[gs + self.width - 1]
         self._check_states()
 
     def run(self, rows) -> Plan:
