@@ -54,7 +54,8 @@ from jaxspline.engine.options import RouteOptions
 
 __all__ = ["Plan", "greedy", "beam_search", "exact_plan", "path_bound", "plan_value"]
 
-_BLOCK_WORDS = 1 << 22  # mask words (uint64) of the candidate states expanded at once: 32 MiB
+_BLOCK_BYTES = 1 << 25  # [bytes] candidate states expanded at once: 32 MiB
+_STATE_WORDS = 12  # 8-byte words a candidate state takes besides its visited-route bits
 _MIN_BLOCK = 1024  # least candidate states expanded at once
 _MIN_DUR = 1e-9  # [s] floor of the greedy's time from now to the end of a candidate
 
@@ -236,7 +237,7 @@ class _Search:
         p = self.order.pos[src] - lo
         first, cnt = off[p], off[p + 1] - off[p]
         cs = np.cumsum(cnt)
-        cap = max(_BLOCK_WORDS // self.nw, _MIN_BLOCK)
+        cap = max(_BLOCK_BYTES // (8 * (self.nw + _STATE_WORDS)), _MIN_BLOCK)
         a = 0
         while a < src.size:
             base = cs[a - 1] if a else 0

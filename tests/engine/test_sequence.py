@@ -260,7 +260,7 @@ def test_streams_give_the_same_plans(reach_kernels, monkeypatch):  # noqa: F811
         for label, m in make.items():
             assert_same(ref, solve_all(opt, m, seed), f"seed {seed} {label}")
         # pools merged after every single candidate: pruning early changes nothing
-        monkeypatch.setattr(sequence, "_BLOCK_WORDS", 1)
+        monkeypatch.setattr(sequence, "_BLOCK_BYTES", 1)
         monkeypatch.setattr(sequence, "_MIN_BLOCK", 1)
         assert_same(ref, solve_all(opt, make["random cuts"], seed), f"seed {seed} blocks")
         assert_same(ref, solve_all(opt, lambda tr=tr: tr, seed), f"seed {seed} blocks, whole")
