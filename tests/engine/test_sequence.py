@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 import pytest
 from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
@@ -49,6 +51,7 @@ def check_plan(opt, tr, plan):
     assert rep.ok, rep.violations
 
 
+@functools.cache
 def instance(seed):
     rng = np.random.default_rng(seed)
     # long windows (each route visible over a third of the horizon): route conflicts matter
@@ -125,3 +128,220 @@ def test_edge_cases_and_errors(reach_kernels):  # noqa: F811
         sequence.greedy(opt, None)
     with pytest.raises(ValueError, match="max_states"):
         sequence.exact_plan(opt, tr, max_states=1)
+
+
+# ----------------------------------------------------------------------------
+# streams of chunks
+# ----------------------------------------------------------------------------
+
+
+def old_greedy(options, transitions):
+    """The greedy of the pull implementation (CSR by source), kept as the reference."""
+    n = np.shape(options.t_start)[0]
+    src = np.asarray(transitions.src, np.int64)
+    dst = np.asarray(transitions.dst, np.int64)
+    route = np.asarray(options.route, np.int64)
+    ok = np.asarray(options.scan_ok, bool)
+    value = np.asarray(options.value, np.float64)
+    ts = np.asarray(options.t_start, np.float64)
+    te = np.asarray(options.t_end, np.float64)
+    keep = (
+        np.asarray(transitions.feasible, bool)
+        & ok[src]
+        & ok[dst]
+        & (route[src] != route[dst])
+        & (ts[dst] > te[src])
+    )
+    src, dst = src[keep], dst[keep]
+    nodes = np.flatnonzero(ok)
+    nodes = nodes[np.argsort(ts[nodes], kind="stable")]
+    if nodes.size == 0:
+        return sequence.Plan(np.zeros(0, np.int64), 0.0)
+    o = np.lexsort((dst, src))
+    s_sorted, d_sorted = src[o], dst[o]
+    out_ptr = np.searchsorted(s_sorted, np.arange(n + 1))
+    visited: set[int] = set()
+    path: list[int] = []
+    cand = nodes
+    t_now = ts[nodes].min()
+    while True:
+        cand = cand[[route[c] not in visited for c in cand]] if cand.size else cand
+        if cand.size == 0:
+            break
+        dur = np.maximum(te[cand] - t_now, 1e-9)
+        score = value[cand] / dur
+        k = np.lexsort((cand, ts[cand], -score))[0]
+        j = int(cand[k])
+        path.append(j)
+        visited.add(int(route[j]))
+        t_now = te[j]
+        cand = d_sorted[out_ptr[j] : out_ptr[j + 1]]
+    idx = np.asarray(path, np.int64)
+    return sequence.Plan(idx, sequence.plan_value(options, idx))
+
+
+def brute_force_path(opt: RouteOptions, tr) -> float:
+    """Longest chain value over feasible rows, routes may repeat (depth-first)."""
+    succ = {i: [] for i in range(len(opt.route))}
+    for s, d, f in zip(tr.src.tolist(), tr.dst.tolist(), tr.feasible.tolist(), strict=True):
+        if f:
+            succ[s].append(d)
+
+    @functools.cache
+    def best_from(i):
+        return opt.value[i] + max([0.0] + [best_from(j) for j in succ[i]])
+
+    return max([0.0] + [best_from(i) for i in range(len(opt.route)) if opt.scan_ok[i]])
+
+
+def shuffled(tr, rng):
+    """The same rows in random order."""
+    o = rng.permutation(tr.src.size)
+    return tr._replace(**{f: getattr(tr, f)[o] for f in tr._fields[:7]})
+
+
+def stream(opt, tr, rng, cut="random"):
+    """Chunks in stream order: sources by (t_start, index), destinations shuffled.
+
+    cut: "random" (cuts at random rows, also inside one source's rows, and some
+    empty chunks) or "one" (one row per chunk).
+    """
+    m = tr.src.size
+    o = np.lexsort((rng.permutation(m), tr.src, opt.t_start[tr.src]))
+    cols = [getattr(tr, f)[o] for f in tr._fields[:7]]
+    if cut == "one":
+        bounds = np.arange(m + 1)
+    else:
+        inner = rng.integers(0, m + 1, size=int(rng.integers(0, max(m // 3, 1) + 1)))
+        bounds = np.sort(np.r_[0, inner, m])  # repeated bounds give empty chunks
+    for a, b in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True):
+        yield screen.Transitions(*(c[a:b] for c in cols), b - a)
+
+
+def solve_all(opt, make, seed):
+    """Every solver on a fresh ``make()`` (a stream is read once)."""
+    return {
+        "greedy": sequence.greedy(opt, make()),
+        "beam1": sequence.beam_search(opt, make(), width=1, seed=seed),
+        "beam3": sequence.beam_search(opt, make(), width=3, seed=seed),
+        "exact": sequence.exact_plan(opt, make()),
+        "bound": sequence.path_bound(opt, make()),
+    }
+
+
+def assert_same(a, b, label):
+    for k, p in a.items():
+        if k == "bound":
+            assert b[k] == p, (label, k)
+        else:
+            np.testing.assert_array_equal(b[k].chosen, p.chosen, err_msg=f"{label} {k}")
+            assert b[k].value == p.value, (label, k)
+
+
+def variants(opt, tr, rng):
+    """Makers of the same transitions in other forms (each call a fresh stream)."""
+    feas = tr._replace(**{f: getattr(tr, f)[tr.feasible] for f in tr._fields[:7]})
+    return {
+        "shuffled": lambda: shuffled(tr, rng),
+        "random cuts": lambda: stream(opt, tr, rng),
+        "feasible only, random cuts": lambda: stream(opt, feas, rng),
+        "one row per chunk": lambda: stream(opt, tr, rng, cut="one"),
+        "list of chunks": lambda: list(stream(opt, feas, rng)),
+    }
+
+
+def test_streams_give_the_same_plans(reach_kernels, monkeypatch):  # noqa: F811
+    """Random cuts, one row per chunk, shuffled rows, infeasible rows: one plan each."""
+    for seed in range(8):
+        rng = np.random.default_rng(100 + seed)
+        opt, tr = instance(seed)
+        make = variants(opt, tr, rng)
+        ref = solve_all(opt, lambda tr=tr: tr, seed)
+        for label, m in make.items():
+            assert_same(ref, solve_all(opt, m, seed), f"seed {seed} {label}")
+        # pools merged after every single candidate: pruning early changes nothing
+        monkeypatch.setattr(sequence, "_BLOCK_BYTES", 1)
+        monkeypatch.setattr(sequence, "_MIN_BLOCK", 1)
+        assert_same(ref, solve_all(opt, make["random cuts"], seed), f"seed {seed} blocks")
+        assert_same(ref, solve_all(opt, lambda tr=tr: tr, seed), f"seed {seed} blocks, whole")
+        monkeypatch.undo()
+
+
+def test_greedy_equals_the_pull_implementation(reach_kernels):  # noqa: F811
+    for seed in range(15):
+        rng = np.random.default_rng(200 + seed)
+        opt, tr = instance(seed)
+        ref = old_greedy(opt, tr)
+        for tt in (tr, shuffled(tr, rng), stream(opt, tr, rng)):
+            p = sequence.greedy(opt, tt)
+            np.testing.assert_array_equal(p.chosen, ref.chosen, err_msg=str(seed))
+            assert p.value == ref.value
+    rng = np.random.default_rng(7)
+    opt = synthetic_options(rng, n_routes=30, per_route=3, horizon=600.0, spread=0.8, window=60.0)
+    tr = screen.screen_transitions(opt, LIMITS, progress=False)
+    ref = old_greedy(opt, tr)
+    assert ref.chosen.size > 3
+    np.testing.assert_array_equal(sequence.greedy(opt, stream(opt, tr, rng)).chosen, ref.chosen)
+
+
+def test_path_bound_brute_force_and_bounds(reach_kernels):  # noqa: F811
+    for seed in range(15):
+        opt, tr = instance(seed)
+        b = sequence.path_bound(opt, tr)
+        assert b == pytest.approx(brute_force_path(opt, tr), rel=1e-12), seed
+        ex = sequence.exact_plan(opt, tr)
+        assert b >= ex.value - 1e-9
+        assert b >= sequence.greedy(opt, tr).value - 1e-9
+        # one option per route: the each-route-once rule is void, the bound is the optimum
+        solo = opt._replace(route=np.arange(len(opt.route), dtype=opt.route.dtype))
+        assert sequence.exact_plan(solo, tr).value == pytest.approx(b, rel=1e-12), seed
+        assert brute_force(solo, tr) == pytest.approx(b, rel=1e-12), seed
+    rng = np.random.default_rng(0)
+    opt = synthetic_options(rng, n_routes=3, per_route=2)
+    assert sequence.path_bound(opt._replace(scan_ok=np.zeros(6, bool)), iter(())) == 0.0
+
+
+def test_stream_wide_beam_equals_exact(reach_kernels):  # noqa: F811
+    rng = np.random.default_rng(42)
+    opt = synthetic_options(rng, n_routes=12, per_route=4, horizon=400.0, spread=0.8, window=120.0)
+    tr = screen.screen_transitions(opt, LIMITS, progress=False)
+    ex = sequence.exact_plan(opt, tr)
+    wide = sequence.beam_search(opt, stream(opt, tr, rng), width=100_000)
+    assert wide.value == pytest.approx(ex.value, rel=1e-12)
+    check_plan(opt, tr, wide)
+    for w in (1, 4, 16):
+        ref = sequence.beam_search(opt, tr, width=w, seed=5)
+        got = sequence.beam_search(opt, stream(opt, tr, rng, cut="one"), width=w, seed=5)
+        np.testing.assert_array_equal(got.chosen, ref.chosen)
+        check_plan(opt, tr, got)
+
+
+def test_stream_errors(reach_kernels):  # noqa: F811
+    opt, tr = instance(3)
+    rng = np.random.default_rng(0)
+    chunks = list(stream(opt, tr, rng, cut="one"))
+    ts = opt.t_start
+    # swap two chunks of different sources whose t_start differ
+    k = next(i for i in range(len(chunks) - 1) if ts[chunks[i].src[0]] < ts[chunks[i + 1].src[0]])
+    bad = chunks[:k] + [chunks[k + 1], chunks[k]] + chunks[k + 2 :]
+    late = int(chunks[k].src[0])
+    for solver in (
+        sequence.greedy,
+        sequence.beam_search,
+        sequence.exact_plan,
+        sequence.path_bound,
+    ):
+        with pytest.raises(ValueError, match=rf"transitions.*source {late} "):
+            solver(opt, iter(bad))
+        # going back inside one chunk
+        merged = screen.Transitions(
+            *(np.concatenate([getattr(c, f) for c in bad]) for f in tr._fields[:7]), 0
+        )
+        with pytest.raises(ValueError, match=rf"transitions.*source {late} "):
+            solver(opt, [merged])
+        with pytest.raises(ValueError, match="transitions"):
+            solver(opt, 3)
+        with pytest.raises(ValueError, match="transitions chunks must be Transitions"):
+            solver(opt, [tr, {"src": 1}])
+        with pytest.raises(ValueError, match="transitions"):
+            solver(opt, tr._replace(dst=tr.dst + len(opt.route)))
