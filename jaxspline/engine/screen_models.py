@@ -144,11 +144,16 @@ class ChannelPairs:
 class SlewPairs:
     """Rest-to-rest pair function: a :class:`~jaxspline.engine.models.SlewTable` lookup.
 
-    ``table`` = (end_los, start_los), component-major [3, N]; ``params`` = (time
-    [S + 1],), the table's required times [s] at ``theta_k = pi (k / S)^2``. With
-    ``u = end_los[src]``, ``v = start_los[dst]``:
-    ``theta = atan2(|u x v|, u . v)``, ``k = min(ceil(S sqrt(theta / pi) - 1e-12), S)``
-    (as ``SlewTable.__call__``), ``t_req = time[k]`` and
+    ``table`` = (end_los, start_los), component-major [3, N], unit vectors
+    (:func:`model_arrays` normalizes them); ``params`` = (time [S + 1],), the table's
+    required times [s] at ``theta_k = pi (k / S)^2``. With ``u = end_los[src]``,
+    ``v = start_los[dst]``: the angle ``theta = atan2(|u x v|, u . v)`` [rad],
+    evaluated as ``2 atan2(|u - v|, |u + v|)`` (the same angle for unit vectors, and
+    exactly 0 for equal ones: XLA's CPU backend contracts the cross product's
+    ``a b - c d`` into a fused multiply-add, which leaves a rounding residue of ~1e-16
+    there, enough to move the lookup off ``theta_0``), then
+    ``k = min(ceil(S sqrt(theta / pi) - 1e-12), S)`` (as ``SlewTable.__call__``),
+    ``t_req = time[k]`` and
 
     * feasible = ``T > 0 and T >= t_req``,
     * margin = ``T - t_req`` [s] (-inf for T <= 0),
@@ -163,11 +168,13 @@ class SlewPairs:
         size = time.shape[0] - 1
         u = [end_los[c][src] for c in range(3)]
         v = [start_los[c][dst] for c in range(3)]
-        cx = u[1] * v[2] - u[2] * v[1]
-        cy = u[2] * v[0] - u[0] * v[2]
-        cz = u[0] * v[1] - u[1] * v[0]
-        cross = jnp.sqrt(cx * cx + cy * cy + cz * cz)
-        theta = jnp.clip(jnp.arctan2(cross, u[0] * v[0] + u[1] * v[1] + u[2] * v[2]), 0.0, math.pi)
+        d = [a - b for a, b in zip(u, v, strict=True)]
+        s = [a + b for a, b in zip(u, v, strict=True)]
+        half = jnp.arctan2(
+            jnp.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]),
+            jnp.sqrt(s[0] * s[0] + s[1] * s[1] + s[2] * s[2]),
+        )
+        theta = jnp.clip(2.0 * half, 0.0, math.pi)
         k = jnp.minimum(jnp.ceil(size * jnp.sqrt(theta / math.pi) - _INDEX_EPS), size)
         t_req = time[k.astype(jnp.int32)]
         pos = T > 0
@@ -214,6 +221,10 @@ def validate_model(model, options: RouteOptions, name: str = "model") -> None:
             raise ValueError(f"options.{f} is None: a SlewTable {name} needs lines of sight")
         if np.shape(los) != (n, 3):
             raise ValueError(f"options.{f} must have shape ({n}, 3), got {np.shape(los)}")
+        norm = np.linalg.norm(np.asarray(los, np.float64), axis=1)
+        if not (np.isfinite(norm).all() and (norm > 0).all()):
+            k = int(np.flatnonzero(~(np.isfinite(norm) & (norm > 0)))[0])
+            raise ValueError(f"options.{f} must be finite non-zero vectors, got row {k}: {los[k]}")
 
 
 def model_arrays(model, options: RouteOptions, dtype, order=None):
@@ -237,8 +248,8 @@ def model_arrays(model, options: RouteOptions, dtype, order=None):
         pair, fields = SlewPairs(), _LOS_FIELDS
         params = (np.asarray(model.time, np.dtype(dtype)),)
     sel = slice(None) if order is None else order
-    table = tuple(
-        np.ascontiguousarray(np.asarray(getattr(options, f))[sel].T, np.dtype(dtype))
-        for f in fields
-    )
+    cols = [np.asarray(getattr(options, f))[sel] for f in fields]
+    if pair == SlewPairs():
+        cols = [x / np.linalg.norm(x.astype(np.float64), axis=1, keepdims=True) for x in cols]
+    table = tuple(np.ascontiguousarray(x.T, np.dtype(dtype)) for x in cols)
     return pair, table, params
