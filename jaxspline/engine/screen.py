@@ -24,9 +24,10 @@ Engine layout:
   ``searchsorted``). N^2 pairs are never held at once.
 * Fused path (default; :mod:`jaxspline.engine.screen_fused`): each run is cut into
   rows of ``width`` slots (a power of two <= 256 chosen so padding stays <= 6 %),
-  and the time-sorted option table plus the row table (source, first
-  destination, count) go to the devices once. Chunk k is ``rows`` consecutive
-  rows and costs one scalar argument: the screening program builds the slots'
+  and the time-sorted option table (padded to a power of two, so tables of
+  similar size share compiled programs) goes to the devices once. Chunk k is
+  ``rows`` consecutive rows of the row table (source, first destination, count;
+  a few kB per chunk): the screening program builds the slots'
   destination indices by broadcasting (no per-candidate search: XLA's CPU
   ``searchsorted`` ran at 2e7/s), applies the same-route exclusion, forms
   ``T = t_start[dst] - t_end[src]`` in float64 and cast to the table dtype

@@ -2,8 +2,8 @@
 
 :func:`jaxspline.engine.screen.screen_transitions` runs :func:`screen_transitions_fused`
 when x64 is on (see that module's docstring for the layout). Each source's run of
-destinations is cut into rows of ``width`` slots; the time-sorted option table and
-the row table go to the devices once, and chunk k costs one scalar argument. One
+destinations is cut into rows of ``width`` slots; the time-sorted option table goes
+to the devices once, and chunk k costs its ``rows`` rows of the row table. One
 program screens a chunk with the model's pair function (the same one as the host
 path's ``screen_host._chunk_program``, :mod:`jaxspline.engine.screen_models`), a
 second compacts the kept rows to the front. :func:`fused_chunks` yields the
@@ -26,7 +26,7 @@ from jax.sharding import PartitionSpec as P
 from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
 from jaxspline.engine.screen import Transitions, _collect, _mesh, _Stream, _top_k_merge
 from jaxspline.engine.screen_models import model_arrays
-from jaxspline.kernels._batch import ragged_positions, round_up
+from jaxspline.kernels._batch import padded_size, ragged_positions, round_up
 
 __all__ = ["fused_chunks", "screen_transitions_fused"]
 
@@ -51,7 +51,7 @@ def _row_width(counts: np.ndarray, chunk_size: int) -> int:
 
 @functools.lru_cache(maxsize=16)
 def _fused_program(pair, rows: int, width: int, mesh, dtype):
-    """jit program screening rows ``r0 .. r0 + rows`` of the row table.
+    """jit program screening one chunk: ``rows`` rows of the row table.
 
     Row r is source position ``row_k[r]`` (time-sorted valid options) and the
     destinations ``row_d[r] + 0 .. row_n[r] - 1`` of the same order. Per slot: the
@@ -65,12 +65,11 @@ def _fused_program(pair, rows: int, width: int, mesh, dtype):
     """
     cand = NamedSharding(mesh, P("cand"))
 
-    def run(tab, params, row_k, row_d, row_n, r0):
+    def run(tab, params, row_k, row_d, row_n):
         fields, te, ts, route, _ = tab
         nv = te.shape[0]
-        k = jax.lax.with_sharding_constraint(jax.lax.dynamic_slice_in_dim(row_k, r0, rows), cand)
-        d0 = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)
-        n = jax.lax.dynamic_slice_in_dim(row_n, r0, rows)
+        k = jax.lax.with_sharding_constraint(row_k, cand)
+        d0, n = row_d, row_n
         j = jnp.arange(width, dtype=d0.dtype)
         d = jnp.minimum(d0[:, None] + j, nv - 1)  # [rows, width]; padded slots clamped
         kb = k[:, None]
@@ -112,7 +111,7 @@ def _compact_program(rows: int, width: int, feasible_only: bool):
     entries past ``count`` are filler.
     """
 
-    def run(order, row_k, row_d, r0, keep, T, feasible, margin, effort, tmin):
+    def run(order, row_k, row_d, keep, T, feasible, margin, effort, tmin):
         sel = (feasible if feasible_only else keep).reshape(-1)
         s = sel.size
         pos = _prefix_count(sel) - 1
@@ -122,8 +121,8 @@ def _compact_program(rows: int, width: int, feasible_only: bool):
             .set(jnp.arange(s, dtype=jnp.int32), mode="drop", unique_indices=True)
         )
         row, col = slot // width, slot % width
-        k = jax.lax.dynamic_slice_in_dim(row_k, r0, rows)[row]
-        d = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)[row] + col
+        k = row_k[row]
+        d = row_d[row] + col
         nv = order.shape[0]
         src, dst = order[k], order[jnp.minimum(d, nv - 1)]
         cols = [x.reshape(-1)[slot] for x in (T, feasible, margin, effort, tmin)]
@@ -142,11 +141,11 @@ def _topk_program(rows: int, width: int, k: int):
     time-sorted table (the caller merges the rows of one source).
     """
 
-    def run(order, row_k, row_d, r0, keep, T, feasible, margin, effort, tmin):
+    def run(order, row_k, row_d, keep, T, feasible, margin, effort, tmin):
         score = jnp.where(feasible, margin, -jnp.inf)
         _, col = jax.lax.top_k(score, k)
-        k_pos = jax.lax.dynamic_slice_in_dim(row_k, r0, rows)
-        d = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)[:, None] + col
+        k_pos = row_k
+        d = row_d[:, None] + col
         dst = order[jnp.minimum(d, order.shape[0] - 1)]
         cols = [jnp.take_along_axis(x, col, axis=1) for x in (T, feasible, margin, effort, tmin)]
         src_pos = jnp.broadcast_to(k_pos[:, None], col.shape)
@@ -191,10 +190,12 @@ def _runs(options: RouteOptions, max_gap) -> _Runs:
 def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, pi, pc, top_k=None):
     """Fused path of :func:`~jaxspline.engine.screen.screen_chunks` (arguments validated).
 
-    The time-sorted option table (the model's fields, :func:`model_arrays`) and a row
-    table (source, first destination, count; a source's run is cut into rows of
-    ``width`` slots) go to the devices once; chunk k is rows ``k * rows .. (k + 1) *
-    rows - 1`` and costs one scalar argument. Only the compacted rows come back.
+    The time-sorted option table (the model's fields, :func:`model_arrays`; padded to
+    a power of two) goes to the devices once; a row table (source, first
+    destination, count; a source's run is cut into rows of ``width`` slots) stays on
+    the host and chunk k sends its rows ``k * rows .. (k + 1) * rows - 1``. The
+    programs depend on (model, rows, width, padded table size) only, so the
+    planner's per-satellite screens can share them. Only the compacted rows come back.
 
     Returns:
       ``(total, dtype, chunks)``: the number of candidate slots (same-route pairs
@@ -221,15 +222,20 @@ def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, p
     pad = nchunks * rows - row_k.size
     itype = np.int32 if row_k.size < 2**31 and runs.order.size < 2**31 else np.int64
     rep = NamedSharding(mesh, P())
+    cand = NamedSharding(mesh, P("cand"))
 
     def put(a, dt=None):
+        # the option axis is padded to a power of two: programs are reused across
+        # tables of similar size (the planner screens one table per satellite)
+        a = np.asarray(a)
+        a = np.pad(a, [(0, 0)] * (a.ndim - 1) + [(0, nv_pad - a.shape[-1])])
         return jax.device_put(jnp.asarray(a, dt), rep)
 
     row_k, row_d, row_n = (
-        put(np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype))
-        for a in (row_k, row_d, row_n)
+        np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype) for a in (row_k, row_d, row_n)
     )
     o = runs.order
+    nv_pad = padded_size(o.size)
     pair, fields, params = model_arrays(model, options, dtype, o)
     tab = (
         tuple(put(a) for a in fields),
@@ -238,7 +244,7 @@ def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, p
         put(np.asarray(options.route)[o]),
         put(o.astype(np.int64)),
     )
-    params = tuple(put(a) for a in params)
+    params = tuple(jax.device_put(jnp.asarray(a), rep) for a in params)
     program = _fused_program(pair, rows, width, mesh, np.dtype(dtype))
     if top_k is not None:
         compact = _topk_program(rows, width, min(int(top_k), width))
@@ -265,9 +271,10 @@ def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, p
         try:
             for k in range(nchunks):
                 if k % pc == pi:
-                    r0 = itype(k * rows)
-                    out = program(tab, params, row_k, row_d, row_n, r0)
-                    nxt = compact(tab[-1], row_k, row_d, r0, *out)
+                    sl = slice(k * rows, (k + 1) * rows)  # the chunk's rows: a few kB
+                    rk, rd, rn = (jax.device_put(a[sl], cand) for a in (row_k, row_d, row_n))
+                    out = program(tab, params, rk, rd, rn)
+                    nxt = compact(tab[-1], rk, rd, *out)
                     if pending is not None:
                         yield rows_of(pending)
                     pending = nxt
