@@ -61,6 +61,7 @@ _REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (
 _REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
+_NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
 _MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
 _REFILL_ROUNDS = 2  # join rejections followed by a greedy refill (later rounds only drop)
 _REFILL_S = 2.0  # [s] budget of one refill
@@ -215,6 +216,7 @@ def _near_pairs(sc, opp, tables, far, slack):
             sub,
             tables[k] if rest else sat.limits,
             max_gap=far[k] + slack + _WINDOW_GUARD,
+            chunk_size=_NEAR_CHUNK,
             feasible_only=True,
             progress=False,
         )

@@ -32,6 +32,8 @@ __all__ = ["fused_chunks", "screen_transitions_fused"]
 
 #: Row widths tried for the [rows, width] candidate layout, widest first.
 _WIDTHS = (256, 128, 64, 32, 16, 8, 4, 2, 1)
+#: Smallest padded option table (~1 MB for 3 channels): small tables share programs.
+_MIN_TABLE = 1 << 14
 
 
 def _row_width(counts: np.ndarray, chunk_size: int) -> int:
@@ -235,7 +237,7 @@ def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, p
         np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype) for a in (row_k, row_d, row_n)
     )
     o = runs.order
-    nv_pad = padded_size(o.size)
+    nv_pad = padded_size(max(o.size, _MIN_TABLE))
     pair, fields, params = model_arrays(model, options, dtype, o)
     tab = (
         tuple(put(a) for a in fields),
