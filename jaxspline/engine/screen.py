@@ -86,7 +86,6 @@ from jaxspline.engine.screen_models import (  # noqa: F401 (re-exported for the 
     validate_model,
 )
 from jaxspline.kernels._validate import check_positive
-from jaxspline.kernels.limits import AxisLimits
 
 __all__ = [
     "best_per_source",
@@ -446,13 +445,6 @@ class _Sink:
             except MemoryError:
                 self.cols = None
 
-    def add(self, cols):
-        """Add a screened chunk (every row; only the feasible ones are kept if asked)."""
-        if self.feasible_only:
-            self.parts.append(tuple(a[cols[3]] for a in cols))
-            return
-        self.add_rows(cols)
-
     def add_rows(self, cols):
         """Add rows that are kept as they are (already compacted on the device)."""
         if self.cols is None:
@@ -517,14 +509,15 @@ def screen_pairs(options: RouteOptions, model, src, dst, *, chunk_size: int = 2*
     return Transitions(*cols, n_screened=int(src.size))
 
 
-def screen_sequences(options: RouteOptions, sequences, limits: AxisLimits):
+def screen_sequences(options: RouteOptions, sequences, limits):
     """Screen K whole candidate sequences at once.
 
     Args:
       options: RouteOptions (N options, C channels).
       sequences: int [K, L] option indices in time order, padded with -1 at the
         end of a row.
-      limits: AxisLimits (per channel, as in :func:`screen_transitions`).
+      limits: the maneuver model, AxisLimits (per channel) or a SlewTable (rest
+        to rest), as in :func:`screen_transitions`.
 
     Returns:
       ``(feasible [K] bool, first_fail [K] int, value [K])``. ``first_fail`` is
