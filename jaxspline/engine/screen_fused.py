@@ -199,6 +199,10 @@ def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, p
     programs depend on (model, rows, width, padded table size) only, so the
     planner's per-satellite screens can share them. Only the compacted rows come back.
 
+    Args:
+      options, model, max_gap, chunk_size, progress, feasible_only, top_k: as
+        :func:`~jaxspline.engine.screen.screen_transitions`.
+      pi, pc: this process's index and the process count.
     Returns:
       ``(total, dtype, chunks)``: the number of candidate slots (same-route pairs
       included), the compute dtype and a generator of :class:`Transitions`, one per

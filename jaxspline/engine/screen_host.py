@@ -104,6 +104,10 @@ class _Screener:
 def host_chunks(options, model, max_gap, chunk_size, progress, feasible_only, pi, pc):
     """Host path of :func:`~jaxspline.engine.screen.screen_chunks` (arguments validated).
 
+    Args:
+      options, model, max_gap, chunk_size, progress, feasible_only: as
+        :func:`~jaxspline.engine.screen.screen_transitions`.
+      pi, pc: this process's index and the process count.
     Returns:
       ``(total, dtype, order, chunks)``: the number of candidate slots (same-route
       pairs included), the compute dtype, the time-sorted valid options (int [V])

@@ -135,7 +135,16 @@ class ChannelPairs:
     reach: _ReachKernels
 
     def __call__(self, table, params, src, dst, T):
-        """Screen candidates src -> dst with durations T (arrays broadcasting together)."""
+        """Screen candidates src -> dst with durations T.
+
+        Args:
+          table: the model's option columns (class docstring), device arrays [F, N].
+          params: the model's parameters (class docstring).
+          src, dst: int arrays indexing the table's columns, broadcasting with T.
+          T: transfer durations [s]; T <= 0 is infeasible.
+        Returns:
+          (feasible bool, margin, effort, t_min), broadcast to T's shape.
+        """
         rate, accel = params
         return _all_channels(self.reach, table, src, dst, T, rate, accel)
 
@@ -162,7 +171,16 @@ class SlewPairs:
     """
 
     def __call__(self, table, params, src, dst, T):
-        """Screen candidates src -> dst with durations T (arrays broadcasting together)."""
+        """Screen candidates src -> dst with durations T.
+
+        Args:
+          table: the model's option columns (class docstring), device arrays [F, N].
+          params: the model's parameters (class docstring).
+          src, dst: int arrays indexing the table's columns, broadcasting with T.
+          T: transfer durations [s]; T <= 0 is infeasible.
+        Returns:
+          (feasible bool, margin, effort, t_min), broadcast to T's shape.
+        """
         end_los, start_los = table
         (time,) = params
         size = time.shape[0] - 1
