@@ -112,7 +112,7 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     import jax.numpy as jnp
     import numpy as np
 
-    from jaxspline.engine import screen, screen_fused
+    from jaxspline.engine import screen_fused, screen_host
     from jaxspline.kernels._batch import ragged_positions
 
     runs = screen_fused._runs(opts, MAX_GAP)
@@ -120,7 +120,7 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     src, dst = runs.order[k[:n]], runs.order[runs.lo[k[:n]] + p[:n]]
     keep = np.asarray(opts.route)[src] != np.asarray(opts.route)[dst]
     src, dst = src[keep], dst[keep]
-    sc = screen._Screener(opts, limits)
+    sc = screen_host._Screener(opts, limits)
     T = sc.t_start[dst] - sc.t_end[src]
     chunks = [
         tuple(
@@ -131,7 +131,7 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     ]
 
     def run():
-        return [sc.program(*sc.table, *sc.limits, *c) for c in chunks]
+        return [sc.program(sc.table, sc.params, *c) for c in chunks]
 
     return run, len(chunks) * chunk
 

@@ -9,9 +9,10 @@ for flown joins) -> ``sequence`` and ``search/``
 engine never imports the product layer.
 
 Re-exported here (and from :mod:`jaxspline`): the public modules in ``_MODULES``.
-The planner's internal stages (``opportunities``, ``models``, ``join_screen``, ``screen_fused``,
-``refine_starts``, ``plan_check``) and ``search`` (whose ``greedy`` is not the sequencer's) stay
-namespaces: ``jaxspline.engine.search.solve``.
+The planner's internal stages (``opportunities``, ``models``, ``join_screen``,
+``screen_models``, ``screen_fused``, ``screen_host``, ``refine_starts``, ``plan_check``)
+and ``search`` (whose ``greedy`` is not the sequencer's) stay namespaces:
+``jaxspline.engine.search.solve``.
 """
 
 from jaxspline.engine import (

@@ -38,20 +38,20 @@ from jaxspline.engine.models import (
     REST_TO_REST,
     far_gap,
     first_requirements,
-    pair_requirements,
     slew_table,
 )
 from jaxspline.engine.opportunities import build_opportunities, nadir_rate, reference_points
+from jaxspline.engine.options import take_options
 from jaxspline.engine.plan_check import check_plan
 from jaxspline.engine.plan_joins import reject_unflyable
 from jaxspline.engine.refine_starts import refine_starts
 from jaxspline.engine.result import Observations, PlanResult
+from jaxspline.engine.screen import screen_transitions
 from jaxspline.engine.search import BatteryModel, Problem, greedy, mip_bound, solve
 from jaxspline.geometry.frames import gmst, in_shadow, jd_split, sun_direction
 from jaxspline.geometry.orbit import tabulate_orbits
 from jaxspline.geometry.pointing import Scene
 from jaxspline.geometry.windows import visibility_windows_all
-from jaxspline.kernels._batch import ragged_positions
 
 __all__ = ["Prepared", "build_problem", "orbit_scene", "plan"]
 
@@ -60,7 +60,8 @@ _RESERVE_MIN = 1.0  # [s]
 _REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
 _REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
-_PAIR_BLOCK = 1 << 20  # option pairs per screening block
+_WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
+_NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
 _MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
 _REFILL_ROUNDS = 2  # join rejections followed by a greedy refill (later rounds only drop)
 _REFILL_S = 2.0  # [s] budget of one refill
@@ -191,31 +192,44 @@ def _near_pairs(sc, opp, tables, far, slack):
     """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need.
 
     The slack (the shortest observation) lets the DP process a block of starts that
-    wide at once (:func:`jaxspline.engine.search.dp_prepare`).
+    wide at once (:func:`jaxspline.engine.search.dp_prepare`). Each satellite's options
+    go through the fused screen (:func:`jaxspline.engine.screen.screen_transitions`)
+    with its maneuver model: AxisLimits for ``per_channel`` (need = min(t_min, gap)),
+    its SlewTable for rest-to-rest models (need = t_req). The sub-table gets
+    ``route = arange(n)`` (the screen excludes equal routes; the planner wants pairs of
+    the same target too) and ``scan_ok`` everywhere. The screen's window
+    ``gap <= max_gap`` is widened by ``_WINDOW_GUARD`` and the pairs are then cut with
+    the planner's own test ``t_end[i] > t_start[j] - far - slack`` (strict), so the
+    result does not depend on how either side rounds. Pairs come per satellite, by
+    destination, then by the source's end time.
     """
     o = opp.options
     src_all, dst_all, need_all = [], [], []
     for k, sat in enumerate(sc.satellites):
         ids = np.flatnonzero(o.sat == k)
-        if ids.size == 0:
+        if ids.size < 2:
             continue
-        s, e = o.t_start[ids], o.t_end[ids]
-        eo = ids[np.argsort(e, kind="stable")]
-        es = o.t_end[eo]
-        a = np.searchsorted(es, s - far[k] - slack, side="right")
-        b = np.searchsorted(es, s, side="left")
-        cnt = np.maximum(b - a, 0)
-        rows = max(1, ids.size * _PAIR_BLOCK // max(int(cnt.sum()), 1))  # ~_PAIR_BLOCK pairs
-        for c0 in range(0, ids.size, rows):
-            sl = slice(c0, c0 + rows)
-            owner, off = ragged_positions(cnt[sl])
-            jj = ids[sl][owner]
-            ii = eo[a[sl][owner] + off]
-            need = pair_requirements(sat, o, ii, jj, tables[k])
-            ok = np.isfinite(need)
-            src_all.append(ii[ok])
-            dst_all.append(jj[ok])
-            need_all.append(need[ok])
+        n = ids.size
+        sub = take_options(o, ids)._replace(route=np.arange(n), scan_ok=np.ones(n, bool))
+        rest = sat.model in REST_TO_REST
+        tr = screen_transitions(
+            sub,
+            tables[k] if rest else sat.limits,
+            max_gap=far[k] + slack + _WINDOW_GUARD,
+            chunk_size=_NEAR_CHUNK,
+            feasible_only=True,
+            progress=False,
+        )
+        ii, jj = ids[tr.src], ids[tr.dst]
+        keep = o.t_end[ii] > o.t_start[jj] - far[k] - slack
+        by_end = np.empty(n, np.int64)
+        by_end[np.argsort(sub.t_end, kind="stable")] = np.arange(n)
+        order = np.flatnonzero(keep)
+        order = order[np.lexsort((by_end[tr.src[order]], tr.dst[order]))]
+        need = tr.t_min if rest else np.minimum(tr.t_min, tr.T)
+        src_all.append(ii[order])
+        dst_all.append(jj[order])
+        need_all.append(need[order].astype(np.float64))
     if not src_all:
         z = np.zeros(0, np.int64)
         return z, z, np.zeros(0)

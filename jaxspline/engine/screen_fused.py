@@ -2,10 +2,12 @@
 
 :func:`jaxspline.engine.screen.screen_transitions` runs :func:`screen_transitions_fused`
 when x64 is on (see that module's docstring for the layout). Each source's run of
-destinations is cut into rows of ``width`` slots; the time-sorted option table and
-the row table go to the devices once, and chunk k costs one scalar argument. One
-program screens a chunk (same kernels and channel reductions as
-``screen._chunk_program``), a second compacts the kept rows to the front.
+destinations is cut into rows of ``width`` slots; the time-sorted option table goes
+to the devices once, and chunk k costs its ``rows`` rows of the row table. One
+program screens a chunk with the model's pair function (the same one as the host
+path's ``screen_host._chunk_program``, :mod:`jaxspline.engine.screen_models`), a
+second compacts the kept rows to the front. :func:`fused_chunks` yields the
+compacted chunks one by one, with one chunk in flight on the devices.
 
 Units: radians, seconds.
 """
@@ -22,24 +24,18 @@ from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
 from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
-from jaxspline.engine.screen import (
-    Transitions,
-    _all_channels,
-    _channel_limits,
-    _empty,
-    _mesh,
-    _reach,
-    _Sink,
-    best_per_source,
-)
-from jaxspline.kernels._batch import ragged_positions, round_up
+from jaxspline.engine.screen import Transitions, _collect, _mesh, _Stream, _top_k_merge
+from jaxspline.engine.screen_models import model_arrays
+from jaxspline.kernels._batch import padded_size, ragged_positions, round_up
 
-__all__ = ["screen_transitions_fused"]
+__all__ = ["fused_chunks", "screen_transitions_fused"]
 
 #: Row widths tried for the [rows, width] candidate layout, widest first.
 _WIDTHS = (256, 128, 64, 32, 16, 8, 4, 2, 1)
 #: Largest k selected per row by argmax rounds (unrolled); above it a stable sort.
 _EXTRACT_MAX_K = 32
+#: Smallest padded option table (~1 MB for 3 channels): small tables share programs.
+_MIN_TABLE = 1 << 14
 
 
 def _row_width(counts: np.ndarray, chunk_size: int) -> int:
@@ -58,32 +54,32 @@ def _row_width(counts: np.ndarray, chunk_size: int) -> int:
 
 
 @functools.lru_cache(maxsize=16)
-def _fused_program(reach, rows: int, width: int, mesh):
-    """jit program screening rows ``r0 .. r0 + rows`` of the row table.
+def _fused_program(pair, rows: int, width: int, mesh, dtype):
+    """jit program screening one chunk: ``rows`` rows of the row table.
 
     Row r is source position ``row_k[r]`` (time-sorted valid options) and the
     destinations ``row_d[r] + 0 .. row_n[r] - 1`` of the same order. Per slot: the
     same-route exclusion, ``T = t_start[dst] - t_end[src]`` in float64 (then cast to
-    the table dtype, as the host path does), the per-channel exact-T kernels and the
-    channel reductions of :func:`_chunk_program`. The source is constant along a
+    ``dtype``, as the host path does) and the model's pair function ``pair``
+    (:mod:`jaxspline.engine.screen_models`; per-channel kernels with their channel
+    reductions, or the rest-to-rest slew table). The source is constant along a
     row, so its state is gathered once per row. Returns ``(keep, T, feasible,
     margin, effort, t_min)``, each [rows, width]; ``keep`` marks live
     different-route slots (a dropped slot has T = 0 and is infeasible).
     """
     cand = NamedSharding(mesh, P("cand"))
 
-    def run(tab, rate, accel, row_k, row_d, row_n, r0):
-        ea, er, sa, sr, te, ts, route, _ = tab
+    def run(tab, params, row_k, row_d, row_n):
+        fields, te, ts, route, _ = tab
         nv = te.shape[0]
-        k = jax.lax.with_sharding_constraint(jax.lax.dynamic_slice_in_dim(row_k, r0, rows), cand)
-        d0 = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)
-        n = jax.lax.dynamic_slice_in_dim(row_n, r0, rows)
+        k = jax.lax.with_sharding_constraint(row_k, cand)
+        d0, n = row_d, row_n
         j = jnp.arange(width, dtype=d0.dtype)
         d = jnp.minimum(d0[:, None] + j, nv - 1)  # [rows, width]; padded slots clamped
         kb = k[:, None]
         keep = (j < n[:, None]) & (route[kb] != route[d])
-        T = jnp.where(keep, ts[d] - te[kb], 0.0).astype(ea.dtype)
-        return (keep, T, *_all_channels(reach, (ea, er, sa, sr), kb, d, T, rate, accel))
+        T = jnp.where(keep, ts[d] - te[kb], 0.0).astype(dtype)
+        return (keep, T, *pair(fields, params, kb, d, T))
 
     return jax.jit(run)
 
@@ -119,7 +115,7 @@ def _compact_program(rows: int, width: int, feasible_only: bool):
     entries past ``count`` are filler.
     """
 
-    def run(order, row_k, row_d, r0, keep, T, feasible, margin, effort, tmin):
+    def run(order, row_k, row_d, keep, T, feasible, margin, effort, tmin):
         sel = (feasible if feasible_only else keep).reshape(-1)
         s = sel.size
         pos = _prefix_count(sel) - 1
@@ -129,8 +125,8 @@ def _compact_program(rows: int, width: int, feasible_only: bool):
             .set(jnp.arange(s, dtype=jnp.int32), mode="drop", unique_indices=True)
         )
         row, col = slot // width, slot % width
-        k = jax.lax.dynamic_slice_in_dim(row_k, r0, rows)[row]
-        d = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)[row] + col
+        k = row_k[row]
+        d = row_d[row] + col
         nv = order.shape[0]
         src, dst = order[k], order[jnp.minimum(d, nv - 1)]
         cols = [x.reshape(-1)[slot] for x in (T, feasible, margin, effort, tmin)]
@@ -178,11 +174,11 @@ def _topk_program(rows: int, width: int, k: int):
     than ``k`` feasible slots fills the rest with picks whose ``feasible`` is False.
     """
 
-    def run(order, row_k, row_d, r0, keep, T, feasible, margin, effort, tmin):
+    def run(order, row_k, row_d, keep, T, feasible, margin, effort, tmin):
         score = jnp.where(feasible, margin, -jnp.inf)
         col, real = _row_top_k(score, k)
-        k_pos = jax.lax.dynamic_slice_in_dim(row_k, r0, rows)
-        d = jax.lax.dynamic_slice_in_dim(row_d, r0, rows)[:, None] + col
+        k_pos = row_k
+        d = row_d[:, None] + col
         dst = order[jnp.minimum(d, order.shape[0] - 1)]
         cols = [jnp.take_along_axis(x, col, axis=1) for x in (T, feasible, margin, effort, tmin)]
         cols[1] = cols[1] & real
@@ -225,22 +221,32 @@ def _runs(options: RouteOptions, max_gap) -> _Runs:
     return _Runs(order, lo, np.maximum(hi - lo, 0).astype(np.int64))
 
 
-def screen_transitions_fused(
-    options, limits, max_gap, chunk_size, progress, feasible_only, pi, pc, top_k=None
-) -> Transitions:
-    """Fused path of :func:`~jaxspline.engine.screen.screen_transitions` (arguments validated).
+def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, pi, pc, top_k=None):
+    """Fused path of :func:`~jaxspline.engine.screen.screen_chunks` (arguments validated).
 
-    The time-sorted option table and a row table (source, first destination, count;
-    a source's run is cut into rows of ``width`` slots) go to the devices once; chunk
-    k is rows ``k * rows .. (k + 1) * rows - 1`` and costs one scalar argument. Only
-    the compacted rows come back.
+    The time-sorted option table (the model's fields, :func:`model_arrays`; padded to
+    a power of two) goes to the devices once; a row table (source, first
+    destination, count; a source's run is cut into rows of ``width`` slots) stays on
+    the host and chunk k sends its rows ``k * rows .. (k + 1) * rows - 1``. The
+    programs depend on (model, rows, width, padded table size) only, so the
+    planner's per-satellite screens can share them. Only the compacted rows come back.
+
+    Args:
+      options, model, max_gap, chunk_size, progress, feasible_only, top_k: as
+        :func:`~jaxspline.engine.screen.screen_transitions`.
+      pi, pc: this process's index and the process count.
+    Returns:
+      ``(total, dtype, chunks)``: the number of candidate slots (same-route pairs
+      included), the compute dtype and a generator of :class:`Transitions`, one per
+      chunk of this process in source order (with ``top_k``, the merged best rows
+      of the sources that became final).
     """
-    c = validate_options(options)
+    validate_options(options)
     dtype = options_dtype(options)
     runs = _runs(options, max_gap)
     total = int(runs.counts.sum())
     if total == 0:
-        return _empty(dtype)
+        return 0, dtype, iter(())
     mesh = _mesh()
     ndev = mesh.devices.size
     width = _row_width(runs.counts, chunk_size)
@@ -254,78 +260,88 @@ def screen_transitions_fused(
     pad = nchunks * rows - row_k.size
     itype = np.int32 if row_k.size < 2**31 and runs.order.size < 2**31 else np.int64
     rep = NamedSharding(mesh, P())
+    cand = NamedSharding(mesh, P("cand"))
 
     def put(a, dt=None):
+        # the option axis is padded to a power of two: programs are reused across
+        # tables of similar size (the planner screens one table per satellite)
+        a = np.asarray(a)
+        a = np.pad(a, [(0, 0)] * (a.ndim - 1) + [(0, nv_pad - a.shape[-1])])
         return jax.device_put(jnp.asarray(a, dt), rep)
 
     row_k, row_d, row_n = (
-        put(np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype))
-        for a in (row_k, row_d, row_n)
+        np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype) for a in (row_k, row_d, row_n)
     )
     o = runs.order
+    nv_pad = padded_size(max(o.size, _MIN_TABLE))
+    pair, fields, params = model_arrays(model, options, dtype, o)
     tab = (
-        *(put(np.ascontiguousarray(np.asarray(getattr(options, f))[o].T), dtype)
-          for f in ("end_angle", "end_rate", "start_angle", "start_rate")),
+        tuple(put(a) for a in fields),
         put(np.asarray(options.t_end, np.float64)[o]),
         put(np.asarray(options.t_start, np.float64)[o]),
         put(np.asarray(options.route)[o]),
         put(o.astype(np.int64)),
-    )  # fmt: skip
-    rate, accel = (put(x) for x in _channel_limits(limits, c, dtype))
-    program = _fused_program(_reach(), rows, width, mesh)
+    )
+    params = tuple(jax.device_put(jnp.asarray(a), rep) for a in params)
+    program = _fused_program(pair, rows, width, mesh, np.dtype(dtype))
     if top_k is not None:
         compact = _topk_program(rows, width, min(int(top_k), width))
     else:
         compact = _compact_program(rows, width, bool(feasible_only))
     per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
-    sink = _Sink(total, dtype, feasible_only, lazy=True)
-    n_screened = 0
-    pending = None
-    from tqdm.auto import tqdm
 
-    bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
-
-    # top_k: finished sources' best rows (src position, dst, T, ..., t_min) and the rows of
-    # the last source seen, which the next chunk may continue (rows come in source order)
-    best, carry = [], None
-
-    def collect(p):
-        nonlocal carry
-        if top_k is not None:
-            kept, *cols = p
-            cols = [np.asarray(x).reshape(-1) for x in cols]
-            cols = [x[cols[3]] for x in cols]
-            if carry is not None:
-                cols = [np.concatenate([a, b]) for a, b in zip(carry, cols, strict=True)]
-            if cols[0].size:
-                done = cols[0] < cols[0].max()
-                sel = best_per_source(cols[0][done], cols[4][done], int(top_k))
-                best.append([x[done][sel] for x in cols])
-                carry = [x[~done] for x in cols]
-            return int(kept)
+    def rows_of(p):
+        if top_k is not None:  # (src position, columns, n): feasible rows of the row top-k's
+            kept, pos, *cols = (np.asarray(x) for x in p)
+            ok = cols[2].reshape(-1)
+            pos = pos.reshape(-1)[ok]
+            cols = [x.reshape(-1)[ok] for x in cols]
+            return pos, [o[pos], *cols], int(kept)
         kept, count, *cols = p
         m = int(count)
-        sink.add_rows([np.asarray(x)[:m] for x in cols])
-        return int(kept)
+        return Transitions(*(np.asarray(x)[:m] for x in cols), n_screened=int(kept))
 
-    for k in range(nchunks):
-        if k % pc == pi:
-            r0 = itype(k * rows)
-            out = program(tab, rate, accel, row_k, row_d, row_n, r0)
-            nxt = compact(tab[-1], row_k, row_d, r0, *out)
+    def chunks():
+        pending = None
+        from tqdm.auto import tqdm
+
+        bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
+        try:
+            for k in range(nchunks):
+                if k % pc == pi:
+                    sl = slice(k * rows, (k + 1) * rows)  # the chunk's rows: a few kB
+                    rk, rd, rn = (jax.device_put(a[sl], cand) for a in (row_k, row_d, row_n))
+                    out = program(tab, params, rk, rd, rn)
+                    nxt = compact(tab[-1], rk, rd, *out)
+                    if pending is not None:
+                        yield rows_of(pending)
+                    pending = nxt
+                bar.update(int(per_chunk[k]))
             if pending is not None:
-                n_screened += collect(pending)
-            pending = nxt
-        bar.update(int(per_chunk[k]))
-    if pending is not None:
-        n_screened += collect(pending)
-    bar.close()
+                yield rows_of(pending)
+        finally:
+            bar.close()
+
     if top_k is not None:
-        if carry is not None:
-            best.append(carry)
-        if not best:
-            return _empty(dtype)._replace(n_screened=n_screened)
-        pos, *cols = (np.concatenate(c) for c in zip(*best, strict=True))
-        keep = best_per_source(pos, cols[3], int(top_k))
-        return Transitions(runs.order[pos[keep]], *(c[keep] for c in cols), n_screened=n_screened)
-    return sink.result(n_screened)
+        return total, dtype, _top_k_merge(chunks(), int(top_k))
+    return total, dtype, chunks()
+
+
+def screen_transitions_fused(
+    options, model, max_gap, chunk_size, progress, feasible_only, pi, pc, top_k=None
+) -> Transitions:
+    """:func:`fused_chunks` collected into one :class:`Transitions` (arguments validated).
+
+    Args:
+      options, model, max_gap, chunk_size, progress, feasible_only: as
+        :func:`~jaxspline.engine.screen.screen_transitions`.
+      pi, pc: this process's index and the process count.
+      top_k: as :func:`~jaxspline.engine.screen.screen_transitions`.
+    Returns:
+      Transitions.
+    """
+    feasible_only = feasible_only or top_k is not None
+    total, dtype, chunks = fused_chunks(
+        options, model, max_gap, chunk_size, progress, feasible_only, pi, pc, top_k
+    )
+    return _collect(_Stream(total, dtype, top_k is None, chunks), feasible_only)

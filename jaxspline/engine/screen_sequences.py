@@ -20,7 +20,7 @@ summed value. Layout of the fused path (x64 on):
 * ONE compiled program per chunk forms every consecutive pair
   ``(seq[:, l - 1], seq[:, l])``, ``T = t_start[dst] - t_end[src]`` in float64 then
   cast to the table dtype (bit-identical to the host path), runs the per-channel
-  kernels through :func:`jaxspline.engine.screen._all_channels` (one call, so the
+  kernels through the model's pair function (:mod:`jaxspline.engine.screen_models`; one call, so the
   maneuver model stays swappable) and reduces to per-row outputs. Only the three
   [K] columns come back.
 * Repeated routes are found on the device by comparing every position with every
@@ -50,11 +50,11 @@ import numpy as np
 from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
-from jaxspline.engine.screen import _all_channels, _channel_limits, _mesh, _reach, screen_pairs
+from jaxspline.engine.options import RouteOptions, options_dtype
+from jaxspline.engine.screen import _mesh, screen_pairs
+from jaxspline.engine.screen_models import model_arrays, validate_model
 from jaxspline.kernels._batch import round_up
 from jaxspline.kernels._validate import check_positive
-from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 __all__ = ["screen_sequences"]
 
@@ -127,12 +127,13 @@ def _first_repeat_sorted(rid, pad, big):
 
 
 @functools.lru_cache(maxsize=16)
-def _sequence_program(reach, rows: int, length: int, mesh, repeats: str):
+def _sequence_program(pair, rows: int, length: int, mesh, repeats: str):
     """jit program screening one chunk of ``rows`` x ``length`` sequences (-1 padded).
 
     Per row: ``fail[p]`` = option p is not padding and (``scan_ok`` false, or its
     route occurs at an earlier position, or the transition p-1 -> p is infeasible:
-    T <= 0 or not reachable in exactly T on some channel). Returns ``(feasible
+    T <= 0 or infeasible under the maneuver model's pair function ``pair``, see
+    :mod:`jaxspline.engine.screen_models`). Returns ``(feasible
     bool [rows], first_fail int32 [rows] (-1: none), value float64 [rows])``. The
     value is summed left to right (a chain of adds, not a reduction XLA vectorizes
     per shape), so a row's value does not depend on the chunk, padding or sharding.
@@ -141,8 +142,8 @@ def _sequence_program(reach, rows: int, length: int, mesh, repeats: str):
     cand = NamedSharding(mesh, P("cand"))
     first_repeat = _first_repeat_pairwise if repeats == "pairwise" else _first_repeat_sorted
 
-    def run(tab, rate, accel, seq):
-        ea, er, sa, sr, te, ts, rid, scan_ok, value = tab
+    def run(table, params, aux, seq):
+        te, ts, rid, scan_ok, value = aux
         seq = jax.lax.with_sharding_constraint(seq, cand)
         pad = seq < 0
         s0 = jnp.where(pad, 0, seq)
@@ -150,8 +151,8 @@ def _sequence_program(reach, rows: int, length: int, mesh, repeats: str):
         pos = jnp.arange(length, dtype=jnp.int32)
         src, dst = s0[:, :-1], s0[:, 1:]
         live = ~pad[:, 1:]
-        T = jnp.where(live, ts[dst] - te[src], 0.0).astype(ea.dtype)
-        ok = _all_channels(reach, (ea, er, sa, sr), src, dst, T, rate, accel)[0]
+        T = jnp.where(live, ts[dst] - te[src], 0.0).astype(table[0].dtype)
+        ok = pair(table, params, src, dst, T)[0]
         step = jnp.min(jnp.where(live & ~ok, pos[1:], big), axis=1)
         scan = jnp.min(jnp.where(~pad & ~scan_ok[s0], pos, big), axis=1)
         first = jnp.minimum(jnp.minimum(step, scan), first_repeat(rid[s0], pad, big))
@@ -164,7 +165,7 @@ def _sequence_program(reach, rows: int, length: int, mesh, repeats: str):
 
 
 def screen_sequences(
-    options: RouteOptions, sequences, limits: AxisLimits, *, chunk_size: int = _CHUNK_TRANSITIONS
+    options: RouteOptions, sequences, model, *, chunk_size: int = _CHUNK_TRANSITIONS
 ):
     """Screen K whole candidate sequences at once.
 
@@ -172,8 +173,10 @@ def screen_sequences(
       options: RouteOptions (N options, C channels).
       sequences: int [K, L] option indices in time order, padded with -1 at the
         end of a row.
-      limits: AxisLimits (per channel, as in
-        :func:`~jaxspline.engine.screen.screen_transitions`).
+      model: the maneuver model, as in
+        :func:`~jaxspline.engine.screen.screen_transitions`: AxisLimits (per-channel
+        exact-T reach sets) or a :class:`~jaxspline.engine.models.SlewTable` (rest to
+        rest, tabulated eigen-axis or flexible slew with settling).
       chunk_size: transitions per compiled chunk (a chunk is
         ``max(1, chunk_size // (L - 1))`` rows; device memory ~ 100 bytes per
         transition).
@@ -183,24 +186,23 @@ def screen_sequences(
       ``first_fail`` is the position (0..L-1) of the first option that cannot be
       appended to the prefix before it — its ``scan_ok`` is False, its route
       already occurs in the prefix, or the transition from the previous option
-      fails (T <= 0 or not reachable in exactly T, SPEC section 1) — and -1 when
+      fails (T <= 0 or infeasible under the model in exactly T) — and -1 when
       the whole row is feasible. ``value`` is the summed option value of the row
       (whether or not it is feasible). An all-padding row is feasible with value 0.
 
     Raises:
-      ValueError: invalid options or limits, ``sequences`` not an int [K, L]
+      ValueError: invalid options or model, ``sequences`` not an int [K, L]
         array of indices in -1..N-1, -1 padding before an index in a row, or
         ``chunk_size`` not positive.
 
     With x64 on, the transitions are formed and screened on the device and only
     the [K] outputs come back (module docstring); with x64 off, the host path runs.
     """
-    c = validate_options(options)
-    validate_limits(limits)
+    validate_model(model, options)
     check_positive("chunk_size", chunk_size)
     seq = _validate_sequences(options, sequences)
     if jax.dtypes.canonicalize_dtype(np.float64) != np.float64:  # x64 off: T needs float64
-        return _screen_sequences_host(options, seq, limits)
+        return _screen_sequences_host(options, seq, model)
     kk, ll = seq.shape
     if kk == 0 or ll == 0:
         return np.ones(kk, bool), np.full(kk, -1, np.int64), np.zeros(kk, np.float64)
@@ -214,20 +216,19 @@ def screen_sequences(
         return jax.device_put(jnp.asarray(a, dt), rep)
 
     _, rid = np.unique(np.asarray(options.route), return_inverse=True)
-    tab = (
-        *(put(np.ascontiguousarray(np.asarray(getattr(options, f)).T), dtype)
-          for f in ("end_angle", "end_rate", "start_angle", "start_rate")),
+    pair, table, params = model_arrays(model, options, dtype)
+    table, params = tuple(put(x) for x in table), tuple(put(x) for x in params)
+    aux = (
         put(np.asarray(options.t_end, np.float64)),
         put(np.asarray(options.t_start, np.float64)),
         put(rid.reshape(-1).astype(np.int32)),
         put(np.asarray(options.scan_ok, bool)),
         put(np.asarray(options.value, np.float64)),
-    )  # fmt: skip
-    rate, accel = (put(x) for x in _channel_limits(limits, c, dtype))
+    )
     length = max(2, _bucket(ll))
     rows = round_up(_bucket(kk, max(1, int(chunk_size) // (length - 1))), ndev)
     repeats = "pairwise" if length <= _PAIRWISE_MAX_L else "sorted"
-    program = _sequence_program(_reach(), rows, length, mesh, repeats)
+    program = _sequence_program(pair, rows, length, mesh, repeats)
 
     feasible = np.empty(kk, bool)
     first = np.empty(kk, np.int64)
@@ -243,7 +244,7 @@ def screen_sequences(
         n = min(rows, kk - k0)
         chunk = np.full((rows, length), -1, np.int32)
         chunk[:n, :ll] = seq[k0 : k0 + n]
-        nxt = (k0, n, program(tab, rate, accel, jax.device_put(chunk, cand)))
+        nxt = (k0, n, program(table, params, aux, jax.device_put(chunk, cand)))
         if pending is not None:
             collect(pending)  # the devices screen chunk k0 meanwhile
         pending = nxt
@@ -251,7 +252,7 @@ def screen_sequences(
     return feasible, first, value
 
 
-def _screen_sequences_host(options: RouteOptions, seq: np.ndarray, limits: AxisLimits):
+def _screen_sequences_host(options: RouteOptions, seq: np.ndarray, model):
     """The host path (x64 off): numpy checks and :func:`screen_pairs` on the transitions.
 
     Arguments as :func:`screen_sequences`, already validated; the route repeats are
@@ -273,7 +274,7 @@ def _screen_sequences_host(options: RouteOptions, seq: np.ndarray, limits: AxisL
     if ll > 1:
         has = ~pad[:, 1:]
         rows, cols = np.nonzero(has)
-        tr = screen_pairs(options, limits, seq[rows, cols], seq[rows, cols + 1])
+        tr = screen_pairs(options, model, seq[rows, cols], seq[rows, cols + 1])
         bad_step[rows, cols + 1] = ~tr.feasible
     fail = (~scan_ok | repeat | bad_step) & ~pad
     first = np.where(fail.any(axis=1), np.argmax(fail, axis=1), -1)

@@ -17,6 +17,7 @@ import pytest
 
 from jaxspline.engine import screen, screen_fused
 from jaxspline.engine.options import RouteOptions, take_options
+from jaxspline.engine.screen_sequences import screen_sequences
 from jaxspline.kernels.limits import AxisLimits
 
 # ----------------------------------------------------------------------------
@@ -230,18 +231,18 @@ def test_screen_sequences_planted(reach_kernels):
             [i, j, other],  # repeated route at position 2 (and/or T <= 0)
         ]
     )
-    feas, first, value = screen.screen_sequences(opt, seqs, LIMITS)
+    feas, first, value = screen_sequences(opt, seqs, LIMITS)
     np.testing.assert_array_equal(feas, [True, False, False, True, True, False])
     np.testing.assert_array_equal(first, [-1, 1, 1, -1, -1, 2])
     np.testing.assert_allclose(value[0], opt.value[i] + opt.value[j])
     assert value[4] == 0
     opt2 = opt._replace(scan_ok=np.where(np.arange(len(opt.route)) == j, False, True))
-    feas, first, _ = screen.screen_sequences(opt2, seqs[:1], LIMITS)
+    feas, first, _ = screen_sequences(opt2, seqs[:1], LIMITS)
     assert not feas[0] and first[0] == 1
     # batch of random sequences vs a per-row reference built from brute_feasible
     n = len(opt.route)
     rows = np.sort(rng.integers(0, n, size=(40, 4)), axis=1)
-    feas, first, _ = screen.screen_sequences(opt, rows, LIMITS)
+    feas, first, _ = screen_sequences(opt, rows, LIMITS)
     for r, row in enumerate(rows):
         ref = -1
         for p in range(len(row)):
@@ -272,9 +273,9 @@ def test_value_errors(reach_kernels):
     with pytest.raises(ValueError, match="start_rate"):
         screen.screen_transitions(opt._replace(start_rate=opt.start_rate[:, :1]), LIMITS)
     with pytest.raises(ValueError, match="padding"):
-        screen.screen_sequences(opt, np.array([[0, -1, 1]]), LIMITS)
+        screen_sequences(opt, np.array([[0, -1, 1]]), LIMITS)
     with pytest.raises(ValueError, match="sequences"):
-        screen.screen_sequences(opt, np.array([[0, 99]]), LIMITS)
+        screen_sequences(opt, np.array([[0, 99]]), LIMITS)
 
 
 def test_empty_and_no_candidates(reach_kernels):
