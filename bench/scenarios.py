@@ -303,8 +303,9 @@ def screening_stream(n_routes: int, search: str) -> dict:
     """Screen and search in one pass, in a fresh process: time and peak RSS.
 
     ``search="greedy"``: every feasible row of :func:`jaxspline.screen_chunks` streams
-    into :func:`jaxspline.greedy`; ``"beam"``: the ``TOP_K`` best successors per option
-    stream into :func:`jaxspline.beam_search` (width ``BEAM_WIDTH``). Compile included.
+    into :func:`jaxspline.greedy`; ``"beam"``: the ``TOP_K`` feasible successors of
+    largest value density per option (``top_k_by="density"``) stream into
+    :func:`jaxspline.beam_search` (width ``BEAM_WIDTH``). Compile included.
     """
     import jax
 
@@ -317,7 +318,10 @@ def screening_stream(n_routes: int, search: str) -> dict:
 
         def chunks():
             top_k = TOP_K if search == "beam" else None
-            for c in js.screen_chunks(opts, limits, max_gap=MAX_GAP, top_k=top_k, progress=False):
+            stream = js.screen_chunks(
+                opts, limits, max_gap=MAX_GAP, top_k=top_k, top_k_by="density", progress=False
+            )
+            for c in stream:
                 counts["screened"] += int(c.n_screened)
                 counts["rows"] += int(c.src.size)
                 counts["chunks"] += 1

@@ -87,6 +87,9 @@ from jaxspline.engine.screen_models import (  # noqa: F401 (re-exported for the 
 )
 from jaxspline.kernels._validate import check_positive
 
+#: Scores a top-k screen can rank successors by.
+_TOP_K_BY = ("margin", "value", "density")
+
 __all__ = [
     "best_per_source",
     "Transitions",
@@ -159,7 +162,9 @@ class _Stream(NamedTuple):
     chunks: Iterator[Transitions]
 
 
-def _stream(options, model, max_gap, chunk_size, progress, feasible_only, top_k, pi, pc) -> _Stream:
+def _stream(
+    options, model, max_gap, chunk_size, progress, feasible_only, top_k, pi, pc, top_k_by="margin"
+) -> _Stream:
     """Validate the arguments eagerly and start the screen's chunk generator."""
     validate_options(options)
     validate_model(model, options)
@@ -168,6 +173,8 @@ def _stream(options, model, max_gap, chunk_size, progress, feasible_only, top_k,
         check_positive("max_gap", max_gap)
     if top_k is not None and not (isinstance(top_k, int | np.integer) and top_k >= 1):
         raise ValueError(f"top_k must be a positive int or None, got {top_k!r}")
+    if top_k_by not in _TOP_K_BY:
+        raise ValueError(f"top_k_by must be one of {_TOP_K_BY}, got {top_k_by!r}")
     chunk_size = int(chunk_size)
     pi = jax.process_index() if pi is None else int(pi)
     pc = jax.process_count() if pc is None else int(pc)
@@ -178,7 +185,7 @@ def _stream(options, model, max_gap, chunk_size, progress, feasible_only, top_k,
     if jax.dtypes.canonicalize_dtype(np.float64) == np.float64:  # x64 on (also in a context)
         from jaxspline.engine.screen_fused import fused_chunks
 
-        total, dtype, chunks = fused_chunks(*args, top_k=top_k)
+        total, dtype, chunks = fused_chunks(*args, top_k=top_k, top_k_by=top_k_by)
         return _Stream(total, dtype, top_k is None, chunks)
     from jaxspline.engine.screen_host import host_chunks
 
@@ -187,12 +194,26 @@ def _stream(options, model, max_gap, chunk_size, progress, feasible_only, top_k,
         rank = np.empty(len(options.t_start), np.int64)  # sources in t_start order, as fused
         rank[order] = np.arange(order.size)
         parts = ((rank[c.src], c[:-1], c.n_screened) for c in chunks)
-        chunks = _top_k_merge(parts, int(top_k))
+        chunks = _top_k_merge(parts, int(top_k), _top_k_score(options, top_k_by))
     return _Stream(total, dtype, False, chunks)
 
 
-def _top_k_merge(parts, k: int) -> Iterator[Transitions]:
-    """Per source, its ``k`` rows of largest margin, yielded once the source is final.
+def _top_k_score(options, top_k_by: str):
+    """The ranking score of feasible rows (the 7 Transitions columns): their margin, the
+    value of their destination option, or that value per second from the source's end
+    to the destination's end (see :func:`screen_transitions`)."""
+    if top_k_by == "margin":
+        return lambda cols: cols[4]
+    value = np.asarray(options.value, np.float64)
+    if top_k_by == "value":
+        return lambda cols: value[cols[1]]
+    t_end = np.asarray(options.t_end, np.float64)
+    return lambda cols: value[cols[1]] / (t_end[cols[1]] - t_end[cols[0]])
+
+
+def _top_k_merge(parts, k: int, score) -> Iterator[Transitions]:
+    """Per source, its ``k`` rows of largest ``score(cols)``, yielded once the source is
+    final (ties: earlier rows first).
 
     ``parts`` yields ``(key, cols, n_screened)``: ``key`` int [m] the source's time
     rank, non-decreasing over the whole stream, and ``cols`` the 7 feasible-row columns
@@ -208,12 +229,12 @@ def _top_k_merge(parts, k: int) -> Iterator[Transitions]:
         out = [c[:0] for c in cols]
         if key.size:
             done = key < key.max()
-            sel = best_per_source(key[done], cols[4][done], k)
+            sel = best_per_source(key[done], score(cols)[done], k)
             out = [c[done][sel] for c in cols]
             carry = key[~done], [c[~done] for c in cols]
         yield Transitions(*out, n_screened=int(n))
     if carry is not None:
-        sel = best_per_source(carry[0], carry[1][4], k)
+        sel = best_per_source(carry[0], score(carry[1]), k)
         yield Transitions(*(c[sel] for c in carry[1]), n_screened=0)
 
 
@@ -242,6 +263,7 @@ def screen_chunks(
     top_k: int | None = None,
     process_index: int | None = None,
     process_count: int | None = None,
+    top_k_by: str = "margin",
 ) -> Iterator[Transitions]:
     """Screen like :func:`screen_transitions`, yielding the result chunk by chunk.
 
@@ -256,8 +278,8 @@ def screen_chunks(
     argsort of ``t_start`` over the ``scan_ok`` options; within a source,
     destinations by ``(t_start, index)``. A source's rows may span consecutive
     chunks, and a chunk may hold no rows (its candidates all failed or were
-    filtered). With ``top_k``, each source's merged best rows (by decreasing margin)
-    are yielded exactly once, in one chunk, when the source is final; the last
+    filtered). With ``top_k``, each source's merged best rows (by decreasing
+    ``top_k_by`` score) are yielded exactly once, in one chunk, when the source is final; the last
     chunk may then carry rows with ``n_screened = 0``. With several processes, each
     yields its own chunks in this order.
 
@@ -274,7 +296,8 @@ def screen_chunks(
       progress: show a tqdm bar over candidates.
       feasible_only: yield only feasible rows (default True here).
       top_k: keep for every source only its ``top_k`` feasible successors of
-        largest margin (implies ``feasible_only``).
+        largest ``top_k_by`` score (implies ``feasible_only``).
+      top_k_by: ``"margin"``, ``"value"`` or ``"density"``, see :func:`screen_transitions`.
       process_index, process_count: multi-host split of chunks (defaults:
         ``jax.process_index()``, ``jax.process_count()``).
     Returns:
@@ -285,7 +308,7 @@ def screen_chunks(
     """
     stream = _stream(
         options, model, max_gap, chunk_size, progress, feasible_only, top_k,
-        process_index, process_count,
+        process_index, process_count, top_k_by,
     )  # fmt: skip
     return stream.chunks
 
@@ -301,6 +324,7 @@ def screen_transitions(
     process_index: int | None = None,
     process_count: int | None = None,
     top_k: int | None = None,
+    top_k_by: str = "margin",
 ) -> Transitions:
     """Screen every candidate transition between options of different routes.
 
@@ -329,15 +353,22 @@ def screen_transitions(
       process_index, process_count: multi-host split of chunks (defaults:
         ``jax.process_index()``, ``jax.process_count()``).
       top_k: keep for every source only its ``top_k`` feasible successors of
-        largest margin (implies ``feasible_only``). Selected per row of up to 256
+        largest ``top_k_by`` score (implies ``feasible_only``). Selected per row of up to 256
         destinations on the device and merged per source on the host, so memory
         is O(rows x top_k) instead of O(candidates). With several processes, each
         returns the best of its own chunks: merge the parts with
         :func:`best_per_source`.
+      top_k_by: the score ``top_k`` ranks feasible successors i -> j by:
+        ``"margin"`` (the reach margin: the most robust transitions), ``"value"``
+        (``value[j]``) or ``"density"`` (``value[j] / (t_end[j] - t_end[i])``, the
+        value per second of timeline the successor takes, transfer and imaging:
+        the score of :func:`~jaxspline.engine.sequence.greedy`, and the one to use
+        when a sequencer consumes the top-k rows; > 0 for every feasible pair).
+        Ties go to the earlier destination in ``(t_start, index)`` order.
 
     Returns:
       Transitions (numpy arrays), in the order (source by t_start, then
-      destination by t_start); with ``top_k``, per source by decreasing margin.
+      destination by t_start); with ``top_k``, per source by decreasing score.
       The collection of :func:`screen_chunks` with the same arguments.
     Raises:
       ValueError: an argument is invalid; names it and its value.
@@ -349,7 +380,7 @@ def screen_transitions(
     """
     stream = _stream(
         options, model, max_gap, chunk_size, progress, feasible_only, top_k,
-        process_index, process_count,
+        process_index, process_count, top_k_by,
     )  # fmt: skip
     return _collect(stream, feasible_only or top_k is not None)
 
@@ -506,4 +537,3 @@ def screen_pairs(options: RouteOptions, model, src, dst, *, chunk_size: int = 2*
         parts.append((s, d, T, feas, margin, effort, tmin))
     cols = [np.concatenate(col) for col in zip(*parts, strict=True)]
     return Transitions(*cols, n_screened=int(src.size))
-

@@ -24,7 +24,14 @@ from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
 from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
-from jaxspline.engine.screen import Transitions, _collect, _mesh, _Stream, _top_k_merge
+from jaxspline.engine.screen import (
+    Transitions,
+    _collect,
+    _mesh,
+    _Stream,
+    _top_k_merge,
+    _top_k_score,
+)
 from jaxspline.engine.screen_models import model_arrays
 from jaxspline.kernels._batch import padded_size, ragged_positions, round_up
 
@@ -164,9 +171,10 @@ def _row_top_k(score, k: int):
 
 
 @functools.lru_cache(maxsize=16)
-def _topk_program(rows: int, width: int, k: int):
+def _topk_program(rows: int, width: int, k: int, by: str):
     """jit program keeping, per row of one screened chunk, its ``k`` feasible slots of
-    largest margin (:func:`_row_top_k`; infeasible slots score -inf).
+    largest score ``by`` (margin, destination value or value density, see
+    ``screen_transitions``; :func:`_row_top_k`; infeasible slots score -inf).
 
     Returns ``(n_pairs, src position, dst, T, feasible, margin, effort, t_min)``, each
     [rows, k] except the scalar count; ``src position`` is the source's rank in the
@@ -174,12 +182,21 @@ def _topk_program(rows: int, width: int, k: int):
     than ``k`` feasible slots fills the rest with picks whose ``feasible`` is False.
     """
 
-    def run(order, row_k, row_d, keep, T, feasible, margin, effort, tmin):
-        score = jnp.where(feasible, margin, -jnp.inf)
+    def run(order, value, t_end, row_k, row_d, keep, T, feasible, margin, effort, tmin):
+        nv = order.shape[0]
+        if by == "margin":
+            score = jnp.where(feasible, margin, -jnp.inf)
+        else:  # the sorted table's value of every slot's destination
+            slot_d = jnp.minimum(row_d[:, None] + jnp.arange(width, dtype=row_d.dtype), nv - 1)
+            score = value[slot_d]
+            if by == "density":
+                span = t_end[slot_d] - t_end[row_k][:, None]
+                score = score / jnp.where(feasible, span, 1.0)
+            score = jnp.where(feasible, score, -jnp.inf)
         col, real = _row_top_k(score, k)
         k_pos = row_k
         d = row_d[:, None] + col
-        dst = order[jnp.minimum(d, order.shape[0] - 1)]
+        dst = order[jnp.minimum(d, nv - 1)]
         cols = [jnp.take_along_axis(x, col, axis=1) for x in (T, feasible, margin, effort, tmin)]
         cols[1] = cols[1] & real
         src_pos = jnp.broadcast_to(k_pos[:, None], col.shape)
@@ -221,7 +238,10 @@ def _runs(options: RouteOptions, max_gap) -> _Runs:
     return _Runs(order, lo, np.maximum(hi - lo, 0).astype(np.int64))
 
 
-def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, pi, pc, top_k=None):
+def fused_chunks(
+    options, model, max_gap, chunk_size, progress, feasible_only, pi, pc, top_k=None,
+    top_k_by="margin",
+):  # fmt: skip
     """Fused path of :func:`~jaxspline.engine.screen.screen_chunks` (arguments validated).
 
     The time-sorted option table (the model's fields, :func:`model_arrays`; padded to
@@ -232,7 +252,7 @@ def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, p
     planner's per-satellite screens can share them. Only the compacted rows come back.
 
     Args:
-      options, model, max_gap, chunk_size, progress, feasible_only, top_k: as
+      options, model, max_gap, chunk_size, progress, feasible_only, top_k, top_k_by: as
         :func:`~jaxspline.engine.screen.screen_transitions`.
       pi, pc: this process's index and the process count.
     Returns:
@@ -285,7 +305,11 @@ def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, p
     params = tuple(jax.device_put(jnp.asarray(a), rep) for a in params)
     program = _fused_program(pair, rows, width, mesh, np.dtype(dtype))
     if top_k is not None:
-        compact = _topk_program(rows, width, min(int(top_k), width))
+        topk = _topk_program(rows, width, min(int(top_k), width), top_k_by)
+        value = put(np.asarray(options.value, np.float64)[o])
+
+        def compact(order, rk, rd, *out):
+            return topk(order, value, tab[1], rk, rd, *out)
     else:
         compact = _compact_program(rows, width, bool(feasible_only))
     per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
@@ -323,7 +347,8 @@ def fused_chunks(options, model, max_gap, chunk_size, progress, feasible_only, p
             bar.close()
 
     if top_k is not None:
-        return total, dtype, _top_k_merge(chunks(), int(top_k))
+        score = _top_k_score(options, top_k_by)
+        return total, dtype, _top_k_merge(chunks(), int(top_k), score)
     return total, dtype, chunks()
 
 

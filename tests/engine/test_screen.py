@@ -665,3 +665,40 @@ def test_row_top_k_matches_a_stable_sort(k):
         if kk == score.shape[1]:  # the whole row: a set, in column order
             got, ref = sorted(got), sorted(ref)
         assert got == ref
+
+
+@pytest.mark.parametrize("by", ["value", "density"])
+@pytest.mark.parametrize("k, chunk", [(1, 512), (4, 8), (1000, 512)])
+def test_top_k_by_value_keeps_the_most_valuable_feasible_successors(k, chunk, by):
+    """top_k_by="value" / "density": per source, the k feasible successors j of largest
+    value[j] / value[j] per second (t_end[j] - t_end[i]) (ties: earlier destination), on
+    the fused path and on the host fallback (x64 off)."""
+    import jax
+
+    rng = np.random.default_rng(5)
+    opt = synthetic_options(rng, n_routes=40, per_route=5, horizon=900.0)
+    opt = opt._replace(value=np.round(rng.uniform(1, 5, len(opt.route))))  # many ties
+
+    def expected(full):
+        ts, te, val = (np.asarray(x, np.float64) for x in (opt.t_start, opt.t_end, opt.value))
+        out = {}
+        for s_ in np.unique(full.src):
+            d = full.dst[full.src == s_]
+            score = val[d] if by == "value" else val[d] / (te[d] - te[s_])
+            out[int(s_)] = d[np.lexsort((d, ts[d], -score))][:k].tolist()  # score desc, time
+        return out
+
+    def kept(best):
+        return {int(s_): best.dst[best.src == s_].tolist() for s_ in np.unique(best.src)}
+
+    full = screen.screen_transitions(opt, LIMITS, progress=False, feasible_only=True)
+    best = screen.screen_transitions(
+        opt, LIMITS, progress=False, chunk_size=chunk, top_k=k, top_k_by=by
+    )
+    assert kept(best) == expected(full) and best.feasible.all()
+    with jax.enable_x64(False):  # the host fallback screens in float32: compare with that
+        full32 = screen.screen_transitions(opt, LIMITS, progress=False, feasible_only=True)
+        host = screen.screen_transitions(opt, LIMITS, progress=False, top_k=k, top_k_by=by)
+    assert kept(host) == expected(full32)
+    with pytest.raises(ValueError, match="top_k_by"):
+        screen.screen_transitions(opt, LIMITS, progress=False, top_k=2, top_k_by="cost")
