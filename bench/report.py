@@ -105,8 +105,9 @@ def screening_table(sc) -> list[str]:
     the streamed screen + search."""
     lines = [
         "\n| routes | options | mode | candidates | feasible | rows returned | host cand/s | "
-        "fused cand/s | fused/host | ceiling cand/s | fused/ceiling | same rows as host |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "fused cand/s | fused/host | ceiling cand/s | fused/ceiling | same rows as host | "
+        "fused float32 cand/s |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for s in sc.get("speed", []):
         for m in s["modes"]:
@@ -117,7 +118,8 @@ def screening_table(sc) -> list[str]:
                 f"{m['n_screened']:.3g} | {'–' if feas is None else f'{feas:.0%}'} | "
                 f"{m['rows']:.3g} | {r['host']:.3g} | {r['fused']:.3g} | "
                 f"{m['fused_over_host']:.2f}× | {r['ceiling']:.3g} | "
-                f"{m['fused_over_ceiling']:.0%} | {m['identical_to_host']} |"
+                f"{m['fused_over_ceiling']:.0%} | {m['identical_to_host']} | "
+                f"{r.get('fused_float32', float('nan')):.3g} |"
             )
     lines += [
         "\n| routes | path | mode | candidates | rows returned | result MB | "

@@ -141,7 +141,8 @@ def screening_compare(n_routes: int, reps: int = 3, modes=tuple(MODES)) -> dict:
 
     Synthetic pass of ``n_routes`` routes (:func:`synthetic_options`), float64,
     ``MAX_GAP``; for each mode of ``MODES`` both paths run once to compile, then
-    ``reps`` rounds of (host, fused, ceiling). Rates are candidates screened per second
+    ``reps`` rounds of (host, fused, ceiling, fused on the float32 table: reported
+    apart, float64 is the default). Rates are candidates screened per second
     (median); ratios are of medians measured in the same rounds.
     """
     import jax
@@ -188,12 +189,15 @@ def _screening_compare(n_routes, reps, modes):
     import numpy as np
 
     opts, limits = synthetic_options(n_routes)
+    opts32 = _as_float32(opts)
     modes = [m for m in modes if _fits(opts, m, "host") is None]
     ceiling, n_ceil = _ceiling(opts, limits)
     jax.block_until_ready(ceiling())
     out = {"routes": n_routes, "options": int(np.shape(opts.t_start)[0]), "modes": []}
     for mode in modes:
-        times = {"host": [], "fused": [], "ceiling": []}
+        times = {"host": [], "fused": [], "ceiling": [], "fused_float32": []}
+        fused = _paths()["fused"]
+        _call(fused, opts32, limits, mode)  # compile the float32 programs
         first = {}
         res = {}
         for name, f in _paths().items():
@@ -214,11 +218,17 @@ def _screening_compare(n_routes, reps, modes):
             t0 = time.perf_counter()
             jax.block_until_ready(ceiling())
             times["ceiling"].append(time.perf_counter() - t0)
+            t0 = time.perf_counter()
+            r = _call(fused, opts32, limits, mode)
+            times["fused_float32"].append(time.perf_counter() - t0)
+            n32 = int(r.n_screened)
+            del r
         med = {k: statistics.median(v) for k, v in times.items()}
         rate = {
             "host": n / med["host"],
             "fused": n / med["fused"],
             "ceiling": n_ceil / med["ceiling"],
+            "fused_float32": n32 / med["fused_float32"],
         }
         out["modes"].append(
             {
@@ -238,6 +248,15 @@ def _screening_compare(n_routes, reps, modes):
             }
         )
     return out
+
+
+def _as_float32(opts):
+    """The option table with float32 angles, rates and times (the fused path then screens
+    in float32, T still formed in float64 first)."""
+    import numpy as np
+
+    f32 = ("t_start", "t_end", "start_angle", "start_rate", "end_angle", "end_rate", "value")
+    return opts._replace(**{f: np.asarray(getattr(opts, f), np.float32) for f in f32})
 
 
 def _same_rows(a, b) -> bool:
