@@ -95,26 +95,18 @@ def repeats(k: int, routes: int, lengths=(8, 20, 64, 128)) -> dict:
     import jax.numpy as jnp
 
     mod = importlib.import_module("jaxspline.engine.screen_sequences")
-    from jaxspline.engine.screen import _channel_limits, _mesh, _reach
+    from jaxspline.engine.screen import _mesh
 
     opts, limits = synthetic_options(routes)
-    dtype = jnp.float64
-    tab = (
-        *(jnp.asarray(np.asarray(getattr(opts, f)).T, dtype)
-          for f in ("end_angle", "end_rate", "start_angle", "start_rate")),
-        jnp.asarray(opts.t_end), jnp.asarray(opts.t_start),
-        jnp.asarray(np.unique(opts.route, return_inverse=True)[1].astype(np.int32)),
-        jnp.asarray(opts.scan_ok), jnp.asarray(opts.value),
-    )  # fmt: skip
-    rate, accel = _channel_limits(limits, 3, dtype)
+    pair, table, params, aux = mod._device_inputs(opts, limits, _mesh())
     res = {}
     for length in lengths:
         seq = jnp.asarray(plausible_sequences(opts, k, length).astype(np.int32))
         for how in ("pairwise", "sorted"):
-            prog = mod._sequence_program(_reach(), k, length, _mesh(), how)
-            jax.block_until_ready(prog(tab, rate, accel, seq))
+            prog = mod._sequence_program(pair, k, length, _mesh(), how)
+            jax.block_until_ready(prog(table, params, aux, seq))
             res[f"L={length} {how}"] = _median_time(
-                lambda p=prog, s=seq: jax.block_until_ready(p(tab, rate, accel, s))
+                lambda p=prog, s=seq: jax.block_until_ready(p(table, params, aux, s))
             )
     return res
 

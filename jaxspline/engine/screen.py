@@ -78,13 +78,7 @@ import numpy as np
 from jax.sharding import Mesh
 
 from jaxspline.engine.options import RouteOptions, validate_options
-from jaxspline.engine.screen_models import (  # noqa: F401 (re-exported for the engine's modules)
-    _all_channels,
-    _channel_limits,
-    _reach,
-    _ReachKernels,
-    validate_model,
-)
+from jaxspline.engine.screen_models import validate_model
 from jaxspline.kernels._validate import check_positive
 
 #: Scores a top-k screen can rank successors by.

@@ -164,6 +164,36 @@ def _sequence_program(pair, rows: int, length: int, mesh, repeats: str):
     return jax.jit(run)
 
 
+def _device_inputs(options: RouteOptions, model, mesh):
+    """The arguments of a :func:`_sequence_program`, replicated on ``mesh``'s devices.
+
+    Args:
+      options: RouteOptions (validated).
+      model: AxisLimits or SlewTable (validated).
+      mesh: the 1-D device mesh (``screen._mesh()``).
+    Returns:
+      ``(pair, table, params, aux)``: the model's pair function, its option columns and
+      parameters (:func:`~jaxspline.engine.screen_models.model_arrays`, in the options'
+      dtype) and ``aux = (t_end, t_start, dense route id, scan_ok, value)``, times and
+      values in float64.
+    """
+    rep = NamedSharding(mesh, P())
+
+    def put(a):
+        return jax.device_put(jnp.asarray(a), rep)
+
+    _, rid = np.unique(np.asarray(options.route), return_inverse=True)
+    pair, table, params = model_arrays(model, options, options_dtype(options))
+    aux = (
+        np.asarray(options.t_end, np.float64),
+        np.asarray(options.t_start, np.float64),
+        rid.reshape(-1).astype(np.int32),
+        np.asarray(options.scan_ok, bool),
+        np.asarray(options.value, np.float64),
+    )
+    return pair, tuple(map(put, table)), tuple(map(put, params)), tuple(map(put, aux))
+
+
 def screen_sequences(
     options: RouteOptions, sequences, model, *, chunk_size: int = _CHUNK_TRANSITIONS
 ):
@@ -206,25 +236,10 @@ def screen_sequences(
     kk, ll = seq.shape
     if kk == 0 or ll == 0:
         return np.ones(kk, bool), np.full(kk, -1, np.int64), np.zeros(kk, np.float64)
-    dtype = options_dtype(options)
     mesh = _mesh()
     ndev = mesh.devices.size
-    rep = NamedSharding(mesh, P())
     cand = NamedSharding(mesh, P("cand"))
-
-    def put(a, dt=None):
-        return jax.device_put(jnp.asarray(a, dt), rep)
-
-    _, rid = np.unique(np.asarray(options.route), return_inverse=True)
-    pair, table, params = model_arrays(model, options, dtype)
-    table, params = tuple(put(x) for x in table), tuple(put(x) for x in params)
-    aux = (
-        put(np.asarray(options.t_end, np.float64)),
-        put(np.asarray(options.t_start, np.float64)),
-        put(rid.reshape(-1).astype(np.int32)),
-        put(np.asarray(options.scan_ok, bool)),
-        put(np.asarray(options.value, np.float64)),
-    )
+    pair, table, params, aux = _device_inputs(options, model, mesh)
     length = max(2, _bucket(ll))
     rows = round_up(_bucket(kk, max(1, int(chunk_size) // (length - 1))), ndev)
     repeats = "pairwise" if length <= _PAIRWISE_MAX_L else "sorted"
