@@ -112,10 +112,10 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     import jax.numpy as jnp
     import numpy as np
 
-    from jaxspline.engine import screen_fused, screen_host
+    from jaxspline.engine import screen, screen_host
     from jaxspline.kernels._batch import ragged_positions
 
-    runs = screen_fused._runs(opts, MAX_GAP)
+    runs = screen._runs(opts, MAX_GAP)
     k, p = ragged_positions(runs.counts)
     src, dst = runs.order[k[:n]], runs.order[runs.lo[k[:n]] + p[:n]]
     keep = np.asarray(opts.route)[src] != np.asarray(opts.route)[dst]
@@ -159,12 +159,12 @@ def _fits(opts, mode: str, path: str = "host") -> dict | None:
     2 for the host path's ``feasible_only`` (masked parts plus their concatenation);
     the fused top-k screen keeps O(options x TOP_K) rows.
     """
-    from jaxspline.engine import screen_fused
+    from jaxspline.engine import screen
 
     feasible_only, top_k = MODES[mode]
     if top_k is not None and path == "fused":
         return None
-    n = int(screen_fused._runs(opts, MAX_GAP).counts.sum())
+    n = int(screen._runs(opts, MAX_GAP).counts.sum())
     factor = 2.0 if (feasible_only and path == "host") else 1.0
     need = n * 49 * factor / 1e6
     avail = _meminfo("MemAvailable")

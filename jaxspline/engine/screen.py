@@ -136,6 +136,32 @@ def _mesh():
     return Mesh(np.array(devs), ("cand",))
 
 
+class _Runs(NamedTuple):
+    """Candidate runs: the ``scan_ok`` options sorted by ``(t_start, index)``; source
+    position k's destinations are the sorted positions ``lo[k] .. lo[k] + counts[k] - 1``
+    (``t_end[src] < t_start[dst] <= t_end[src] + max_gap``)."""
+
+    order: np.ndarray
+    lo: np.ndarray
+    counts: np.ndarray
+
+
+def _runs(options: RouteOptions, max_gap) -> _Runs:
+    """The candidate runs of ``options`` (float64 times), shared by both screening paths."""
+    t_start = np.asarray(options.t_start, np.float64)
+    t_end = np.asarray(options.t_end, np.float64)
+    valid = np.flatnonzero(np.asarray(options.scan_ok, bool))
+    order = valid[np.argsort(t_start[valid], kind="stable")]
+    ts_sorted = t_start[order]
+    te_src = t_end[order]
+    lo = np.searchsorted(ts_sorted, te_src, side="right")
+    if max_gap is None:
+        hi = np.full_like(lo, order.size)
+    else:
+        hi = np.searchsorted(ts_sorted, te_src + float(max_gap), side="right")
+    return _Runs(order, lo, np.maximum(hi - lo, 0).astype(np.int64))
+
+
 # ----------------------------------------------------------------------------
 # public entry points
 # ----------------------------------------------------------------------------

@@ -1,13 +1,14 @@
 """The fused screening path (issue 9): pairs generated and rows compacted on the device.
 
-:func:`jaxspline.engine.screen.screen_transitions` runs :func:`screen_transitions_fused`
-when x64 is on (see that module's docstring for the layout). Each source's run of
-destinations is cut into rows of ``width`` slots; the time-sorted option table goes
-to the devices once, and chunk k costs its ``rows`` rows of the row table. One
-program screens a chunk with the model's pair function (the same one as the host
-path's ``screen_host._chunk_program``, :mod:`jaxspline.engine.screen_models`), a
-second compacts the kept rows to the front. :func:`fused_chunks` yields the
-compacted chunks one by one, with one chunk in flight on the devices.
+:func:`jaxspline.engine.screen.screen_chunks` (and so ``screen_transitions``) runs
+:func:`fused_chunks` when x64 is on (see that module's docstring for the layout).
+Each source's run of destinations is cut into rows of ``width`` slots; the
+time-sorted option table goes to the devices once, and chunk k costs its ``rows``
+rows of the row table. One program screens a chunk with the model's pair function
+(the same one as the host path's ``screen_host._chunk_program``,
+:mod:`jaxspline.engine.screen_models`), a second compacts the kept rows to the
+front. :func:`fused_chunks` yields the compacted chunks one by one, with one chunk
+in flight on the devices.
 
 Units: radians, seconds.
 """
@@ -15,7 +16,6 @@ Units: radians, seconds.
 from __future__ import annotations
 
 import functools
-from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -23,11 +23,12 @@ import numpy as np
 from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
+from jaxspline.engine.options import options_dtype
 from jaxspline.engine.screen import (
     Transitions,
     _collect,
     _mesh,
+    _runs,
     _Stream,
     _top_k_merge,
     _top_k_score,
@@ -194,12 +195,11 @@ def _topk_program(rows: int, width: int, k: int, by: str):
                 score = score / jnp.where(feasible, span, 1.0)
             score = jnp.where(feasible, score, -jnp.inf)
         col, real = _row_top_k(score, k)
-        k_pos = row_k
         d = row_d[:, None] + col
         dst = order[jnp.minimum(d, nv - 1)]
         cols = [jnp.take_along_axis(x, col, axis=1) for x in (T, feasible, margin, effort, tmin)]
         cols[1] = cols[1] & real
-        src_pos = jnp.broadcast_to(k_pos[:, None], col.shape)
+        src_pos = jnp.broadcast_to(row_k[:, None], col.shape)
         return keep.sum(dtype=jnp.int32), src_pos, dst, *cols
 
     return jax.jit(run)
@@ -212,30 +212,6 @@ def _bucket(n: int, maximum: int) -> int:
         return maximum
     p = 1 << (max(int(n), 1) - 1).bit_length()
     return min(maximum, round_up(n, max(1, p // 16)))
-
-
-class _Runs(NamedTuple):
-    """Candidate runs: valid options sorted by t_start; source k's destinations are
-    sorted positions ``lo[k] .. lo[k] + counts[k] - 1``."""
-
-    order: np.ndarray
-    lo: np.ndarray
-    counts: np.ndarray
-
-
-def _runs(options: RouteOptions, max_gap) -> _Runs:
-    t_start = np.asarray(options.t_start, np.float64)
-    t_end = np.asarray(options.t_end, np.float64)
-    valid = np.flatnonzero(np.asarray(options.scan_ok, bool))
-    order = valid[np.argsort(t_start[valid], kind="stable")]
-    ts_sorted = t_start[order]
-    te_src = t_end[order]
-    lo = np.searchsorted(ts_sorted, te_src, side="right")
-    if max_gap is None:
-        hi = np.full_like(lo, order.size)
-    else:
-        hi = np.searchsorted(ts_sorted, te_src + float(max_gap), side="right")
-    return _Runs(order, lo, np.maximum(hi - lo, 0).astype(np.int64))
 
 
 def fused_chunks(
@@ -261,7 +237,6 @@ def fused_chunks(
       chunk of this process in source order (with ``top_k``, the merged best rows
       of the sources that became final).
     """
-    validate_options(options)
     dtype = options_dtype(options)
     runs = _runs(options, max_gap)
     total = int(runs.counts.sum())

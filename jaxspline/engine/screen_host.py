@@ -23,7 +23,7 @@ from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
 from jaxspline.engine.options import RouteOptions, options_dtype, validate_options
-from jaxspline.engine.screen import Transitions, _mesh
+from jaxspline.engine.screen import Transitions, _mesh, _runs
 from jaxspline.engine.screen_models import model_arrays
 from jaxspline.kernels._batch import padded_size
 
@@ -116,16 +116,9 @@ def host_chunks(options, model, max_gap, chunk_size, progress, feasible_only, pi
     """
     screener = _Screener(options, model)
     route = np.asarray(options.route)
-    valid = np.flatnonzero(np.asarray(options.scan_ok, bool))
-    order = valid[np.argsort(screener.t_start[valid], kind="stable")]
+    order, lo, counts = _runs(options, max_gap)
     ts_sorted = screener.t_start[order]
     te_src = screener.t_end[order]
-    lo = np.searchsorted(ts_sorted, te_src, side="right")
-    if max_gap is None:
-        hi = np.full_like(lo, order.size)
-    else:
-        hi = np.searchsorted(ts_sorted, te_src + float(max_gap), side="right")
-    counts = np.maximum(hi - lo, 0).astype(np.int64)
     starts = np.concatenate([[0], np.cumsum(counts)])
     total = int(starts[-1])
     route_sorted = route[order]
