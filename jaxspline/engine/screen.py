@@ -79,6 +79,7 @@ from jax.sharding import Mesh
 
 from jaxspline.engine.options import RouteOptions, validate_options
 from jaxspline.engine.screen_models import validate_model
+from jaxspline.kernels._batch import ragged_positions
 from jaxspline.kernels._validate import check_positive
 
 #: Scores a top-k screen can rank successors by.
@@ -425,7 +426,7 @@ def best_per_source(src, margin, k: int) -> np.ndarray:
     order = np.lexsort((np.arange(src.size), -margin, src))
     s = src[order]
     first = np.r_[0, np.flatnonzero(s[1:] != s[:-1]) + 1]
-    rank = np.arange(s.size) - np.repeat(first, np.diff(np.r_[first, s.size]))
+    rank = ragged_positions(np.diff(np.r_[first, s.size]))[1]  # position in its source
     return order[rank < k]
 
 

@@ -51,6 +51,7 @@ from jaxspline.engine._transition_stream import (
     option_order,
 )
 from jaxspline.engine.options import RouteOptions
+from jaxspline.kernels._batch import ragged_positions
 
 __all__ = ["Plan", "greedy", "beam_search", "exact_plan", "path_bound", "plan_value"]
 
@@ -140,10 +141,8 @@ def _best_first(dpos, v, gid, keys, width):
     o = o[np.sort(first)]
     if width is not None and o.size:
         d = dpos[o]
-        idx = np.arange(d.size)
-        start = np.ones(d.size, bool)
-        start[1:] = d[1:] != d[:-1]
-        o = o[idx - np.maximum.accumulate(np.where(start, idx, 0)) < width]
+        start = np.flatnonzero(np.r_[True, d[1:] != d[:-1]])
+        o = o[ragged_positions(np.diff(np.r_[start, d.size]))[1] < width]
     return o
 
 
@@ -246,8 +245,7 @@ class _Search:
             a = b
 
     def _push_block(self, tab: _States, src, dst, first, cnt):
-        rep = np.repeat(np.arange(src.size), cnt)
-        slot = np.arange(rep.size) - np.repeat(np.cumsum(cnt) - cnt, cnt)
+        rep, slot = ragged_positions(cnt)
         st = first[rep] + slot
         d = dst[rep]
         v = tab.v[st] + self.value[d]
