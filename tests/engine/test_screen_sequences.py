@@ -25,26 +25,9 @@ seqmod = importlib.import_module("jaxspline.engine.screen_sequences")
 
 
 def reference_screen_sequences(options, sequences, limits):
-    """The implementation before the fused path (numpy checks + screen_pairs), verbatim."""
-    seq = np.asarray(sequences)
-    kk, ll = seq.shape
-    pad = seq < 0
-    s0 = np.where(pad, 0, seq)
-    scan_ok = np.asarray(options.scan_ok, bool)[s0] | pad
-    route = np.asarray(options.route)[s0]
-    same = (route[:, :, None] == route[:, None, :]) & ~pad[:, :, None] & ~pad[:, None, :]
-    earlier = np.tril(np.ones((ll, ll), bool), k=-1)
-    repeat = (same & earlier[None]).any(axis=2)
-    bad_step = np.zeros((kk, ll), bool)
-    if ll > 1:
-        has = ~pad[:, 1:]
-        rows, cols = np.nonzero(has)
-        tr = screen.screen_pairs(options, limits, seq[rows, cols], seq[rows, cols + 1])
-        bad_step[rows, cols + 1] = ~tr.feasible
-    fail = (~scan_ok | repeat | bad_step) & ~pad
-    first = np.where(fail.any(axis=1), np.argmax(fail, axis=1), -1)
-    value = np.where(pad, 0.0, np.asarray(options.value, float)[s0]).sum(axis=1)
-    return first < 0, first.astype(np.int64), value
+    """The implementation before the fused path: the module's host path (numpy checks
+    and ``screen_pairs`` per transition), the one x64-off calls run."""
+    return seqmod._screen_sequences_host(options, np.asarray(sequences), limits)
 
 
 def brute_force(options, sequences, limits):
