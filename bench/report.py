@@ -100,15 +100,19 @@ def table(report) -> str:
     return "\n".join(lines)
 
 
+def _header(*cols: str) -> list[str]:
+    """A markdown table's header and separator lines (after a blank line)."""
+    return ["\n| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]
+
+
 def screening_table(sc) -> list[str]:
     """Markdown rows: speed (host vs fused vs ceiling, same run), peak RSS per call, and
     the streamed screen + search."""
-    lines = [
-        "\n| routes | options | mode | candidates | feasible | rows returned | host cand/s | "
-        "fused cand/s | fused/host | ceiling cand/s | fused/ceiling | same rows as host | "
-        "fused float32 cand/s |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
-    ]
+    lines = _header(
+        "routes", "options", "mode", "candidates", "feasible", "rows returned", "host cand/s",
+        "fused cand/s", "fused/host", "ceiling cand/s", "fused/ceiling", "same rows as host",
+        "fused float32 cand/s",
+    )  # fmt: skip
     for s in sc.get("speed", []):
         for m in s["modes"]:
             r = m["rate"]
@@ -121,11 +125,10 @@ def screening_table(sc) -> list[str]:
                 f"{m['fused_over_ceiling']:.0%} | {m['identical_to_host']} | "
                 f"{r.get('fused_float32', float('nan')):.3g} |"
             )
-    lines += [
-        "\n| routes | path | mode | candidates | rows returned | result MB | "
-        "RSS before MB | peak RSS MB | s (incl. compile) |",
-        "|---|---|---|---|---|---|---|---|---|",
-    ]
+    lines += _header(
+        "routes", "path", "mode", "candidates", "rows returned", "result MB", "RSS before MB",
+        "peak RSS MB", "s (incl. compile)",
+    )  # fmt: skip
     for m in sc.get("rss", []):
         head = f"| {m['routes']} | {m['path']} | {m['mode']} |"
         if "skipped" in m:
@@ -138,11 +141,10 @@ def screening_table(sc) -> list[str]:
                 f"{m['rss_before_MB']:.0f} | {m['peak_MB']:.0f} | "
                 f"{m['seconds_incl_compile']:.1f} |"
             )
-    lines += [
-        "\n| routes | screen -> search | candidates | rows streamed | plan options | value | "
-        "RSS before MB | peak RSS MB | s (incl. compile) | cand/s |",
-        "|---|---|---|---|---|---|---|---|---|---|",
-    ]
+    lines += _header(
+        "routes", "screen -> search", "candidates", "rows streamed", "plan options", "value",
+        "RSS before MB", "peak RSS MB", "s (incl. compile)", "cand/s",
+    )  # fmt: skip
     for m in sc.get("stream", []):
         what = "all feasible -> greedy" if m["search"] == "greedy" else "top-k -> beam"
         if "error" in m:
