@@ -29,8 +29,18 @@ import time
 from pathlib import Path
 
 from jaxspline.engine._io import refuse_overwrite
+from jaxspline.engine.search.clock import catch_signals
 
-__all__ = ["AEM_STEP_S", "ATTITUDE_FIGURE", "OUTPUT_FILES", "register", "run_plan"]
+__all__ = [
+    "AEM_STEP_S",
+    "ATTITUDE_FIGURE",
+    "EXIT_INTERRUPTED",
+    "OUTPUT_FILES",
+    "register",
+    "run_plan",
+]
+
+EXIT_INTERRUPTED = 130  # exit code after Ctrl-C / SIGTERM (128 + SIGINT, the shell convention)
 
 # AEM sample step of the plan command [s]: ccsds-ndm serializes ~2,000 states/s, so
 # 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
@@ -67,6 +77,14 @@ def register(sub) -> None:
     )
     p.add_argument("--seed", type=int, default=0, help="search seed (default 0)")
     p.add_argument(
+        "--max-iters",
+        type=int,
+        default=None,
+        metavar="N",
+        help="cap the search at N LNS iterations (N/10 Lagrangian): the run ignores the "
+        "clock inside the search and gives the same plan every time (default: time-bound)",
+    )
+    p.add_argument(
         "--certify",
         type=float,
         default=0.0,
@@ -99,12 +117,15 @@ def _main(args) -> int:
         force=args.force,
         time_limit=args.time_limit,
         seed=args.seed,
+        max_iters=args.max_iters,
         certify=args.certify,
         plots=not args.no_plots,
         progress=not args.quiet,
         aem=args.aem,
         aem_step=args.aem_step,
     )
+    if result.report.get("interrupted"):
+        return EXIT_INTERRUPTED
     return 0 if result.report["valid"] else 1
 
 
@@ -115,6 +136,7 @@ def run_plan(
     force: bool = False,
     time_limit: float | None = None,
     seed: int = 0,
+    max_iters: int | None = None,
     certify: float = 0.0,
     plots: bool = True,
     progress: bool = True,
@@ -131,6 +153,7 @@ def run_plan(
       force: overwrite existing outputs.
       time_limit: wall-clock budget of the planner [s]; None: the scenario default.
       seed: int, seed of the randomized search.
+      max_iters: iteration cap of the search (reproducible plans); None: time-bound.
       certify: extra seconds after the time limit for a tighter certificate (0: none).
       plots: write the PNG figures.
       progress: show progress bars.
@@ -142,8 +165,7 @@ def run_plan(
       FileExistsError: an output exists and ``force`` is false.
       ValueError: a bad scenario file (naming the field).
     """
-    from jaxspline.aem import aem_file_name, write_aems
-    from jaxspline.engine.attitude_history import attitude_history
+    from jaxspline.aem import aem_file_name
     from jaxspline.engine.mission import Scenario
     from jaxspline.engine.planner import plan
     from jaxspline.scenario import default_scenario, load_scenario
@@ -160,10 +182,35 @@ def run_plan(
         names += (ATTITUDE_FIGURE,) * plots + tuple(aem_file_name(s.name) for s in sc.satellites)
     for name in names:  # fail before planning, not after
         refuse_overwrite(out / name, force)
+    if max_iters is not None and (isinstance(max_iters, bool) or int(max_iters) < 1):
+        raise ValueError(f"max_iters must be an integer >= 1, got {max_iters!r}")
     # with --aem the flown joins are checked: the AEM files never exceed a limit
     result = plan(
-        sc, time_limit=time_limit, seed=seed, progress=progress, certify=certify, flown_joins=aem
+        sc,
+        time_limit=time_limit,
+        seed=seed,
+        progress=progress,
+        max_iters=max_iters,
+        certify=certify,
+        flown_joins=aem,
     )
+    with catch_signals() as late:  # signals wait: every output is written whole
+        _write_outputs(result, sc, out, names, force, plots, aem, aem_step)
+    if late["signal"] and not result.report.get("interrupted"):
+        result.report["interrupted"] = late["signal"]
+    if result.report.get("interrupted"):
+        print(
+            f"jaxspline: interrupted ({result.report['interrupted']}): the best plan found "
+            f"so far was checked and written to {out}/",
+            file=sys.stderr,
+        )
+    return result
+
+
+def _write_outputs(result, sc, out, names, force, plots, aem, aem_step):
+    from jaxspline.aem import write_aems
+    from jaxspline.engine.attitude_history import attitude_history
+
     if sc.areas:  # covered fraction per area, into plan.json's report
         from jaxspline.areas import area_coverage
 
@@ -191,7 +238,6 @@ def run_plan(
 
             plot_attitude_profile(result, attitude, out / ATTITUDE_FIGURE)
     _print_summary(result, out, names)
-    return result
 
 
 def _print_summary(r, out: Path, names) -> None:
@@ -206,7 +252,9 @@ def _print_summary(r, out: Path, names) -> None:
         f"{s['value']:g} of {s['total_value']:g}",
         f"bound         {s['bound']:.6g} ({st['bound_status']}); gap {s['gap']:.6g} "
         f"({100 * s['gap'] / max(s['bound'], 1e-300):.2f} % of the bound)",
-        f"check         {'valid' if s['valid'] else 'INVALID'} ({r.report['dropped']} dropped)",
+        f"check         {'valid' if s['valid'] else 'INVALID'} (dropped: "
+        + ", ".join(f"{n} {why}" for why, n in r.report["dropped"].items())
+        + ")",
         "wall time [s]  " + ", ".join(f"{k} {v:.2f}" for k, v in r.timings.items()),
         f"outputs       {out}/ ({', '.join(names)})",
     ]

@@ -18,7 +18,10 @@ every constraint of the scenario *without* margins from the kernels:
 * battery: the conservative profile (:class:`jaxspline.engine.search.BatteryModel`) with
   margin 0 stays >= 0.
 
-Failing observations are reported by index.
+Failing observations are reported by index, each with the reason it fails: one
+observation per violated rule (the later observation of a failing transition, the
+first observation a battery overdraw follows), so dropping them never takes more
+than the violations.
 """
 
 from __future__ import annotations
@@ -56,16 +59,17 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
       (bad, details): the sorted option ids that fail, and a dict with the
       per-observation required maneuver time and slack [s] (exact kernels), the
       battery profile and minimum of every powered satellite that has observations,
-      the human-readable violations and the checked order.
+      the human-readable violations, the checked order and ``reasons`` (option id ->
+      "geometry", "timing", "repeat", "maneuver" or "battery", the first rule it broke).
     """
     o = opp.options
     chosen = np.asarray(sorted(chosen, key=lambda c: (o.sat[c], o.t_start[c])), np.int64)
     n = chosen.size
-    viol, bad = [], set()
+    viol, bad = [], {}
     man = np.zeros(n)
     slack = np.zeros(n)
     if n == 0:
-        empty = {"maneuver": man, "slack": slack, "violations": viol}
+        empty = {"maneuver": man, "slack": slack, "violations": viol, "reasons": {}}
         return [], {**empty, "battery_min": {}, "battery": {}, "order": chosen}
     sat, tgt = o.sat[chosen], o.route[chosen]
     t0, t1 = o.t_start[chosen], o.t_end[chosen]
@@ -89,18 +93,18 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
         & ((tg.sensor[tgt] == "") | (tg.sensor[tgt] == sensors[sat]))
     )
     for i in np.flatnonzero(~(geo_ok & time_ok)):
-        bad.add(int(chosen[i]))
+        bad.setdefault(int(chosen[i]), "geometry")
         viol.append(f"{sc.satellites[sat[i]].name} {tg.name[tgt[i]]}: geometry / window")
     mid = 0.5 * (t0 + t1)
     mid_ok = (mid >= tg.mid_lo[tgt] - _TIME_TOL) & (mid <= tg.mid_hi[tgt] + _TIME_TOL)
     for i in np.flatnonzero(~mid_ok):
-        bad.add(int(chosen[i]))
+        bad.setdefault(int(chosen[i]), "timing")
         viol.append(
             f"{sc.satellites[sat[i]].name} {tg.name[tgt[i]]}: imaging midpoint {mid[i]:.3f} s "
             f"outside the desired time window [{tg.mid_lo[tgt[i]]:g}, {tg.mid_hi[tgt[i]]:g}] s"
         )
     for i in np.flatnonzero(t1 - t0 < tg.min_duration[tgt] - _TIME_TOL):
-        bad.add(int(chosen[i]))
+        bad.setdefault(int(chosen[i]), "timing")
         viol.append(
             f"{sc.satellites[sat[i]].name} {tg.name[tgt[i]]}: imaging time "
             f"{t1[i] - t0[i]:.3f} s < min_duration {tg.min_duration[tgt[i]]:g} s"
@@ -108,6 +112,9 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
     dup = np.unique(tgt, return_counts=True)
     for r in dup[0][dup[1] > 1]:
         viol.append(f"target {tg.name[r]} imaged more than once")
+        again = np.flatnonzero(tgt == r)
+        for i in again[np.argsort(t0[again], kind="stable")][1:]:  # keep the earliest
+            bad.setdefault(int(chosen[i]), "repeat")
     # --- maneuvers
     first = np.ones(n, bool)
     first[1:] = sat[1:] != sat[:-1]
@@ -124,7 +131,7 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
             need = slew_time(s, th)
             man[m], slack[m] = need, gap[m] - need
             for i in m[gap[m] < need]:
-                bad.add(int(chosen[i]))
+                bad.setdefault(int(chosen[i]), "maneuver")
                 viol.append(
                     f"{s.name} {tg.name[tgt[i]]}: maneuver {man[i]:.3f} s > gap {gap[i]:.3f} s"
                 )
@@ -144,7 +151,9 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
             if not rep.ok:
                 for v in rep.violations:
                     viol.append(f"{s.name}: {v}")
-                bad.update(int(c) for c in chosen[m])
+                # step 0 of ``rest`` is the rest state before the first observation
+                for step in rep.bad_steps:
+                    bad.setdefault(int(chosen[m[max(step - 1, 0)]]), "maneuver")
             size = round_up(m.size, _PAD)  # few compiled shapes across checks
             frm_a = np.where(first[m, None], 0.0, o.end_angle[prev[m]])
             frm_b = np.where(first[m, None], 0.0, o.end_rate[prev[m]])
@@ -161,7 +170,7 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
                 kv = int(np.argmax(lev < 0.0))
                 before = m[t0[m] <= kv * battery.dt]
                 i = before[-1] if before.size else m[0]
-                bad.add(int(chosen[i]))
+                bad.setdefault(int(chosen[i]), "battery")
                 viol.append(f"{s.name}: battery below 0 Wh at t = {kv * battery.dt:.0f} s")
     details = {
         "maneuver": man,
@@ -170,5 +179,6 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
         "battery_min": bat_min,
         "battery": levels,
         "order": chosen,
+        "reasons": bad,
     }
     return sorted(bad), details

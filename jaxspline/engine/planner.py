@@ -13,8 +13,13 @@ process-wide setting is left alone):
    gap through the satellite's maneuver model (:mod:`jaxspline.engine.models`);
 5. **search** - greedy, Lagrangian/DP bound, exact search on tiny instances, LNS
    (:mod:`jaxspline.engine.search`) until the time limit;
-6. **check** - an independent re-check without margins (:mod:`jaxspline.engine.plan_check`);
-   failing observations are dropped, so the returned plan is valid under it.
+6. **repair** - start-time refinement, an independent re-check without margins
+   (:mod:`jaxspline.engine.plan_check`), the flown joins and refills as one loop
+   (:mod:`jaxspline.engine.repair`): failing observations are dropped, one per
+   violation, so the returned plan is valid under every check that ran.
+
+Ctrl-C or SIGTERM during stages 5-6 stops the search: the best plan so far goes
+through the repair and is returned with ``report["interrupted"]`` set.
 """
 
 from __future__ import annotations
@@ -42,12 +47,11 @@ from jaxspline.engine.models import (
 )
 from jaxspline.engine.opportunities import build_opportunities, nadir_rate, reference_points
 from jaxspline.engine.options import take_options
-from jaxspline.engine.plan_check import check_plan
-from jaxspline.engine.plan_joins import reject_unflyable
-from jaxspline.engine.refine_starts import refine_starts
+from jaxspline.engine.repair import repair
 from jaxspline.engine.result import Observations, PlanResult
 from jaxspline.engine.screen import screen_transitions
-from jaxspline.engine.search import BatteryModel, Problem, greedy, mip_bound, solve
+from jaxspline.engine.search import BatteryModel, Problem, mip_bound, solve
+from jaxspline.engine.search import clock as search_clock
 from jaxspline.geometry.frames import gmst, in_shadow, jd_split, sun_direction
 from jaxspline.geometry.orbit import tabulate_orbits
 from jaxspline.geometry.pointing import Scene
@@ -62,9 +66,7 @@ _REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold 
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
-_MAX_DROP_ROUNDS = 10  # re-check rounds before giving up on a plan
-_REFILL_ROUNDS = 2  # join rejections followed by a greedy refill (later rounds only drop)
-_REFILL_S = 2.0  # [s] budget of one refill
+_REFILL_S = 2.0  # [s] budget of one refill after join rejections
 
 
 class _Clock:
@@ -78,6 +80,7 @@ class _Clock:
         self.timings = {}
         self.bar = None
         self.bar_t0 = self.t0
+        self.interrupted = None  # name of the signal that stopped the search
 
     def lap(self, stage: str, msg: str = ""):
         now = time.monotonic()
@@ -133,7 +136,9 @@ def plan(
       seed: random seed of the search (runs are deterministic for a seed and
         ``max_iters``; a time limit only truncates the search).
       progress: stage lines on stderr.
-      max_iters: optional cap on search iterations (reproducible runs).
+      max_iters: optional cap on search iterations: the search and the refills then
+        run to their caps whatever the clock says, and the plan is identical on every
+        run (``time_limit`` only sizes the reserved shares; Ctrl-C still stops).
       certify: extra seconds, after the time limit, for a tighter certificate: the
         candidate model solved as a 0/1 program by HiGHS
         (:func:`jaxspline.engine.search.mip_bound`, needs scipy); the reported bound is the
@@ -343,27 +348,29 @@ def build_problem(
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
 
-def _refill(tl, chosen, rejected):
-    """Drop the observations whose joins failed and fill the freed time greedily.
+def _search(pb, deadline, seed, max_iters, pc, clock):
+    """Stage 5 with a progress bar over the search budget."""
+    clock.bar = clock.search_bar(deadline - time.monotonic())
+    clock.bar_t0 = time.monotonic()
+    try:
+        return solve(
+            pb,
+            deadline,
+            seed=seed,
+            lagrangian_share=pc.lagrangian_share,
+            exact_max_options=pc.exact_max_options,
+            max_iters=max_iters,
+            report=clock.say,
+        )
+    finally:
+        if clock.bar is not None:
+            clock.bar.close()
+        clock.bar = None
 
-    The rejected options are withdrawn from their tasks for good, so the refill cannot
-    bring the same join back; everything the refill adds is checked again by the
-    caller (maneuvers, battery, joins). Returns (option ids of the plan, refilled count).
-    """
-    pb = tl.pb
-    for c in rejected:
-        cands = pb.task_cands[pb.c_task[c]]
-        if c in cands:
-            cands.remove(c)
-    gone = set(rejected)
-    kept = [c for c in chosen if c not in gone]
-    assigned = [-1] * len(pb.weight)
-    for c in kept:
-        assigned[pb.c_task[c]] = c
-    tl.restore(assigned)
-    greedy(tl, time.monotonic() + _REFILL_S)
-    new = [c for c in tl.assigned if c >= 0]
-    return new, len(new) - len(kept)
+
+def _dropped_line(dropped: dict) -> str:
+    """'1 check, 0 battery, 36 joins' from the per-reason drop counts."""
+    return ", ".join(f"{n} {reason}" for reason, n in dropped.items())
 
 
 def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
@@ -376,67 +383,46 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     tg = sc.targets
     prep = build_problem(sc, joins=flown_joins, _clock=clock)
     pb, opp, windows, scene, table, battery, far = prep
-    o = opp.options
-    clock.bar = clock.search_bar(deadline - reserve - time.monotonic())
-    clock.bar_t0 = time.monotonic()
-    try:
-        res = solve(
-            pb,
-            deadline - reserve,
-            seed=seed,
-            lagrangian_share=pc.lagrangian_share,
-            exact_max_options=pc.exact_max_options,
-            max_iters=max_iters,
+    search_clock.clear_stop()
+
+    def stopping(name):
+        search_clock.request_stop()
+        clock.say(
+            "stop",
+            f"{name}: stopping the search; the best plan so far is checked "
+            "and returned (Ctrl-C again to abort)",
+        )
+
+    with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
+        res = _search(pb, deadline - reserve, seed, max_iters, pc, clock)
+        tl = res.timeline
+        clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
+        steps = int(pc.refine_steps) if refining else 0
+        left = deadline - time.monotonic()
+        if steps and max_iters is None and left < _REFINE_MIN_S:
+            steps = 0
+            clock.say("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
+        rep = repair(
+            sc,
+            scene,
+            table.usable,
+            opp,
+            tl,
+            battery,
+            refine_steps=steps,
+            flown_joins=flown_joins,
+            refill_s=math.inf if max_iters is not None else _REFILL_S,
             report=clock.say,
         )
-    finally:
-        if clock.bar is not None:
-            clock.bar.close()
-        clock.bar = None
-    tl = res.timeline
-    clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
-    chosen = [c for c in tl.assigned if c >= 0]
-    refined, det = {}, None
-    left = deadline - time.monotonic()
-    if refining and left < _REFINE_MIN_S:
-        refining = False
-        clock.lap("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
-    if refining:
-        opp_r, refined = refine_starts(sc, scene, opp, chosen, int(pc.refine_steps))
-        kept = False
-        if opp_r is not opp:
-            bad, det = check_plan(sc, scene, table.usable, opp_r, chosen, battery)
-            kept = not bad
-            if kept:
-                opp, o = opp_r, opp_r.options
-            else:
-                det = None
-        for v in refined.values():
-            v["kept"] = kept
-        clock.lap("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
-    dropped, rejected, joins, refilled = 0, [], {}, 0
-    for rnd in range(_MAX_DROP_ROUNDS):
-        if det is None:
-            bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
-        if not bad and flown_joins:  # the flown profile: degree-7 joins within the limits
-            bad, joins = reject_unflyable(sc, scene, opp, chosen)
-            rejected += bad
-            if bad and rnd < _REFILL_ROUNDS:
-                chosen, gain = _refill(tl, chosen, bad)
-                refilled += gain
-                det = None
-                continue
-        if not bad:
-            break
-        dropped += len(bad)
-        drop = set(bad)
-        chosen = [c for c in chosen if c not in drop]
-        det = None
-    else:
-        chosen = []
-        bad, det = check_plan(sc, scene, table.usable, opp, chosen, battery)
-    flown = f" ({len(rejected)} for their joins, {refilled} refilled)" if flown_joins else ""
-    clock.lap("check", f"{len(chosen)} observations valid, {dropped} dropped{flown}")
+    search_clock.clear_stop()
+    clock.interrupted = stop["signal"]
+    chosen, opp, det, refined = rep.chosen, rep.opp, rep.details, rep.refined
+    o = opp.options
+    clock.lap(
+        "repair",
+        f"{len(chosen)} observations valid, dropped {_dropped_line(rep.dropped)}"
+        + (f", {rep.refilled} refilled" if flown_joins else ""),
+    )
     idx = np.asarray(det["order"], np.int64)
     obs = Observations(
         sat=np.asarray(o.sat)[idx],
@@ -471,13 +457,18 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     report = {
         "valid": not det["violations"],
         "checked": len(obs),
-        "dropped": dropped,
+        "dropped": rep.dropped,
+        "dropped_total": sum(rep.dropped.values()),
+        "violations_found": rep.violations,
+        "repair_rounds": rep.rounds,
         "violations": det["violations"],
         "min_slack_s": float(obs.slack.min()) if len(obs) else None,
         "min_battery_wh": det["battery_min"],
     }
     if flown_joins:
-        report["joins"] = {**joins, "rejected": len(rejected), "refilled": refilled}
+        report["joins"] = {**rep.joins, "rejected": rep.dropped["joins"], "refilled": rep.refilled}
+    if clock.interrupted:
+        report["interrupted"] = clock.interrupted
     stats = {
         "windows": len(windows),
         "options": len(opp),

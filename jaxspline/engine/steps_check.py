@@ -47,12 +47,18 @@ class StepsReport(NamedTuple):
         scan boundary states, per channel.
       peak_accel: [C] largest |accel| [rad/s^2] over all maneuvers (max of the
         returned accelerations and the finite-difference slopes of the rate).
+      bad_steps: sorted indices of the steps to blame, one per failing rule: the later
+        step of a failing transition ``k -> k + 1`` (``k + 1``), the step itself for a
+        step rule (scan, window, boundary rate), the repeats of a route after its
+        first step. Dropping them leaves a plan whose remaining transitions are new
+        and need a re-check.
     """
 
     ok: bool
     violations: list[str]
     peak_rate: np.ndarray
     peak_accel: np.ndarray
+    bad_steps: tuple[int, ...] = ()
 
 
 def _transfer(a1, b1, a2, b2, T, limits, t):
@@ -103,17 +109,20 @@ def check_steps(
     sa, sr = np.asarray(steps.start_angle, np.float64), np.asarray(steps.start_rate, np.float64)
     ea, er = np.asarray(steps.end_angle, np.float64), np.asarray(steps.end_rate, np.float64)
     v: list[str] = []
+    blame: set[int] = set()
     peak_rate = np.zeros(c)
     peak_accel = np.zeros(c)
 
     # plan rules
     for k in np.flatnonzero(~np.asarray(steps.scan_ok, bool)):
         v.append(f"step {k} (route {route[k]}): scan_ok is False")
+        blame.add(int(k))
     _, first, counts = np.unique(route, return_index=True, return_counts=True)
     for r_first, cnt in zip(first, counts, strict=True):
         if cnt > 1:
             at = np.flatnonzero(route == route[r_first]).tolist()
             v.append(f"route {route[r_first]} imaged {cnt} times (steps {at})")
+            blame.update(at[1:])
     if windows is not None:
         lo_w, hi_w = (np.broadcast_to(np.asarray(w, np.float64), (k_steps,)) for w in windows)
         tol_t = rtol * (1.0 + np.abs(ts))
@@ -122,18 +131,22 @@ def check_steps(
                 f"step {k} (route {route[k]}): start {ts[k]!r} s outside window "
                 f"[{lo_w[k]!r}, {hi_w[k]!r}]"
             )
+            blame.add(int(k))
     # scan boundary states within the rate bound
     for name, x in (("start_rate", sr), ("end_rate", er)):
         peak_rate = np.maximum(peak_rate, np.abs(x).max(axis=0, initial=0.0))
         bad = np.abs(x) > rate * (1.0 + rtol)
         for k, ch in zip(*np.nonzero(bad), strict=True):
             v.append(f"step {k} channel {ch}: |{name}| = {abs(x[k, ch])!r} > rate {rate[ch]!r}")
+            blame.add(int(k))
 
     # maneuvers
     for k in range(k_steps - 1):
+        before = len(v)
         T = ts[k + 1] - te[k]
         if not T > 0:
             v.append(f"steps {k} -> {k + 1} overlap or touch: T = {T!r} s (needs T > 0)")
+            blame.add(k + 1)
             continue
         t = np.linspace(0.0, T, samples)
         a1, b1, a2, b2 = ea[k], er[k], sa[k + 1], sr[k + 1]
@@ -183,4 +196,6 @@ def check_steps(
             dev = np.abs(integral - f[ch]).max()
             if dev > tol_int:
                 v.append(f"{tag}: angle is not the integral of the rate (max deviation {dev!r})")
-    return StepsReport(not v, v, peak_rate, peak_accel)
+        if len(v) > before:
+            blame.add(k + 1)
+    return StepsReport(not v, v, peak_rate, peak_accel, tuple(sorted(blame)))

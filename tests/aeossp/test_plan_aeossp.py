@@ -223,7 +223,7 @@ def test_solve_small_case_valid_by_checker(small_case):
     sol, res = solve_case(small_case, time_limit=15.0, progress=False)
     wall = time.monotonic() - t0
     assert wall <= 15.0 + 2.0
-    assert res.report["valid"] and res.report["dropped"] == 0
+    assert res.report["valid"] and res.report["dropped_total"] == 0
     assert len(sol["actions"]) == len(res.observations) > 40
     rep = check_solution(small_case, sol)
     assert rep.valid, [v.message for v in rep.violations[:5]]
@@ -240,7 +240,7 @@ def test_solve_deterministic_for_seed(small_case):
     assert a == b
     assert len(a["actions"]) > 0
     assert (ra.value, ra.bound) == (rb.value, rb.bound)
-    assert ra.report["dropped"] == 0
+    assert ra.report["dropped_total"] == 0
 
 
 @needs_data
@@ -467,7 +467,7 @@ def test_bound_covers_plans_with_repeats(make, seed):
     if make is _bridge_scenario:
         assert with_rep > without  # the construction makes a repeated B pay
     res = plan(sc, time_limit=20.0, progress=False)
-    assert res.report["valid"] and res.report["dropped"] == 0
+    assert res.report["valid"] and res.report["dropped_total"] == 0
     assert res.stats["exact"]
     assert res.value == pytest.approx(without, abs=1e-9)
     assert res.bound >= with_rep - 1e-9

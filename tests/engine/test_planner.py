@@ -274,7 +274,7 @@ def test_lagrangian_lns_path_reaches_exact_optimum(seed):
     sc, optimum, res = _solved(seed, **LNS_CASE)
     assert res.stats["options"] > sc.planner.exact_max_options
     assert not res.stats["exact"]
-    assert res.report["valid"] and res.report["dropped"] == 0
+    assert res.report["valid"] and res.report["dropped_total"] == 0
     assert res.value <= optimum + 1e-9  # the plan lives in the same candidate model
     assert res.bound >= optimum - 1e-6  # Lagrangian bound
     assert optimum < res.total_value  # not every target fits: the instance has conflicts
@@ -286,7 +286,7 @@ def test_exact_path_matches_exact_optimum(seed):
     sc, optimum, res = _solved(seed, **EXACT_CASE)
     assert 0 < res.stats["options"] <= sc.planner.exact_max_options
     assert res.stats["exact"]
-    assert res.report["valid"] and res.report["dropped"] == 0
+    assert res.report["valid"] and res.report["dropped_total"] == 0
     assert res.value == pytest.approx(optimum, abs=1e-6)
     assert res.bound >= optimum - 1e-6
     assert optimum < res.total_value
@@ -368,7 +368,7 @@ def test_refined_per_channel_starts_keep_the_plan_valid(case, seed):
     assert set(info) == {s.name for s in sc.satellites if s.model == "per_channel"}
     for v in info.values():
         assert v["margin_after_rad"] >= v["margin_before_rad"] - 1e-12
-    assert res.report["valid"] and res.report["dropped"] == 0
+    assert res.report["valid"] and res.report["dropped_total"] == 0
     assert np.all(res.observations.slack >= -1e-9)
     k = next(i for i, s in enumerate(sc.satellites) if s.model == "per_channel")
     starts = res.observations.start[res.observations.sat == k]

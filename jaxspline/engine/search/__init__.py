@@ -56,6 +56,7 @@ __all__ = [
 _EARLIEST_SHARE = 0.05  # share of the budget reserved for the earliest-start pass
 _EARLIEST_MAX = 2.0  # ... at most this many seconds
 _EXACT_SHARE = 0.5  # share of the remaining budget the exact search may use
+_EXACT_MAX_S = 60.0  # [s] budget cap of the exact search when the deadline is +inf
 
 
 @dataclass
@@ -97,13 +98,18 @@ def solve(
         Lagrangian phase.
       exact_max_options: int, run the exact search when the problem has at most this
         many options (0: never).
-      max_iters: caps the LNS iterations and (at 10 x) the Lagrangian iterations so
-        that a run is deterministic; None: the deadline alone.
+      max_iters: caps the LNS iterations and (at 1/10) the Lagrangian iterations;
+        the stages then run to their caps and the deadline no longer cuts them (only
+        a stop request does, :mod:`jaxspline.engine.search.clock`), so the plan is a
+        function of the problem, ``seed`` and ``max_iters`` alone. None: the deadline
+        alone.
       report: callable ``report(stage, message)`` receiving progress lines, or None.
     Returns:
       SearchResult.
     """
     say = report or (lambda stage, msg: None)
+    if max_iters is not None:  # iteration-bound: reproducible, the clock does not cut
+        deadline = math.inf
     tl = Timeline(pb)
     order = greedy_order(tl)
     now = time.monotonic()
@@ -133,7 +139,8 @@ def solve(
         start = list(tl.assigned)
         tl.restore([])
         # at most half of what is left: a search that cannot finish still leaves the LNS time
-        t_exact = time.monotonic() + _EXACT_SHARE * max(0.0, deadline - tail - time.monotonic())
+        left = max(0.0, min(deadline, now + _EXACT_MAX_S) - tail - time.monotonic())
+        t_exact = time.monotonic() + _EXACT_SHARE * left
         value, exact = exact_search(tl, t_exact)
         if value < sum(pb.weight[t] for t, c in enumerate(start) if c >= 0):
             tl.restore(start)

@@ -9,8 +9,7 @@ later cannot beat the best plan found.
 
 from __future__ import annotations
 
-import time
-
+from jaxspline.engine.search import clock
 from jaxspline.engine.search.timeline import Timeline
 
 __all__ = ["exact_search"]
@@ -39,7 +38,7 @@ def exact_search(tl: Timeline, deadline: float):
 
     def dfs(i):
         state["nodes"] += 1
-        if state["nodes"] % _DEADLINE_CHECK == 0 and time.monotonic() > deadline:
+        if state["nodes"] % _DEADLINE_CHECK == 0 and clock.now() > deadline:
             state["timed_out"] = True
         if state["timed_out"]:
             return

@@ -27,11 +27,11 @@ fill); its value is the step target.
 from __future__ import annotations
 
 import math
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
+from jaxspline.engine.search import clock
 from jaxspline.engine.search.energy import EnergyBudgets
 from jaxspline.engine.search.lns import greedy
 from jaxspline.engine.search.problem import Problem
@@ -331,7 +331,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
         return BoundResult(best, 0.0, 0, "optimal")
     pr = _Prices(pb, energy=True)
     status = "time"
-    while time.monotonic() < deadline and (max_iters is None or pr.it < max_iters):
+    while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
         if (pr.it - 1) % _REPAIR_EVERY == 0:
             _plan_from_paths(tl, paths, order_fill, deadline)
@@ -371,7 +371,7 @@ def upper_bound(
         return BoundResult([], 0.0, 0, "optimal")
     pr = _Prices(pb, energy=energy)
     status = "time"
-    while time.monotonic() < deadline and (max_iters is None or pr.it < max_iters):
+    while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         pr.solve_dp()
         if not pr.step(target):
             status = "converged"

@@ -24,6 +24,7 @@ import bisect
 import itertools
 import time
 
+from jaxspline.engine.search import clock
 from jaxspline.engine.search.lns_energy import EnergyRank, make_room
 from jaxspline.engine.search.timeline import Timeline
 
@@ -69,7 +70,7 @@ def greedy(tl: Timeline, deadline: float, order=None):
       order: task order; None uses :func:`greedy_order`.
     """
     for i, t in enumerate(order if order is not None else greedy_order(tl)):
-        if i % _DEADLINE_CHECK == 0 and time.monotonic() > deadline:
+        if i % _DEADLINE_CHECK == 0 and clock.now() > deadline:
             break
         if tl.assigned[t] < 0:
             tl.best_insert(t)
@@ -116,7 +117,7 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
     it = improved = 0
     dirty = False
     last = time.monotonic()
-    while (max_iters is None or it < max_iters) and time.monotonic() < deadline:
+    while (max_iters is None or it < max_iters) and clock.now() < deadline:
         it += 1
         base = tl.score()
         mark = len(tl.log)
@@ -202,7 +203,7 @@ def earliest_pass(tl: Timeline, deadline: float):
     """
     pb = tl.pb
     for t in range(len(pb.weight)):
-        if time.monotonic() > deadline:
+        if clock.now() > deadline:
             return
         c = tl.assigned[t]
         if c < 0:

@@ -268,7 +268,7 @@ def test_battery_bound_plan_is_valid_under_the_checker():
     )
     case = dataclasses.replace(case, case_id="bound", satellites=sats, tasks=case.tasks[::5])
     sol, res = solve_case(case, time_limit=60.0, progress=False, max_iters=800)
-    assert res.report["valid"] and res.report["dropped"] == 0
+    assert res.report["valid"] and res.report["dropped_total"] == 0
     assert res.stats["greedy_value"] <= res.value <= res.bound
     rep = check_solution(case, sol)
     assert rep.valid, [v.message for v in rep.violations[:5]]

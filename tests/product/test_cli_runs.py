@@ -1,0 +1,121 @@
+"""``jaxspline plan`` as a user runs it: separate processes, repeat runs, signals.
+
+* ``--max-iters N`` twice (different hash seeds, so no set or dict order can leak
+  into the plan): plan.json is identical except for the timings;
+* SIGINT / SIGTERM during the search: exit 130, the best plan so far checked and
+  written whole (valid JSON, CSV rows = observations, ``report.interrupted`` named,
+  no temporary file left), a line on stderr says so.
+
+The processes share a compile cache in the test's tmp dir, so only the first one compiles.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from test_cli_plan import SMALL
+
+_TIMEOUT_S = 300
+
+
+@pytest.fixture(scope="module")
+def env(tmp_path_factory):
+    d = tmp_path_factory.mktemp("runs")
+    scen = d / "small.toml"
+    scen.write_text(SMALL, encoding="utf-8")
+    e = dict(os.environ, JAXSPLINE_CACHE_DIR=str(d / "xla"), PYTHONUNBUFFERED="1")
+    return {"scen": scen, "env": e, "dir": d}
+
+
+def _cmd(scen, out, *extra):
+    return [
+        sys.executable,
+        "-m",
+        "jaxspline.cli",
+        "plan",
+        str(scen),
+        "-o",
+        str(out),
+        "--no-plots",
+        "--no-aem",
+        *extra,
+    ]
+
+
+def _plan_json(out):
+    data = json.loads((out / "plan.json").read_text())
+    data.pop("timings_s")
+    return data
+
+
+def test_max_iters_gives_the_same_plan_every_run(env):
+    outs = []
+    for k, hash_seed in enumerate(("1", "2")):
+        out = env["dir"] / f"rep{k}"
+        e = dict(env["env"], PYTHONHASHSEED=hash_seed)
+        cmd = _cmd(env["scen"], out, "--max-iters", "300", "--quiet")
+        r = subprocess.run(cmd, env=e, capture_output=True, text=True, timeout=_TIMEOUT_S)
+        assert r.returncode == 0, r.stderr
+        outs.append(_plan_json(out))
+    assert outs[0]["summary"]["observations"] > 0
+    assert outs[0] == outs[1]
+
+
+def _rows(out):
+    with open(out / "plan.csv", newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM])
+def test_signal_during_search_writes_the_best_plan_and_exits_130(env, sig):
+    out = env["dir"] / f"sig{int(sig)}"
+    # a long budget: only the signal ends the search early
+    cmd = _cmd(env["scen"], out, "--time-limit", "240")
+    p = subprocess.Popen(cmd, env=env["env"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    seen = b""
+    t0 = time.monotonic()
+    while b"greedy" not in seen:  # the search has its first plan
+        chunk = os.read(p.stderr.fileno(), 4096)
+        assert chunk, seen.decode(errors="replace")
+        seen += chunk
+        assert time.monotonic() - t0 < _TIMEOUT_S
+    time.sleep(1.0)
+    p.send_signal(sig)
+    stdout, stderr = p.communicate(timeout=_TIMEOUT_S)
+    stderr = (seen + stderr).decode(errors="replace")
+    assert p.returncode == 130, stderr
+    assert "stopping the search" in stderr
+    assert "interrupted" in stderr
+    data = _plan_json(out)
+    rep = data["report"]
+    assert rep["interrupted"] == sig.name
+    assert rep["valid"]
+    assert len(_rows(out)) == data["summary"]["observations"] > 0
+    assert not [f.name for f in out.iterdir() if f.name.startswith(".")]  # no temp files
+    assert time.monotonic() - t0 < 120  # well before the 240 s budget
+
+
+def test_signal_before_any_plan_leaves_nothing(env):
+    out = env["dir"] / "early"
+    p = subprocess.Popen(
+        _cmd(env["scen"], out, "--time-limit", "240"),
+        env=env["env"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    seen = b""
+    while b"orbits" not in seen:  # planning started, no plan yet
+        chunk = os.read(p.stderr.fileno(), 4096)
+        assert chunk, seen.decode(errors="replace")
+        seen += chunk
+    p.send_signal(signal.SIGTERM)
+    _, stderr = p.communicate(timeout=_TIMEOUT_S)
+    assert p.returncode == 130, stderr.decode(errors="replace")
+    assert not out.exists() or not any(out.iterdir())
