@@ -24,6 +24,7 @@ through the repair and is returned with ``report["interrupted"]`` set.
 
 from __future__ import annotations
 
+import functools
 import math
 import sys
 import time
@@ -49,9 +50,10 @@ from jaxspline.engine.opportunities import build_opportunities, nadir_rate, refe
 from jaxspline.engine.options import take_options
 from jaxspline.engine.repair import repair
 from jaxspline.engine.result import Observations, PlanResult
-from jaxspline.engine.screen import screen_transitions
+from jaxspline.engine.screen import screen_chunks
 from jaxspline.engine.search import BatteryModel, Problem, mip_bound, solve
 from jaxspline.engine.search import clock as search_clock
+from jaxspline.engine.search.store import PairsBuilder, start_order
 from jaxspline.geometry.frames import gmst, in_shadow, jd_split, sun_direction
 from jaxspline.geometry.orbit import tabulate_orbits
 from jaxspline.geometry.pointing import Scene
@@ -66,6 +68,7 @@ _REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold 
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
+_JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
 _REFILL_S = 2.0  # [s] budget of one refill after join rejections
 
 
@@ -193,23 +196,29 @@ def _orbits(sc: Scenario):
     return table, scene, sunlit
 
 
-def _near_pairs(sc, opp, tables, far, slack):
+def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
     """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need.
 
     The slack (the shortest observation) lets the DP process a block of starts that
     wide at once (:func:`jaxspline.engine.search.dp_prepare`). Each satellite's options
-    go through the fused screen (:func:`jaxspline.engine.screen.screen_transitions`)
+    stream through the fused screen (:func:`jaxspline.engine.screen.screen_chunks`)
     with its maneuver model: AxisLimits for ``per_channel`` (need = min(t_min, gap)),
     its SlewTable for rest-to-rest models (need = t_req). The sub-table gets
     ``route = arange(n)`` (the screen excludes equal routes; the planner wants pairs of
     the same target too) and ``scan_ok`` everywhere. The screen's window
     ``gap <= max_gap`` is widened by ``_WINDOW_GUARD`` and the pairs are then cut with
     the planner's own test ``t_end[i] > t_start[j] - far - slack`` (strict), so the
-    result does not depend on how either side rounds. Pairs come per satellite, by
-    destination, then by the source's end time.
+    result does not depend on how either side rounds. ``join_filter(src, dst) -> bool``
+    (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go
+    straight into a :class:`jaxspline.engine.search.store.PairsBuilder`: memory is the
+    compact table plus one satellite's compact rows, whatever the candidate count.
+
+    Returns:
+      (NearPairs, pairs removed by ``join_filter``).
     """
     o = opp.options
-    src_all, dst_all, need_all = [], [], []
+    builder = PairsBuilder(len(opp), start_order(o.t_start, o.sat))
+    removed = 0
     for k, sat in enumerate(sc.satellites):
         ids = np.flatnonzero(o.sat == k)
         if ids.size < 2:
@@ -217,28 +226,39 @@ def _near_pairs(sc, opp, tables, far, slack):
         n = ids.size
         sub = take_options(o, ids)._replace(route=np.arange(n), scan_ok=np.ones(n, bool))
         rest = sat.model in REST_TO_REST
-        tr = screen_transitions(
+        pending, held = [], 0
+        for tr in screen_chunks(
             sub,
             tables[k] if rest else sat.limits,
             max_gap=far[k] + slack + _WINDOW_GUARD,
             chunk_size=_NEAR_CHUNK,
             feasible_only=True,
             progress=False,
-        )
-        ii, jj = ids[tr.src], ids[tr.dst]
-        keep = o.t_end[ii] > o.t_start[jj] - far[k] - slack
-        by_end = np.empty(n, np.int64)
-        by_end[np.argsort(sub.t_end, kind="stable")] = np.arange(n)
-        order = np.flatnonzero(keep)
-        order = order[np.lexsort((by_end[tr.src[order]], tr.dst[order]))]
-        need = tr.t_min if rest else np.minimum(tr.t_min, tr.T)
-        src_all.append(ii[order])
-        dst_all.append(jj[order])
-        need_all.append(need[order].astype(np.float64))
-    if not src_all:
-        z = np.zeros(0, np.int64)
-        return z, z, np.zeros(0)
-    return np.concatenate(src_all), np.concatenate(dst_all), np.concatenate(need_all)
+        ):
+            ii, jj = ids[tr.src], ids[tr.dst]
+            keep = o.t_end[ii] > o.t_start[jj] - far[k] - slack
+            need = tr.t_min if rest else np.minimum(tr.t_min, tr.T)
+            part = (ii[keep], jj[keep], need[keep])
+            if join_filter is None:
+                builder.add(*part)
+                continue
+            pending.append(part)
+            held += part[0].size
+            if held >= _JOIN_BATCH:
+                removed += _filtered(builder, pending, join_filter)
+                pending, held = [], 0
+        if pending:
+            removed += _filtered(builder, pending, join_filter)
+        builder.close()
+    return builder.build(), removed
+
+
+def _filtered(builder, parts, join_filter) -> int:
+    """Add the pairs of ``parts`` that pass ``join_filter``; returns how many failed."""
+    src, dst, need = (np.concatenate(x) for x in zip(*parts, strict=True))
+    keep = join_filter(src, dst)
+    builder.add(src[keep], dst[keep], need[keep])
+    return int((~keep).sum())
 
 
 class Prepared(NamedTuple):
@@ -325,16 +345,15 @@ def build_problem(
             far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
             first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
             lookup = np.ones(len(sats), bool)
-        near = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK)
-        screened = ""
+        join_filter = None
         if lookup is not None:
-            keep = screen_joins(sats, opp, states, near[0], near[1])
-            near = tuple(x[keep] for x in near)
-            screened = f" ({int((~keep).sum())} removed by the join screen)"
+            join_filter = functools.partial(screen_joins, sats, opp, states)
+        near, removed = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK, join_filter)
+        screened = f" ({removed} removed by the join screen)" if lookup is not None else ""
         clock.lap(
             "screening",
-            f"{near[0].size} feasible near pairs{screened}; far gaps "
-            f"{far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s",
+            f"{len(near)} feasible near pairs{screened}, {near.nbytes / max(len(near), 1):.1f} "
+            f"B/pair; far gaps {far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s",
         )
         battery = BatteryModel(
             sunlit,
@@ -472,7 +491,8 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     stats = {
         "windows": len(windows),
         "options": len(opp),
-        "near_pairs": int(pb.near_src.size),
+        "near_pairs": len(pb.pairs),
+        "pair_store_bytes": pb.pairs.nbytes,
         "far_gap_s": far.tolist(),
         "bound_status": res.bound_status,
         "refined": refined,

@@ -49,11 +49,9 @@ class EnergyBudgets:
         bat = pb.battery
         s = np.asarray(pb.c_start, np.float64)
         e = np.asarray(pb.c_end, np.float64)
-        src, dst = np.asarray(pb.near_src, np.int64), np.asarray(pb.near_dst, np.int64)
-        need = np.asarray(pb.near_need, np.float64)
-        sat_src = np.asarray(pb.c_sat, np.int64)[src]
         far = np.asarray(pb.far, np.float64)
-        self.n_options, self.n_near = pb.n_options, src.size
+        pairs = pb.pairs
+        self.n_options, self.n_near = pb.n_options, len(pairs)
         self.sats = []
         m = 0
         for k in range(pb.n_sats):
@@ -70,22 +68,20 @@ class EnergyBudgets:
             level = np.where(a_i == 0, p.initial_wh, p.capacity_wh)
             budget = level[:, None] - bat.margin_wh + cum[b_i][None, :] - cum[a_i][:, None]
             span = (b_t[None, :] - a_t[:, None]) * max(p.imaging_w, p.slew_w) * _WH
-            pk = np.flatnonzero(sat_src == k)
-            gap = s[dst[pk]] - e[src[pk]]
-            slew = np.where(gap < far[k], np.maximum(need[pk] - _SLEW_TOL, 0.0), 0.0)
             sk = {
                 "lo": lo,
                 "hi": hi,
-                "pk": pk,
                 "shape": (a_i.size, b_i.size),
                 "ia": np.searchsorted(a_t, s[lo:hi], side="right"),
                 "ib": np.searchsorted(b_t, e[lo:hi], side="left"),
                 "e": p.imaging_w * (e[lo:hi] - s[lo:hi]) * _WH,
-                "ia_arc": np.searchsorted(a_t, s[src[pk]], side="right"),
-                "ib_arc": np.searchsorted(b_t, e[dst[pk]], side="left"),
-                "e_arc": p.slew_w * slew * _WH,
+                "slew_wh": p.slew_w * _WH,
+                "far": far[k],
+                "s": s[lo:hi],
+                "e_t": e[lo:hi],
+                "pairs": pairs,
             }
-            inside = self._usage(sk, np.ones(hi - lo, bool), np.ones(pk.size, bool))
+            inside = self._usage(sk, np.ones(hi - lo, bool), np.ones(self.n_near, bool))
             kept = (a_t[:, None] < b_t[None, :]) & (budget > 0.0)
             kept &= (inside > budget) & (span > budget)
             sk["kept"], sk["budget"], sk["off"] = kept, budget[kept], m
@@ -106,17 +102,35 @@ class EnergyBudgets:
         self.m = m
 
     @staticmethod
-    def _usage(sk, nodes, arcs):
+    def _arcs(sk, chosen=None):
+        """(positions, ia, ib, energy [Wh]) of the satellite's near pairs (those where the
+        bool [P] ``chosen`` holds, default all), from the pair table: nothing is stored
+        per pair."""
+        pairs, lo = sk["pairs"], sk["lo"]
+        idx, dst = pairs.gather(np.arange(lo, sk["hi"]))
+        if chosen is not None:
+            m = chosen[idx]
+            idx, dst = idx[m], dst[m]
+        src = pairs.src[idx].astype(np.int64) - lo
+        dst = dst - lo
+        gap = sk["s"][dst] - sk["e_t"][src]
+        need = pairs.need[idx].astype(np.float64)
+        slew = np.where(gap < sk["far"], np.maximum(need - _SLEW_TOL, 0.0), 0.0)
+        return idx, sk["ia"][src], sk["ib"][dst], sk["slew_wh"] * slew
+
+    @classmethod
+    def _usage(cls, sk, nodes, arcs):
         """[A, E] energy inside each interval of the chosen options / near pairs (masks)."""
         a_n, e_n = sk["shape"]
         h = np.zeros((a_n + 1, e_n + 1))
         np.add.at(h, (sk["ia"][nodes], sk["ib"][nodes]), sk["e"][nodes])
-        np.add.at(h, (sk["ia_arc"][arcs], sk["ib_arc"][arcs]), sk["e_arc"][arcs])
+        _, ia, ib, ea = cls._arcs(sk, arcs)
+        np.add.at(h, (ia, ib), ea)
         r = np.cumsum(np.cumsum(h[::-1], axis=0)[::-1], axis=1)  # sum over x >= a, y <= b
         return r[1:, :e_n]
 
     def penalties(self, nu: np.ndarray):
-        """Per option and per near pair (``pb.near_src`` order) price of their energy.
+        """Per option and per near pair (``pb.pairs`` order) price of their energy.
 
         Args:
           nu: float [B], multipliers of the B energy budgets (>= 0).
@@ -132,7 +146,8 @@ class EnergyBudgets:
             sp = np.zeros((a_n + 1, e_n + 1))  # sum over a < x, b >= y
             sp[1:, :e_n] = np.cumsum(np.cumsum(v[:, ::-1], axis=1)[:, ::-1], axis=0)
             node[sk["lo"] : sk["hi"]] = sk["e"] * sp[sk["ia"], sk["ib"]]
-            arc[sk["pk"]] = sk["e_arc"] * sp[sk["ia_arc"], sk["ib_arc"]]
+            idx, ia, ib, ea = self._arcs(sk)
+            arc[idx] = ea * sp[ia, ib]
         return node, arc
 
     def usage(self, nodes: np.ndarray, arcs: np.ndarray) -> np.ndarray:
@@ -146,6 +161,6 @@ class EnergyBudgets:
         """
         out = np.zeros(self.m)
         for sk in self.sats:
-            u = self._usage(sk, nodes[sk["lo"] : sk["hi"]], arcs[sk["pk"]])
+            u = self._usage(sk, nodes[sk["lo"] : sk["hi"]], arcs)
             out[sk["off"] : sk["off"] + sk["budget"].size] = u[sk["kept"]] / sk["budget"]
         return out

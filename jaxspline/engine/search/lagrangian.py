@@ -50,46 +50,37 @@ _REPAIR_EVERY = 4  # DP iterations per repaired plan (a repair costs ~2 block DP
 class DPData:
     """Structure of the per-satellite longest-path DP (see :func:`dp_paths`).
 
-    Options are processed in start order (``order``) in blocks of starts at most
-    ``width`` apart (``groups``: slices of ``order`` and of the near-predecessor arrays
-    ``pred`` / ``seg``). With ``width`` <= the shortest observation, a predecessor of
-    any option of a block starts before the block, so a block is one vectorized step;
-    with ``width`` <= ``near_slack``, a far predecessor that only becomes far inside
-    the block (``end + far`` between the block's first start and the option's start)
-    is among the near pairs. ``absorb`` lists options by ``end + far[sat]``, the time
+    Options are processed in start order (``order``, the row order of ``pb.pairs``)
+    in blocks of starts at most ``width`` apart (``groups``: slices of ``order``, so a
+    block's near predecessors are one contiguous range of ``pb.pairs``). With
+    ``width`` <= the shortest observation, a predecessor of any option of a block
+    starts before the block, so a block is one vectorized step; with
+    ``width`` <= ``near_slack``, a far predecessor that only becomes far inside the
+    block (``end + far`` between the block's first start and the option's start) is
+    among the near pairs. ``absorb`` lists options by ``end + far[sat]``, the time
     from which they are far predecessors of everything.
 
     Attributes:
       order: int [N], option ids sorted by start (then satellite).
-      pair: int [P], near pairs (``pb.near_src`` / ``near_dst`` order) sorted by the
-        rank of their destination in ``order``.
       sat: int [N], satellite of each option.
       start: float [N], start time of each option [s].
-      groups: list of ``(ga, gb, pa, pz)``: block ``order[ga:gb]`` and its near pairs
-        ``pred[pa:pz]`` / ``seg[pa:pz]``.
-      pred: int [P], the predecessor (source) option of each sorted near pair.
-      seg: int [P], position of the pair's destination inside its block.
-      ptr: int [N + 1], start of each destination rank's pairs (CSR pointer).
+      groups: list of ``(ga, gb)``: block ``order[ga:gb]``.
       first_ok: bool [N], the option may be its satellite's first observation.
       absorb: int [N], option ids sorted by ``end + far[sat]``.
       absorb_t: float [N], those times [s].
     """
 
     order: np.ndarray
-    pair: np.ndarray
     sat: np.ndarray
     start: np.ndarray
     groups: list
-    pred: np.ndarray
-    seg: np.ndarray
-    ptr: np.ndarray
     first_ok: np.ndarray
     absorb: np.ndarray
     absorb_t: np.ndarray
 
 
 def dp_prepare(pb: Problem) -> DPData:
-    """Group the options and their near feasible predecessors for :func:`dp_paths`.
+    """Group the options in start-order blocks for :func:`dp_paths`.
 
     Args:
       pb: Problem.
@@ -101,13 +92,7 @@ def dp_prepare(pb: Problem) -> DPData:
     e = np.asarray(pb.c_end)
     sat = np.asarray(pb.c_sat, np.int64)
     far = np.asarray(pb.far)
-    order = np.lexsort((sat, s))
-    rank = np.empty(n, np.int64)
-    rank[order] = np.arange(n)
-    jj, ii = pb.near_dst, pb.near_src
-    o2 = np.argsort(rank[jj], kind="stable")
-    jj, ii = jj[o2], ii[o2]
-    ptr = np.searchsorted(rank[jj], np.arange(n + 1), side="left")
+    order = pb.pairs.rows  # start order (Problem keeps the pair rows so)
     so = s[order]
     width = min(float(np.min(e - s)), pb.near_slack) if n else 0.0
     bounds = [0]
@@ -115,39 +100,35 @@ def dp_prepare(pb: Problem) -> DPData:
         b0 = bounds[-1]
         b1 = int(np.searchsorted(so, so[b0] + width, side="right"))
         bounds.append(max(b1, int(np.searchsorted(so, so[b0], side="right"))))
-    bounds = np.asarray(bounds, np.int64)
-    groups = []
-    seg = np.empty(len(jj), np.int64)
-    for ga, gb in zip(bounds[:-1].tolist(), bounds[1:].tolist(), strict=True):
-        pa, pz = int(ptr[ga]), int(ptr[gb])
-        seg[pa:pz] = rank[jj[pa:pz]] - ga
-        groups.append((ga, gb, pa, pz))
+    groups = list(zip(bounds[:-1], bounds[1:], strict=True))
     rt = e + far[sat] if n else np.zeros(0)
     ab = np.argsort(rt, kind="stable")
     first_ok = np.asarray(pb.c_first) <= s
-    return DPData(order, o2, sat, s, groups, ii, seg, ptr, first_ok, ab, rt[ab])
+    return DPData(order, sat, s, groups, first_ok, ab, rt[ab])
 
 
 def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
     """Exact per-satellite maximum-value sequences for option values ``w``.
 
     Args:
-      arc: optional cost of each near pair, in ``d.pred`` order (far transitions and
+      arc: optional cost of each near pair, in ``pb.pairs`` order (far transitions and
         first observations cost nothing).
-      used: optional list; the near-pair ids (``pb.near_src`` order) of the returned
-        paths are appended to it.
+      used: optional list; the near-pair positions (``pb.pairs`` order) of the
+        returned paths are appended to it.
     Returns ``(paths, values)``: per satellite the option ids of an optimal sequence
     (time order) and its value (0 for the empty sequence). Battery not modelled.
     """
     n = len(w)
     n_s = pb.n_sats
+    pairs = pb.pairs
+    src, ptr = pairs.src, pairs.ptr
     best = np.full(n, -np.inf)
     run = np.full(n_s, -np.inf)
     base = np.where(d.first_ok, 0.0, -np.inf)
-    order, sat, pred, seg = d.order, d.sat, d.pred, d.seg
+    order, sat = d.order, d.sat
     ap = 0
     s_order = d.start[order]
-    for ga, gb, pa, pz in d.groups:
+    for ga, gb in d.groups:
         aq = int(np.searchsorted(d.absorb_t, s_order[ga], side="right"))
         if aq > ap:
             sl = d.absorb[ap:aq]
@@ -155,14 +136,15 @@ def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
             ap = aq
         J = order[ga:gb]
         v = np.maximum(base[J], run[sat[J]])
+        pa, pz = int(ptr[ga]), int(ptr[gb])
         if pz > pa:
-            nv = np.full(gb - ga, -np.inf)
-            pv = best[pred[pa:pz]]
-            np.maximum.at(nv, seg[pa:pz], pv if arc is None else pv - arc[pa:pz])
-            v = np.maximum(v, nv)
+            pv = best[src[pa:pz]]
+            if arc is not None:
+                pv = pv - arc[pa:pz]
+            at = ptr[ga:gb] - pa
+            has = ptr[ga + 1 : gb + 1] > ptr[ga:gb]
+            v[has] = np.maximum(v[has], np.maximum.reduceat(pv, at[has]))
         best[J] = w[J] + v
-    rank = np.empty(n, np.int64)
-    rank[order] = np.arange(n)
     ends = np.asarray(pb.c_end)
     far = np.asarray(pb.far)
     paths, values = [], []
@@ -180,13 +162,14 @@ def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
             target = best[j] - w[j]
             if d.first_ok[j] and target <= _PATH_TOL:
                 break
-            q0, q1 = d.ptr[rank[j]], d.ptr[rank[j] + 1]
-            cand = pred[q0:q1]
+            row = pairs.row(j)
+            q0, q1 = row.start, row.stop
+            cand = src[q0:q1]
             cv = best[cand] if arc is None else best[cand] - arc[q0:q1]
             ok = np.flatnonzero(cv >= target - _PATH_TOL)
             hit = cand[ok]
             if hit.size and used is not None:
-                used.append(int(d.pair[q0 + ok[0]]))
+                used.append(q0 + int(ok[0]))
             if hit.size == 0:
                 fp = ids[ends[ids] + far[k] <= d.start[j]]
                 hit = fp[best[fp] >= target - _PATH_TOL]
@@ -270,7 +253,7 @@ class _Prices:
         arc, self.used = None, None
         if self.en is not None:
             node_pen, arc_pen = self.en.penalties(self.lam[n_t:])
-            w, arc, self.used = w - node_pen, arc_pen[self.d.pair], []
+            w, arc, self.used = w - node_pen, arc_pen, []
         paths, vals = dp_paths(self.pb, self.d, w, arc, self.used)
         bound = float(sum(vals) + self.lam.sum())
         if bound < self.ub - _GAP_TOL:

@@ -1,11 +1,12 @@
-"""The search's view of a planning problem: options as Python lists, transition rules.
+"""The search's view of a planning problem: options, their near pairs, transition rules.
 
 Built by :func:`jaxspline.plan` from the screened options. Times are seconds. The
 transition rule between two options i -> j of one satellite is the required time
 ``need(i, j)`` (:mod:`jaxspline.engine.models`): feasible iff ``t_start[j] - t_end[i] >=
 need``. Rest-to-rest satellites evaluate it from the lines of sight through their
 slew table (cheap, any pair); per-channel satellites look it up among the screened
-near pairs; pairs at least ``far[sat]`` apart are always feasible. When the engine
+near pairs (:class:`jaxspline.engine.search.store.NearPairs`, 8 bytes a pair); pairs
+at least ``far[sat]`` apart are always feasible. When the engine
 also screened the flown joins (:mod:`jaxspline.engine.join_screen`), every satellite
 looks its near pairs up (``lookup``): a pair the join screen removed is infeasible.
 """
@@ -18,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jaxspline.engine.search.battery import BatteryModel
+from jaxspline.engine.search.store import NearPairs, start_order
 
 __all__ = ["Problem"]
 
@@ -35,9 +37,7 @@ class Problem:
         observation (inf: not allowed first).
       c_ls, c_le: per option unit lines of sight (tuples) at start / end.
       tables: per satellite a :class:`jaxspline.engine.models.SlewTable` (rest-to-rest) or None.
-      near: dict ``i * n + j -> need`` of feasible near pairs of per-channel satellites.
-      near_src, near_dst, near_need: numpy arrays of ALL feasible near pairs (every
-        model), for the per-satellite DP.
+      pairs: :class:`NearPairs`, every feasible near pair (every model) by destination.
       far: per satellite the always-feasible gap [s].
       battery: :class:`BatteryModel`.
       task_cands: per task its option ids.
@@ -60,10 +60,7 @@ class Problem:
     c_ls: list
     c_le: list
     tables: list
-    near: dict
-    near_src: np.ndarray
-    near_dst: np.ndarray
-    near_need: np.ndarray
+    pairs: NearPairs
     far: list
     battery: BatteryModel
     task_cands: list
@@ -78,6 +75,25 @@ class Problem:
             self.lookup = [t is None for t in self.tables]
         # the hot path of need(): tables of satellites whose near pairs are not looked up
         self._free = [None if look else t for t, look in zip(self.tables, self.lookup, strict=True)]
+        rows = start_order(self.c_start, self.c_sat)
+        if not np.array_equal(self.pairs.rows, rows):  # the DP walks rows in start order
+            p = self.pairs
+            self.pairs = NearPairs.from_arrays(self.n_options, p.src, p.dst(), p.need, rows)
+
+    @property
+    def near_src(self) -> np.ndarray:
+        """int64 [P] source of every near pair (``pairs`` order; built on demand)."""
+        return self.pairs.src.astype(np.int64)
+
+    @property
+    def near_dst(self) -> np.ndarray:
+        """int64 [P] destination of every near pair (``pairs`` order; built on demand)."""
+        return self.pairs.dst()
+
+    @property
+    def near_need(self) -> np.ndarray:
+        """float64 [P] required time of every near pair [s] (``pairs`` order)."""
+        return self.pairs.need.astype(np.float64)
 
     @property
     def n_options(self) -> int:
@@ -98,7 +114,7 @@ class Problem:
         if table is None:
             gap = self.c_start[j] - self.c_end[i]
             if gap < self.far[k]:
-                return self.near.get(i * len(self.c_task) + j, math.inf)
+                return self.pairs.lookup(i, j)
             table = self.tables[k]
             if table is None:
                 return self.far[k]
@@ -119,7 +135,8 @@ class Problem:
           opp: :class:`jaxspline.engine.opportunities.Opportunities` sorted by (sat, start).
           sats: the scenario's satellites.
           first: [N] required time before each option as a first observation.
-          near_pairs: (src, dst, need) numpy arrays of feasible pairs closer than far.
+          near_pairs: :class:`NearPairs`, or (src, dst, need) arrays of the feasible
+            pairs closer than far.
           far: [S] always-feasible gaps.
           tables: per satellite SlewTable or None.
           battery: :class:`BatteryModel`.
@@ -139,11 +156,10 @@ class Problem:
         lo = np.searchsorted(sat, np.arange(n_s), side="left").tolist()
         hi = np.searchsorted(sat, np.arange(n_s), side="right").tolist()
         starts = np.asarray(o.t_start, np.float64).tolist()
-        src, dst, need = near_pairs
+        if not isinstance(near_pairs, NearPairs):
+            near_pairs = NearPairs.from_arrays(n, *near_pairs, rows=start_order(o.t_start, sat))
         pc = np.array([s.model == "per_channel" for s in sats], bool)
         look = pc if lookup is None else np.asarray(lookup, bool) | pc
-        m = look[sat[dst]] if n else np.zeros(0, bool)
-        near = dict(zip((src[m] * n + dst[m]).tolist(), need[m].tolist(), strict=True))
         return cls(
             n_sats=n_s,
             weight=[float(w) for w in weights],
@@ -155,10 +171,7 @@ class Problem:
             c_ls=[tuple(v) for v in np.asarray(o.start_los).tolist()],
             c_le=[tuple(v) for v in np.asarray(o.end_los).tolist()],
             tables=list(tables),
-            near=near,
-            near_src=np.asarray(src, np.int64),
-            near_dst=np.asarray(dst, np.int64),
-            near_need=np.asarray(need, np.float64),
+            pairs=near_pairs,
             far=[float(f) for f in far],
             battery=battery,
             task_cands=task_cands,

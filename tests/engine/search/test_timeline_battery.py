@@ -20,6 +20,7 @@ import pytest
 from jaxspline.aeossp.adapter import AEOSSP_MARGINS
 from jaxspline.engine.mission import Power
 from jaxspline.engine.search import BatteryModel, Problem, Timeline
+from jaxspline.engine.search.store import NearPairs
 
 DT = 5.0  # [s] battery step
 TIE = 1e-7  # [Wh] levels this close to the margin are not compared (rounding)
@@ -153,7 +154,8 @@ def _problem(rng, n_steps, n_sats=2, n_tasks=60, far=40.0):
         task_cands[o[3]].append(i)
     lo = [sat.index(k) if k in sat else n for k in range(n_sats)]
     hi = [n - sat[::-1].index(k) if k in sat else n for k in range(n_sats)]
-    z = np.zeros(0)
+    keys = np.fromiter(near, np.int64, len(near))
+    need = np.fromiter(near.values(), np.float64, len(near))
     pb = Problem(
         n_sats=n_sats,
         weight=[float(w) for w in rng.integers(1, 6, n_tasks)],
@@ -165,10 +167,7 @@ def _problem(rng, n_steps, n_sats=2, n_tasks=60, far=40.0):
         c_ls=[(0.0, 0.0, 1.0)] * n,
         c_le=[(0.0, 0.0, 1.0)] * n,
         tables=[None] * n_sats,
-        near=near,
-        near_src=z.astype(np.int64),
-        near_dst=z.astype(np.int64),
-        near_need=z,
+        pairs=NearPairs.from_arrays(n, keys // n, keys % n, need),
         far=[far] * n_sats,
         battery=bm,
         task_cands=task_cands,

@@ -1,0 +1,208 @@
+"""Feasible near transitions in 8 bytes a pair: a CSR table by destination option.
+
+The planner screens every same-satellite option pair closer than the satellite's
+always-feasible gap; the feasible ones are the graph every search stage walks. Each
+destination option owns one row, its feasible predecessors ``src[ptr[r]:ptr[r + 1]]``
+(int32 option ids, ascending) with their required times ``need`` (float32, rounded up
+so that a pair never looks cheaper than screened). Rows come in the order ``rows``
+given at construction (the DP's start order, so a block of starts is one contiguous
+range of pairs); ``row_of[j]`` is option j's row. Memory: 8 bytes a pair plus 24
+bytes an option (``nbytes``); no index is kept per pair (a pair's destination is its
+row).
+
+:class:`PairsBuilder` fills the table chunk by chunk as the screen streams its rows:
+one satellite's rows are held compactly (12 bytes a pair) until the satellite is done,
+then sorted into rows; finished satellites are copied once into the final arrays.
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+
+import numpy as np
+
+__all__ = ["NearPairs", "PairsBuilder", "start_order"]
+
+_INDEX = np.int32  # option ids of the stored pairs (< 2**31 options)
+_NEED = np.float32  # stored required times [s], rounded up
+
+
+def start_order(start, sat) -> np.ndarray:
+    """Option ids by start, then satellite: the row order of the DP.
+
+    Args:
+      start: float [N] start times [s].
+      sat: int [N] satellites.
+    Returns:
+      int64 [N].
+    """
+    return np.lexsort((np.asarray(sat), np.asarray(start))).astype(np.int64)
+
+
+def _round_up32(need) -> np.ndarray:
+    """float32 copy of ``need`` that is never below it."""
+    need = np.asarray(need, np.float64)
+    n32 = need.astype(_NEED)
+    low = n32.astype(np.float64) < need
+    n32[low] = np.nextafter(n32[low], _NEED(np.inf))
+    return n32
+
+
+class NearPairs:
+    """CSR table of feasible near pairs (module docstring).
+
+    Attributes:
+      ptr: int64 [N + 1], row starts (row j = the predecessors of option j).
+      src: int32 [P], predecessor option ids, ascending within a row.
+      need: float32 [P], required time of each pair [s] (>= the screened value).
+    """
+
+    def __init__(self, ptr, src, need, rows):
+        self.ptr = np.asarray(ptr, np.int64)
+        self.src = np.asarray(src, _INDEX)
+        self.need = np.asarray(need, _NEED)
+        self.rows = np.asarray(rows, np.int64)
+        self.row_of = np.empty_like(self.rows)
+        self.row_of[self.rows] = np.arange(self.rows.size)
+        if (
+            self.src.shape != self.need.shape
+            or self.ptr[-1] != self.src.size
+            or self.ptr.size != self.rows.size + 1
+        ):
+            raise ValueError(
+                f"NearPairs: ptr {self.ptr.shape} ending at {self.ptr[-1]}, src "
+                f"{self.src.shape}, need {self.need.shape}, rows {self.rows.shape} do "
+                "not describe one table"
+            )
+        # scalar lookups (the search's hot path) go through memoryviews: plain Python
+        # ints and floats per access, no numpy scalar boxing
+        self._mv_ptr = memoryview(self.ptr)
+        self._mv_row = memoryview(self.row_of)
+        self._mv_src = memoryview(self.src)
+        self._mv_need = memoryview(self.need)
+
+    @classmethod
+    def from_arrays(cls, n: int, src, dst, need, rows=None) -> NearPairs:
+        """Table of ``n`` options from pair arrays in any order.
+
+        Args:
+          n: number of options.
+          src, dst: int [P] option ids.
+          need: float [P] required times [s].
+          rows: int [n], the options in row order (default: by id; the search wants
+            :func:`start_order`).
+        Returns:
+          NearPairs.
+        """
+        builder = PairsBuilder(n, np.arange(n) if rows is None else rows)
+        builder.add(src, dst, need)
+        return builder.build()
+
+    def __len__(self) -> int:
+        return int(self.src.size)
+
+    @property
+    def n_options(self) -> int:
+        """Number of options (rows)."""
+        return int(self.ptr.size - 1)
+
+    @property
+    def nbytes(self) -> int:
+        """Bytes held by the table (pairs, row pointers and the row order)."""
+        arrays = (self.ptr, self.src, self.need, self.rows, self.row_of)
+        return int(sum(a.nbytes for a in arrays))
+
+    def lookup(self, i: int, j: int) -> float:
+        """Required time of the pair i -> j, or ``inf`` when it is not a feasible near pair.
+
+        Args:
+          i: int, source option id.
+          j: int, destination option id.
+        Returns:
+          float [s].
+        """
+        r = self._mv_row[j]
+        a, b = self._mv_ptr[r], self._mv_ptr[r + 1]
+        p = bisect.bisect_left(self._mv_src, i, a, b)
+        if p < b and self._mv_src[p] == i:
+            return self._mv_need[p]
+        return math.inf
+
+    def row(self, j: int) -> slice:
+        """Positions of option j's predecessors in ``src`` / ``need``."""
+        r = int(self.row_of[j])
+        return slice(int(self.ptr[r]), int(self.ptr[r + 1]))
+
+    def gather(self, options) -> tuple[np.ndarray, np.ndarray]:
+        """Pair positions and destinations of the given options' rows.
+
+        Args:
+          options: int [R] option ids.
+        Returns:
+          (idx int64 [Q] positions into ``src`` / ``need``, dst int64 [Q]).
+        """
+        r = self.row_of[np.asarray(options, np.int64)]
+        starts = self.ptr[r]
+        counts = self.ptr[r + 1] - starts
+        first = np.cumsum(counts) - counts
+        idx = np.arange(int(counts.sum()), dtype=np.int64) + np.repeat(starts - first, counts)
+        return idx, np.repeat(np.asarray(options, np.int64), counts)
+
+    def dst(self) -> np.ndarray:
+        """Destination option id of every pair (int64 [P], built on demand)."""
+        return np.repeat(self.rows, np.diff(self.ptr))
+
+
+class PairsBuilder:
+    """Fill a :class:`NearPairs` from streamed pair chunks, one satellite at a time.
+
+    Call :meth:`add` with the chunks of one satellite (any order), then :meth:`close`
+    before the next one: a closed satellite's pairs are sorted by (row, source) and
+    kept compact (8 bytes a pair) until :meth:`build` places them.
+    """
+
+    def __init__(self, n: int, rows):
+        self.n = int(n)
+        self.rows = np.asarray(rows, np.int64)
+        self.row_of = np.empty(self.n, np.int64)
+        self.row_of[self.rows] = np.arange(self.n)
+        self._open = []  # the open satellite's (src, dst, need) compact chunks
+        self._done = []  # closed satellites: (rows sorted, src, need)
+        self.counts = np.zeros(self.n, np.int64)  # pairs per row
+
+    def add(self, src, dst, need) -> None:
+        """Add feasible pairs (option ids, required times [s]) of the open satellite."""
+        if len(src):
+            self._open.append(
+                (np.asarray(src, _INDEX), np.asarray(dst, _INDEX), _round_up32(need))
+            )
+
+    def close(self) -> None:
+        """Sort the open satellite's pairs by (row, source) and keep them compact."""
+        if not self._open:
+            return
+        src = np.concatenate([c[0] for c in self._open])
+        row = self.row_of[np.concatenate([c[1] for c in self._open])]
+        need = np.concatenate([c[2] for c in self._open])
+        self._open = []
+        order = np.lexsort((src, row))
+        self.counts += np.bincount(row, minlength=self.n)
+        self._done.append((row[order].astype(_INDEX), src[order], need[order]))
+
+    def build(self) -> NearPairs:
+        """The table (closes the open satellite); the builder is emptied."""
+        self.close()
+        ptr = np.zeros(self.n + 1, np.int64)
+        np.cumsum(self.counts, out=ptr[1:])
+        src = np.empty(int(ptr[-1]), _INDEX)
+        need = np.empty(int(ptr[-1]), _NEED)
+        while self._done:  # place and free one satellite at a time
+            row, s, w = self._done.pop(0)
+            # a satellite's rows are sorted: its pairs of row r go to ptr[r] onwards
+            starts = np.flatnonzero(np.r_[True, row[1:] != row[:-1]])
+            counts = np.diff(np.r_[starts, row.size])
+            at = np.repeat(ptr[row[starts]] - starts, counts) + np.arange(row.size)
+            src[at] = s
+            need[at] = w
+        return NearPairs(ptr, src, need, self.rows)
