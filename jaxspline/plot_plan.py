@@ -5,32 +5,22 @@ atomically with :func:`jaxspline.plot.save_figure` (matplotlib, imported lazily,
 backend). Satellite k is drawn in ``SATELLITE_COLORS[k]`` (shared with the CZML export,
 :mod:`jaxspline.czml`).
 
-Coastlines are drawn offline from the land mask of the ``global_land_mask`` package
-(GLOBE 30 arc-second grid, ``True`` = ocean): the mask is streamed from the package's
-compressed file, averaged over blocks of :data:`COAST_BLOCK` x :data:`COAST_BLOCK`
-cells (0.25 deg) and contoured at land fraction 0.5. Importing
-``global_land_mask`` itself would decompress the full 0.9 GB array; streaming needs
-a few MB and about 4 s, once per process (cached).
+Coastlines are drawn offline from the land mask of the ``global_land_mask`` package,
+streamed by :func:`jaxspline.land.land_fraction` (blocks of
+:data:`jaxspline.land.COAST_BLOCK` cells, 0.25 deg), contoured at land fraction 0.5.
 """
 
 from __future__ import annotations
-
-import functools
-import importlib.util
-import zipfile
-from pathlib import Path
 
 import numpy as np
 
 from jaxspline.czml import SATELLITE_COLORS, satellite_tracks
 from jaxspline.geometry.frames import ecef_to_geodetic
+from jaxspline.land import land_fraction
 from jaxspline.plot import _plt, save_figure
 
 __all__ = ["land_fraction", "plot_plan_ground_tracks", "plot_plan_slack", "plot_plan_timeline"]
 
-COAST_BLOCK = 30  # mask cells (1/120 deg) per coastline grid cell: 0.25 deg
-_MASK_FILE = "globe_combined_mask_compressed.npz"
-_ROWS_PER_READ = 8  # coastline grid rows decompressed per read
 SECONDS_PER_HOUR = 3600.0
 NOT_IMAGED_COLOR = "0.6"  # targets the plan does not image
 LAND_COLOR = "#efeae0"
@@ -45,51 +35,6 @@ SLACK_BINS = 40
 
 def _color(k: int) -> str:
     return SATELLITE_COLORS[k % len(SATELLITE_COLORS)]
-
-
-@functools.cache
-def land_fraction(block: int = COAST_BLOCK):
-    """Land fraction on a coarse global grid, from the ``global_land_mask`` package.
-
-    Args:
-      block: mask cells (1/120 deg each) averaged per grid cell along each axis; must
-        divide 21600 and 43200 (30 gives 0.25 deg).
-    Returns:
-      ``(lat [N] deg, descending, lon [M] deg, ascending, land [N, M] in [0, 1])``,
-      cell centres. Cached per process.
-    """
-    spec = importlib.util.find_spec("global_land_mask")
-    if spec is None or not spec.submodule_search_locations:
-        raise ValueError(
-            "coastlines need the global_land_mask package (pip install global-land-mask)"
-        )
-    path = Path(next(iter(spec.submodule_search_locations))) / _MASK_FILE
-    with zipfile.ZipFile(path) as z:
-        with z.open("lat.npy") as f:
-            lat = np.load(f)
-        with z.open("lon.npy") as f:
-            lon = np.load(f)
-        with z.open("mask.npy") as f:
-            version = np.lib.format.read_magic(f)
-            shape, fortran, dtype = (
-                np.lib.format.read_array_header_1_0(f)
-                if version == (1, 0)
-                else np.lib.format.read_array_header_2_0(f)
-            )
-            nr, nc = shape
-            if fortran or dtype != np.bool_ or nr % block or nc % block:
-                raise ValueError(f"block={block!r}: mask {shape} {dtype} is not divisible by it")
-            n, m = nr // block, nc // block
-            ocean = np.empty((n, m))
-            rows = _ROWS_PER_READ
-            for i in range(0, n, rows):
-                k = min(rows, n - i)
-                buf = np.frombuffer(f.read(k * block * nc), np.uint8).reshape(k, block, nc)
-                rows_sum = buf.sum(axis=1, dtype=np.uint16).reshape(k, m, block)
-                ocean[i : i + k] = rows_sum.sum(axis=2, dtype=np.uint32) / (block * block)
-    lat_c = lat[: n * block].reshape(n, block).mean(axis=1)
-    lon_c = lon[: m * block].reshape(m, block).mean(axis=1)
-    return lat_c, lon_c, 1.0 - ocean
 
 
 def _break_antimeridian(lon_deg, lat_deg, ok):

@@ -322,14 +322,14 @@ def load_targets_csv(path) -> Targets:
 
 
 def _land_positions(ctx, rng, count, lat, lon):
-    """``count`` uniform (lat, lon) [deg] in the box, rejecting sea (global_land_mask)."""
-    from global_land_mask import globe
+    """``count`` uniform (lat, lon) [deg] in the box, rejecting sea (:func:`is_land`)."""
+    from jaxspline.land import is_land
 
     batch = max(4 * count, LAND_BATCH_MIN)
     got_lat, got_lon, have = [], [], 0
     for _ in range(LAND_SAMPLE_ROUNDS):
         la, lo = rng.uniform(*lat, batch), rng.uniform(*lon, batch)
-        keep = np.asarray(globe.is_land(la, lo), bool)
+        keep = is_land(la, lo)
         got_lat.append(la[keep])
         got_lon.append(lo[keep])
         have += int(keep.sum())

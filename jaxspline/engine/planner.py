@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import functools
 import math
+import resource
 import sys
 import time
 from typing import NamedTuple
@@ -64,12 +65,18 @@ __all__ = ["Prepared", "build_problem", "orbit_scene", "plan"]
 _RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
 _RESERVE_MIN = 1.0  # [s]
 _REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
+_REFINE_MAX_S = 10.0  # [s] ... at most (warm: ~1-3 s a round; a cold compile 6-12 s)
 _REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
 _JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
 _REFILL_S = 2.0  # [s] budget of one refill after join rejections
+
+
+def _peak_rss_mb() -> float:
+    """Peak resident set size of this process so far [MB] (Linux: ru_maxrss in KiB)."""
+    return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
 
 
 class _Clock:
@@ -81,6 +88,7 @@ class _Clock:
         self.name = name
         self.progress = progress
         self.timings = {}
+        self.peak_rss_mb = {}  # process peak RSS at the end of each stage [MB]
         self.bar = None
         self.bar_t0 = self.t0
         self.interrupted = None  # name of the signal that stopped the search
@@ -88,6 +96,7 @@ class _Clock:
     def lap(self, stage: str, msg: str = ""):
         now = time.monotonic()
         self.timings[stage] = round(now - self.last, 3)
+        self.peak_rss_mb[stage] = _peak_rss_mb()
         self.last = now
         self.say(stage, msg)
 
@@ -398,7 +407,8 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     pc = sc.planner
     sats = sc.satellites
     refining = pc.refine_steps > 0 and any(s.model == "per_channel" for s in sats)
-    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit) + refining * _REFINE_SHARE * limit
+    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
+    reserve += refining * min(_REFINE_SHARE * limit, _REFINE_MAX_S)
     tg = sc.targets
     prep = build_problem(sc, joins=flown_joins, _clock=clock)
     pb, opp, windows, scene, table, battery, far = prep
@@ -494,6 +504,8 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
         "near_pairs": len(pb.pairs),
         "pair_store_bytes": pb.pairs.nbytes,
         "far_gap_s": far.tolist(),
+        "pair_bytes": round(pb.pairs.nbytes / max(len(pb.pairs), 1), 2),
+        "peak_rss_mb": clock.peak_rss_mb,
         "bound_status": res.bound_status,
         "refined": refined,
         "exact": res.exact,
