@@ -159,7 +159,8 @@ class PairsBuilder:
 
     Call :meth:`add` with the chunks of one satellite (any order), then :meth:`close`
     before the next one: a closed satellite's pairs are sorted by (row, source) and
-    kept compact (8 bytes a pair) until :meth:`build` places them.
+    kept compact (8 bytes a pair) until :meth:`build` places them (peak: 16 bytes a
+    pair, while the last satellites move into the final table).
     """
 
     def __init__(self, n: int, rows):
@@ -168,7 +169,7 @@ class PairsBuilder:
         self.row_of = np.empty(self.n, np.int64)
         self.row_of[self.rows] = np.arange(self.n)
         self._open = []  # the open satellite's (src, dst, need) compact chunks
-        self._done = []  # closed satellites: (rows sorted, src, need)
+        self._done = []  # closed satellites: (rows, pairs per row, src, need) by row
         self.counts = np.zeros(self.n, np.int64)  # pairs per row
 
     def add(self, src, dst, need) -> None:
@@ -187,8 +188,10 @@ class PairsBuilder:
         need = np.concatenate([c[2] for c in self._open])
         self._open = []
         order = np.lexsort((src, row))
-        self.counts += np.bincount(row, minlength=self.n)
-        self._done.append((row[order].astype(_INDEX), src[order], need[order]))
+        rows, counts = np.unique(row, return_counts=True)  # sorted rows of this satellite
+        del row
+        self.counts[rows] += counts
+        self._done.append((rows, counts, src[order], need[order]))
 
     def build(self) -> NearPairs:
         """The table (closes the open satellite); the builder is emptied."""
@@ -198,11 +201,11 @@ class PairsBuilder:
         src = np.empty(int(ptr[-1]), _INDEX)
         need = np.empty(int(ptr[-1]), _NEED)
         while self._done:  # place and free one satellite at a time
-            row, s, w = self._done.pop(0)
-            # a satellite's rows are sorted: its pairs of row r go to ptr[r] onwards
-            starts = np.flatnonzero(np.r_[True, row[1:] != row[:-1]])
-            counts = np.diff(np.r_[starts, row.size])
-            at = np.repeat(ptr[row[starts]] - starts, counts) + np.arange(row.size)
+            rows, counts, s, w = self._done.pop(0)
+            # a satellite's pairs are sorted by row: those of row r go to ptr[r] onwards
+            first = np.cumsum(counts) - counts
+            at = np.repeat(ptr[rows] - first, counts) + np.arange(s.size)
             src[at] = s
             need[at] = w
+            del s, w, at
         return NearPairs(ptr, src, need, self.rows)
