@@ -72,6 +72,7 @@ _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + sla
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
 _JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
 _REFILL_S = 2.0  # [s] budget of one refill after join rejections
+_REFILL_ITERS = 2000  # LNS iterations of one refill in iteration-capped runs
 
 
 def _peak_rss_mb() -> float:
@@ -441,6 +442,8 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
             refine_steps=steps,
             flown_joins=flown_joins,
             refill_s=math.inf if max_iters is not None else _REFILL_S,
+            refill_iters=_REFILL_ITERS if max_iters is not None else None,
+            seed=seed,
             report=clock.say,
         )
     search_clock.clear_stop()

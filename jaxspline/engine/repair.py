@@ -14,7 +14,8 @@ degree-7 join check (:func:`jaxspline.engine.plan_joins.reject_unflyable`). One 
    dropped, until the check passes;
 3. **joins** (``flown_joins``): observations whose joins exceed a limit are dropped and
    withdrawn from the search for good; in the first ``_REFILL_ROUNDS`` rounds the
-   search's timeline then fills the freed time greedily and a new round starts.
+   search's timeline then fills the freed time (greedy; in the first refill also a
+   short LNS) and a new round starts.
 
 Invariants:
 
@@ -34,13 +35,14 @@ times) or only removes them.
 
 from __future__ import annotations
 
+import random
 import time
 from typing import NamedTuple
 
 from jaxspline.engine.plan_check import check_plan
 from jaxspline.engine.plan_joins import reject_unflyable
 from jaxspline.engine.refine_starts import refine_starts
-from jaxspline.engine.search import clock, greedy
+from jaxspline.engine.search import clock, greedy, lns
 
 __all__ = ["DROP_REASONS", "Repaired", "repair"]
 
@@ -106,8 +108,9 @@ def _drop_until_clean(sc, scene, table_ok, opp, chosen, battery, det, dropped):
         det = None
 
 
-def _refill(tl, chosen, seconds):
-    """Fill the freed time of ``chosen`` greedily in the search's timeline.
+def _refill(tl, chosen, seconds, iters, seed):
+    """Fill the freed time of ``chosen`` in the search's timeline: a greedy pass, then
+    a short LNS (``iters`` iterations or until ``seconds`` have passed).
 
     Returns (option ids of the plan, observations added).
     """
@@ -115,7 +118,10 @@ def _refill(tl, chosen, seconds):
     for c in chosen:
         assigned[tl.pb.c_task[c]] = c
     tl.restore(assigned)
-    greedy(tl, time.monotonic() + seconds)
+    deadline = time.monotonic() + seconds
+    greedy(tl, deadline)
+    if iters is None or iters > 0:
+        lns(tl, deadline, random.Random(seed), iters)
     new = [c for c in tl.assigned if c >= 0]
     return new, len(new) - len(chosen)
 
@@ -139,6 +145,8 @@ def repair(
     refine_steps: int = 0,
     flown_joins: bool = False,
     refill_s: float = 2.0,
+    refill_iters: int | None = None,
+    seed: int = 0,
     report=None,
 ) -> Repaired:
     """Run the repair loop (module docstring) on the search's final timeline.
@@ -152,7 +160,10 @@ def repair(
       battery: BatteryModel of the scenario.
       refine_steps: Adam steps of the start-time refinement (0: no refinement).
       flown_joins: also check the degree-7 joins and refill after rejections.
-      refill_s: budget of one refill [s] (``math.inf``: until the greedy pass is done).
+      refill_s: budget of one refill [s] (greedy pass, then LNS).
+      refill_iters: LNS iterations of one refill (None: ``refill_s`` alone; give a
+        number with ``refill_s = inf`` for reproducible runs).
+      seed: seed of the refills' LNS.
       report: callable ``report(stage, message)`` or None.
     Returns:
       Repaired.
@@ -188,7 +199,10 @@ def repair(
         det = None
         if refills_left > 0 and not clock.stop_requested():
             refills_left -= 1
-            chosen, gain = _refill(tl, chosen, refill_s)
+            # LNS in the first refill only: a later one would pack new joins that the
+            # last round can only drop
+            iters = refill_iters if refills_left == _REFILL_ROUNDS - 1 else 0
+            chosen, gain = _refill(tl, chosen, refill_s, iters, seed + rounds)
             refilled += gain
             refine = refine_steps > 0 and gain > 0  # refined times follow the new set
     return Repaired(chosen, opp, det, dropped, found, refined, joins, refilled, rounds)

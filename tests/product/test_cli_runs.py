@@ -1,7 +1,7 @@
 """``jaxspline plan`` as a user runs it: separate processes, repeat runs, signals.
 
 * ``--max-iters N`` twice (different hash seeds, so no set or dict order can leak
-  into the plan): plan.json is identical except for the timings;
+  into the plan): plan.json is identical except for the measured times and memory;
 * SIGINT / SIGTERM during the search: exit 130, the best plan so far checked and
   written whole (valid JSON, CSV rows = observations, ``report.interrupted`` named,
   no temporary file left), a line on stderr says so.
@@ -52,6 +52,7 @@ def _cmd(scen, out, *extra):
 def _plan_json(out):
     data = json.loads((out / "plan.json").read_text())
     data.pop("timings_s")
+    data["stats"].pop("peak_rss_mb")  # measurements, not the plan
     return data
 
 

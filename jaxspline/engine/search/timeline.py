@@ -72,6 +72,7 @@ class Timeline:
         self.log = []
         self.cache = {}
         self.saved = {}
+        self._n = pb.n_options  # key stride of the need cache
 
     # ------------------------------------------------------------ transitions
     def need(self, i: int, j: int) -> float:
@@ -83,7 +84,7 @@ class Timeline:
         Returns:
           float [s].
         """
-        key = i * self.pb.n_options + j
+        key = i * self._n + j
         v = self.cache.get(key)
         if v is None:
             if len(self.cache) > _CACHE_LIMIT:
