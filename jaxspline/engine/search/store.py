@@ -175,9 +175,7 @@ class PairsBuilder:
     def add(self, src, dst, need) -> None:
         """Add feasible pairs (option ids, required times [s]) of the open satellite."""
         if len(src):
-            self._open.append(
-                (np.asarray(src, _INDEX), np.asarray(dst, _INDEX), _round_up32(need))
-            )
+            self._open.append((np.asarray(src, _INDEX), np.asarray(dst, _INDEX), _round_up32(need)))
 
     def close(self) -> None:
         """Sort the open satellite's pairs by (row, source) and keep them compact."""
