@@ -178,6 +178,19 @@ def _time_v_peak_mb(path: Path) -> float | None:
     return round(int(m.group(1)) / 1024, 1) if m else None
 
 
+def made_by(scenario: Path | None) -> str | None:
+    """The generator command in a generated scenario's header comment, if any."""
+    if scenario is None:
+        return None
+    try:
+        with open(scenario, encoding="utf-8") as fh:
+            head = "".join(fh.readline() for _ in range(3))
+    except OSError:
+        return None
+    m = re.search(r"^#\s+(python scripts/make_scale_scenario\.py .*)$", head, re.M)
+    return m.group(1) if m else None
+
+
 def _last_stage(log: Path) -> str | None:
     """The last stage the planner reported on stderr (``[plan NAME] stage ...``)."""
     try:
@@ -219,7 +232,7 @@ def parse_plan_json(path: Path) -> dict:
     if gap is not None and bound:
         gap_pct = round(100.0 * gap / bound, 3)
     return {
-        "scenario": _get(doc, "summary.scenario"),
+        "scenario_name": _get(doc, "summary.scenario"),
         "satellites": _get(doc, "summary.satellites"),
         "targets": _get(doc, "summary.targets"),
         "observations": _get(doc, "summary.observations"),
@@ -257,6 +270,7 @@ def run_size(label, scenario, time_limit, max_rss_gb, max_wall_min, workdir: Pat
     out = {
         "size": label,
         "scenario": str(scenario) if scenario is not None else "(packaged default)",
+        "made_by": made_by(scenario),
         "command": " ".join(plan),
         "time_limit_s": time_limit,
         "load_avg_before": round(load, 2),
@@ -388,6 +402,10 @@ def scale_table(report: dict) -> list[str]:
         cells = [f"{_f(t.get(s), '{:.2f}')} / {_f(m.get(s), '{:.0f}')}" for s in stages]
         cells += [_f(r.get("other_s"), "{:.1f}"), _f(r.get("last_stage"))]
         lines.append(f"| {r['size']} | " + " | ".join(cells) + " |")
+    lines.append(
+        "\nScenarios: "
+        + "; ".join(f"{r['size']} = `{r.get('made_by') or r.get('scenario', '-')}`" for r in runs)
+    )
     for r in runs:
         if r.get("killed"):
             lines.append(

@@ -82,3 +82,12 @@ def test_plan_json_fields_and_missing_ones(tmp_path):
     assert "| bare | - | - | 1 |" in text and "| dead | - | - | killed |" in text
     assert "| full | 0.50 / 200 | 2.00 / 300 |" in text
     assert "dead: killed, RSS" in text
+
+
+def test_made_by_reads_the_generator_command(tmp_path):
+    toml = tmp_path / "t.toml"
+    toml.write_text(
+        "# Scale scenario 't'\n#   python scripts/make_scale_scenario.py --out t.toml\n"
+    )
+    assert scale.made_by(toml) == "python scripts/make_scale_scenario.py --out t.toml"
+    assert scale.made_by(None) is None and scale.made_by(tmp_path / "none.toml") is None
