@@ -35,8 +35,8 @@ def _parse(argv):
     p.add_argument(
         "--section",
         action="append",
-        choices=["bandwidth", "kernels", "threads", "devices", "screening"],
-        help="run only these sections (repeatable)",
+        choices=["bandwidth", "kernels", "threads", "devices", "screening", "scale"],
+        help="run only these sections (repeatable; scale runs only when named)",
     )
     p.add_argument(
         "--only",
@@ -49,6 +49,30 @@ def _parse(argv):
         action="append",
         type=int,
         help="screening section: route counts (repeatable; default 1000 2000 5000 10000)",
+    )
+    p.add_argument(
+        "--sizes",
+        default="default,12x12h,day",
+        help="scale section: comma-separated sizes, default / 12x12h / day or a scenario "
+        "TOML (default default,12x12h,day)",
+    )
+    p.add_argument(
+        "--time-limit", type=float, default=60.0, help="scale section: planning budget [s]"
+    )
+    p.add_argument(
+        "--max-rss-gb",
+        type=float,
+        default=8.0,
+        help="scale section: kill a plan whose process tree exceeds this RSS (default 8)",
+    )
+    p.add_argument(
+        "--max-wall-min",
+        type=float,
+        default=60.0,
+        help="scale section: kill a plan running longer than this (default 60 min)",
+    )
+    p.add_argument(
+        "--scale-dir", help="scale section: keep scenarios and plans here (default: a temp dir)"
     )
     p.add_argument("--child", help=argparse.SUPPRESS)  # internal: run one measurement, print JSON
     return p.parse_args(argv)
@@ -354,10 +378,20 @@ def main(argv=None) -> int:
     if "screening" in sections:
         counts = args.routes or ([300, 1000] if args.quick else SCREEN_ROUTES)
         report["screening"] = bench_screening(counts, max(3, args.reps // 2))
-    report["total_s"] = time.perf_counter() - t_all
-    from bench.report import write_outputs
+    if "scale" in sections:
+        from bench.scale import bench_scale, write_scale
 
-    write_outputs(report, out)
+        sizes = [s.strip() for s in args.sizes.split(",") if s.strip()]
+        report["scale"] = bench_scale(
+            sizes, args.time_limit, args.max_rss_gb, args.max_wall_min, args.scale_dir
+        )
+    report["total_s"] = time.perf_counter() - t_all
+    if "scale" in sections:  # its own files: scale.json, SCALE.md
+        write_scale({k: v for k, v in report.items() if k not in sections - {"scale"}}, out)
+    if sections - {"scale"}:
+        from bench.report import write_outputs
+
+        write_outputs({k: v for k, v in report.items() if k != "scale"}, out)
     return 0
 
 

@@ -1,0 +1,427 @@
+"""Scale section: whole ``jaxspline plan`` runs as subprocesses, peak RSS and stage times.
+
+``python -m bench --section scale [--sizes default,12x12h,day] [--time-limit S]
+[--max-rss-gb G]`` plans each size with
+
+    jaxspline plan [SCENARIO] --no-aem --no-plots --time-limit S -o DIR
+
+(``python -m jaxspline.cli``, so the checkout's package runs) under
+``/usr/bin/time -v`` (its ``Maximum resident set size`` is the peak RSS), reads
+``DIR/plan.json`` (stage timings, per-stage peak RSS, windows, options, near pairs,
+pair-store bytes, value, bound, gap, check) and writes ``scale.json`` and ``SCALE.md``
+into the output folder. Plots are skipped: they measure matplotlib, not the planner.
+
+Sizes: ``default`` (the packaged default job, no scenario argument), ``12x12h`` (made
+by ``scripts/make_scale_scenario.py --preset 12x12h`` into the work folder),
+``day`` (the packaged ``jaxspline/data/constellation_day.toml``), or a path to any
+scenario TOML. A field missing from ``plan.json`` (an older or newer planner, or a
+killed run) is shown as "-".
+
+Memory guard: the child's process tree is polled every ``POLL_S`` (resident set of
+every process in it, from ``/proc``, or psutil when installed); above ``--max-rss-gb``
+the whole process group is killed (SIGKILL) and the run is reported as killed with the
+last stage it finished. The child may overshoot by what it allocates in one poll
+interval. ``RLIMIT_AS`` is no use here: XLA reserves far more address space than it
+touches. A wall-clock cap (``--max-wall-min``) kills a run the same way.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[1]
+DAY_TOML = REPO / "jaxspline" / "data" / "constellation_day.toml"
+GENERATOR = REPO / "scripts" / "make_scale_scenario.py"
+SIZES = ("default", "12x12h", "day")
+POLL_S = 0.1
+MAX_RSS_GB = 8.0  # default guard: a third of the shared 24 GB machine
+MAX_WALL_MIN = 60.0
+TIME_BIN = "/usr/bin/time"
+_STAGE_LINE = re.compile(r"\[plan [^\]]*\] (\w+)\s")
+
+
+# ------------------------------------------------------------------ sizes
+def resolve_size(token: str, workdir: Path) -> tuple[str, Path | None]:
+    """(label, scenario TOML or None for the packaged default) of a ``--sizes`` token."""
+    if token == "default":
+        return token, None
+    if token == "day":
+        return token, DAY_TOML
+    if token == "12x12h":
+        path = workdir / "scale_12x12h.toml"
+        if not path.exists():
+            cmd = [sys.executable, str(GENERATOR), "--preset", "12x12h", "--out", str(path)]
+            subprocess.run(cmd, check=True, capture_output=True, text=True, env=_child_env())
+        return token, path
+    path = Path(token)
+    if path.suffix == ".toml" and path.is_file():
+        return path.stem, path
+    raise SystemExit(f"--sizes: unknown size {token!r} (use {', '.join(SIZES)} or a .toml file)")
+
+
+def _child_env() -> dict:
+    """The environment with this checkout first on PYTHONPATH (its jaxspline runs)."""
+    env = dict(os.environ)
+    env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO), env.get("PYTHONPATH")) if p)
+    return env
+
+
+# ------------------------------------------------------------------ memory of a process tree
+def _children_proc(pid: int) -> list[int]:
+    out = []
+    try:
+        for tid in os.listdir(f"/proc/{pid}/task"):
+            with open(f"/proc/{pid}/task/{tid}/children") as fh:
+                out += [int(x) for x in fh.read().split()]
+    except OSError:
+        pass
+    return out
+
+
+def _rss_proc(pid: int) -> int:
+    try:
+        with open(f"/proc/{pid}/status") as fh:
+            for line in fh:
+                if line.startswith("VmRSS:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 0
+
+
+def tree_rss_bytes(pid: int) -> int:
+    """Resident set of ``pid`` and all its descendants [bytes] (0 once it is gone)."""
+    try:
+        import psutil
+    except ImportError:
+        psutil = None
+    if psutil is not None:
+        try:
+            root = psutil.Process(pid)
+            procs = [root, *root.children(recursive=True)]
+        except psutil.Error:
+            return 0
+        total = 0
+        for p in procs:
+            try:
+                total += p.memory_info().rss
+            except psutil.Error:
+                pass
+        return total
+    total, todo, seen = 0, [pid], set()
+    while todo:
+        p = todo.pop()
+        if p in seen:
+            continue
+        seen.add(p)
+        total += _rss_proc(p)
+        todo += _children_proc(p)
+    return total
+
+
+# ------------------------------------------------------------------ one run
+def run_guarded(cmd, log: Path, max_rss_bytes: float, max_wall_s: float, env=None) -> dict:
+    """Run ``cmd`` in its own process group, output to ``log``, killed over the caps.
+
+    Returns:
+      dict: ``exit`` (code, or -signal), ``wall_s``, ``polled_peak_rss_mb``, ``killed``
+      (None, or why).
+    """
+    t0 = time.monotonic()
+    peak, killed = 0, None
+    with open(log, "wb") as fh:
+        proc = subprocess.Popen(
+            cmd, stdout=fh, stderr=subprocess.STDOUT, env=env, start_new_session=True
+        )
+        try:
+            while proc.poll() is None:
+                rss = tree_rss_bytes(proc.pid)
+                peak = max(peak, rss)
+                if rss > max_rss_bytes:
+                    killed = f"RSS {rss / 2**30:.3g} GB > {max_rss_bytes / 2**30:g} GB"
+                elif time.monotonic() - t0 > max_wall_s:
+                    killed = f"wall time > {max_wall_s:g} s"
+                if killed:
+                    os.killpg(proc.pid, signal.SIGKILL)
+                    proc.wait()
+                    break
+                time.sleep(POLL_S)
+        except BaseException:  # Ctrl-C of the bench: take the child down with it
+            if proc.poll() is None:
+                os.killpg(proc.pid, signal.SIGKILL)
+                proc.wait()
+            raise
+    return {
+        "exit": proc.returncode,
+        "wall_s": round(time.monotonic() - t0, 2),
+        "polled_peak_rss_mb": round(peak / 2**20, 1),
+        "killed": killed,
+    }
+
+
+def _time_v_peak_mb(path: Path) -> float | None:
+    """``Maximum resident set size`` [MB] from a ``/usr/bin/time -v -o`` file."""
+    try:
+        text = path.read_text(errors="replace")
+    except OSError:
+        return None
+    m = re.search(r"Maximum resident set size \(kbytes\): (\d+)", text)
+    return round(int(m.group(1)) / 1024, 1) if m else None
+
+
+def made_by(scenario: Path | None) -> str | None:
+    """The generator command in a generated scenario's header comment, if any."""
+    if scenario is None:
+        return None
+    try:
+        with open(scenario, encoding="utf-8") as fh:
+            head = "".join(fh.readline() for _ in range(3))
+    except OSError:
+        return None
+    m = re.search(r"^#\s+(python scripts/make_scale_scenario\.py .*)$", head, re.M)
+    return m.group(1) if m else None
+
+
+def _last_stage(log: Path) -> str | None:
+    """The last stage the planner reported on stderr (``[plan NAME] stage ...``)."""
+    try:
+        text = log.read_text(errors="replace")
+    except OSError:
+        return None
+    stages = _STAGE_LINE.findall(text.replace("\r", "\n"))
+    return stages[-1] if stages else None
+
+
+def _get(d, *paths, default=None):
+    """The first present value among dotted ``paths`` of nested dict ``d``."""
+    for path in paths:
+        x = d
+        for key in path.split("."):
+            if not isinstance(x, dict) or key not in x:
+                break
+            x = x[key]
+        else:
+            if x is not None:
+                return x
+    return default
+
+
+def parse_plan_json(path: Path) -> dict:
+    """The scale figures of one ``plan.json``; every field may be None (missing)."""
+    try:
+        doc = json.loads(path.read_text())
+    except (OSError, ValueError):
+        return {}
+    near = _get(doc, "stats.near_pairs")
+    store = _get(doc, "stats.pair_store_bytes", "stats.store_bytes")
+    per_pair = _get(doc, "stats.pair_bytes", "stats.bytes_per_pair")
+    if per_pair is None and store is not None and near:
+        per_pair = round(store / near, 2)
+    value, bound = _get(doc, "summary.value"), _get(doc, "summary.bound")
+    gap = _get(doc, "summary.gap")
+    gap_pct = None
+    if gap is not None and bound:
+        gap_pct = round(100.0 * gap / bound, 3)
+    return {
+        "scenario_name": _get(doc, "summary.scenario"),
+        "satellites": _get(doc, "summary.satellites"),
+        "targets": _get(doc, "summary.targets"),
+        "observations": _get(doc, "summary.observations"),
+        "windows": _get(doc, "stats.windows"),
+        "options": _get(doc, "stats.options"),
+        "near_pairs": near,
+        "store_bytes": store,
+        "bytes_per_pair": per_pair,
+        "value": value,
+        "bound": bound,
+        "gap": gap,
+        "gap_pct": gap_pct,
+        "bound_status": _get(doc, "stats.bound_status"),
+        "valid": _get(doc, "summary.valid", "report.valid"),
+        "timings_s": _get(doc, "timings_s", default={}),
+        "stage_peak_rss_mb": _get(doc, "stats.peak_rss_mb", default={}),
+    }
+
+
+def run_size(label, scenario, time_limit, max_rss_gb, max_wall_min, workdir: Path) -> dict:
+    """Plan one size in a subprocess and collect its figures."""
+    outdir = workdir / f"plan_{label}"
+    if outdir.exists():
+        shutil.rmtree(outdir)
+    plan = [sys.executable, "-m", "jaxspline.cli", "plan"]
+    plan += [str(scenario)] if scenario is not None else []
+    plan += ["--no-aem", "--no-plots", "--time-limit", f"{time_limit:g}", "-o", str(outdir)]
+    time_file = workdir / f"time_{label}.txt"
+    has_time = Path(TIME_BIN).is_file()
+    cmd = ([TIME_BIN, "-v", "-o", str(time_file)] if has_time else []) + plan
+    log = workdir / f"plan_{label}.log"
+    load = os.getloadavg()[0]
+    res = run_guarded(cmd, log, max_rss_gb * 2**30, 60.0 * max_wall_min, env=_child_env())
+    peak = _time_v_peak_mb(time_file) if has_time and not res["killed"] else None
+    out = {
+        "size": label,
+        "scenario": str(scenario) if scenario is not None else "(packaged default)",
+        "made_by": made_by(scenario),
+        "command": " ".join(plan),
+        "time_limit_s": time_limit,
+        "load_avg_before": round(load, 2),
+        **res,
+        "peak_rss_mb": peak if peak is not None else res["polled_peak_rss_mb"],
+        "peak_rss_source": "time -v" if peak is not None else "polled",
+        "last_stage": _last_stage(log),
+        **parse_plan_json(outdir / "plan.json"),
+    }
+    stages = sum(out["timings_s"].values()) if out.get("timings_s") else None
+    out["other_s"] = round(res["wall_s"] - stages, 2) if stages is not None else None
+    if res["exit"] != 0:
+        try:
+            out["log_tail"] = log.read_text(errors="replace").replace("\r", "\n")[-1500:]
+        except OSError:
+            pass
+    return out
+
+
+def bench_scale(
+    sizes: list[str],
+    time_limit: float,
+    max_rss_gb: float = MAX_RSS_GB,
+    max_wall_min: float = MAX_WALL_MIN,
+    workdir: str | None = None,
+) -> dict:
+    """Run every size in turn (one subprocess each); the section's report."""
+    tmp = None
+    if workdir is None:
+        tmp = tempfile.TemporaryDirectory(prefix="jaxspline_scale_")
+        wd = Path(tmp.name)
+    else:
+        wd = Path(workdir)
+        wd.mkdir(parents=True, exist_ok=True)
+    runs = []
+    try:
+        for token in sizes:
+            label, scenario = resolve_size(token, wd)
+            print(f"scale: planning {label} ({time_limit:g} s limit) ...", flush=True)
+            r = run_size(label, scenario, time_limit, max_rss_gb, max_wall_min, wd)
+            runs.append(r)
+            print("  " + summary_line(r), flush=True)
+    finally:
+        if tmp is not None:
+            tmp.cleanup()
+    return {
+        "sizes": sizes,
+        "time_limit_s": time_limit,
+        "max_rss_gb": max_rss_gb,
+        "workdir": None if tmp else str(wd),
+        "runs": runs,
+    }
+
+
+# ------------------------------------------------------------------ report
+def _f(x, fmt="{:.3g}") -> str:
+    if x is None or x == {}:
+        return "-"
+    if isinstance(x, bool):
+        return "yes" if x else "NO"
+    try:
+        return fmt.format(x)
+    except (TypeError, ValueError):  # e.g. "{:d}" of a float from a newer plan.json
+        return str(x)
+
+
+def summary_line(r: dict) -> str:
+    """One progress line of a finished run."""
+    state = f"killed ({r['killed']})" if r.get("killed") else f"exit {r['exit']}"
+    return (
+        f"{r['size']}: {state}, wall {_f(r['wall_s'], '{:.1f}')} s, peak RSS "
+        f"{_f(r['peak_rss_mb'], '{:.0f}')} MB, options {_f(r.get('options'), '{:d}')}, "
+        f"pairs {_f(r.get('near_pairs'), '{:d}')}, value {_f(r.get('value'), '{:g}')}, "
+        f"gap {_f(r.get('gap_pct'), '{:.2f}')} %, last stage {_f(r.get('last_stage'))}"
+    )
+
+
+def scale_table(report: dict) -> list[str]:
+    """Markdown: one summary row per size, then per-stage wall time and peak RSS."""
+    runs = report.get("runs", [])
+    lines = [
+        f"\nScale runs: `jaxspline plan --no-aem --no-plots --time-limit "
+        f"{report.get('time_limit_s', 0):g}`, one subprocess each, guard "
+        f"{report.get('max_rss_gb', 0):g} GB RSS.",
+        "\n| size | sats | targets | exit | wall s | peak RSS MB | windows | options | near pairs "
+        "| bytes/pair | store MB | value | bound | gap % | valid | load |",
+        "|" + "---|" * 16,
+    ]
+    for r in runs:
+        state = "killed" if r.get("killed") else str(r.get("exit"))
+        store = r.get("store_bytes")
+        lines.append(
+            "| "
+            + " | ".join(
+                [
+                    r["size"],
+                    _f(r.get("satellites"), "{:d}"),
+                    _f(r.get("targets"), "{:d}"),
+                    state,
+                    _f(r.get("wall_s"), "{:.1f}"),
+                    _f(r.get("peak_rss_mb"), "{:.0f}"),
+                    _f(r.get("windows"), "{:d}"),
+                    _f(r.get("options"), "{:d}"),
+                    _f(r.get("near_pairs"), "{:d}"),
+                    _f(r.get("bytes_per_pair"), "{:.2f}"),
+                    _f(None if store is None else store / 1e6, "{:.1f}"),
+                    _f(r.get("value"), "{:g}"),
+                    _f(r.get("bound"), "{:.6g}"),
+                    _f(r.get("gap_pct"), "{:.2f}"),
+                    _f(r.get("valid")),
+                    _f(r.get("load_avg_before"), "{:.2f}"),
+                ]
+            )
+            + " |"
+        )
+    stages = []
+    for r in runs:
+        for k in list(r.get("timings_s") or {}) + list(r.get("stage_peak_rss_mb") or {}):
+            if k not in stages:
+                stages.append(k)
+    lines += [
+        "\nPer stage: wall s / process peak RSS MB at the stage's end (plan.json); "
+        "*other* = wall time outside the stages (start-up, load, compile cache, writing).",
+        "\n| size | " + " | ".join(stages + ["other s", "last stage done"]) + " |",
+        "|" + "---|" * (len(stages) + 3),
+    ]
+    for r in runs:
+        t, m = r.get("timings_s") or {}, r.get("stage_peak_rss_mb") or {}
+        cells = [f"{_f(t.get(s), '{:.2f}')} / {_f(m.get(s), '{:.0f}')}" for s in stages]
+        cells += [_f(r.get("other_s"), "{:.1f}"), _f(r.get("last_stage"))]
+        lines.append(f"| {r['size']} | " + " | ".join(cells) + " |")
+    lines.append(
+        "\nScenarios: "
+        + "; ".join(f"{r['size']} = `{r.get('made_by') or r.get('scenario', '-')}`" for r in runs)
+    )
+    for r in runs:
+        if r.get("killed"):
+            lines.append(
+                f"\n{r['size']}: killed, {r['killed']}, after stage {_f(r.get('last_stage'))} "
+                "(the next one was running)."
+            )
+    return lines
+
+
+def write_scale(report: dict, out: Path) -> None:
+    """Write ``scale.json`` and ``SCALE.md`` into ``out`` and print the tables."""
+    from jaxspline.engine._io import atomic_write_text
+
+    text = "\n".join(scale_table(report["scale"])).lstrip("\n")
+    print("\n" + text)
+    out.mkdir(parents=True, exist_ok=True)
+    atomic_write_text(out / "scale.json", json.dumps(report, indent=1, default=str) + "\n")
+    atomic_write_text(out / "SCALE.md", "# Scale runs (issue 21)\n\n" + text + "\n")
+    print(f"\nwrote {out}/scale.json, SCALE.md")
