@@ -24,7 +24,8 @@ scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
   by the timeline (zoom or pan it) filter the map's tracks, footprints and imaged
   targets (a few lines of ``CustomJS`` set the renderers' ``BooleanFilter``); the
   battery lines of unchecked satellites are hidden; ``filter_status`` says what is
-  shown.
+  shown; a click on an imaged target zooms the timeline to its observation
+  +- :data:`PASS_PAD_S` (and so the map to that pass).
 
 A ``plan.json`` without the ``"view"`` section (older jaxspline) still gives the
 header and the timeline; the map then has the coastlines only.
@@ -87,6 +88,16 @@ status.text = `map shows ${names.length} of ${boxes.labels.length} satellites ` 
   `(${names.join(", ") || "none"}), ${iso(a)} to ${iso(b)} UTC`
 """
 _ALL_JS = "boxes.active = boxes.labels.map((_, k) => k)"
+# a click on an imaged target zooms the timeline (and so the map) to its pass
+_TAP_JS = """
+const i = src.selected.indices[0]
+if (i !== undefined) {
+  const d = src.data
+  const [lo, hi] = xr.bounds
+  xr.setv({start: Math.max(d.t0[i] - pad, lo), end: Math.min(d.t1[i] + pad, hi)})
+}
+"""
+PASS_PAD_S = 600.0  # a click on a target shows its observation +- this in the timeline [s]
 
 
 def read_plan(path) -> dict:
@@ -654,7 +665,7 @@ def plan_page(doc):
       a Bokeh layout model.
     """
     from bokeh.layouts import column, row
-    from bokeh.models import Button, CheckboxGroup, CustomJS, Div
+    from bokeh.models import Button, CheckboxGroup, CustomJS, Div, TapTool
 
     sats = _satellites(doc)
     obs = _observation_columns(doc, sats)
@@ -672,6 +683,12 @@ def plan_page(doc):
     )
     show_all = Button(label="all satellites", width=CONTROLS_WIDTH - 20, name="all_satellites")
     status = Div(text="", width=MAP_WIDTH + CONTROLS_WIDTH, name="filter_status")
+    imaged = next(r for r in filt if r.name == "targets_imaged")
+    tap = TapTool(renderers=[imaged], behavior="select")
+    fmap.add_tools(tap)
+    tap.callback = CustomJS(
+        args={"src": imaged.data_source, "xr": x_range, "pad": PASS_PAD_S * _MS}, code=_TAP_JS
+    )
     args = {"boxes": boxes, "xr": x_range, "filtered": filt, "battery": lines, "status": status}
     cb = CustomJS(args=args, code=_FILTER_JS)
     boxes.js_on_change("active", cb)
@@ -684,8 +701,9 @@ def plan_page(doc):
             "<b>satellites</b> (check to show on the map)"
             f'<div style="font-size:12px">{legend}</div>'
             f'<p style="font-size:12px">{n_obs} observations; {max(n_tg - n_obs, 0)} '
-            "targets not imaged (grey). Hover a target for who images it when; "
-            "wheel / box zoom the map; zoom the timeline to a pass.</p>"
+            "targets not imaged (grey). Hover a target for who images it when, click it "
+            "to zoom the timeline to its pass; wheel / box zoom the map; zoom or pan the "
+            "timeline to filter the map by time.</p>"
         ),
         width=CONTROLS_WIDTH,
     )

@@ -31,7 +31,7 @@ from jaxspline.engine.mission import Area, Satellite, Scenario, make_targets
 from jaxspline.engine.result import Observations, PlanResult
 from jaxspline.geometry.orbit import circular_orbit
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.plan_html import plan_document, read_plan
+from jaxspline.plan_html import PASS_PAD_S, plan_document, read_plan
 from jaxspline.plan_view import view_data
 
 ISS_TLE = (
@@ -282,7 +282,7 @@ def test_imaged_target_glyphs_are_the_observations(loaded, page):
     assert level == pytest.approx(doc["view"]["battery"]["alpha"]["level_wh"], abs=1e-9)
 
 
-def test_hover_on_a_target_shows_its_tooltip(loaded, page):
+def test_hover_on_a_target_shows_its_tooltip_and_a_click_zooms_to_its_pass(loaded, page):
     pg, _, _ = loaded
     _, doc, _ = page
     i = 2  # an isolated point target (the targets are spread in longitude)
@@ -296,6 +296,14 @@ def test_hover_on_a_target_shows_its_tooltip(loaded, page):
     o = doc["observations"][i]
     assert o["satellite"] in text and "off-nadir" in text and "slack" in text
     assert o["start_utc"][11:19] in text  # start time (UTC)
+    pg.mouse.click(xy["x"], xy["y"])  # a click zooms the timeline to the pass
+    pg.wait_for_timeout(200)
+    xr = _model(pg, "timeline", "[m.x_range.start, m.x_range.end]")
+    epoch = dt.datetime.fromisoformat(doc["view"]["epoch_utc"]).timestamp() * 1e3
+    pad = 1e3 * PASS_PAD_S
+    assert xr == pytest.approx([epoch + 1e3 * o["start_s"] - pad, epoch + 1e3 * o["end_s"] + pad])
+    assert _model(pg, "targets_imaged", "m.view.filter.booleans.filter((b) => b).length") == 1
+    _model(pg, "timeline", f"m.x_range.setv({{start: {epoch}, end: {epoch + 1e3 * DURATION}}})")
     pg.mouse.move(5, 5)
 
 
