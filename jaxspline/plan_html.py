@@ -19,7 +19,7 @@ scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
   slack;
 * ``timeline``: per-satellite Gantt chart of imaging (``imaging``) and maneuvers
   (``maneuvers``), and ``battery`` below (``battery-<satellite>`` lines) on the same
-  time axis;
+  time axis (a note when no satellite has a power model);
 * linking: the satellite check boxes (``satellite_filter``) and the time range shown
   by the timeline (zoom or pan it) filter the map's tracks, footprints and imaged
   targets (a few lines of ``CustomJS`` set the renderers' ``BooleanFilter``); the
@@ -558,7 +558,7 @@ def _map(doc, sats, obs):
 
 
 def _timeline(doc, sats, obs):
-    from bokeh.models import ColumnDataSource, FactorRange, HoverTool, Range1d
+    from bokeh.models import ColumnDataSource, Div, FactorRange, HoverTool, Range1d
     from bokeh.plotting import figure
 
     view = doc.get("view") or {}
@@ -613,6 +613,9 @@ def _timeline(doc, sats, obs):
         )
     )
     bat = view.get("battery") or {}
+    if not bat:
+        note = "<i>battery: no satellite of this plan has a power model</i>"
+        return gantt, Div(text=note, name="battery"), x_range, []
     index = {n: k for k, n in enumerate(names)}
     batt = figure(
         name="battery",
@@ -622,7 +625,7 @@ def _timeline(doc, sats, obs):
         x_axis_type="datetime",
         tools="xpan,xwheel_zoom,xbox_zoom,reset,save",
         active_scroll="xwheel_zoom",
-        title="battery [Wh]" if bat else "battery: no satellite has a power model",
+        title="battery [Wh]",
         y_axis_label="Wh",
         output_backend="canvas",
     )
@@ -642,17 +645,16 @@ def _timeline(doc, sats, obs):
             tags=[k],
         )
         lines.append(r)
-    if lines:
-        batt.legend.location = "top_left"
-        batt.legend.click_policy = "hide"
-        batt.add_tools(
-            HoverTool(
-                renderers=lines,
-                tooltips=[("battery", "$name"), ("time", "$x{%F %T} UTC"), ("level", "$y{0.0} Wh")],
-                formatters={"$x": "datetime"},
-                mode="vline",
-            )
+    batt.legend.location = "top_left"
+    batt.legend.click_policy = "hide"
+    batt.add_tools(
+        HoverTool(
+            renderers=lines,
+            tooltips=[("battery", "$name"), ("time", "$x{%F %T} UTC"), ("level", "$y{0.0} Wh")],
+            formatters={"$x": "datetime"},
+            mode="vline",
         )
+    )
     return gantt, batt, x_range, lines
 
 
@@ -700,10 +702,10 @@ def plan_page(doc):
         text=(
             "<b>satellites</b> (check to show on the map)"
             f'<div style="font-size:12px">{legend}</div>'
-            f'<p style="font-size:12px">{n_obs} observations; {max(n_tg - n_obs, 0)} '
-            "targets not imaged (grey). Hover a target for who images it when, click it "
-            "to zoom the timeline to its pass; wheel / box zoom the map; zoom or pan the "
-            "timeline to filter the map by time.</p>"
+            f'<p style="font-size:12px;width:{CONTROLS_WIDTH - 16}px">{n_obs} observations; '
+            f"{max(n_tg - n_obs, 0)} targets not imaged (grey). Hover a target for who "
+            "images it when, click it to zoom the timeline to its pass; wheel / box zoom "
+            "the map; zoom or pan the timeline to filter the map by time.</p>"
         ),
         width=CONTROLS_WIDTH,
     )
