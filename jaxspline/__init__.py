@@ -24,6 +24,8 @@ from jaxspline import aem, areas, areas_io, engine, geometry, kernels, scenario
 __all__ = [*kernels.__all__, *geometry.__all__, *engine.__all__]
 __all__ += [n for m in (scenario, areas_io, areas, aem) for n in m.__all__ if n not in __all__]
 
+# registers PlanResult.to_html's writer (Bokeh itself is imported when a page is written)
+from jaxspline import plan_html  # noqa: E402, F401
 from jaxspline.aem import *  # noqa: E402, F403
 from jaxspline.areas import *  # noqa: E402, F403
 from jaxspline.areas_io import *  # noqa: E402, F403

@@ -8,6 +8,9 @@ calls :func:`jaxspline.plan` and writes into the output directory:
   stage timings and every observation; ``plan.csv`` - one row per observation;
 * ``plan.czml`` - satellites, targets, areas, imaging intervals and sensor footprints
   for Cesium;
+* ``plan.html`` (``--no-html`` skips it) - one self-contained page (Bokeh, no network):
+  map, per-satellite timeline and battery, headline figures (:mod:`jaxspline.plan_html`;
+  ``jaxspline view plan.json`` rebuilds it from the ``"view"`` section of ``plan.json``);
 * ``ground_track.png`` (world map with coastlines), ``timeline.png`` (per-satellite
   Gantt chart and battery), ``slack.png`` (maneuver slack per model);
 * by default (``--aem``; ``--no-aem`` skips it) a flyable plan: transitions are
@@ -30,6 +33,7 @@ from pathlib import Path
 
 from jaxspline.engine._io import refuse_overwrite
 from jaxspline.engine.search.clock import catch_signals
+from jaxspline.plan_html import HTML_FILE
 
 __all__ = [
     "AEM_STEP_S",
@@ -93,6 +97,12 @@ def register(sub) -> None:
     )
     p.add_argument("--no-plots", action="store_true", help="skip the PNG figures")
     p.add_argument(
+        "--html",
+        action=argparse.BooleanOptionalAction,
+        default=True,
+        help=f"write the self-contained web page {HTML_FILE} (default; --no-html: skip it)",
+    )
+    p.add_argument(
         "--aem",
         action=argparse.BooleanOptionalAction,
         default=True,
@@ -120,6 +130,7 @@ def _main(args) -> int:
         max_iters=args.max_iters,
         certify=args.certify,
         plots=not args.no_plots,
+        html=args.html,
         progress=not args.quiet,
         aem=args.aem,
         aem_step=args.aem_step,
@@ -139,6 +150,7 @@ def run_plan(
     max_iters: int | None = None,
     certify: float = 0.0,
     plots: bool = True,
+    html: bool = True,
     progress: bool = True,
     aem: bool = True,
     aem_step: float = AEM_STEP_S,
@@ -156,6 +168,7 @@ def run_plan(
       max_iters: iteration cap of the search (reproducible plans); None: time-bound.
       certify: extra seconds after the time limit for a tighter certificate (0: none).
       plots: write the PNG figures.
+      html: write the web page ``plan.html``.
       progress: show progress bars.
       aem: write one CCSDS AEM per satellite (and check the flown joins).
       aem_step: sampling step of the AEM files [s].
@@ -178,6 +191,7 @@ def run_plan(
     else:
         sc = load_scenario(scenario)
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
+    names += (HTML_FILE,) * html
     if aem:
         names += (ATTITUDE_FIGURE,) * plots + tuple(aem_file_name(s.name) for s in sc.satellites)
     for name in names:  # fail before planning, not after
@@ -195,7 +209,7 @@ def run_plan(
         flown_joins=aem,
     )
     with catch_signals() as late:  # signals wait: every output is written whole
-        _write_outputs(result, sc, out, names, force, plots, aem, aem_step)
+        _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html)
     if late["signal"] and not result.report.get("interrupted"):
         result.report["interrupted"] = late["signal"]
     if result.report.get("interrupted"):
@@ -207,7 +221,7 @@ def run_plan(
     return result
 
 
-def _write_outputs(result, sc, out, names, force, plots, aem, aem_step):
+def _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html):
     from jaxspline.aem import write_aems
     from jaxspline.engine.attitude_history import attitude_history
 
@@ -222,7 +236,10 @@ def _write_outputs(result, sc, out, names, force, plots, aem, aem_step):
         attitude = attitude_history(result, aem_step)
         write_aems(result, attitude, out, force=force)
         result.timings["attitude"] = round(time.monotonic() - t0, 3)
-    result.to_json(out / "plan.json", force=force)
+    from jaxspline.plan_view import view_data
+
+    view = {"view": view_data(result)}  # what plan.html draws: `jaxspline view` rebuilds it
+    result.to_json(out / "plan.json", force=force, extra=view)
     result.to_csv(out / "plan.csv", force=force)
     from jaxspline.czml import write_czml
 
@@ -237,10 +254,17 @@ def _write_outputs(result, sc, out, names, force, plots, aem, aem_step):
             from jaxspline.plot_attitude import plot_attitude_profile
 
             plot_attitude_profile(result, attitude, out / ATTITUDE_FIGURE)
-    _print_summary(result, out, names)
+    page = None
+    if html:
+        from jaxspline.plan_html import write_plan_html
+
+        t0 = time.monotonic()
+        path = write_plan_html(result.to_dict(extra=view), out / HTML_FILE, force=force)
+        page = (path.stat().st_size, time.monotonic() - t0)
+    _print_summary(result, out, names, page)
 
 
-def _print_summary(r, out: Path, names) -> None:
+def _print_summary(r, out: Path, names, page=None) -> None:
     s, st = r.summary(), r.stats
     n_imaged = len(set(r.observations.target.tolist()))
     lines = [
@@ -258,6 +282,8 @@ def _print_summary(r, out: Path, names) -> None:
         "wall time [s]  " + ", ".join(f"{k} {v:.2f}" for k, v in r.timings.items()),
         f"outputs       {out}/ ({', '.join(names)})",
     ]
+    if page:
+        lines.append(f"page          {HTML_FILE}: {page[0] / 1e6:.2f} MB in {page[1]:.2f} s")
     if r.report.get("areas"):
         from jaxspline.areas import coverage_line
 

@@ -21,6 +21,11 @@ from jaxspline.engine.mission import Scenario
 
 __all__ = ["Observations", "PlanResult"]
 
+#: Writers of the plan's web page, ``writer(result, path, force=...)``, for
+#: :meth:`PlanResult.to_html`: the product layer's :mod:`jaxspline.plan_html` (imported
+#: by ``import jaxspline``) appends its own; the engine never imports the product.
+HTML_WRITERS: list = []
+
 
 class Observations(NamedTuple):
     """K planned observations, numpy arrays [K] sorted by (satellite, start).
@@ -155,14 +160,16 @@ class PlanResult:
             "valid": bool(self.report.get("valid", False)),
         }
 
-    def to_json(self, path, *, force: bool = False):
-        """Write summary, report, stats, timings and the observations as JSON (atomic).
+    def to_dict(self, *, extra: dict | None = None) -> dict:
+        """The plan document: summary, report, stats, timings and the observations.
 
         Args:
-          path: str or Path.
-          force: overwrite an existing file.
+          extra: further top-level sections (JSON-ready), e.g. ``{"view": ...}`` from
+            :func:`jaxspline.plan_view.view_data`; they may not replace a section.
+        Returns:
+          dict, JSON-ready (numpy scalars converted, non-finite floats None).
         Raises:
-          FileExistsError: the file exists and ``force`` is false.
+          ValueError: an ``extra`` key names a built-in section.
         """
         doc = {
             "summary": self.summary(),
@@ -171,7 +178,40 @@ class PlanResult:
             "timings_s": self.timings,
             "observations": self.rows(),
         }
-        return atomic_write_text(path, json.dumps(_clean(doc), indent=2) + "\n", force=force)
+        clash = sorted(set(extra or {}) & set(doc))
+        if clash:
+            raise ValueError(f"extra: sections {clash} are built in")
+        return _clean({**doc, **(extra or {})})
+
+    def to_json(self, path, *, force: bool = False, extra: dict | None = None):
+        """Write :meth:`to_dict` as JSON (atomic).
+
+        Args:
+          path: str or Path.
+          force: overwrite an existing file.
+          extra: further top-level sections (see :meth:`to_dict`).
+        Raises:
+          FileExistsError: the file exists and ``force`` is false.
+        """
+        text = _dumps(self.to_dict(extra=extra)) + "\n"
+        return atomic_write_text(path, text, force=force)
+
+    def to_html(self, path, *, force: bool = False):
+        """Write the plan's self-contained web page (map, timeline, battery; atomic).
+
+        Rendered by :func:`jaxspline.plan_html.write_plan_html` (Bokeh, JavaScript inlined).
+
+        Args:
+          path: str or Path (conventionally ``plan.html``).
+          force: overwrite an existing file.
+        Returns:
+          Path of the written file.
+        Raises:
+          FileExistsError: the file exists and ``force`` is false.
+        """
+        if not HTML_WRITERS:
+            raise RuntimeError("no HTML writer registered: import jaxspline.plan_html")
+        return HTML_WRITERS[-1](self, path, force=force)
 
     def to_csv(self, path, *, force: bool = False):
         """Write one CSV row per observation (atomic).
@@ -193,6 +233,23 @@ class PlanResult:
 
 def _iso(when) -> str:
     return when.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
+
+
+def _dumps(x, level: int = 0) -> str:
+    """``json.dumps(x, indent=2)``, but with a list of plain values on one line.
+
+    A ground track or a battery curve then takes one line, not one per number.
+    """
+    nested = isinstance(x, dict) or (
+        isinstance(x, list) and any(isinstance(v, dict | list) for v in x)
+    )
+    if not x or not nested:
+        return json.dumps(x)
+    pad, end = "  " * (level + 1), "  " * level
+    if isinstance(x, dict):
+        items = [f"{pad}{json.dumps(str(k))}: {_dumps(v, level + 1)}" for k, v in x.items()]
+        return "{\n" + ",\n".join(items) + "\n" + end + "}"
+    return "[\n" + ",\n".join(pad + _dumps(v, level + 1) for v in x) + "\n" + end + "]"
 
 
 def _clean(x):

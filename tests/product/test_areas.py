@@ -215,6 +215,8 @@ def test_plan_command_reports_coverage_and_czml(tmp_path, capsys):
     doc = json.loads((out / "plan.json").read_text())
     (rep,) = doc["report"]["areas"]
     assert rep["area"] == "karst" and 0.0 <= rep["covered_fraction"] <= 1.0
+    assert [a["name"] for a in doc["view"]["areas"]] == ["karst"]  # drawn by plan.html
+    assert (out / "plan.html").stat().st_size > 0
     assert "areas         1 area covered: karst" in capsys.readouterr().out
     czml = json.loads((out / "plan.czml").read_text())
     ids = {p["id"] for p in czml}

@@ -13,13 +13,16 @@ runs reuse the compiled kernels with a 3 s budget.
 
 import csv
 import datetime as dt
+import html
 import json
+import re
 
 import pytest
 
 from jaxspline.aem import aem_file_name
 from jaxspline.cli import main
 from jaxspline.cli_plan import ATTITUDE_FIGURE, OUTPUT_FILES
+from jaxspline.plan_html import HTML_FILE
 
 EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)
 DURATION_S = 1800.0
@@ -85,7 +88,8 @@ time_limit_s = 15.0
 N_TARGETS = 32
 QUICK = ["--time-limit", "3", "--quiet"]
 AEMS = tuple(aem_file_name(n) for n in ("eo-tle", "eo-agile"))  # one file a satellite
-FULL = OUTPUT_FILES + (ATTITUDE_FIGURE,) + AEMS  # the default (--aem)
+FULL = OUTPUT_FILES + (HTML_FILE, ATTITUDE_FIGURE) + AEMS  # the default (--aem, --html)
+OFF_NADIR_MAX_DEG = {"eo-tle": 30.0, "eo-agile": 40.0}
 
 
 @pytest.fixture(scope="module")
@@ -94,7 +98,7 @@ def runs(tmp_path_factory):
     scen = d / "small.toml"
     scen.write_text(SMALL, encoding="utf-8")
     no_plots = d / "no_plots"
-    args = ["plan", str(scen), "-o", str(no_plots), "--no-plots", "--no-aem", *QUICK]
+    args = ["plan", str(scen), "-o", str(no_plots), "--no-plots", "--no-aem", "--no-html", *QUICK]
     code_no_plots = main(args)
     out = d / "out"
     code = main(["plan", str(scen), "-o", str(out)])  # the default: flown joins and AEMs
@@ -163,6 +167,59 @@ def test_plan_csv_matches_json(runs):
                 assert float(row[key]) == value, key
 
 
+def _page_header(html_text: str) -> dict:
+    """``data-key`` cells of the page's header, from the Bokeh document embedded in it."""
+    blob = re.search(r'<script type="application/json"[^>]*>(.*?)</script>', html_text, re.S)
+    found = []
+
+    def walk(x):
+        if isinstance(x, dict):
+            if x.get("attributes", {}).get("name") == "header":
+                found.append(x["attributes"]["text"])
+            for v in x.values():
+                walk(v)
+        elif isinstance(x, list):
+            for v in x:
+                walk(v)
+
+    walk(json.loads(html.unescape(blob.group(1))))  # Bokeh escapes the embedded JSON
+    (text,) = found
+    return dict(re.findall(r'data-key="([^"]+)">([^<]*)<', text))
+
+
+def test_plan_html_numbers_equal_plan_json(runs):
+    """The page of a real plan: header numbers and view data agree with plan.json."""
+    out = runs["out"]
+    doc = json.loads((out / "plan.json").read_text())
+    cells = _page_header((out / HTML_FILE).read_text(encoding="utf-8"))
+    s, joins = doc["summary"], doc["report"]["joins"]
+    for key, want in [
+        ("observations", s["observations"]),
+        ("value", s["value"]),
+        ("bound", s["bound"]),
+        ("gap", s["gap"]),
+        ("checked", doc["report"]["checked"]),
+        ("joins", joins["joins"]),
+        ("joins_rejected", joins["rejected"]),
+        ("windows", doc["stats"]["windows"]),
+        ("t_search", doc["timings_s"]["search"]),
+    ]:
+        assert float(cells[key]) == pytest.approx(want, rel=5e-3, abs=1e-12), key
+    assert cells["scenario"] == "cli-small" and cells["valid"] == "valid"
+    view, obs = doc["view"], doc["observations"]
+    assert len(view["targets"]["name"]) == N_TARGETS
+    assert len(view["strips"]) == 2 and [s_["name"] for s_ in view["satellites"]] == list(
+        OFF_NADIR_MAX_DEG
+    )
+    off = view["observations"]["off_nadir_deg"]
+    assert len(off) == len(view["observations"]["footprint"]) == len(obs) > 0
+    for o, angle in zip(obs, off, strict=True):  # the planner kept every look within limits
+        assert 0.0 <= angle <= OFF_NADIR_MAX_DEG[o["satellite"]] + 0.05, (o, angle)
+    track = view["tracks"]
+    assert track["t_s"][0] == 0.0 and track["t_s"][-1] == DURATION_S
+    assert all(len(lon) == len(track["t_s"]) for lon in track["lon_deg"])
+
+
 def test_plan_refuses_to_overwrite(runs, capsys):
     scen, out = runs["scen"], runs["out"]
     before = _snapshot(out)
@@ -175,15 +232,15 @@ def test_plan_refuses_to_overwrite(runs, capsys):
 
 def test_plan_force_overwrites(runs):
     scen, out = runs["scen"], runs["out"]
-    before = {n: (out / n).stat().st_mtime_ns for n in OUTPUT_FILES}
+    before = {n: (out / n).stat().st_mtime_ns for n in OUTPUT_FILES + (HTML_FILE,)}
     assert main(["plan", str(scen), "-o", str(out), "--force", *QUICK]) == 0
-    for name in OUTPUT_FILES:
+    for name in before:
         assert (out / name).stat().st_mtime_ns > before[name], name
     assert sorted(p.name for p in out.iterdir()) == sorted(FULL)
     assert json.loads((out / "plan.json").read_text())["summary"]["valid"] is True
 
 
-def test_plan_no_plots_no_aem_writes_data_files_only(runs):
+def test_plan_no_plots_no_aem_no_html_writes_data_files_only(runs):
     code, out = runs["no_plots"]
     assert code == 0
     assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES[:3])

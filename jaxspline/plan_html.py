@@ -1,0 +1,743 @@
+"""The plan as one self-contained web page: map, timeline, battery and headline figures.
+
+:func:`write_plan_html` renders a plan document (the content of ``plan.json``:
+:meth:`jaxspline.engine.result.PlanResult.to_dict` plus the ``"view"`` section of
+:mod:`jaxspline.plan_view`) with Bokeh (imported lazily) and its JavaScript inlined, so
+the file opens by double-click with no network. The page (models named for tests and
+scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
+
+* ``header``: scenario, value, bound and gap, validity, join statistics, areas
+  covered, search statistics and stage timings (each number in a cell with a
+  ``data-key`` attribute);
+* ``map`` (equirectangular, pan / zoom): land and coastlines from the package's
+  offline land data (:func:`jaxspline.plot_plan.land_fraction`, contoured at land
+  fraction 0.5), area polygons (``areas``), strip centrelines (``strips``), ground
+  tracks (``tracks``), sensor footprints of the observations (``footprints``), targets
+  not imaged (``targets_not_imaged``, grey) and one glyph per observation at its
+  target in the satellite's colour (``targets_imaged``); hovering a target shows its
+  name, priority, satellite, start and end (UTC), off-nadir angle, maneuver time and
+  slack;
+* ``timeline``: per-satellite Gantt chart of imaging (``imaging``) and maneuvers
+  (``maneuvers``), and ``battery`` below (``battery-<satellite>`` lines) on the same
+  time axis (a note when no satellite has a power model);
+* linking: the satellite check boxes (``satellite_filter``) and the time range shown
+  by the timeline (zoom or pan it) filter the map's tracks, footprints and imaged
+  targets (a few lines of ``CustomJS`` set the renderers' ``BooleanFilter``); the
+  battery lines of unchecked satellites are hidden; ``filter_status`` says what is
+  shown; a click on an imaged target zooms the timeline to its observation
+  +- :data:`PASS_PAD_S` (and so the map to that pass).
+
+A ``plan.json`` without the ``"view"`` section (older jaxspline) still gives the
+header and the timeline; the map then has the coastlines only.
+"""
+
+from __future__ import annotations
+
+import datetime as _dt
+import functools
+import html
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+
+from jaxspline.czml import SATELLITE_COLORS
+from jaxspline.engine import result as _result
+from jaxspline.engine._io import atomic_write_text, refuse_overwrite
+
+__all__ = ["HTML_FILE", "plan_document", "plan_page", "read_plan", "write_plan_html"]
+
+HTML_FILE = "plan.html"
+LAND_COLOR = "#efeae0"  # as the PNG map (jaxspline.plot_plan)
+COAST_COLOR = "#595959"
+OCEAN_COLOR = "#f4f8fb"
+NOT_IMAGED_COLOR = "#999999"
+STRIP_COLOR = "#555555"
+MANEUVER_COLOR = "#333333"
+AREA_COLOR = "#ffd700"
+MAP_WIDTH = 1200  # [px]; the map is 2:1 (360 x 180 deg)
+CONTROLS_WIDTH = 190  # [px]
+TIMELINE_ROW_PX = 34
+BATTERY_HEIGHT = 230
+TRACK_SEGMENT = 10  # track samples per filterable map segment (5 min at 30 s)
+IMAGING_HEIGHT = 0.6  # Gantt bar heights (row pitch 1)
+MANEUVER_HEIGHT = 0.25
+COAST_DECIMATE = 2  # land grid cells averaged per axis for the page (0.5 deg)
+_MS = 1000.0
+
+# CustomJS glue: the satellite check boxes and the timeline's time range filter the map.
+_FILTER_JS = """
+const on = new Set(boxes.active)
+const a = xr.start, b = xr.end
+for (const r of filtered) {
+  const d = r.data_source.data
+  const n = d.sat.length
+  const keep = new Array(n)
+  for (let i = 0; i < n; i++) {
+    keep[i] = on.has(d.sat[i]) && d.t1[i] >= a && d.t0[i] <= b
+  }
+  r.view.filter.booleans = keep
+}
+for (const r of battery) {
+  r.visible = on.has(r.tags[0])
+}
+const iso = (t) => new Date(t).toISOString().slice(0, 19).replace("T", " ")
+const names = boxes.active.map((k) => boxes.labels[k])
+status.text = `map shows ${names.length} of ${boxes.labels.length} satellites ` +
+  `(${names.join(", ") || "none"}), ${iso(a)} to ${iso(b)} UTC`
+"""
+_ALL_JS = "boxes.active = boxes.labels.map((_, k) => k)"
+# a click on an imaged target zooms the timeline (and so the map) to its pass
+_TAP_JS = """
+const i = src.selected.indices[0]
+if (i !== undefined) {
+  const d = src.data
+  const [lo, hi] = xr.bounds
+  xr.setv({start: Math.max(d.t0[i] - pad, lo), end: Math.min(d.t1[i] + pad, hi)})
+}
+"""
+PASS_PAD_S = 600.0  # a click on a target shows its observation +- this in the timeline [s]
+
+
+def read_plan(path) -> dict:
+    """Read a ``plan.json``.
+
+    Args:
+      path: str or Path.
+    Returns:
+      dict, the document.
+    Raises:
+      FileNotFoundError: no such file.
+      ValueError: not a plan document (naming the file and what is missing).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"plan file not found: {path}")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not JSON ({exc})") from None
+    missing = [
+        k
+        for k in ("summary", "report", "observations")
+        if not isinstance(doc, dict) or k not in doc
+    ]
+    if missing:
+        raise ValueError(f"{path}: not a jaxspline plan.json (missing {', '.join(missing)})")
+    return doc
+
+
+def plan_document(result) -> dict:
+    """The document of a plan with its ``"view"`` section (what ``plan.json`` holds).
+
+    Args:
+      result: :class:`jaxspline.engine.result.PlanResult`.
+    Returns:
+      dict, JSON-ready.
+    """
+    from jaxspline.plan_view import view_data
+
+    return result.to_dict(extra={"view": view_data(result)})
+
+
+# --- data -----------------------------------------------------------------------------
+
+
+@functools.cache
+def _coast():
+    """Land polygons (with holes) and coastlines [deg] from the offline land grid, cached.
+
+    Returns:
+      (land_xs, land_ys, coast_xs, coast_ys): nested lists for Bokeh ``multi_polygons``
+      (one polygon per row: [[exterior, hole, ...]]) and ``multi_line`` (float32).
+    """
+    import contourpy
+
+    from jaxspline.plot_plan import land_fraction
+
+    lat, lon, land = land_fraction()
+    d = COAST_DECIMATE
+    n, m = land.shape[0] // d, land.shape[1] // d
+    land = land[: n * d, : m * d].reshape(n, d, m, d).mean(axis=(1, 3))
+    lat = lat[: n * d].reshape(n, d).mean(axis=1)
+    lon = lon[: m * d].reshape(m, d).mean(axis=1)
+    # close the grid at the poles and the antimeridian so land polygons do not stop short
+    lon = np.concatenate([[-180.0], lon, [180.0]])
+    land = np.concatenate([land[:, -1:], land, land[:, :1]], axis=1)
+    gen = contourpy.contour_generator(lon, lat, land, fill_type="OuterOffset", line_type="Separate")
+    pts, offsets = gen.filled(0.5, 2.0)
+    land_xs, land_ys = [], []
+    for p, off in zip(pts, offsets, strict=True):
+        rings = [p[i:j].astype(np.float32) for i, j in zip(off[:-1], off[1:], strict=True)]
+        land_xs.append([[r[:, 0] for r in rings]])
+        land_ys.append([[r[:, 1] for r in rings]])
+    lines = [ln.astype(np.float32) for ln in gen.lines(0.5) if len(ln) > 1]
+    return land_xs, land_ys, [ln[:, 0] for ln in lines], [ln[:, 1] for ln in lines]
+
+
+def _parse_utc(text: str) -> _dt.datetime:
+    return _dt.datetime.strptime(text, "%Y-%m-%dT%H:%M:%S.%fZ").replace(tzinfo=_dt.UTC)
+
+
+def _epoch_ms(doc) -> float:
+    """Scenario epoch [ms since 1970] (Bokeh datetime) from the view or the first row."""
+    view = doc.get("view") or {}
+    if "epoch_utc" in view:
+        return _parse_utc(view["epoch_utc"]).timestamp() * _MS
+    rows = doc["observations"]
+    if rows:
+        return (_parse_utc(rows[0]["start_utc"]).timestamp() - rows[0]["start_s"]) * _MS
+    return 0.0
+
+
+def _satellites(doc) -> list[dict]:
+    view = doc.get("view") or {}
+    if view.get("satellites"):
+        return view["satellites"]
+    names = list(dict.fromkeys(o["satellite"] for o in doc["observations"]))
+    return [
+        {"name": n, "model": "", "color": SATELLITE_COLORS[k % len(SATELLITE_COLORS)]}
+        for k, n in enumerate(names)
+    ]
+
+
+def _utc_text(iso: str) -> str:
+    """``2026-04-14T00:03:21.123456Z`` -> ``2026-04-14 00:03:21.123``."""
+    return iso[:23].replace("T", " ")
+
+
+def _fmt(x, spec: str = ".6g") -> str:
+    if x is None:
+        return "-"
+    if isinstance(x, bool):
+        return str(x).lower()
+    if isinstance(x, int | float):
+        return format(x, spec)
+    return html.escape(str(x))
+
+
+def _observation_columns(doc, sats) -> dict:
+    """One row per observation: map position, times, hover texts, filter columns."""
+    rows = doc["observations"]
+    view = doc.get("view") or {}
+    epoch = _epoch_ms(doc)
+    index = {s["name"]: k for k, s in enumerate(sats)}
+    tg = view.get("targets")
+    pos = {n: i for i, n in enumerate(tg["name"])} if tg else {}
+    off = (view.get("observations") or {}).get("off_nadir_deg") or [None] * len(rows)
+    r = [pos.get(o["target"]) for o in rows]
+    nan = float("nan")
+    return {
+        "x": np.array([tg["lon_deg"][i] if i is not None else nan for i in r], np.float64),
+        "y": np.array([tg["lat_deg"][i] if i is not None else nan for i in r], np.float64),
+        "target": [o["target"] for o in rows],
+        "kind": [o.get("kind", "") for o in rows],
+        "priority": np.array([o["value"] for o in rows], np.float64),
+        "satellite": [o["satellite"] for o in rows],
+        "model": [o.get("model", "") for o in rows],
+        "start": [_utc_text(o["start_utc"]) for o in rows],
+        "end": [_utc_text(o["end_utc"]) for o in rows],
+        "duration": np.array([o["end_s"] - o["start_s"] for o in rows], np.float64),
+        "off_nadir": np.array([nan if v is None else v for v in off], np.float64),
+        "maneuver": np.array([o["maneuver_s"] for o in rows], np.float64),
+        "slack": np.array([o["slack_s"] for o in rows], np.float64),
+        "sat": np.array([index[o["satellite"]] for o in rows], np.int32),
+        "color": [sats[index[o["satellite"]]]["color"] for o in rows],
+        "t0": epoch + _MS * np.array([o["start_s"] for o in rows], np.float64),
+        "t1": epoch + _MS * np.array([o["end_s"] for o in rows], np.float64),
+        "m0": epoch + _MS * np.array([o["start_s"] - o["maneuver_s"] for o in rows], np.float64),
+    }
+
+
+def _track_columns(doc, sats) -> dict:
+    """Ground tracks cut into segments of TRACK_SEGMENT samples (filterable rows)."""
+    tr = (doc.get("view") or {}).get("tracks")
+    cols = {"xs": [], "ys": [], "sat": [], "t0": [], "t1": [], "color": [], "satellite": []}
+    if not tr:
+        return cols
+    epoch = _epoch_ms(doc)
+    t = epoch + _MS * np.asarray(tr["t_s"], np.float64)
+    for k, s in enumerate(sats):
+        lon = np.array([np.nan if v is None else v for v in tr["lon_deg"][k]], np.float64)
+        lat = np.array([np.nan if v is None else v for v in tr["lat_deg"][k]], np.float64)
+        for i in range(0, t.size - 1, TRACK_SEGMENT):
+            j = min(i + TRACK_SEGMENT + 1, t.size)  # overlap one sample: no gaps
+            x, y = lon[i:j], lat[i:j]
+            jump = np.flatnonzero(np.abs(np.diff(x)) > 180.0) + 1  # antimeridian: break
+            cols["xs"].append(np.insert(x, jump, np.nan))
+            cols["ys"].append(np.insert(y, jump, np.nan))
+            cols["sat"].append(k)
+            cols["t0"].append(t[i])
+            cols["t1"].append(t[j - 1])
+            cols["color"].append(s["color"])
+            cols["satellite"].append(s["name"])
+    return cols
+
+
+def _footprint_columns(doc, obs) -> dict:
+    from jaxspline.plan_view import disc
+
+    view = doc.get("view") or {}
+    fps = (view.get("observations") or {}).get("footprint") or []
+    swath = {s["name"]: s.get("swath_m") for s in view.get("satellites") or []}
+    xs, ys, keep = [], [], []
+    for i, fp in enumerate(fps):
+        if fp is not None:
+            x, y = fp["lon_deg"], fp["lat_deg"]
+        elif math.isfinite(obs["x"][i]) and swath.get(obs["satellite"][i]):
+            x, y = disc(obs["x"][i], obs["y"][i], swath[obs["satellite"][i]] / 2.0)
+        else:
+            continue
+        xs.append(np.asarray(x, np.float64))
+        ys.append(np.asarray(y, np.float64))
+        keep.append(i)
+    cols = {k: [v[i] for i in keep] for k, v in obs.items() if k not in ("x", "y")}
+    cols = {k: np.asarray(v) if isinstance(obs[k], np.ndarray) else v for k, v in cols.items()}
+    return {"xs": xs, "ys": ys, **cols}
+
+
+def _area_columns(doc) -> dict:
+    view = doc.get("view") or {}
+    cover = doc["report"].get("areas") or []
+    cols = {"xs": [], "ys": [], "name": [], "priority": [], "covered": []}
+    for a, area in enumerate(view.get("areas") or []):
+        geom = area["geometry"]
+        polys = [geom["coordinates"]] if geom["type"] == "Polygon" else geom["coordinates"]
+        cov = cover[a] if a < len(cover) else {}
+        frac = cov.get("covered_fraction")
+        for rings in polys:
+            cols["xs"].append([[np.asarray([p[0] for p in ring], np.float64) for ring in rings]])
+            cols["ys"].append([[np.asarray([p[1] for p in ring], np.float64) for ring in rings]])
+            cols["name"].append(area["name"])
+            cols["priority"].append(area["value"])
+            cols["covered"].append("-" if frac is None else f"{100 * frac:.1f} %")
+    return cols
+
+
+# --- page -----------------------------------------------------------------------------
+
+
+def _header(doc) -> str:
+    s, rep, st = doc["summary"], doc["report"], doc.get("stats") or {}
+    tim = doc.get("timings_s") or {}
+
+    def cell(key, value, spec=".6g"):
+        return f'<span class="v" data-key="{key}">{_fmt(value, spec)}</span>'
+
+    bound = s.get("bound") or 0.0
+    gap_pct = 100.0 * s["gap"] / bound if bound and s.get("gap") is not None else None
+    total = s.get("total_value") or 0.0
+    view = doc.get("view") or {}
+    when = ""
+    if "epoch_utc" in view:
+        when = (
+            f", {cell('duration_h', view['duration_s'] / 3600.0, '.4g')} h from "
+            f"{html.escape(_utc_text(view['epoch_utc'])[:16])} UTC"
+        )
+    valid = bool(s.get("valid"))
+    status = "converged" if s.get("bound_converged") else "-"
+    low = rep.get("min_battery_wh")  # per powered satellite (older files: one number)
+    low = low if isinstance(low, dict) else ({} if low is None else {"all": low})
+    battery = ", ".join(
+        f"{html.escape(k)} {cell('min_battery_wh.' + k, v, '.5g')}" for k, v in low.items()
+    )
+    dropped = ", ".join(f"{n} {html.escape(k)}" for k, n in (rep.get("dropped") or {}).items())
+    lines = [
+        f"<b>scenario</b> {cell('scenario', s['scenario'])}: "
+        f"{cell('satellites', s['satellites'])} satellites, "
+        f"{cell('targets', s['targets'])} targets{when}",
+        f"<b>plan</b> {cell('observations', s['observations'])} observations, value "
+        f"{cell('value', s['value'])} of {cell('total_value', total)}"
+        + (f" ({100.0 * s['value'] / total:.1f} %)" if total else ""),
+        f"<b>bound</b> {cell('bound', s['bound'])} "
+        f"({html.escape(str(st.get('bound_status', status)))}); "
+        f"<b>gap</b> {cell('gap', s['gap'])}"
+        + (
+            f" ({cell('gap_percent', gap_pct, '.3g')} % of the bound)"
+            if gap_pct is not None
+            else ""
+        ),
+        f'<b>check</b> <span class="{"ok" if valid else "bad"}" data-key="valid">'
+        f"{'valid' if valid else 'INVALID'}</span>: {cell('checked', rep.get('checked'))} checked, "
+        f"{cell('violations', len(rep.get('violations') or []))} violations"
+        + (f", dropped {dropped}" if dropped else "")
+        + f"; min slack {cell('min_slack_s', rep.get('min_slack_s'), '.4g')} s"
+        + (f"; min battery {battery} Wh" if battery else ""),
+    ]
+    j = rep.get("joins")
+    if j:
+        lines.append(
+            f"<b>joins</b> {cell('joins', j.get('joins'))} degree-7 joins, "
+            f"{cell('joins_retimed', j.get('retimed'))} re-timed, "
+            f"{cell('joins_rejected', j.get('rejected'))} rejected; peak ratios rate "
+            f"{cell('max_rate_ratio', j.get('max_rate_ratio'), '.3f')}, accel "
+            f"{cell('max_accel_ratio', j.get('max_accel_ratio'), '.3f')}, jerk "
+            f"{cell('max_jerk_ratio', j.get('max_jerk_ratio'), '.3f')}"
+        )
+    else:
+        lines.append("<b>joins</b> not checked (planned with --no-aem)")
+    for a in rep.get("areas") or []:
+        lines.append(
+            f"<b>area</b> {html.escape(str(a.get('area')))}: "
+            f"{a.get('strips_planned')}/{a.get('strips')} strips planned, "
+            f"{_fmt(100.0 * (a.get('covered_fraction') or 0.0), '.1f')} % covered"
+        )
+    counts = [
+        (k, st[k])
+        for k in ("windows", "options", "near_pairs", "lagrangian_iterations", "lns_iterations")
+        if isinstance(st.get(k), int | float)
+    ]
+    if counts:
+        lines.append(
+            "<b>search</b> " + ", ".join(f"{k.replace('_', ' ')} {cell(k, v)}" for k, v in counts)
+        )
+    if tim:
+        lines.append(
+            "<b>wall time [s]</b> "
+            + ", ".join(f"{html.escape(k)} {cell('t_' + k, v, '.3g')}" for k, v in tim.items())
+            + f"; total {cell('t_total', sum(v for v in tim.values() if v), '.3g')}"
+        )
+    style = (
+        "<style>.hdr{font:13px/1.5 sans-serif} .hdr .v{font-weight:600}"
+        " .hdr .ok{color:#2ca02c;font-weight:700} .hdr .bad{color:#d62728;font-weight:700}"
+        " .hdr h2{margin:0 0 4px 0;font-size:18px}</style>"
+    )
+    title = f"<h2>jaxspline plan: {html.escape(str(s['scenario']))}</h2>"
+    return style + '<div class="hdr">' + title + "<br>".join(lines) + "</div>"
+
+
+def _map(doc, sats, obs):
+    from bokeh.models import (
+        BooleanFilter,
+        CDSView,
+        ColumnDataSource,
+        HoverTool,
+        Range1d,
+    )
+    from bokeh.plotting import figure
+
+    view = doc.get("view") or {}
+    fig = figure(
+        name="map",
+        width=MAP_WIDTH,
+        height=MAP_WIDTH // 2 + 40,
+        x_range=Range1d(-180.0, 180.0, bounds=(-180.0, 180.0)),
+        y_range=Range1d(-90.0, 90.0, bounds=(-90.0, 90.0)),
+        match_aspect=True,
+        tools="pan,wheel_zoom,box_zoom,reset,save",
+        active_scroll="wheel_zoom",
+        x_axis_label="longitude [deg]",
+        y_axis_label="latitude [deg]",
+        background_fill_color=OCEAN_COLOR,
+        output_backend="canvas",
+    )
+    fig.grid.grid_line_alpha = 0.3
+    land_xs, land_ys, coast_xs, coast_ys = _coast()
+    fig.multi_polygons(xs=land_xs, ys=land_ys, fill_color=LAND_COLOR, line_color=None, name="land")
+    fig.multi_line(xs=coast_xs, ys=coast_ys, line_color=COAST_COLOR, line_width=0.6, name="coast")
+
+    def filtered(cols):
+        src = ColumnDataSource(cols)
+        return {"source": src, "view": CDSView(filter=BooleanFilter([True] * len(cols["sat"])))}
+
+    hover_renderers = []
+    areas = _area_columns(doc)
+    if areas["name"]:
+        ra = fig.multi_polygons(
+            xs="xs",
+            ys="ys",
+            source=ColumnDataSource(areas),
+            fill_color=AREA_COLOR,
+            fill_alpha=0.25,
+            line_color=AREA_COLOR,
+            line_width=1.5,
+            name="areas",
+        )
+        fig.add_tools(
+            HoverTool(
+                renderers=[ra],
+                tooltips=[("area", "@name"), ("priority", "@priority"), ("covered", "@covered")],
+            )
+        )
+    strips = view.get("strips") or []
+    if strips:
+        fig.multi_line(
+            xs=[np.asarray(s["lon_deg"], np.float64) for s in strips],
+            ys=[np.asarray(s["lat_deg"], np.float64) for s in strips],
+            line_color=STRIP_COLOR,
+            line_width=1.5,
+            line_alpha=0.7,
+            name="strips",
+        )
+    tracks = _track_columns(doc, sats)
+    filt = []
+    if tracks["sat"]:
+        rt = fig.multi_line(
+            xs="xs",
+            ys="ys",
+            line_color="color",
+            line_width=1.2,
+            line_alpha=0.8,
+            name="tracks",
+            **filtered(tracks),
+        )
+        filt.append(rt)
+    fp = _footprint_columns(doc, obs)
+    if fp["xs"]:
+        rf = fig.patches(
+            xs="xs",
+            ys="ys",
+            fill_color="color",
+            fill_alpha=0.35,
+            line_color="color",
+            line_width=1.0,
+            name="footprints",
+            **filtered(fp),
+        )
+        filt.append(rf)
+    tg = view.get("targets")
+    if tg:
+        imaged = set(obs["target"])
+        free = [i for i, n in enumerate(tg["name"]) if n not in imaged]
+        rn = fig.scatter(
+            x="x",
+            y="y",
+            source=ColumnDataSource(
+                {
+                    "x": np.asarray([tg["lon_deg"][i] for i in free], np.float64),
+                    "y": np.asarray([tg["lat_deg"][i] for i in free], np.float64),
+                    "target": [tg["name"][i] for i in free],
+                    "kind": [tg["kind"][i] for i in free],
+                    "priority": np.asarray([tg["value"][i] for i in free], np.float64),
+                }
+            ),
+            size=4,
+            color=NOT_IMAGED_COLOR,
+            alpha=0.8,
+            name="targets_not_imaged",
+        )
+        hover_renderers.append(rn)
+        fig.add_tools(
+            HoverTool(
+                renderers=[rn],
+                tooltips=[
+                    ("target", "@target (@kind)"),
+                    ("priority", "@priority{0.[000]}"),
+                    ("imaged", "no"),
+                ],
+            )
+        )
+    ri = fig.scatter(
+        x="x",
+        y="y",
+        size=8,
+        fill_color="color",
+        line_color="black",
+        line_width=0.6,
+        name="targets_imaged",
+        **filtered(obs),
+    )
+    filt.append(ri)
+    fig.add_tools(
+        HoverTool(
+            renderers=[ri],
+            tooltips=[
+                ("target", "@target (@kind)"),
+                ("priority", "@priority{0.[000]}"),
+                ("satellite", "@satellite (@model)"),
+                ("start", "@start UTC"),
+                ("end", "@end UTC"),
+                ("off-nadir", "@off_nadir{0.00} deg"),
+                ("maneuver", "@maneuver{0.000} s"),
+                ("slack", "@slack{0.000} s"),
+            ],
+        )
+    )
+    return fig, filt
+
+
+def _timeline(doc, sats, obs):
+    from bokeh.models import ColumnDataSource, Div, FactorRange, HoverTool, Range1d
+    from bokeh.plotting import figure
+
+    view = doc.get("view") or {}
+    epoch = _epoch_ms(doc)
+    duration = view.get("duration_s") or max([o["end_s"] for o in doc["observations"]] or [1.0])
+    end = epoch + _MS * duration
+    x_range = Range1d(epoch, end, bounds=(epoch, end), min_interval=10.0 * _MS)
+    names = [s["name"] for s in sats]
+    gantt = figure(
+        name="timeline",
+        width=MAP_WIDTH + CONTROLS_WIDTH,
+        height=70 + TIMELINE_ROW_PX * max(len(sats), 1),
+        x_range=x_range,
+        y_range=FactorRange(*reversed(names)),
+        x_axis_type="datetime",
+        tools="xpan,xwheel_zoom,xbox_zoom,reset,save",
+        active_scroll="xwheel_zoom",
+        title="timeline (zoom or pan to filter the map by time; UTC)",
+        output_backend="canvas",
+    )
+    gantt.xgrid.grid_line_alpha = 0.3
+    src = ColumnDataSource(obs)
+    rm = gantt.hbar(
+        y="satellite",
+        left="m0",
+        right="t0",
+        height=MANEUVER_HEIGHT,
+        color=MANEUVER_COLOR,
+        source=src,
+        name="maneuvers",
+    )
+    ri = gantt.hbar(
+        y="satellite",
+        left="t0",
+        right="t1",
+        height=IMAGING_HEIGHT,
+        color="color",
+        source=src,
+        name="imaging",
+    )
+    gantt.add_tools(
+        HoverTool(
+            renderers=[ri, rm],
+            tooltips=[
+                ("target", "@target (@kind)"),
+                ("satellite", "@satellite"),
+                ("start", "@start UTC"),
+                ("end", "@end UTC"),
+                ("maneuver", "@maneuver{0.000} s"),
+                ("slack", "@slack{0.000} s"),
+            ],
+        )
+    )
+    bat = view.get("battery") or {}
+    if not bat:
+        note = "<i>battery: no satellite of this plan has a power model</i>"
+        return gantt, Div(text=note, name="battery"), x_range, []
+    index = {n: k for k, n in enumerate(names)}
+    batt = figure(
+        name="battery",
+        width=MAP_WIDTH + CONTROLS_WIDTH,
+        height=BATTERY_HEIGHT,
+        x_range=x_range,
+        x_axis_type="datetime",
+        tools="xpan,xwheel_zoom,xbox_zoom,reset,save",
+        active_scroll="xwheel_zoom",
+        title="battery [Wh]",
+        y_axis_label="Wh",
+        output_backend="canvas",
+    )
+    batt.xgrid.grid_line_alpha = 0.3
+    lines = []
+    for name, b in bat.items():
+        k = index.get(name, 0)
+        t = epoch + _MS * np.asarray(b["t_s"], np.float64)
+        lv = np.array([np.nan if v is None else v for v in b["level_wh"]], np.float64)
+        r = batt.line(
+            x=t,
+            y=lv,
+            color=sats[k]["color"] if k < len(sats) else "black",
+            line_width=1.5,
+            legend_label=name,
+            name=f"battery-{name}",
+            tags=[k],
+        )
+        lines.append(r)
+    batt.legend.location = "top_left"
+    batt.legend.click_policy = "hide"
+    batt.add_tools(
+        HoverTool(
+            renderers=lines,
+            tooltips=[("battery", "$name"), ("time", "$x{%F %T} UTC"), ("level", "$y{0.0} Wh")],
+            formatters={"$x": "datetime"},
+            mode="vline",
+        )
+    )
+    return gantt, batt, x_range, lines
+
+
+def plan_page(doc):
+    """The Bokeh layout of a plan document (module docstring).
+
+    Args:
+      doc: dict, the content of ``plan.json`` (:func:`plan_document`).
+    Returns:
+      a Bokeh layout model.
+    """
+    from bokeh.layouts import column, row
+    from bokeh.models import Button, CheckboxGroup, CustomJS, Div, TapTool
+
+    sats = _satellites(doc)
+    obs = _observation_columns(doc, sats)
+    fmap, filt = _map(doc, sats, obs)
+    gantt, batt, x_range, lines = _timeline(doc, sats, obs)
+    legend = "".join(
+        f'<div><span style="display:inline-block;width:12px;height:12px;background:'
+        f'{html.escape(s["color"])};margin-right:6px"></span>{html.escape(s["name"])}'
+        + (f" <small>({html.escape(s['model'])})</small>" if s.get("model") else "")
+        + "</div>"
+        for s in sats
+    )
+    boxes = CheckboxGroup(
+        labels=[s["name"] for s in sats], active=list(range(len(sats))), name="satellite_filter"
+    )
+    show_all = Button(label="all satellites", width=CONTROLS_WIDTH - 20, name="all_satellites")
+    status = Div(text="", width=MAP_WIDTH + CONTROLS_WIDTH, name="filter_status")
+    imaged = next(r for r in filt if r.name == "targets_imaged")
+    tap = TapTool(renderers=[imaged], behavior="select")
+    fmap.add_tools(tap)
+    tap.callback = CustomJS(
+        args={"src": imaged.data_source, "xr": x_range, "pad": PASS_PAD_S * _MS}, code=_TAP_JS
+    )
+    args = {"boxes": boxes, "xr": x_range, "filtered": filt, "battery": lines, "status": status}
+    cb = CustomJS(args=args, code=_FILTER_JS)
+    boxes.js_on_change("active", cb)
+    x_range.js_on_change("start", cb)
+    x_range.js_on_change("end", cb)
+    show_all.js_on_event("button_click", CustomJS(args={"boxes": boxes}, code=_ALL_JS))
+    n_obs, n_tg = len(obs["sat"]), len((doc.get("view") or {}).get("targets", {}).get("name", []))
+    key = Div(
+        text=(
+            "<b>satellites</b> (check to show on the map)"
+            f'<div style="font-size:12px">{legend}</div>'
+            f'<p style="font-size:12px;width:{CONTROLS_WIDTH - 16}px">{n_obs} observations; '
+            f"{max(n_tg - n_obs, 0)} targets not imaged (grey). Hover a target for who "
+            "images it when, click it to zoom the timeline to its pass; wheel / box zoom "
+            "the map; zoom or pan the timeline to filter the map by time.</p>"
+        ),
+        width=CONTROLS_WIDTH,
+    )
+    controls = column(key, boxes, show_all, width=CONTROLS_WIDTH)
+    header = Div(text=_header(doc), width=MAP_WIDTH + CONTROLS_WIDTH, name="header")
+    status.text = (
+        f"map shows all {len(sats)} satellites over the whole horizon "
+        "(zoom the timeline or uncheck satellites to filter)"
+    )
+    return column(header, row(controls, fmap), status, gantt, batt)
+
+
+def write_plan_html(doc, path, *, force: bool = False) -> Path:
+    """Write the page of a plan as one self-contained HTML file (atomic).
+
+    Args:
+      doc: dict, a plan document (:func:`plan_document`, or ``plan.json`` read with
+        :func:`read_plan`); a :class:`PlanResult` is converted with :func:`plan_document`.
+      path: output file.
+      force: overwrite an existing file (otherwise ``FileExistsError``, file untouched).
+    Returns:
+      ``Path(path)``.
+    """
+    from bokeh.embed import file_html
+    from bokeh.resources import INLINE
+
+    refuse_overwrite(path, force)
+    if isinstance(doc, _result.PlanResult):
+        doc = plan_document(doc)
+    title = f"jaxspline plan: {doc['summary'].get('scenario', '')}"
+    text = file_html(plan_page(doc), INLINE, title=title)
+    return atomic_write_text(path, text, force=force)
+
+
+_result.HTML_WRITERS.append(write_plan_html)  # PlanResult.to_html (the engine never imports us)
