@@ -54,7 +54,12 @@ def _enable_compile_cache() -> None:
 
 # Each module registers its own sub-commands with ``register(subparsers)``; the module
 # sets ``func(args) -> int`` on its parsers. Imported lazily to keep start-up fast.
-_SUBCOMMAND_MODULES = ("jaxspline.cli_plan", "jaxspline.cli_view", "jaxspline.aeossp.cli")
+_SUBCOMMAND_MODULES = (
+    "jaxspline.cli_plan",
+    "jaxspline.cli_bound",
+    "jaxspline.cli_view",
+    "jaxspline.aeossp.cli",
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

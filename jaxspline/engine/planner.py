@@ -244,6 +244,8 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
             chunk_size=_NEAR_CHUNK,
             feasible_only=True,
             progress=False,
+            process_index=0,  # every pair of these satellites here, also under
+            process_count=1,  # jax.distributed (shards split by satellite, not chunk)
         ):
             ii, jj = ids[tr.src], ids[tr.dst]
             keep = o.t_end[ii] > o.t_start[jj] - far[k] - slack
@@ -295,7 +297,12 @@ class Prepared(NamedTuple):
 
 
 def build_problem(
-    scenario: Scenario, *, progress: bool = False, joins: bool = False, _clock=None
+    scenario: Scenario,
+    *,
+    progress: bool = False,
+    joins: bool = False,
+    reduce_slack=None,
+    _clock=None,
 ) -> Prepared:
     """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
 
@@ -306,6 +313,10 @@ def build_problem(
         (:mod:`jaxspline.engine.join_screen`): pairs up to the join far gap are
         screened and kept only when both the model and the join screen pass them,
         and an option is a first observation only when the join from nadir passes.
+      reduce_slack: optional callable ``local -> global`` on the near-pair slack (the
+        shortest observation [s], the DP's block width): processes that each build
+        a shard of the satellites pass the minimum over all of them, so every shard
+        screens the same window as a single process would.
       _clock: private; the stage timer of an enclosing :func:`plan` call.
     Returns:
       Prepared, the inputs of the search stage.
@@ -348,7 +359,10 @@ def build_problem(
             ids = np.flatnonzero(o.sat == k)
             far[k] = far_gap(s, o, ids, float(omega[k]), tables[k])
             first[ids] = first_requirements(s, o, ids, tables[k])
-        slack = float(np.min(o.t_end - o.t_start)) if len(opp) else 0.0
+        slack = float(np.min(o.t_end - o.t_start)) if len(opp) else math.inf
+        if reduce_slack is not None:
+            slack = float(reduce_slack(slack))
+        slack = slack if math.isfinite(slack) else 0.0
         lookup = None
         if joins and len(opp):
             states = channel_states(scene, sats, opp)
