@@ -37,6 +37,14 @@ _SLEW_TOL = 0.1  # [s] taken off each required slew time (covers the gap margin)
 _WH = 1.0 / 3600.0  # [Wh / J]
 
 
+def _round_down32(x: np.ndarray) -> np.ndarray:
+    """float32 copy never above x: a cheaper arc only raises the DP, so the bound stays valid."""
+    x32 = x.astype(np.float32)
+    high = x32.astype(np.float64) > x
+    x32[high] = np.nextafter(x32[high], np.float32(-np.inf))
+    return x32
+
+
 class EnergyBudgets:
     """Interval energy constraints of the battery satellites (module docstring).
 
@@ -135,10 +143,11 @@ class EnergyBudgets:
         Args:
           nu: float [B], multipliers of the B energy budgets (>= 0).
         Returns:
-          (node float [N], arc float [P]) prices.
+          (node float64 [N], arc float32 [P]) prices (arcs rounded down: a cheaper arc
+          can only raise the DP's optimum, so the bound stays an upper bound).
         """
         node = np.zeros(self.n_options)
-        arc = np.zeros(self.n_near)
+        arc = np.zeros(self.n_near, np.float32)  # 4 bytes a pair, rounded down below
         for sk in self.sats:
             a_n, e_n = sk["shape"]
             v = np.zeros((a_n, e_n))
@@ -147,7 +156,7 @@ class EnergyBudgets:
             sp[1:, :e_n] = np.cumsum(np.cumsum(v[:, ::-1], axis=1)[:, ::-1], axis=0)
             node[sk["lo"] : sk["hi"]] = sk["e"] * sp[sk["ia"], sk["ib"]]
             idx, ia, ib, ea = self._arcs(sk)
-            arc[idx] = ea * sp[ia, ib]
+            arc[idx] = _round_down32(ea * sp[ia, ib])
         return node, arc
 
     def usage(self, nodes: np.ndarray, arcs: np.ndarray) -> np.ndarray:
