@@ -21,11 +21,20 @@ infeasible pair). The models (``Satellite.model``):
   :func:`jaxspline.kernels.slew.slew_profile_time`),
   plus settling plus the gap margin.
 
-Rest-to-rest models are evaluated through a per-satellite *slew table*: the slew
-time on the angle grid ``theta_k = pi (k / N)^2`` (fine near 0, where the time grows
-like sqrt(theta)), read at the next grid angle above theta. The time is increasing in
-theta, so the table never under-estimates it (the excess is below 1e-3 s for the
-aeossp limits); the plan's final check uses the kernel itself.
+Rest-to-rest models are evaluated through a per-satellite *slew table*: on the angle
+grid ``theta_k = pi (k / N)^2`` (fine near 0, where the time grows like sqrt(theta)) an
+angle theta is read at the next grid angle above it (one index, one load). Entry k is
+an UPPER BOUND of the exact time (:func:`slew_time`) over the whole cell
+``(theta_{k-1}, theta_k]`` that reads it, so the planner never needs the plan's final
+check (which uses the kernel itself) to reject a slew the table allowed. The exact time
+is not monotone: it is non-decreasing on pieces, but the flexible profile drops at the
+A -> C switch ``7/6 omega^2/eps`` (from ``sqrt(28/3) b`` to ``3 b``, ``b = omega/eps``,
+SPEC section 2), so the entry is the larger of the time at the cell's upper end and the
+left limits of the drops inside the cell (:func:`_time_drops`), evaluated a little
+beyond both (``_ANGLE_SLACK``: lookup and angle rounding) plus ``_TIME_PAD``. The excess
+is the rise of the time over one cell (below 3e-3 s for the aeossp limits), except in
+the single cell holding a drop, which keeps the whole drop (0.055 b). The table is not
+monotone; :func:`far_gap` uses its running maximum.
 
 Far gaps: :func:`far_gap` gives per satellite a gap beyond which every pair is
 feasible, so the engine only screens pairs closer than that.
@@ -48,6 +57,13 @@ _TABLE_SIZE = 1 << 16  # points of a slew table
 _PAD = 1 << 12  # batch sizes are padded to multiples of this (few compiled shapes)
 _FAR_SAFETY = 1.0 + 1e-9  # relative safety of the per-channel far gap
 _FIXED_POINT_ITERS = 200  # iterations of the rest-to-rest far-gap fixed point
+#: A slew-table entry bounds the time up to ``theta (1 + rel) + abs`` [rad] above its cell:
+#: covers the lookup's index guard (angles up to ``theta_k (1 + 2e-12 / k)`` read entry
+#: k) and the ~1e-16 rad differences between the angle formulas of the screen, the search
+#: and the plan check (near 0 the time grows like sqrt(theta): 1e-14 rad costs ~3e-6 s).
+_ANGLE_SLACK = (1e-9, 1e-14)
+#: Added to every slew-table entry [s]: the kernels' own rounding (~1e-13 s).
+_TIME_PAD = 1e-9
 REST_TO_REST = ("eigen_axis", "flexible")
 
 
@@ -55,7 +71,9 @@ class SlewTable(NamedTuple):
     """Conservative rest-to-rest slew time of one satellite, including settle and margin.
 
     Attributes:
-      time: [N + 1] required time [s] at theta_k = pi (k/N)^2.
+      time: [N + 1] required time [s] read by the angles of the cell
+        ``(theta_{k-1}, theta_k]``, ``theta_k = pi (k/N)^2``: an upper bound of the
+        exact time over the cell (module docstring); not monotone in k.
       size: N.
     """
 
@@ -63,7 +81,7 @@ class SlewTable(NamedTuple):
     size: int
 
     def __call__(self, theta) -> np.ndarray:
-        """Required time [s] for angles theta [rad] (numpy, never below the kernel)."""
+        """Required time [s] for angles theta [rad] (numpy, never below :func:`slew_time`)."""
         theta = np.clip(np.asarray(theta, np.float64), 0.0, math.pi)
         k = np.minimum(np.ceil(self.size * np.sqrt(theta / math.pi) - 1e-12), self.size)
         return self.time[k.astype(np.int64)]
@@ -114,19 +132,79 @@ def flex_tau(sat) -> float:
     return tau
 
 
+def _time_drops(sat, gap_margin: float, rel: float, abs_: float):
+    """Where the exact time of ``sat`` drops, with a bound of its left limit there.
+
+    :func:`slew_time` is non-decreasing in the angle on pieces, with a downward jump
+    only where the flexible profile switches from A to C, at
+    ``theta_s = 7/6 omega^2/eps`` (A: ``T_d = sqrt(8 phi/eps)``, increasing, up to
+    ``sqrt(28/3) omega/eps``; C then D from ``3 omega/eps``, increasing and continuous;
+    SPEC section 2, :func:`jaxspline.kernels.slew.slew_profile_kernel`). Bang-coast-bang
+    (eigen_axis) is continuous and non-decreasing: no drop.
+
+    Args:
+      sat: Satellite with a rest-to-rest model.
+      gap_margin: float [s], as :func:`slew_time`.
+      rel, abs_: the angle window ``theta_s (1 -+ rel) -+ abs_`` [rad] the switch may
+        fall in after rounding (of the kernel's test ``a <= 7/6 b^2`` and of the angle).
+    Returns:
+      list of ``(lo, hi, t)``: the drop lies in ``[lo, hi]`` [rad], and every angle there
+      that the kernel evaluates with profile A needs at most t [s] (profile A forced at
+      hi, increasing in the angle), settle and margin included.
+    """
+    if sat.model != "flexible":
+        return []
+    from jaxspline.kernels.slew import slew_profile_time
+
+    rate, accel = float(sat.limits.rate), float(sat.limits.accel)
+    theta_s = 7.0 / 6.0 * rate * rate / accel
+    lo, hi = theta_s * (1.0 - rel) - abs_, min(math.pi, theta_s * (1.0 + rel) + abs_)
+    t_a = float(slew_profile_time(hi, rate, accel, flex_tau(sat), kind="A"))
+    return [(lo, hi, t_a + sat.settle + gap_margin)] if lo < math.pi else []
+
+
+def _cell(theta, size: int):
+    """Table index read by angles theta [rad] (numpy; the formula of :class:`SlewTable`)."""
+    theta = np.clip(np.asarray(theta, np.float64), 0.0, math.pi)
+    k = np.minimum(np.ceil(size * np.sqrt(theta / math.pi) - 1e-12), size)
+    return k.astype(np.int64)
+
+
 def slew_table(sat, gap_margin: float = 0.0, size: int = _TABLE_SIZE) -> SlewTable:
-    """Tabulate :func:`slew_time` of a rest-to-rest satellite (see module docstring).
+    """Tabulate an upper bound of :func:`slew_time` of a rest-to-rest satellite.
+
+    ``time[k] = max(t(theta_k (1 + rel) + abs), left limits of the drops of t in the
+    cell) + _TIME_PAD`` with t = :func:`slew_time`, ``(rel, abs) = _ANGLE_SLACK`` and the
+    drops of :func:`_time_drops` (t is non-decreasing between them): so ``time[k] >= t``
+    on the whole cell ``(theta_{k-1}, theta_k]`` that reads entry k (module docstring).
 
     Args:
       sat: Satellite with a rest-to-rest model.
       gap_margin: float, extra time added to every slew [s].
       size: int N, the table has N + 1 entries at theta_k = pi (k/N)^2.
     Returns:
-      SlewTable, made non-decreasing in the angle.
+      SlewTable (not monotone in the angle; :func:`far_gap` takes its running maximum).
+    Raises:
+      ValueError: naming the satellite if the time drops in a cell where no drop is
+        known (the bound would not hold: the profile changed, update ``_time_drops``).
     """
+    rel, abs_ = _ANGLE_SLACK
     theta = math.pi * (np.arange(size + 1) / size) ** 2
-    t = slew_time(sat, theta, gap_margin)
-    return SlewTable(np.maximum.accumulate(t), size)
+    t = slew_time(sat, np.minimum(theta * (1.0 + rel) + abs_, math.pi), gap_margin)
+    known = np.zeros(size + 1, bool)
+    for lo, hi, t_left in _time_drops(sat, gap_margin, rel, abs_):
+        k0, k1 = _cell([lo, hi], size)
+        t[k0 : k1 + 1] = np.maximum(t[k0 : k1 + 1], t_left)
+        known[k0 : k1 + 2] = True  # the drop may also show at the next node
+    drop = np.flatnonzero(np.diff(t) < 0.0) + 1
+    if np.any(~known[drop]):
+        k = int(drop[~known[drop]][0])
+        raise ValueError(
+            f"satellite {sat.name!r}: model {sat.model!r} slew time drops between "
+            f"{theta[k - 1]!r} and {theta[k]!r} rad, where no drop is known: the table "
+            "would not bound it"
+        )
+    return SlewTable(t + _TIME_PAD, size)
 
 
 def _rest_to_rest(table: SlewTable, frm, i, to, j, available):
@@ -204,7 +282,9 @@ def far_gap(sat, options, idx, nadir_rate: float, table: SlewTable | None = None
     ``4 b_c / d_c`` (SPEC section 1). Rest-to-rest: two lines of sight inside the
     off-nadir cone at instants g apart are at most ``2 eta + omega g`` apart (omega =
     ``nadir_rate``, the inertial turn rate of nadir), so the fixed point of
-    ``g = t_req(min(pi, 2 eta + omega g))`` bounds every required gap.
+    ``g = T(min(pi, 2 eta + omega g))`` bounds every required gap, with T(theta) the
+    largest table time over ``[0, theta]`` (the running maximum: the table itself is
+    not monotone, see :func:`slew_table`).
 
     Args:
       sat: Satellite.
@@ -218,8 +298,9 @@ def far_gap(sat, options, idx, nadir_rate: float, table: SlewTable | None = None
     if sat.model in REST_TO_REST:
         g = 0.0
         eta = float(sat.off_nadir_max)
+        up_to = SlewTable(np.maximum.accumulate(table.time), table.size)  # max over [0, theta]
         for _ in range(_FIXED_POINT_ITERS):
-            g_new = table.scalar(min(math.pi, 2.0 * eta + nadir_rate * g))
+            g_new = up_to.scalar(min(math.pi, 2.0 * eta + nadir_rate * g))
             if abs(g_new - g) < 1e-12:
                 break
             g = g_new
