@@ -34,6 +34,8 @@ from jaxspline.engine.search.problem import Problem
 __all__ = ["EnergyBudgets"]
 
 _SLEW_TOL = 0.1  # [s] taken off each required slew time (covers the gap margin)
+_CACHE_PAIRS = 1 << 25  # up to this many near pairs, each battery satellite's per-pair
+# terms are kept between iterations (~28 bytes a pair); above, derived each time
 _WH = 1.0 / 3600.0  # [Wh / J]
 
 
@@ -89,6 +91,8 @@ class EnergyBudgets:
                 "e_t": e[lo:hi],
                 "pairs": pairs,
             }
+            if self.n_near <= _CACHE_PAIRS:
+                sk["arcs"] = self._arcs(sk)
             inside = self._usage(sk, np.ones(hi - lo, bool), np.ones(self.n_near, bool))
             kept = (a_t[:, None] < b_t[None, :]) & (budget > 0.0)
             kept &= (inside > budget) & (span > budget)
@@ -112,8 +116,13 @@ class EnergyBudgets:
     @staticmethod
     def _arcs(sk, chosen=None):
         """(positions, ia, ib, energy [Wh]) of the satellite's near pairs (those where the
-        bool [P] ``chosen`` holds, default all), from the pair table: nothing is stored
-        per pair."""
+        bool [P] ``chosen`` holds, default all): kept ones, else from the pair table."""
+        if "arcs" in sk:
+            idx, ia, ib, ea = sk["arcs"]
+            if chosen is None:
+                return idx, ia, ib, ea
+            m = chosen[idx]
+            return idx[m], ia[m], ib[m], ea[m]
         pairs, lo = sk["pairs"], sk["lo"]
         idx, dst = pairs.gather(np.arange(lo, sk["hi"]))
         if chosen is not None:
@@ -124,7 +133,8 @@ class EnergyBudgets:
         gap = sk["s"][dst] - sk["e_t"][src]
         need = pairs.need[idx].astype(np.float64)
         slew = np.where(gap < sk["far"], np.maximum(need - _SLEW_TOL, 0.0), 0.0)
-        return idx, sk["ia"][src], sk["ib"][dst], sk["slew_wh"] * slew
+        ia, ib = sk["ia"][src].astype(np.int32), sk["ib"][dst].astype(np.int32)
+        return idx, ia, ib, sk["slew_wh"] * slew
 
     @classmethod
     def _usage(cls, sk, nodes, arcs):
