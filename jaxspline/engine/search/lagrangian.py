@@ -255,13 +255,17 @@ class _Prices:
             node_pen, arc_pen = self.en.penalties(self.lam[n_t:])
             w, arc, self.used = w - node_pen, arc_pen, []
         paths, vals = dp_paths(self.pb, self.d, w, arc, self.used)
+        self._record(vals, paths)
+        return paths
+
+    def _record(self, vals, paths):
+        """Bound of this iteration from the satellites' DP values (satellite order)."""
         bound = float(sum(vals) + self.lam.sum())
         if bound < self.ub - _GAP_TOL:
             self.ub, self.best_lam, self.stall = bound, self.lam.copy(), 0
         else:
             self.stall += 1
         self.paths = paths
-        return paths
 
     def _subgradient(self) -> np.ndarray:
         cnt = np.zeros(self.W.size)

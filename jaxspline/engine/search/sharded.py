@@ -78,12 +78,7 @@ class _ShardPrices(_Prices):
         vals_all = every[:, : self.n_sats].sum(axis=0)  # one owner each: exact
         self.cnt = every[:, self.n_sats : -1].sum(axis=0)
         self.stop = bool(every[:, -1].max() > 0.0)
-        bound = float(sum(vals_all.tolist()) + self.lam.sum())
-        if bound < self.ub - 1e-9:
-            self.ub, self.best_lam, self.stall = bound, self.lam.copy(), 0
-        else:
-            self.stall += 1
-        self.paths = paths
+        self._record(vals_all.tolist(), paths)
         return paths
 
     def _subgradient(self) -> np.ndarray:
