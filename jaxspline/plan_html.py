@@ -33,16 +33,13 @@ header and the timeline; the map then has the coastlines only.
 
 from __future__ import annotations
 
-import datetime as _dt
-import functools
 import html
 import json
-import math
 from pathlib import Path
 
 import numpy as np
 
-from jaxspline.czml import SATELLITE_COLORS
+from jaxspline import plan_html_columns as columns
 from jaxspline.engine import result as _result
 from jaxspline.engine._io import atomic_write_text, refuse_overwrite
 
@@ -60,11 +57,8 @@ MAP_WIDTH = 1200  # [px]; the map is 2:1 (360 x 180 deg)
 CONTROLS_WIDTH = 190  # [px]
 TIMELINE_ROW_PX = 34
 BATTERY_HEIGHT = 230
-TRACK_SEGMENT = 10  # track samples per filterable map segment (5 min at 30 s)
 IMAGING_HEIGHT = 0.6  # Gantt bar heights (row pitch 1)
 MANEUVER_HEIGHT = 0.25
-COAST_DECIMATE = 2  # land grid cells averaged per axis for the page (0.5 deg)
-_MS = 1000.0
 
 # CustomJS glue: the satellite check boxes and the timeline's time range filter the map.
 _FILTER_JS = """
@@ -141,189 +135,12 @@ def plan_document(result) -> dict:
     return result.to_dict(extra={"view": view_data(result)})
 
 
-# --- data -----------------------------------------------------------------------------
-
-
-@functools.cache
-def _coast():
-    """Land polygons (with holes) and coastlines [deg] from the offline land grid, cached.
-
-    Returns:
-      (land_xs, land_ys, coast_xs, coast_ys): nested lists for Bokeh ``multi_polygons``
-      (one polygon per row: [[exterior, hole, ...]]) and ``multi_line`` (float32).
-    """
-    import contourpy
-
-    from jaxspline.plot_plan import land_fraction
-
-    lat, lon, land = land_fraction()
-    d = COAST_DECIMATE
-    n, m = land.shape[0] // d, land.shape[1] // d
-    land = land[: n * d, : m * d].reshape(n, d, m, d).mean(axis=(1, 3))
-    lat = lat[: n * d].reshape(n, d).mean(axis=1)
-    lon = lon[: m * d].reshape(m, d).mean(axis=1)
-    # close the grid at the poles and the antimeridian so land polygons do not stop short
-    lon = np.concatenate([[-180.0], lon, [180.0]])
-    land = np.concatenate([land[:, -1:], land, land[:, :1]], axis=1)
-    gen = contourpy.contour_generator(lon, lat, land, fill_type="OuterOffset", line_type="Separate")
-    pts, offsets = gen.filled(0.5, 2.0)
-    land_xs, land_ys = [], []
-    for p, off in zip(pts, offsets, strict=True):
-        rings = [p[i:j].astype(np.float32) for i, j in zip(off[:-1], off[1:], strict=True)]
-        land_xs.append([[r[:, 0] for r in rings]])
-        land_ys.append([[r[:, 1] for r in rings]])
-    lines = [ln.astype(np.float32) for ln in gen.lines(0.5) if len(ln) > 1]
-    return land_xs, land_ys, [ln[:, 0] for ln in lines], [ln[:, 1] for ln in lines]
-
-
-def _parse_utc(text: str) -> _dt.datetime:
-    return _dt.datetime.strptime(text, "%Y-%m-%dT%H:%M:%S.%fZ").replace(tzinfo=_dt.UTC)
-
-
-def _epoch_ms(doc) -> float:
-    """Scenario epoch [ms since 1970] (Bokeh datetime) from the view or the first row."""
-    view = doc.get("view") or {}
-    if "epoch_utc" in view:
-        return _parse_utc(view["epoch_utc"]).timestamp() * _MS
-    rows = doc["observations"]
-    if rows:
-        return (_parse_utc(rows[0]["start_utc"]).timestamp() - rows[0]["start_s"]) * _MS
-    return 0.0
-
-
-def _satellites(doc) -> list[dict]:
-    view = doc.get("view") or {}
-    if view.get("satellites"):
-        return view["satellites"]
-    names = list(dict.fromkeys(o["satellite"] for o in doc["observations"]))
-    return [
-        {"name": n, "model": "", "color": SATELLITE_COLORS[k % len(SATELLITE_COLORS)]}
-        for k, n in enumerate(names)
-    ]
-
-
-def _utc_text(iso: str) -> str:
-    """``2026-04-14T00:03:21.123456Z`` -> ``2026-04-14 00:03:21.123``."""
-    return iso[:23].replace("T", " ")
-
-
-def _fmt(x, spec: str = ".6g") -> str:
-    if x is None:
-        return "-"
-    if isinstance(x, bool):
-        return str(x).lower()
-    if isinstance(x, int | float):
-        return format(x, spec)
-    return html.escape(str(x))
-
-
-def _observation_columns(doc, sats) -> dict:
-    """One row per observation: map position, times, hover texts, filter columns."""
-    rows = doc["observations"]
-    view = doc.get("view") or {}
-    epoch = _epoch_ms(doc)
-    index = {s["name"]: k for k, s in enumerate(sats)}
-    tg = view.get("targets")
-    pos = {n: i for i, n in enumerate(tg["name"])} if tg else {}
-    off = (view.get("observations") or {}).get("off_nadir_deg") or [None] * len(rows)
-    r = [pos.get(o["target"]) for o in rows]
-    nan = float("nan")
-    return {
-        "x": np.array([tg["lon_deg"][i] if i is not None else nan for i in r], np.float64),
-        "y": np.array([tg["lat_deg"][i] if i is not None else nan for i in r], np.float64),
-        "target": [o["target"] for o in rows],
-        "kind": [o.get("kind", "") for o in rows],
-        "priority": np.array([o["value"] for o in rows], np.float64),
-        "satellite": [o["satellite"] for o in rows],
-        "model": [o.get("model", "") for o in rows],
-        "start": [_utc_text(o["start_utc"]) for o in rows],
-        "end": [_utc_text(o["end_utc"]) for o in rows],
-        "duration": np.array([o["end_s"] - o["start_s"] for o in rows], np.float64),
-        "off_nadir": np.array([nan if v is None else v for v in off], np.float64),
-        "maneuver": np.array([o["maneuver_s"] for o in rows], np.float64),
-        "slack": np.array([o["slack_s"] for o in rows], np.float64),
-        "sat": np.array([index[o["satellite"]] for o in rows], np.int32),
-        "color": [sats[index[o["satellite"]]]["color"] for o in rows],
-        "t0": epoch + _MS * np.array([o["start_s"] for o in rows], np.float64),
-        "t1": epoch + _MS * np.array([o["end_s"] for o in rows], np.float64),
-        "m0": epoch + _MS * np.array([o["start_s"] - o["maneuver_s"] for o in rows], np.float64),
-    }
-
-
-def _track_columns(doc, sats) -> dict:
-    """Ground tracks cut into segments of TRACK_SEGMENT samples (filterable rows)."""
-    tr = (doc.get("view") or {}).get("tracks")
-    cols = {"xs": [], "ys": [], "sat": [], "t0": [], "t1": [], "color": [], "satellite": []}
-    if not tr:
-        return cols
-    epoch = _epoch_ms(doc)
-    t = epoch + _MS * np.asarray(tr["t_s"], np.float64)
-    for k, s in enumerate(sats):
-        lon = np.array([np.nan if v is None else v for v in tr["lon_deg"][k]], np.float64)
-        lat = np.array([np.nan if v is None else v for v in tr["lat_deg"][k]], np.float64)
-        for i in range(0, t.size - 1, TRACK_SEGMENT):
-            j = min(i + TRACK_SEGMENT + 1, t.size)  # overlap one sample: no gaps
-            x, y = lon[i:j], lat[i:j]
-            jump = np.flatnonzero(np.abs(np.diff(x)) > 180.0) + 1  # antimeridian: break
-            cols["xs"].append(np.insert(x, jump, np.nan))
-            cols["ys"].append(np.insert(y, jump, np.nan))
-            cols["sat"].append(k)
-            cols["t0"].append(t[i])
-            cols["t1"].append(t[j - 1])
-            cols["color"].append(s["color"])
-            cols["satellite"].append(s["name"])
-    return cols
-
-
-def _footprint_columns(doc, obs) -> dict:
-    from jaxspline.plan_view import disc
-
-    view = doc.get("view") or {}
-    fps = (view.get("observations") or {}).get("footprint") or []
-    swath = {s["name"]: s.get("swath_m") for s in view.get("satellites") or []}
-    xs, ys, keep = [], [], []
-    for i, fp in enumerate(fps):
-        if fp is not None:
-            x, y = fp["lon_deg"], fp["lat_deg"]
-        elif math.isfinite(obs["x"][i]) and swath.get(obs["satellite"][i]):
-            x, y = disc(obs["x"][i], obs["y"][i], swath[obs["satellite"][i]] / 2.0)
-        else:
-            continue
-        xs.append(np.asarray(x, np.float64))
-        ys.append(np.asarray(y, np.float64))
-        keep.append(i)
-    cols = {k: [v[i] for i in keep] for k, v in obs.items() if k not in ("x", "y")}
-    cols = {k: np.asarray(v) if isinstance(obs[k], np.ndarray) else v for k, v in cols.items()}
-    return {"xs": xs, "ys": ys, **cols}
-
-
-def _area_columns(doc) -> dict:
-    view = doc.get("view") or {}
-    cover = doc["report"].get("areas") or []
-    cols = {"xs": [], "ys": [], "name": [], "priority": [], "covered": []}
-    for a, area in enumerate(view.get("areas") or []):
-        geom = area["geometry"]
-        polys = [geom["coordinates"]] if geom["type"] == "Polygon" else geom["coordinates"]
-        cov = cover[a] if a < len(cover) else {}
-        frac = cov.get("covered_fraction")
-        for rings in polys:
-            cols["xs"].append([[np.asarray([p[0] for p in ring], np.float64) for ring in rings]])
-            cols["ys"].append([[np.asarray([p[1] for p in ring], np.float64) for ring in rings]])
-            cols["name"].append(area["name"])
-            cols["priority"].append(area["value"])
-            cols["covered"].append("-" if frac is None else f"{100 * frac:.1f} %")
-    return cols
-
-
-# --- page -----------------------------------------------------------------------------
-
-
 def _header(doc) -> str:
     s, rep, st = doc["summary"], doc["report"], doc.get("stats") or {}
     tim = doc.get("timings_s") or {}
 
     def cell(key, value, spec=".6g"):
-        return f'<span class="v" data-key="{key}">{_fmt(value, spec)}</span>'
+        return f'<span class="v" data-key="{key}">{columns.fmt(value, spec)}</span>'
 
     bound = s.get("bound") or 0.0
     gap_pct = 100.0 * s["gap"] / bound if bound and s.get("gap") is not None else None
@@ -333,7 +150,7 @@ def _header(doc) -> str:
     if "epoch_utc" in view:
         when = (
             f", {cell('duration_h', view['duration_s'] / 3600.0, '.4g')} h from "
-            f"{html.escape(_utc_text(view['epoch_utc'])[:16])} UTC"
+            f"{html.escape(columns.utc_text(view['epoch_utc'])[:16])} UTC"
         )
     valid = bool(s.get("valid"))
     status = "converged" if s.get("bound_converged") else "-"
@@ -381,7 +198,7 @@ def _header(doc) -> str:
         lines.append(
             f"<b>area</b> {html.escape(str(a.get('area')))}: "
             f"{a.get('strips_planned')}/{a.get('strips')} strips planned, "
-            f"{_fmt(100.0 * (a.get('covered_fraction') or 0.0), '.1f')} % covered"
+            f"{columns.fmt(100.0 * (a.get('covered_fraction') or 0.0), '.1f')} % covered"
         )
     counts = [
         (k, st[k])
@@ -433,7 +250,7 @@ def _map(doc, sats, obs):
         output_backend="canvas",
     )
     fig.grid.grid_line_alpha = 0.3
-    land_xs, land_ys, coast_xs, coast_ys = _coast()
+    land_xs, land_ys, coast_xs, coast_ys = columns.coast()
     fig.multi_polygons(xs=land_xs, ys=land_ys, fill_color=LAND_COLOR, line_color=None, name="land")
     fig.multi_line(xs=coast_xs, ys=coast_ys, line_color=COAST_COLOR, line_width=0.6, name="coast")
 
@@ -442,7 +259,7 @@ def _map(doc, sats, obs):
         return {"source": src, "view": CDSView(filter=BooleanFilter([True] * len(cols["sat"])))}
 
     hover_renderers = []
-    areas = _area_columns(doc)
+    areas = columns.area_columns(doc)
     if areas["name"]:
         ra = fig.multi_polygons(
             xs="xs",
@@ -470,7 +287,7 @@ def _map(doc, sats, obs):
             line_alpha=0.7,
             name="strips",
         )
-    tracks = _track_columns(doc, sats)
+    tracks = columns.track_columns(doc, sats)
     filt = []
     if tracks["sat"]:
         rt = fig.multi_line(
@@ -483,7 +300,7 @@ def _map(doc, sats, obs):
             **filtered(tracks),
         )
         filt.append(rt)
-    fp = _footprint_columns(doc, obs)
+    fp = columns.footprint_columns(doc, obs)
     if fp["xs"]:
         rf = fig.patches(
             xs="xs",
@@ -562,10 +379,10 @@ def _timeline(doc, sats, obs):
     from bokeh.plotting import figure
 
     view = doc.get("view") or {}
-    epoch = _epoch_ms(doc)
+    epoch = columns.epoch_ms(doc)
     duration = view.get("duration_s") or max([o["end_s"] for o in doc["observations"]] or [1.0])
-    end = epoch + _MS * duration
-    x_range = Range1d(epoch, end, bounds=(epoch, end), min_interval=10.0 * _MS)
+    end = epoch + columns.MS * duration
+    x_range = Range1d(epoch, end, bounds=(epoch, end), min_interval=10.0 * columns.MS)
     names = [s["name"] for s in sats]
     gantt = figure(
         name="timeline",
@@ -633,7 +450,7 @@ def _timeline(doc, sats, obs):
     lines = []
     for name, b in bat.items():
         k = index.get(name, 0)
-        t = epoch + _MS * np.asarray(b["t_s"], np.float64)
+        t = epoch + columns.MS * np.asarray(b["t_s"], np.float64)
         lv = np.array([np.nan if v is None else v for v in b["level_wh"]], np.float64)
         r = batt.line(
             x=t,
@@ -669,8 +486,8 @@ def plan_page(doc):
     from bokeh.layouts import column, row
     from bokeh.models import Button, CheckboxGroup, CustomJS, Div, TapTool
 
-    sats = _satellites(doc)
-    obs = _observation_columns(doc, sats)
+    sats = columns.satellites(doc)
+    obs = columns.observation_columns(doc, sats)
     fmap, filt = _map(doc, sats, obs)
     gantt, batt, x_range, lines = _timeline(doc, sats, obs)
     legend = "".join(
@@ -689,7 +506,8 @@ def plan_page(doc):
     tap = TapTool(renderers=[imaged], behavior="select")
     fmap.add_tools(tap)
     tap.callback = CustomJS(
-        args={"src": imaged.data_source, "xr": x_range, "pad": PASS_PAD_S * _MS}, code=_TAP_JS
+        args={"src": imaged.data_source, "xr": x_range, "pad": PASS_PAD_S * columns.MS},
+        code=_TAP_JS,
     )
     args = {"boxes": boxes, "xr": x_range, "filtered": filt, "battery": lines, "status": status}
     cb = CustomJS(args=args, code=_FILTER_JS)
