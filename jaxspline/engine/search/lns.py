@@ -153,7 +153,8 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
                 else:
                     removed += room
                     tl.insert(forced)
-        pool = {pb.c_task[c] for c in removed}
+        moved = {pb.c_task[c] for c in removed}
+        pool = set(moved)
         a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
         b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
         for c in range(a, b):
@@ -165,9 +166,9 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
             pool = sorted(
                 pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t)
             )
-        for t in pool:
+        for t in pool:  # only satellite k has new room for a task that was waiting
             if tl.assigned[t] < 0:
-                tl.best_insert(t, rng=rng)
+                tl.best_insert(t, rng=rng, sat=None if t in moved else k)
         if max_iters is not None:
             frac = it / max_iters
         else:

@@ -347,18 +347,22 @@ class Timeline:
                 self.levels[k], self.debt[k], self.stale[k] = lv, debt, stale
             self.saved.clear()
 
-    def best_insert(self, t: int, rng=None) -> bool:
+    def best_insert(self, t: int, rng=None, sat: int | None = None) -> bool:
         """Insert task t at its cheapest feasible option (noisy costs with ``rng``).
 
         Args:
           t: int, task index.
           rng: numpy Generator for randomized costs, or None.
+          sat: only options of this satellite (None: every satellite).
         Returns:
           bool, whether the task was inserted.
         """
         pb = self.pb
+        c_sat = pb.c_sat
         best, best_cost = -1, math.inf
         for c in pb.task_cands[t]:
+            if sat is not None and c_sat[c] != sat:
+                continue
             cost = self.check(c)
             if cost is None:
                 continue
