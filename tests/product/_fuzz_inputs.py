@@ -523,6 +523,12 @@ def _geojson_docs(doc):
         ("wrong_depth", {"type": "Polygon", "coordinates": ring}, "error", "error"),
         ("nan_literal", json.dumps(_fc([[[14, NAN], *ring[1:]]])), "error", "error"),
         ("inf_literal", json.dumps(_fc([[*ring[:2], [INF, 46.0], *ring[3:]]])), "error", "error"),
+        (
+            "huge_integer",
+            json.dumps(_fc([ring])).replace("46.3]", "1" * 400 + "]"),
+            "error",
+            "error",
+        ),
         ("lon_plus_360", _fc([[[x + 360.0, y] for x, y in ring]]), "either", "error"),
         ("too_large", _fc([_ring(0.0, 0.0, 30.0, 30.0)]), "either", "error"),
         (

@@ -15,6 +15,11 @@ belongs, a latitude of 95 deg, an unknown key or column, a duplicate name, an em
 file): those must be rejected. No reader may write anything: an audit hook records
 every ``open`` for writing, rename, removal or directory creation while a reader runs.
 
+Areas across the antimeridian are refused with the remedy in the message (two areas,
+one each side), and that remedy is checked to cut both halves where they are. The
+generators live in ``_fuzz_inputs.py``; ``python tests/product/test_fuzz_readers.py``
+prints a summary of the failing cases by kind.
+
 The baseline results are parsed once per test; no plan is built. The random targets
 of ``default.toml`` are drawn with ``land_only = false`` in the mutated copies (the land
 mask costs 0.5 s a read), and its CSV path is made absolute.
@@ -23,6 +28,7 @@ mask costs 0.5 s a read), and its CSV path is made absolute.
 from __future__ import annotations
 
 import dataclasses
+import json
 import os
 import re
 import sys
@@ -343,6 +349,69 @@ def test_fuzz_reader(name, baselines, tmp_path, monkeypatch):
     failures = run_cases(tmp_path, cases, baselines)
     assert not failures, summary(failures)
     assert sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("c")) == []
+
+
+def test_the_write_watch_sees_writes(tmp_path):
+    _, _, writes = _call((tmp_path / "x.txt").write_text, "x")
+    assert writes and "x.txt" in writes[0]
+    _, _, writes = _call((tmp_path / "x.txt").read_text)
+    assert writes == []
+
+
+def _area_scenario(tmp_path, areas: str, name="s.toml"):
+    """areas_example.toml without its areas and daylight rule, with ``areas`` instead."""
+    _, text, _ = _toml_baselines()
+    text = text[: text.index("[[areas]]")] + areas + text[text.index("[[targets]]") :]
+    text = text.replace("sun_elevation_min_deg = 10.0\n", "")
+    (tmp_path / name).write_text(text, encoding="utf-8")
+    return tmp_path / name
+
+
+def _ring_toml(name, lon0, lon1, lat0=10.0, lat1=10.8):
+    ring = [[lon0, lat0], [lon1, lat0], [lon1, lat1], [lon0, lat1]]
+    return f'[[areas]]\nname = "{name}"\nlonlat_deg = {ring}\nmax_length_km = 40.0\n'
+
+
+@pytest.mark.parametrize(
+    ("ring", "why"),
+    [
+        ((179.6, -179.6), "span 359.2 deg"),  # a jump across the meridian
+        ((179.6, 180.4), "within [-180, 180]"),  # longitudes past 180
+        ((-180.4, -179.6), "within [-180, 180]"),
+    ],
+)
+def test_antimeridian_areas_are_refused_with_the_remedy(tmp_path, ring, why):
+    with pytest.raises(ValueError) as exc:
+        load_scenario(_area_scenario(tmp_path, _ring_toml("dateline", *ring)))
+    msg = str(exc.value)
+    assert "areas[0].lonlat_deg (line" in msg and why in msg, msg
+    assert "antimeridian" in msg and "two areas" in msg, msg
+
+
+def test_antimeridian_split_geojson_is_refused(tmp_path):
+    # RFC 7946 section 3.1.9: an area across the meridian split in two at it
+    east = [[179.6, 10], [180, 10], [180, 10.8], [179.6, 10.8], [179.6, 10]]
+    west = [[-180, 10], [-179.6, 10], [-179.6, 10.8], [-180, 10.8], [-180, 10]]
+    doc = {"type": "MultiPolygon", "coordinates": [[east], [west]]}
+    (tmp_path / "d.geojson").write_text(json.dumps(doc), encoding="utf-8")
+    assert read_geojson(tmp_path / "d.geojson").geom_type == "MultiPolygon"  # readable
+    with pytest.raises(ValueError, match=r"d\.geojson: longitudes span 360 deg.*two areas"):
+        load_scenario(_area_scenario(tmp_path, '[[areas]]\ngeojson = "d.geojson"\n'))
+
+
+def test_areas_either_side_of_the_antimeridian_are_cut_in_place(tmp_path):
+    """The remedy the error names: one area each side; each is cut about its own centre."""
+    text = _ring_toml("east", 179.6, 180.0) + _ring_toml("west", -180.0, -179.6)
+    sc = load_scenario(_area_scenario(tmp_path, text))
+    assert [a.name for a in sc.areas] == ["east", "west"]
+    assert not _check_scenario(sc)
+    for area, lon0 in zip(sc.areas, (179.6, -180.0), strict=True):
+        idx = np.asarray(area.targets)
+        assert idx.size > 0  # the 12 h horizon has passes over both halves
+        lat, lon = np.degrees(sc.targets.lat[idx]), np.degrees(sc.targets.lon[idx])
+        # strip starts lie by the area (not on the far side of the Earth); |lon| wraps at 180
+        dlon = np.abs((lon - (lon0 + 0.2) + 180.0) % 360.0 - 180.0)
+        assert np.all(dlon < 0.6) and np.all(np.abs(lat - 10.4) < 0.6), (lon, lat)
 
 
 if __name__ == "__main__":  # python tests/product/test_fuzz_readers.py: the failure summary
