@@ -4,12 +4,15 @@ Shared by :mod:`jaxspline.scenario` (satellites, planner) and
 :mod:`jaxspline.targets_io` (targets). Every reader raises ``ValueError`` as
 ``source: field (line N): message``; :class:`FieldContext` finds the TOML line of a
 field such as ``satellites[1].rate_deg_s`` when the raw text is known.
+:func:`read_text` reads every input file (TOML, CSV, GeoJSON, YAML) as UTF-8, a
+byte-order mark dropped, and names the file and line of bytes that are not UTF-8.
 """
 
 from __future__ import annotations
 
 import math
 import re
+from pathlib import Path
 
 __all__ = [
     "REQUIRED",
@@ -22,6 +25,7 @@ __all__ = [
     "field_str",
     "field_table",
     "field_tables",
+    "read_text",
 ]
 
 _IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
@@ -108,6 +112,31 @@ class FieldContext:
 
 
 REQUIRED = object()
+
+
+def read_text(path, where=None) -> str:
+    """The text of a UTF-8 file (a leading byte-order mark dropped; line ends kept).
+
+    Args:
+      path: str or Path.
+      where: callable ``where(line) -> str`` naming the place of a decoding error
+        (default ``"<path>: line N"``).
+    Returns:
+      str.
+    Raises:
+      FileNotFoundError: the file is missing.
+      ValueError: the bytes are not UTF-8, naming the file and the line.
+    """
+    data = Path(path).read_bytes()
+    try:
+        return data.decode("utf-8-sig")
+    except UnicodeDecodeError as exc:
+        line = data[: exc.start].count(b"\n") + 1
+        place = where(line) if where is not None else f"{path}: line {line}"
+        raise ValueError(
+            f"{place}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
+            "save the file as UTF-8"
+        ) from None
 
 
 def check_float(

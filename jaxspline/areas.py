@@ -55,7 +55,7 @@ import numpy as np
 import shapely
 from shapely.geometry import Polygon, box, mapping, shape
 
-from jaxspline.areas_io import DENSIFY_DEG, AreaSpec, polygon_center
+from jaxspline.areas_io import DENSIFY_DEG, MIN_STRIP_M, AreaSpec, polygon_center
 from jaxspline.engine.mission import STRIP, Area, Scenario, Targets, make_targets
 from jaxspline.engine.planner import orbit_scene
 from jaxspline.geometry.frames import (
@@ -92,7 +92,6 @@ __all__ = [
 ]
 
 MERGE_DEG = 5.0  # passes whose track axes differ by at most this share a cutting [deg]
-MIN_STRIP_M = 1000.0  # shorter strips are lengthened about their middle to this [m]
 FOOTPRINT_STEP_M = 2000.0  # footprint polygons get a point on each side every this [m]
 _MAX_REFERENCE_POINTS = 64  # polygon vertices whose visibility windows give the passes
 _AREA_TOL = 1e-9  # band pieces below this share of the polygon's area are dropped

@@ -1,6 +1,7 @@
 """Planning scenarios from files: the TOML schema, loading with named errors, the default.
 
-A scenario file is TOML; angles are degrees in the file and radians in the
+A scenario file is TOML (UTF-8; a byte-order mark and CRLF line ends are accepted);
+angles are degrees in the file and radians in the
 :class:`jaxspline.engine.mission.Scenario` it becomes; times are seconds from the epoch.
 Unknown keys are errors (typos fail loudly); every error is a ``ValueError`` naming
 the field (``satellites[1].rate_deg_s``) and, where it can be located, the TOML line.
@@ -13,7 +14,8 @@ required::
     [scenario]
     name = "example"                    # label (default: the file's stem)
     epoch = "2026-04-14T00:00:00Z"      # ISO-8601 UTC date-time of t = 0 (required)
-    duration_h = 1.0                    # horizon [h], or duration_s [s] (one required)
+    duration_h = 1.0                    # horizon [h], or duration_s [s] (one required;
+                                        # at most 30 days)
 
     [[satellites]]                      # one table per satellite; a single [satellite]
     name = "sat1"                       # table is accepted as an alias. Name defaults
@@ -36,7 +38,8 @@ required::
     sensor = "visible"                  # sensor type (default "visible")
     settle_s = 0.0                      # settling time after a rest-to-rest slew [s]
     swath_km = 20.0                     # ground width imaged across a strip [km] (default
-                                        # 20): default strip width of areas, footprints
+                                        # 20, at most 5000): default strip width of areas,
+                                        # footprints
     flex = { freq_hz = 0.5, damping = 0.01, tolerance_deg = 1e-4 }
                                         # structural mode (model "flexible" only, required
                                         # there): frequency [Hz] (2 pi f rad/s inside),
@@ -102,8 +105,9 @@ required::
 
     [planner]                           # every key optional (PlannerConfig defaults)
     time_step_s = 5.0                   # action grid: observation starts [s]
-    geometry_step_s = 5.0               # ephemeris / visibility grid [s] (divides time_step_s)
-    scan_speeds_km_s = [7.0]            # strip ground scan speeds [km/s]
+    geometry_step_s = 5.0               # ephemeris / visibility grid [s] (divides time_step_s;
+                                        # at most 10^6 steps over the horizon)
+    scan_speeds_km_s = [7.0]            # strip ground scan speeds [km/s] (at most 100)
     sun_elevation_min_deg = 10.0        # daylight rule at the target [deg] (default: none)
     off_nadir_margin_deg = 0.01         # kept back from off_nadir_max_deg [deg]
     horizon_margin = 0.0                # sine of target elevation must exceed this
@@ -146,6 +150,7 @@ from jaxspline._fields import (
     field_str,
     field_table,
     field_tables,
+    read_text,
 )
 from jaxspline.engine.mission import (
     DEFAULT_SWATH,
@@ -184,6 +189,10 @@ DEFAULT_OFF_NADIR_DEG = 45.0
 MAX_OFF_NADIR_DEG = 80.0
 DEFAULT_SENSOR = "visible"
 DEFAULT_SWATH_KM = DEFAULT_SWATH / 1e3
+MAX_SWATH_KM = 5000.0  # a wider swath is a unit mistake (strip widths are km)
+MAX_DURATION_S = 30 * 86400.0  # longest horizon [s]: TLEs and plans are days, not months
+MAX_GRID_POINTS = 1_000_000  # longest ephemeris grid, duration / geometry_step_s
+MAX_SCAN_SPEED_KM_S = 100.0  # strip ground scan speeds beyond this are unit mistakes
 
 _ORBIT_KEYS = ("altitude_km", "inclination_deg", "raan_deg", "arg_lat_deg", "over")
 _SAT_MODEL_KEYS = (
@@ -239,7 +248,7 @@ def _orbit(ctx, f, sat, epoch_jd, duration):
         raise ctx.error(f"{f}.{clash[0]}", "cannot be combined with over (it places the orbit)")
     ov = field_table(ctx, f"{f}.over", sat["over"], _KEYS["over"])
     lat = field_number(ctx, f"{f}.over.lat_deg", ov.get("lat_deg", 0.0), lo=-90.0, hi=90.0)
-    lon = field_number(ctx, f"{f}.over.lon_deg", ov.get("lon_deg", 0.0))
+    lon = field_number(ctx, f"{f}.over.lon_deg", ov.get("lon_deg", 0.0), lo=-180.0, hi=180.0)
     t_over = field_number(ctx, f"{f}.over.t_s", ov.get("t_s", duration / 2))
     desc = field_bool(ctx, f"{f}.over.descending", ov.get("descending", True))
     gmst0 = float(gmst(*jd_split(epoch_jd, 0.0)))
@@ -312,7 +321,8 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
             power = Power(**vals)
         except ValueError as exc:
             raise ctx.error(f"{f}.power", str(exc)) from None
-    swath = field_number(ctx, f"{f}.swath_km", sat.get("swath_km", DEFAULT_SWATH_KM), positive=True)
+    swath = sat.get("swath_km", DEFAULT_SWATH_KM)
+    swath = field_number(ctx, f"{f}.swath_km", swath, positive=True, hi=MAX_SWATH_KM)
     limits = AxisLimits(rate, accel)
     try:
         return Satellite(
@@ -325,7 +335,7 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
 # --- planner, scenario (targets: jaxspline.targets_io) ---
 
 
-def _planner(ctx, pl) -> PlannerConfig:
+def _planner(ctx, pl, duration: float) -> PlannerConfig:
     pl = field_table(ctx, "planner", pl, _KEYS["planner"])
     d, dm = PlannerConfig(), Margins()
 
@@ -335,6 +345,11 @@ def _planner(ctx, pl) -> PlannerConfig:
     speeds = pl.get("scan_speeds_km_s", [s / 1e3 for s in d.scan_speeds])
     if not isinstance(speeds, list) or not speeds:
         raise ctx.error("planner.scan_speeds_km_s", f"must be a non-empty list, got {speeds!r}")
+    speeds = tuple(
+        1e3
+        * field_number(ctx, "planner.scan_speeds_km_s", s, positive=True, hi=MAX_SCAN_SPEED_KM_S)
+        for s in speeds
+    )
     sun = pl.get("sun_elevation_min_deg")
     if sun is not None:
         sun = math.radians(
@@ -347,14 +362,27 @@ def _planner(ctx, pl) -> PlannerConfig:
         battery_wh=num("battery_margin_wh", dm.battery_wh, nonneg=True),
         shadow_guard=field_int(ctx, "planner.shadow_guard_steps", pl.get("shadow_guard_steps", 0)),
     )
+    time_step = num("time_step_s", d.time_step, positive=True)
+    geometry_step = num("geometry_step_s", d.geometry_step, positive=True)
+    ratio = time_step / geometry_step
+    if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-9:
+        raise ctx.error(
+            "planner.time_step_s",
+            f"must be a whole multiple of planner.geometry_step_s = {geometry_step:g}, "
+            f"got {time_step:g}",
+        )
+    if duration / geometry_step > MAX_GRID_POINTS:
+        raise ctx.error(
+            "planner.geometry_step_s",
+            f"{geometry_step:g} s steps over the {duration:g} s horizon are "
+            f"{duration / geometry_step:.3g} grid points (at most {MAX_GRID_POINTS:g}); "
+            "use a coarser step or a shorter horizon",
+        )
     try:
         return PlannerConfig(
-            time_step=num("time_step_s", d.time_step, positive=True),
-            geometry_step=num("geometry_step_s", d.geometry_step, positive=True),
-            scan_speeds=tuple(
-                1e3 * field_number(ctx, "planner.scan_speeds_km_s", s, positive=True)
-                for s in speeds
-            ),
+            time_step=time_step,
+            geometry_step=geometry_step,
+            scan_speeds=speeds,
             sun_elevation_min=sun,
             margins=margins,
             exact_max_options=field_int(
@@ -366,8 +394,8 @@ def _planner(ctx, pl) -> PlannerConfig:
             ),
             default_time_limit=num("time_limit_s", d.default_time_limit, positive=True),
         )
-    except ValueError as exc:
-        raise ctx.error("planner.time_step_s", str(exc)) from None
+    except ValueError as exc:  # PlannerConfig's own checks (the fields are checked above)
+        raise ctx.error("planner", str(exc)) from None
 
 
 def _epoch(ctx, value) -> _dt.datetime:
@@ -411,9 +439,17 @@ def parse_scenario(
     if ("duration_s" in sc) == ("duration_h" in sc):
         raise ctx.error("scenario.duration_s", "give exactly one of duration_s, duration_h")
     if "duration_s" in sc:
-        duration = field_number(ctx, "scenario.duration_s", sc["duration_s"], positive=True)
+        duration = field_number(
+            ctx, "scenario.duration_s", sc["duration_s"], positive=True, hi=MAX_DURATION_S
+        )
     else:
-        hours = field_number(ctx, "scenario.duration_h", sc["duration_h"], positive=True)
+        hours = field_number(
+            ctx,
+            "scenario.duration_h",
+            sc["duration_h"],
+            positive=True,
+            hi=MAX_DURATION_S / SECONDS_PER_HOUR,
+        )
         duration = SECONDS_PER_HOUR * hours
     epoch_jd = julian_date(epoch)
 
@@ -432,7 +468,7 @@ def parse_scenario(
 
     has_areas = "areas" in data or "area" in data
     targets = scenario_targets(ctx, data, base_dir, required=not has_areas)
-    planner = _planner(ctx, data.get("planner", {}))
+    planner = _planner(ctx, data.get("planner", {}), duration)
     if not has_areas:
         return Scenario(name, epoch, duration, tuple(sats), targets, planner)
 
@@ -467,7 +503,7 @@ def load_scenario(path) -> Scenario:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_text(path)  # UTF-8, a byte-order mark dropped
     except FileNotFoundError:
         raise FileNotFoundError(f"scenario file not found: {path}") from None
     try:

@@ -7,9 +7,10 @@ the files are km (strip length) and m (altitude); times are seconds from the sce
 epoch. Every error is a ``ValueError`` naming the source, the field and the value.
 
 CSV targets (``targets_csv``, ``[targets_file]``, :func:`load_targets_csv`): UTF-8
-text (a byte-order mark is accepted), a header row, then one target per row, columns
-in any order; blank rows are skipped and an empty cell takes the default. Unknown or
-repeated columns are errors. The columns:
+text (a byte-order mark and CRLF line ends are accepted), a header row, then one target
+per row, columns in any order; blank rows are skipped and an empty cell takes the
+default. Unknown or repeated columns are errors. Target names are unique over all the
+targets of a scenario (CSV rows, ``[[targets]]`` tables, random targets). The columns:
 
 ================  =====  ==================================================================
 column            unit   meaning
@@ -19,9 +20,10 @@ column            unit   meaning
 ``lon_deg``       deg    longitude in [-180, 180] (required)
 ``priority``      -      value if imaged, > 0 (column required; an empty cell means 1)
 ``kind``          -      ``point`` (default) or ``strip``
-``alt_m``         m      height above the WGS84 ellipsoid (default 0)
+``alt_m``         m      height above the WGS84 ellipsoid in [-12000, 12000] (default 0)
 ``duration_s``    s      point: imaging time (default 10); must be empty for a strip
-``length_km``     km     strip: length (required for a strip); must be empty for a point
+``length_km``     km     strip: length, at most 10000 (required for a strip); must be
+                         empty for a point
 ``azimuth_deg``   deg    strip: direction at the start, clockwise from north (default 0);
                          must be empty for a point
 ``window_lo_s``   s      imaging starts at or after this time from the epoch (default: none)
@@ -46,13 +48,15 @@ raises ``FileNotFoundError``.
 window is one key ``window_s = [lo, hi]``. ``[random_targets]`` draws, with numpy's
 ``default_rng(seed)``, positions uniform in latitude and longitude over the box (not
 uniform in area), then kinds, point durations, strip lengths, azimuths and integer
-priorities; with ``land_only`` the positions are rejection-sampled against
-``global_land_mask`` in batches of ``max(4 count, 1024)`` draws, at most 200 batches.
+priorities (``count`` at most :data:`MAX_RANDOM_TARGETS`); with ``land_only`` the
+positions are rejection-sampled against ``global_land_mask`` in batches of
+``max(4 count, 1024)`` draws, at most 200 batches.
 """
 
 from __future__ import annotations
 
 import csv
+import io
 from pathlib import Path
 
 import numpy as np
@@ -66,6 +70,7 @@ from jaxspline._fields import (
     field_str,
     field_table,
     field_tables,
+    read_text,
 )
 from jaxspline.engine.mission import POINT, STRIP, Targets, make_targets
 
@@ -84,6 +89,9 @@ DEFAULT_RANDOM_LENGTH_KM = (20.0, 60.0)
 DEFAULT_RANDOM_PRIORITY = (1, 10)
 LAT_RANGE_DEG = (-90.0, 90.0)
 LON_RANGE_DEG = (-180.0, 180.0)
+ALT_RANGE_M = (-12e3, 12e3)  # ground targets: the deepest trench to above the highest peak
+MAX_STRIP_KM = 10e3  # longest strip [km] (a quarter of a great circle)
+MAX_RANDOM_TARGETS = 1_000_000
 LAND_SAMPLE_ROUNDS = 200  # rejection-sampling batches before giving up on a region
 LAND_BATCH_MIN = 1024
 
@@ -125,23 +133,41 @@ def scenario_targets(ctx, data: dict, base_dir=None, required: bool = True) -> T
     Raises:
       ValueError: naming the field, also when ``required`` and the file gives no targets.
     """
-    parts = []
+    parts = []  # (Targets, origin of each target: "targets[0]", "t.csv row 5", ...)
     explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"))
     if explicit is not None:
         parts.append(explicit)
-    parts += [load_targets_csv(p) for p in _csv_paths(ctx, data, base_dir)]
+    parts += [_read_csv(p) for p in _csv_paths(ctx, data, base_dir)]
     if "random_targets" in data:
-        parts.append(_random_targets(ctx, data["random_targets"]))
+        tg = _random_targets(ctx, data["random_targets"])
+        parts.append((tg, ["random_targets"] * len(tg)))
     if not parts and not required:
         return None
     if not parts:
         raise ctx.error(
             "targets", "no targets: give [[targets]], targets_csv and/or [random_targets]"
         )
-    targets = parts[0]
-    for more in parts[1:]:
-        targets = targets.concat(more)
+    targets, origins = parts[0]
+    for more, where in parts[1:]:
+        targets, origins = targets.concat(more), origins + where
+    _unique_names(targets.name, origins, lambda k, msg: _name_error(ctx, origins[k], msg))
     return targets
+
+
+def _name_error(ctx, origin: str, msg: str) -> ValueError:
+    """The error of a bad name at ``origin`` (a TOML table label or ``file row N``)."""
+    if " row " in origin:  # a CSV row: named like the CSV reader's errors
+        return ValueError(f"{origin}, column 'name': {msg}")
+    return ctx.error(f"{origin}.name" if origin.startswith(("targets", "routes")) else origin, msg)
+
+
+def _unique_names(names, origins, err) -> None:
+    """Raise ``err(k, msg)`` at the first target ``k`` whose name an earlier one has."""
+    first = {}
+    for k, n in enumerate(names.tolist()):
+        if n in first:
+            raise err(k, f"duplicate target name {n!r} (also {origins[first[n]]})")
+        first[n] = k
 
 
 def _target_row(get, err, default_name, text=False) -> tuple:
@@ -169,13 +195,13 @@ def _target_row(get, err, default_name, text=False) -> tuple:
         raise err("kind")(f"must be 'point' or 'strip', got {kind!r}")
     lat = num("lat_deg", lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
     lon = num("lon_deg", lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
-    alt = num("alt_m", default=0.0)
+    alt = num("alt_m", default=0.0, lo=ALT_RANGE_M[0], hi=ALT_RANGE_M[1])
     prio = num("priority", default=1.0, positive=True)
     min_dur = num("min_duration_s", default=0.0, nonneg=True)
     if kind == "strip":
         if get("duration_s") is not None:
             raise err("duration_s")("a strip has no duration_s (it is length / scan speed)")
-        length = 1e3 * num("length_km", positive=True)
+        length = 1e3 * num("length_km", positive=True, hi=MAX_STRIP_KM)
         az = num("azimuth_deg", default=0.0)
         dur = 0.0
     else:
@@ -250,8 +276,8 @@ def _targets_from_rows(rows) -> Targets:
     )
 
 
-def _toml_targets(ctx, items) -> Targets | None:
-    rows = []
+def _toml_targets(ctx, items) -> tuple[Targets, list[str]] | None:
+    rows, origins = [], []
     for i, (f, rt) in enumerate(items):
         rt = dict(field_table(ctx, f, rt, _KEYS["target"]))
         if "window_s" in rt:
@@ -265,7 +291,8 @@ def _toml_targets(ctx, items) -> Targets | None:
             return lambda m: ctx.error(f"{f}.{key}", m)
 
         rows.append(_target_row(rt.get, err, f"target_{i + 1}"))
-    return _targets_from_rows(rows) if rows else None
+        origins.append(f)
+    return (_targets_from_rows(rows), origins) if rows else None
 
 
 def load_targets_csv(path) -> Targets:
@@ -279,15 +306,20 @@ def load_targets_csv(path) -> Targets:
       FileNotFoundError: the file is missing.
       ValueError: naming the file, the row (line number) and the column for bad content.
     """
+    return _read_csv(path)[0]
+
+
+def _read_csv(path) -> tuple[Targets, list[str]]:
+    """:func:`load_targets_csv` and the origin (``file row N``) of each target."""
     path = Path(path)
     label = path.name
     try:
-        f = path.open(newline="", encoding="utf-8-sig")
+        text = read_text(path, lambda line: f"{label} row {line}")
     except FileNotFoundError:
         raise FileNotFoundError(f"targets CSV not found: {path}") from None
-    rows = []
-    with f:
-        reader = csv.reader(f)
+    rows, origins = [], []
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
         header = [h.strip() for h in next(reader, [])]
         allowed = CSV_REQUIRED + CSV_OPTIONAL
         for h in header:
@@ -316,9 +348,16 @@ def load_targets_csv(path) -> Targets:
                 return lambda m: ValueError(f"{label} row {line}, column {col!r}: {m}")
 
             rows.append(_target_row(rec.get, err, f"row_{line}", text=True))
+            origins.append(f"{label} row {line}")
+    except csv.Error as exc:  # an over-long cell (an unbalanced quote), a NUL byte, ...
+        raise ValueError(f"{label} row {reader.line_num}: not readable as CSV: {exc}") from None
     if not rows:
         raise ValueError(f"{label}: no target rows (a header row and at least one target)")
-    return _targets_from_rows(rows)
+    targets = _targets_from_rows(rows)
+    _unique_names(
+        targets.name, origins, lambda k, msg: ValueError(f"{origins[k]}, column 'name': {msg}")
+    )
+    return targets, origins
 
 
 def _land_positions(ctx, rng, count, lat, lon):
@@ -349,6 +388,8 @@ def _random_targets(ctx, rt) -> Targets:
     if "count" not in rt:
         raise ctx.error(f"{f}.count", "missing (how many targets to generate)")
     count = field_int(ctx, f"{f}.count", rt["count"], 1)
+    if count > MAX_RANDOM_TARGETS:
+        raise ctx.error(f"{f}.count", f"must be <= {MAX_RANDOM_TARGETS}, got {count!r}")
 
     def pair(key, default, **kw):
         return field_pair(ctx, f"{f}.{key}", rt.get(key, list(default)), **kw)
@@ -359,7 +400,7 @@ def _random_targets(ctx, rt) -> Targets:
     frac = rt.get("strip_fraction", DEFAULT_STRIP_FRACTION)
     frac = field_number(ctx, f"{f}.strip_fraction", frac, lo=0.0, hi=1.0)
     dur = pair("duration_s", DEFAULT_RANDOM_DURATION_S, positive=True)
-    length = pair("length_km", DEFAULT_RANDOM_LENGTH_KM, positive=True)
+    length = pair("length_km", DEFAULT_RANDOM_LENGTH_KM, positive=True, hi=MAX_STRIP_KM)
     az = pair("azimuth_deg", (0.0, 360.0))
     prio = rt.get("priority", list(DEFAULT_RANDOM_PRIORITY))
     if not isinstance(prio, list) or len(prio) != 2:

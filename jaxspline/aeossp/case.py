@@ -3,8 +3,13 @@
 A case directory holds ``mission.yaml``, ``satellites.yaml`` and ``tasks.yaml``
 (benchmark ``aeossp_standard``, repository Mtrya/astro-reason). Every field is
 validated on load; a missing or malformed field raises ``ValueError`` naming the
-file and the field. Times are timezone-aware UTC ``datetime`` objects; the
-solution format uses ISO 8601 strings ending in ``Z``.
+file and the field. Files are UTF-8 (a byte-order mark and CRLF line ends are
+accepted); a key repeated in one mapping is an error (YAML would keep the last);
+fields the loader does not read are ignored. Each TLE must propagate (SGP4) at the
+horizon start; task positions lie in [-90, 90] x [-180, 180] deg, altitudes in
+:data:`ALTITUDE_RANGE_M`; a case has at least one satellite and one task. Times are
+timezone-aware UTC ``datetime`` objects; the solution format uses ISO 8601 strings
+ending in ``Z``.
 """
 
 from __future__ import annotations
@@ -20,9 +25,13 @@ from typing import Any
 import numpy as np
 import yaml
 
+from jaxspline._fields import read_text
 from jaxspline.engine._io import atomic_write_text, refuse_overwrite
+from jaxspline.geometry.frames import jd_split, julian_date
+from jaxspline.geometry.orbit import propagate_tle
 
 __all__ = [
+    "ALTITUDE_RANGE_M",
     "Case",
     "Satellite",
     "Task",
@@ -34,6 +43,29 @@ __all__ = [
 ]
 
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
+
+#: Task altitudes [m]: ground targets, the deepest trench to above the highest peak.
+ALTITUDE_RANGE_M = (-12e3, 12e3)
+
+
+class _UniqueKeyLoader(_Loader):
+    """The safe loader, refusing a key repeated in one mapping (YAML keeps the last)."""
+
+    def construct_mapping(self, node, deep=False):
+        if isinstance(node, yaml.MappingNode):
+            seen = set()
+            for key_node, _ in node.value:
+                key = self.construct_object(key_node, deep=deep)
+                try:
+                    again = key in seen
+                except TypeError:  # unhashable: the base class names it
+                    continue
+                if again:
+                    raise yaml.constructor.ConstructorError(
+                        None, None, f"duplicate key {key!r}", key_node.start_mark
+                    )
+                seen.add(key)
+        return super().construct_mapping(node, deep)
 
 
 def parse_time(text: str, *, where: str = "time") -> datetime:
@@ -236,11 +268,11 @@ _SENSORS = ("visible", "infrared")
 def _read_yaml(path: Path) -> Any:
     if not path.is_file():
         raise FileNotFoundError(f"{path}: case file not found")
-    with open(path, encoding="utf-8") as fh:
-        try:
-            return yaml.load(fh, Loader=_Loader)
-        except yaml.YAMLError as exc:
-            raise ValueError(f"{path}: not valid YAML: {exc}") from None
+    text = read_text(path)  # UTF-8 (a byte-order mark dropped), else names the line
+    try:
+        return yaml.load(text, Loader=_UniqueKeyLoader)
+    except yaml.YAMLError as exc:
+        raise ValueError(f"{path}: not valid YAML: {exc}") from None
 
 
 def _get(mapping: Any, key: str, where: str) -> Any:
@@ -281,7 +313,19 @@ def _time(mapping: Any, key: str, where: str) -> datetime:
     return parse_time(_get(mapping, key, where), where=f"{where}.{key}")
 
 
-def _load_satellite(raw: Any, where: str) -> Satellite:
+def _check_tle(l1: str, l2: str, where: str, start: datetime) -> None:
+    """Parse the TLE and propagate it to the horizon start (SGP4), naming the line."""
+    try:
+        err = propagate_tle(l1, l2, *jd_split(julian_date(start), 0.0))[2]
+    except ValueError as exc:
+        raise ValueError(f"{where}.tle_line1/tle_line2: not a valid TLE: {exc}") from None
+    if int(err[0]) != 0:
+        raise ValueError(
+            f"{where}.tle_line1/tle_line2: SGP4 error code {int(err[0])} at horizon_start"
+        )
+
+
+def _load_satellite(raw: Any, where: str, start: datetime) -> Satellite:
     sid = _str(raw, "satellite_id", where)
     where = f"{where}[{sid}]"
     norad = _get(raw, "norad_catalog_id", where)
@@ -292,6 +336,7 @@ def _load_satellite(raw: Any, where: str) -> Satellite:
         raise ValueError(f"{where}.tle_line1: not a TLE line 1: {l1!r}")
     if not l2.startswith("2 ") or len(l2) < 69:
         raise ValueError(f"{where}.tle_line2: not a TLE line 2: {l2!r}")
+    _check_tle(l1, l2, where, start)
     sensor = _get(raw, "sensor", where)
     att = _get(raw, "attitude_model", where)
     res = _get(raw, "resource_model", where)
@@ -339,6 +384,11 @@ def _load_task(raw: Any, where: str) -> Task:
     )
     if not -90.0 <= task.latitude_deg <= 90.0:
         raise ValueError(f"{where}.latitude_deg: outside [-90, 90]: {task.latitude_deg}")
+    if not -180.0 <= task.longitude_deg <= 180.0:
+        raise ValueError(f"{where}.longitude_deg: outside [-180, 180]: {task.longitude_deg}")
+    lo, hi = ALTITUDE_RANGE_M
+    if not lo <= task.altitude_m <= hi:
+        raise ValueError(f"{where}.altitude_m: outside [{lo:g}, {hi:g}]: {task.altitude_m}")
     if task.due_time < task.release_time:
         raise ValueError(f"{where}.due_time: before release_time")
     return task
@@ -373,14 +423,16 @@ def load_case(case_dir: str | os.PathLike) -> Case:
 
     spath = case_dir / "satellites.yaml"
     raw_sats = _get(_read_yaml(spath), "satellites", str(spath))
-    if not isinstance(raw_sats, list):
-        raise ValueError(f"{spath}: field 'satellites' must be a list")
-    sats = tuple(_load_satellite(r, f"{spath}: satellites[{i}]") for i, r in enumerate(raw_sats))
+    if not isinstance(raw_sats, list) or not raw_sats:
+        raise ValueError(f"{spath}: field 'satellites' must be a non-empty list")
+    sats = tuple(
+        _load_satellite(r, f"{spath}: satellites[{i}]", start) for i, r in enumerate(raw_sats)
+    )
 
     tpath = case_dir / "tasks.yaml"
     raw_tasks = _get(_read_yaml(tpath), "tasks", str(tpath))
-    if not isinstance(raw_tasks, list):
-        raise ValueError(f"{tpath}: field 'tasks' must be a list")
+    if not isinstance(raw_tasks, list) or not raw_tasks:
+        raise ValueError(f"{tpath}: field 'tasks' must be a non-empty list")
     tasks = tuple(_load_task(r, f"{tpath}: tasks[{i}]") for i, r in enumerate(raw_tasks))
 
     for path, items, key in ((spath, sats, "satellite_id"), (tpath, tasks, "task_id")):
