@@ -100,7 +100,11 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     finally:
         if threading.current_thread() is threading.main_thread():
-            signal.signal(signal.SIGTERM, old_term)
+            # called as the process (argv None): the work is done, later signals only
+            # race the exit; called from Python: hand the handler back
+            signal.signal(signal.SIGTERM, signal.SIG_IGN if argv is None else old_term)
+            if argv is None:
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 def _terminate(signum, frame):

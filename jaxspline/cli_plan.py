@@ -208,10 +208,11 @@ def run_plan(
         certify=certify,
         flown_joins=aem,
     )
-    with catch_signals() as late:  # signals wait: every output is written whole
+    def late(name):  # plan.json says so if it is not written yet
+        result.report.setdefault("interrupted", name)
+
+    with catch_signals(late):  # signals wait: every output is written whole
         _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html)
-    if late["signal"] and not result.report.get("interrupted"):
-        result.report["interrupted"] = late["signal"]
     if result.report.get("interrupted"):
         print(
             f"jaxspline: interrupted ({result.report['interrupted']}): the best plan found "
