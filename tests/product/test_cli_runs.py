@@ -49,6 +49,24 @@ def _cmd(scen, out, *extra):
     ]
 
 
+def _start_until(env, out, marker: bytes, *extra):
+    """Start ``jaxspline plan`` and read its stderr until ``marker``; (process, stderr)."""
+    p = subprocess.Popen(
+        _cmd(env["scen"], out, *extra),
+        env=env["env"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+    )
+    seen = b""
+    t0 = time.monotonic()
+    while marker not in seen:
+        chunk = os.read(p.stderr.fileno(), 4096)
+        assert chunk, seen.decode(errors="replace")
+        seen += chunk
+        assert time.monotonic() - t0 < _TIMEOUT_S
+    return p, seen
+
+
 def _plan_json(out):
     data = json.loads((out / "plan.json").read_text())
     data.pop("timings_s")
@@ -78,15 +96,8 @@ def _rows(out):
 def test_signal_during_search_writes_the_best_plan_and_exits_130(env, sig):
     out = env["dir"] / f"sig{int(sig)}"
     # a long budget: only the signal ends the search early
-    cmd = _cmd(env["scen"], out, "--time-limit", "240")
-    p = subprocess.Popen(cmd, env=env["env"], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
-    seen = b""
     t0 = time.monotonic()
-    while b"greedy" not in seen:  # the search has its first plan
-        chunk = os.read(p.stderr.fileno(), 4096)
-        assert chunk, seen.decode(errors="replace")
-        seen += chunk
-        assert time.monotonic() - t0 < _TIMEOUT_S
+    p, seen = _start_until(env, out, b"greedy", "--time-limit", "240")  # a first plan
     time.sleep(1.0)
     p.send_signal(sig)
     stdout, stderr = p.communicate(timeout=_TIMEOUT_S)
@@ -105,17 +116,7 @@ def test_signal_during_search_writes_the_best_plan_and_exits_130(env, sig):
 
 def test_signal_before_any_plan_leaves_nothing(env):
     out = env["dir"] / "early"
-    p = subprocess.Popen(
-        _cmd(env["scen"], out, "--time-limit", "240"),
-        env=env["env"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
-    seen = b""
-    while b"orbits" not in seen:  # planning started, no plan yet
-        chunk = os.read(p.stderr.fileno(), 4096)
-        assert chunk, seen.decode(errors="replace")
-        seen += chunk
+    p, _ = _start_until(env, out, b"orbits", "--time-limit", "240")  # no plan yet
     p.send_signal(signal.SIGTERM)
     _, stderr = p.communicate(timeout=_TIMEOUT_S)
     assert p.returncode == 130, stderr.decode(errors="replace")
@@ -126,17 +127,7 @@ def test_signals_while_repairing_and_writing_leave_whole_files(env):
     """SIGTERM from the repair on, every 0.3 s until the process exits: whatever phase a
     signal lands in, every output that exists parses whole and no temporary file stays."""
     out = env["dir"] / "writing"
-    p = subprocess.Popen(
-        _cmd(env["scen"], out, "--time-limit", "20"),
-        env=env["env"],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-    )
-    seen = b""
-    while b"repair" not in seen:  # the search is over
-        chunk = os.read(p.stderr.fileno(), 4096)
-        assert chunk, seen.decode(errors="replace")
-        seen += chunk
+    p, _ = _start_until(env, out, b"repair", "--time-limit", "20")  # the search is over
     sent = 0
     while p.poll() is None and sent < 100:
         p.send_signal(signal.SIGTERM)
