@@ -208,6 +208,7 @@ def run_plan(
         certify=certify,
         flown_joins=aem,
     )
+
     def late(name):  # plan.json says so if it is not written yet
         result.report.setdefault("interrupted", name)
 
