@@ -106,7 +106,6 @@ def run_bound(
     import numpy as np
 
     from jaxspline.engine._io import refuse_overwrite
-    from jaxspline.engine.mission import Scenario
     from jaxspline.engine.planner import build_problem
     from jaxspline.engine.search import Timeline, greedy
     from jaxspline.engine.search.sharded import (
@@ -114,7 +113,7 @@ def run_bound(
         owned_satellites,
         sharded_upper_bound,
     )
-    from jaxspline.scenario import default_scenario, load_scenario
+    from jaxspline.scenario import scenario_from
 
     if not (math.isfinite(time_limit) and time_limit > 0):
         raise ValueError(f"time_limit must be a number > 0, got {time_limit!r}")
@@ -132,10 +131,7 @@ def run_bound(
         def allgather(x):
             return np.asarray(x, np.float64)[None]
 
-    if isinstance(scenario, Scenario):
-        sc = scenario
-    else:
-        sc = default_scenario() if scenario is None else load_scenario(scenario)
+    sc = scenario_from(scenario)
     if count > len(sc.satellites):
         raise ValueError(
             f"num_processes must be at most the {len(sc.satellites)} satellites (one at "

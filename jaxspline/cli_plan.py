@@ -179,25 +179,17 @@ def run_plan(
       ValueError: a bad scenario file (naming the field).
     """
     from jaxspline.aem import aem_file_name
-    from jaxspline.engine.mission import Scenario
     from jaxspline.engine.planner import plan
-    from jaxspline.scenario import default_scenario, load_scenario
+    from jaxspline.scenario import scenario_from
 
     out = Path(outdir)
-    if scenario is None:
-        sc = default_scenario()
-    elif isinstance(scenario, Scenario):
-        sc = scenario
-    else:
-        sc = load_scenario(scenario)
+    sc = scenario_from(scenario)
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
     names += (HTML_FILE,) * html
     if aem:
         names += (ATTITUDE_FIGURE,) * plots + tuple(aem_file_name(s.name) for s in sc.satellites)
     for name in names:  # fail before planning, not after
         refuse_overwrite(out / name, force)
-    if max_iters is not None and (isinstance(max_iters, bool) or int(max_iters) < 1):
-        raise ValueError(f"max_iters must be an integer >= 1, got {max_iters!r}")
     # with --aem the flown joins are checked: the AEM files never exceed a limit
     result = plan(
         sc,
@@ -267,6 +259,8 @@ def _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html):
 
 
 def _print_summary(r, out: Path, names, page=None) -> None:
+    from jaxspline.engine.repair import dropped_line
+
     s, st = r.summary(), r.stats
     n_imaged = len(set(r.observations.target.tolist()))
     lines = [
@@ -278,9 +272,8 @@ def _print_summary(r, out: Path, names, page=None) -> None:
         f"{s['value']:g} of {s['total_value']:g}",
         f"bound         {s['bound']:.6g} ({st['bound_status']}); gap {s['gap']:.6g} "
         f"({100 * s['gap'] / max(s['bound'], 1e-300):.2f} % of the bound)",
-        f"check         {'valid' if s['valid'] else 'INVALID'} (dropped: "
-        + ", ".join(f"{n} {why}" for why, n in r.report["dropped"].items())
-        + ")",
+        f"check         {'valid' if s['valid'] else 'INVALID'} "
+        f"(dropped: {dropped_line(r.report['dropped'])})",
         "wall time [s]  " + ", ".join(f"{k} {v:.2f}" for k, v in r.timings.items()),
         f"outputs       {out}/ ({', '.join(names)})",
     ]

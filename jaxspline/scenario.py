@@ -175,6 +175,7 @@ __all__ = [
     "load_scenario",
     "load_targets_csv",
     "parse_scenario",
+    "scenario_from",
 ]
 
 #: The packaged default scenario (six satellites, six hours, ~1700 targets).
@@ -525,3 +526,20 @@ def default_scenario() -> Scenario:
       Scenario.
     """
     return load_scenario(DEFAULT_SCENARIO_PATH)
+
+
+def scenario_from(scenario) -> Scenario:
+    """The scenario a command was given: a Scenario as is, a TOML path loaded, None the default.
+
+    Args:
+      scenario: Scenario, str or Path of a scenario TOML file, or None.
+    Returns:
+      Scenario.
+    Raises:
+      ValueError / FileNotFoundError: as :func:`load_scenario`.
+    """
+    if scenario is None:
+        return default_scenario()
+    if isinstance(scenario, Scenario):
+        return scenario
+    return load_scenario(scenario)

@@ -111,9 +111,9 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
         )
     dup = np.unique(tgt, return_counts=True)
     for r in dup[0][dup[1] > 1]:
-        viol.append(f"target {tg.name[r]} imaged more than once")
         again = np.flatnonzero(tgt == r)
         for i in again[np.argsort(t0[again], kind="stable")][1:]:  # keep the earliest
+            viol.append(f"target {tg.name[r]} imaged more than once")  # one per repeat
             bad.setdefault(int(chosen[i]), "repeat")
     # --- maneuvers
     first = np.ones(n, bool)

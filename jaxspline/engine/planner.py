@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import functools
 import math
+import numbers
 import resource
 import sys
 import time
@@ -49,7 +50,7 @@ from jaxspline.engine.models import (
 )
 from jaxspline.engine.opportunities import build_opportunities, nadir_rate, reference_points
 from jaxspline.engine.options import take_options
-from jaxspline.engine.repair import repair
+from jaxspline.engine.repair import dropped_line, repair
 from jaxspline.engine.result import Observations, PlanResult
 from jaxspline.engine.screen import screen_chunks
 from jaxspline.engine.search import BatteryModel, Problem, mip_bound, solve
@@ -92,7 +93,6 @@ class _Clock:
         self.peak_rss_mb = {}  # process peak RSS at the end of each stage [MB]
         self.bar = None
         self.bar_t0 = self.t0
-        self.interrupted = None  # name of the signal that stopped the search
 
     def lap(self, stage: str, msg: str = ""):
         now = time.monotonic()
@@ -173,6 +173,10 @@ def plan(
         raise ValueError(f"time_limit must be a number > 0, got {time_limit!r}")
     if not (isinstance(certify, int | float) and math.isfinite(certify) and certify >= 0):
         raise ValueError(f"certify must be a number of seconds >= 0, got {certify!r}")
+    if max_iters is not None and (
+        isinstance(max_iters, bool) or not isinstance(max_iters, numbers.Integral) or max_iters < 1
+    ):
+        raise ValueError(f"max_iters must be an integer >= 1, got {max_iters!r}")
     with jax.enable_x64(True):
         return _plan(
             scenario, float(limit), int(seed), bool(progress), max_iters, certify, flown_joins
@@ -411,11 +415,6 @@ def _search(pb, deadline, seed, max_iters, pc, clock):
         clock.bar = None
 
 
-def _dropped_line(dropped: dict) -> str:
-    """'1 check, 0 battery, 36 joins' from the per-reason drop counts."""
-    return ", ".join(f"{n} {reason}" for reason, n in dropped.items())
-
-
 def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
     clock = _Clock(sc.name, progress)
     deadline = clock.t0 + limit
@@ -461,12 +460,11 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
             report=clock.say,
         )
     search_clock.clear_stop()
-    clock.interrupted = stop["signal"]
     chosen, opp, det, refined = rep.chosen, rep.opp, rep.details, rep.refined
     o = opp.options
     clock.lap(
         "repair",
-        f"{len(chosen)} observations valid, dropped {_dropped_line(rep.dropped)}"
+        f"{len(chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
         + (f", {rep.refilled} refilled" if flown_joins else ""),
     )
     idx = np.asarray(det["order"], np.int64)
@@ -513,8 +511,8 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     }
     if flown_joins:
         report["joins"] = {**rep.joins, "rejected": rep.dropped["joins"], "refilled": rep.refilled}
-    if clock.interrupted:
-        report["interrupted"] = clock.interrupted
+    if stop["signal"]:
+        report["interrupted"] = stop["signal"]
     stats = {
         "windows": len(windows),
         "options": len(opp),

@@ -25,8 +25,8 @@ Invariants:
 * refinement is a function of the current set: it re-runs after a refill added
   observations, so refined and refilled observations are never mixed unchecked;
 * every round ends with a plan that passes the check in the table in force; the
-  loop ends after a round with no join rejection (or no refill left), so the returned
-  plan passes every check that ran;
+  loop ends after a round with no join rejection, so the returned plan passes every
+  check that ran;
 * every dropped observation is charged to one violation: ``sum(dropped) <= violations``.
 
 The loop terminates: a round either adds observations (at most ``_REFILL_ROUNDS``
@@ -44,7 +44,7 @@ from jaxspline.engine.plan_joins import reject_unflyable
 from jaxspline.engine.refine_starts import refine_starts
 from jaxspline.engine.search import clock, greedy, lns
 
-__all__ = ["DROP_REASONS", "Repaired", "repair"]
+__all__ = ["DROP_REASONS", "Repaired", "dropped_line", "repair"]
 
 _REFILL_ROUNDS = 2  # join rejections followed by a greedy refill (later rounds only drop)
 DROP_REASONS = ("check", "battery", "joins")  # keys of Repaired.dropped
@@ -76,6 +76,17 @@ class Repaired(NamedTuple):
     joins: dict
     refilled: int
     rounds: int
+
+
+def dropped_line(dropped: dict) -> str:
+    """Human-readable drop counts: '1 check, 0 battery, 36 joins'.
+
+    Args:
+      dropped: reason -> count (:attr:`Repaired.dropped`, ``report["dropped"]``).
+    Returns:
+      str.
+    """
+    return ", ".join(f"{n} {reason}" for reason, n in dropped.items())
 
 
 def _refine(sc, scene, table_ok, opp0, chosen, battery, steps):

@@ -93,7 +93,7 @@ class EnergyBudgets:
             }
             if self.n_near <= _CACHE_PAIRS:
                 sk["arcs"] = self._arcs(sk)
-            inside = self._usage(sk, np.ones(hi - lo, bool), np.ones(self.n_near, bool))
+            inside = self._usage(sk, np.ones(hi - lo, bool))
             kept = (a_t[:, None] < b_t[None, :]) & (budget > 0.0)
             kept &= (inside > budget) & (span > budget)
             sk["kept"], sk["budget"], sk["off"] = kept, budget[kept], m
@@ -137,8 +137,9 @@ class EnergyBudgets:
         return idx, ia, ib, sk["slew_wh"] * slew
 
     @classmethod
-    def _usage(cls, sk, nodes, arcs):
-        """[A, E] energy inside each interval of the chosen options / near pairs (masks)."""
+    def _usage(cls, sk, nodes, arcs=None):
+        """[A, E] energy inside each interval of the chosen options / near pairs (masks;
+        ``arcs`` None: every near pair)."""
         a_n, e_n = sk["shape"]
         h = np.zeros((a_n + 1, e_n + 1))
         np.add.at(h, (sk["ia"][nodes], sk["ib"][nodes]), sk["e"][nodes])

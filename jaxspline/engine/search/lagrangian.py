@@ -267,10 +267,15 @@ class _Prices:
             self.stall += 1
         self.paths = paths
 
-    def _subgradient(self) -> np.ndarray:
+    def _takers(self, paths) -> np.ndarray:
+        """Number of paths taking each task (float [T])."""
         cnt = np.zeros(self.W.size)
-        for p in self.paths:
+        for p in paths:
             np.add.at(cnt, self.ctask[p], 1.0)
+        return cnt
+
+    def _subgradient(self) -> np.ndarray:
+        cnt = self._takers(self.paths)
         if self.used is None:
             return cnt - 1.0
         return np.r_[cnt, self._energy_usage(self.paths, self.used)] - 1.0

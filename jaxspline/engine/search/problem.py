@@ -91,11 +91,6 @@ class Problem:
         return self.pairs.dst()
 
     @property
-    def near_need(self) -> np.ndarray:
-        """float64 [P] required time of every near pair [s] (``pairs`` order)."""
-        return self.pairs.need.astype(np.float64)
-
-    @property
     def n_options(self) -> int:
         """Number of options."""
         return len(self.c_task)

@@ -71,8 +71,7 @@ class _ShardPrices(_Prices):
         paths, vals = dp_paths(self.pb, self.d, w)
         local = np.zeros(self.n_sats + n_t + 1)
         local[self.sat_ids] = vals
-        for p in paths:
-            np.add.at(local, self.n_sats + self.ctask[p], 1.0)
+        local[self.n_sats : -1] = self._takers(paths)
         local[-1] = float(want_stop)
         every = self.allgather(local)
         vals_all = every[:, : self.n_sats].sum(axis=0)  # one owner each: exact
