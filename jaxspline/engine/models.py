@@ -82,9 +82,7 @@ class SlewTable(NamedTuple):
 
     def __call__(self, theta) -> np.ndarray:
         """Required time [s] for angles theta [rad] (numpy, never below :func:`slew_time`)."""
-        theta = np.clip(np.asarray(theta, np.float64), 0.0, math.pi)
-        k = np.minimum(np.ceil(self.size * np.sqrt(theta / math.pi) - 1e-12), self.size)
-        return self.time[k.astype(np.int64)]
+        return self.time[_cell(theta, self.size)]
 
     def scalar(self, theta: float) -> float:
         """Same as calling the table, for one Python float (the search's hot loop).
