@@ -67,11 +67,15 @@ def _round(x, decimals: int) -> list:
     return [float(v) if math.isfinite(v) else None for v in a.ravel()]
 
 
+def _wrap_deg(lon_deg):
+    """Longitudes [deg] wrapped into [-180, 180)."""
+    return (np.asarray(lon_deg, np.float64) + 180.0) % 360.0 - 180.0
+
+
 def _lonlat(r_ecef):
     """(lon, lat) [deg] of Earth-fixed points [..., 3], lon in [-180, 180)."""
     lat, lon, _ = ecef_to_geodetic(np.asarray(r_ecef, np.float64))
-    lon = (np.degrees(lon) + 180.0) % 360.0 - 180.0
-    return lon, np.degrees(lat)
+    return _wrap_deg(np.degrees(lon)), np.degrees(lat)
 
 
 def disc(lon_deg: float, lat_deg: float, radius_m: float):
@@ -165,7 +169,7 @@ def _footprints(sc, obs) -> list[dict | None]:
             out.append(None)
             continue
         lon, lat = footprint_lonlat(tg, j, swath)
-        lon = (np.asarray(lon) + 180.0) % 360.0 - 180.0
+        lon = _wrap_deg(lon)
         out.append({"lon_deg": _round(lon, DEG_DECIMALS), "lat_deg": _round(lat, DEG_DECIMALS)})
     return out
 
@@ -181,7 +185,7 @@ def view_data(result) -> dict:
     sc = result.scenario
     obs = result.observations
     tg = sc.targets
-    lon = (np.degrees(tg.lon) + 180.0) % 360.0 - 180.0
+    lon = _wrap_deg(np.degrees(tg.lon))
     return {
         "version": VIEW_VERSION,
         "epoch_utc": sc.epoch.strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
