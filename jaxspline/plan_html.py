@@ -10,7 +10,7 @@ scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
   covered, search statistics and stage timings (each number in a cell with a
   ``data-key`` attribute);
 * ``map`` (equirectangular, pan / zoom): land and coastlines from the package's
-  offline land data (:func:`jaxspline.plot_plan.land_fraction`, contoured at land
+  offline land data (:func:`jaxspline.land.land_fraction`, contoured at land
   fraction 0.5), area polygons (``areas``), strip centrelines (``strips``), ground
   tracks (``tracks``), sensor footprints of the observations (``footprints``), targets
   not imaged (``targets_not_imaged``, grey) and one glyph per observation at its
