@@ -44,7 +44,7 @@ from jaxspline.engine.plan_joins import reject_unflyable
 from jaxspline.engine.refine_starts import refine_starts
 from jaxspline.engine.search import clock, greedy, lns
 
-__all__ = ["DROP_REASONS", "Repaired", "dropped_line", "repair"]
+__all__ = ["DROP_REASONS", "Repaired", "drop_failing", "dropped_line", "repair"]
 
 _REFILL_ROUNDS = 2  # join rejections followed by a greedy refill (later rounds only drop)
 DROP_REASONS = ("check", "battery", "joins")  # keys of Repaired.dropped
@@ -117,6 +117,25 @@ def _drop_until_clean(sc, scene, table_ok, opp, chosen, battery, det, dropped):
         gone = set(bad)
         chosen = [c for c in chosen if c not in gone]
         det = None
+
+
+def drop_failing(sc, scene, table_ok, opp, chosen, battery):
+    """Step 2 of the repair alone: check ``chosen``, drop one observation per violation, repeat.
+
+    Args:
+      sc: Scenario.
+      scene: Scene of the scenario's satellites.
+      table_ok: callable (sat [M], t [M]) -> bool [M], the orbit table is usable there.
+      opp: Opportunities (``chosen`` indexes them).
+      chosen: option ids of the plan.
+      battery: BatteryModel of the scenario.
+    Returns:
+      (kept option ids, which pass :func:`check_plan`; dropped per reason, keys
+      :data:`DROP_REASONS`).
+    """
+    dropped = dict.fromkeys(DROP_REASONS, 0)
+    kept, _, _ = _drop_until_clean(sc, scene, table_ok, opp, list(chosen), battery, None, dropped)
+    return kept, dropped
 
 
 def _refill(tl, chosen, seconds, iters, seed):
