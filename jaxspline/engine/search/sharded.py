@@ -415,9 +415,12 @@ def _second_round(pb, chosen, keep, deadline, search_iters, seed):
     pass and a short LNS; returns (option ids of ``pb``, LNS iterations)."""
     sub, ids = restrict_tasks(pb, keep)
     tl = Timeline(sub)
+    at = np.minimum(np.searchsorted(ids, chosen), max(ids.size - 1, 0)).astype(np.int64)
+    if len(chosen) and not np.array_equal(ids[at], chosen):
+        raise RuntimeError("the second round lost a task of the first round's plan")
     assigned = [-1] * len(pb.weight)
-    for c in chosen:  # every task of the first round's plan is kept: its options too
-        assigned[pb.c_task[c]] = int(np.searchsorted(ids, c))
+    for c, a in zip(chosen, at.tolist(), strict=True):
+        assigned[pb.c_task[c]] = a
     tl.restore(assigned)
     greedy(tl, math.inf)  # complete, as the first greedy of solve
     iters = None if search_iters is None else int(_SECOND_SHARE * search_iters)
