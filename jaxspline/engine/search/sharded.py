@@ -24,14 +24,18 @@ task most often; among equals the one holding most of the task's options; then t
 lowest index. Each process then runs the ordinary search
 (:func:`jaxspline.engine.search.solve`: greedy, Lagrangian with repaired plans, LNS,
 earliest pass) on its problem restricted to the tasks it owns
-(:func:`restrict_tasks`), optionally checks its plan (``check``), and one more
-all-gather of a per-task vector (satellite, option, start, end) merges the plans. The
-processes' plans are disjoint in satellites and in tasks, every transition is between
-two observations of one satellite, the battery is per satellite: their union is a
-plan of the whole scenario that images each task at most once, valid wherever each
-part is, of value the sum of the parts. Its value can be below a single process's
-plan (a task is never searched on a satellite of another process than its owner);
-the bound is the single-process one.
+(:func:`restrict_tasks`). A task that no process imaged is handed to the best other
+process by the same rule (when that one has options of it), which inserts it in a
+second round (greedy, then LNS on :data:`_SECOND_SHARE` of the budget) on its plan
+restricted to its new set of tasks. Each process optionally checks its plan
+(``check``), and one more all-gather of a per-task vector (satellite, option, start,
+end) merges the plans. The processes' plans are disjoint in satellites and in tasks,
+every transition is between two observations of one satellite, the battery is per
+satellite: their union is a plan of the whole scenario that images each task at most
+once, valid wherever each part is, of value the sum of the parts. Its value can be
+below a single process's plan (a task is only tried on the satellites of its owner
+and then of one other process, and no move exchanges tasks across processes); the
+bound is the single-process one.
 
 Satellite ``k`` belongs to process ``k % process_count``.
 """
