@@ -423,5 +423,5 @@ def write_scale(report: dict, out: Path) -> None:
     print("\n" + text)
     out.mkdir(parents=True, exist_ok=True)
     atomic_write_text(out / "scale.json", json.dumps(report, indent=1, default=str) + "\n")
-    atomic_write_text(out / "SCALE.md", "# Scale runs (issue 21)\n\n" + text + "\n")
+    atomic_write_text(out / "SCALE.md", "# Scale runs\n\n" + text + "\n")
     print(f"\nwrote {out}/scale.json, SCALE.md")

@@ -1,7 +1,7 @@
 """End-to-end screening workload: one synthetic pass of N routes.
 
 The packaged default scenario has ~1,700 targets (2,330 options of a per-channel
-satellite over six hours), too few for the 1,000-10,000-route sizes of issue 9, so
+satellite over six hours), too few for the 1,000-10,000-route sizes of the screening benchmark, so
 the workload is a synthetic single pass at the density of the former single-pass
 default scenario (:func:`synthetic_options`). ALL transitions within ``MAX_GAP``
 seconds are screened by the host-generated path, the fused path and the compute

@@ -1,4 +1,4 @@
-"""screen_sequences: host path vs fused device path (issue 9).
+"""screen_sequences: host path vs fused device path.
 
 ``python -m bench.seqscreen [--k 100000] [--l 20] [--routes 2000] [--repeats]``
 

@@ -1,6 +1,6 @@
 """jaxspline: batched, differentiable attitude-maneuver kinematics and imaging planning.
 
-The package is layered (README "Architecture"); imports point down only:
+The package is layered (docs/development.md, "Architecture"); imports point down only:
 
 - :mod:`jaxspline.kernels` - per-candidate mathematics (reach, slew, flex, attitude,
   joins, retarget);

@@ -11,7 +11,7 @@ it, loading included), then the independent checker
 Lagrangian bound (candidate model, battery relaxed) and its status, CR, TAT, PC and
 wall time, and writes a markdown table (with the means) to ``--out``. Solutions go to
 ``--solutions DIR`` if given. The cases come from the public aeossp_standard
-benchmark (see the README); ``--data`` points at its ``train`` directory.
+benchmark (see docs/aeossp.md); ``--data`` points at its ``train`` directory.
 """
 
 from __future__ import annotations

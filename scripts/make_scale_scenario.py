@@ -1,6 +1,6 @@
 """Write a scale-test scenario (TOML + targets CSV) from documented scenario keys only.
 
-The planner's scaling work (issue 21) needs large, reproducible instances. This script
+The planner's scaling work needs large, reproducible instances. This script
 writes them with nothing but the keys of the scenario schema (``jaxspline/scenario.py``
 docstring, README *Scenario files*) and the documented CSV columns
 (``jaxspline/targets_io.py``), so every file it writes loads with
@@ -351,7 +351,7 @@ def build(spec: Spec, csv_name: str, preset: str | None = None, out_name: str = 
     n_con = sum(bool(r["window_lo_s"] or r["sensor"]) for r in rows)
     models = {m: sum(s["model"] == m for s in sats) for m in MODEL_CYCLE}
     lines = [
-        f"# Scale scenario {spec.name!r} (issue 21), generated: do not edit by hand. Remake with",
+        f"# Scale scenario {spec.name!r}, generated: do not edit by hand. Remake with",
         f"#   {_command(spec, preset, out_name or spec.name + '.toml')}",
         f"# {len(sats)} satellites ({sum('tle' in s for s in sats)} TLE; "
         + ", ".join(f"{v} {k}" for k, v in models.items())

@@ -62,10 +62,12 @@ class Power:
     """Battery and loads of one satellite (aeossp RULES.md rule 8 semantics).
 
     Attributes:
-      capacity_wh, initial_wh: battery capacity and level at t = 0 [Wh].
-      idle_w: always-on load [W]; imaging_w: extra load while imaging [W];
-      slew_w: extra load while maneuvering [W]; charge_w: solar charging while
-      sunlit (cylindrical Earth shadow) [W].
+      capacity_wh: battery capacity [Wh].
+      initial_wh: battery level at t = 0 [Wh].
+      idle_w: always-on load [W].
+      imaging_w: extra load while imaging [W].
+      slew_w: extra load while maneuvering [W].
+      charge_w: solar charging while sunlit (cylindrical Earth shadow) [W].
     """
 
     capacity_wh: float

@@ -236,7 +236,9 @@ def plan_joins(scene, sats, sat, start, end, params) -> Joins:
     Args:
       scene: multi-satellite :class:`jaxspline.geometry.pointing.Scene`.
       sats: the scenario's satellites (sequence of :class:`jaxspline.engine.mission.Satellite`).
-      sat, start, end: [K] satellite index, imaging interval [s] of every observation.
+      sat: [K] satellite index of every observation.
+      start: [K] imaging start [s].
+      end: [K] imaging end [s].
       params: [K, 8] aim laws (:func:`jaxspline.geometry.pointing.aim_params`) started at ``start``.
     Returns:
       :class:`Joins`.

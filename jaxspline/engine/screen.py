@@ -319,8 +319,9 @@ def screen_chunks(
       top_k: keep for every source only its ``top_k`` feasible successors of
         largest ``top_k_by`` score (implies ``feasible_only``).
       top_k_by: ``"margin"``, ``"value"`` or ``"density"``, see :func:`screen_transitions`.
-      process_index, process_count: multi-host split of chunks (defaults:
-        ``jax.process_index()``, ``jax.process_count()``).
+      process_index: this process's index in the multi-host split of chunks (default
+        ``jax.process_index()``).
+      process_count: number of processes sharing the chunks (default ``jax.process_count()``).
     Returns:
       An iterator of Transitions chunks (arguments are checked before it is returned).
     Raises:
@@ -371,8 +372,9 @@ def screen_transitions(
       progress: show a tqdm bar over candidates.
       feasible_only: keep only feasible candidates in the result (compacted on
         the device; saves memory when most candidates fail).
-      process_index, process_count: multi-host split of chunks (defaults:
-        ``jax.process_index()``, ``jax.process_count()``).
+      process_index: this process's index in the multi-host split of chunks (default
+        ``jax.process_index()``).
+      process_count: number of processes sharing the chunks (default ``jax.process_count()``).
       top_k: keep for every source only its ``top_k`` feasible successors of
         largest ``top_k_by`` score (implies ``feasible_only``). Selected per row of up to 256
         destinations on the device and merged per source on the host, so memory

@@ -1,4 +1,4 @@
-"""The fused screening path (issue 9): pairs generated and rows compacted on the device.
+"""The fused screening path: pairs generated and rows compacted on the device.
 
 :func:`jaxspline.engine.screen.screen_chunks` (and so ``screen_transitions``) runs
 :func:`fused_chunks` when x64 is on (see that module's docstring for the layout).

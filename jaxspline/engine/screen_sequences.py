@@ -1,4 +1,4 @@
-"""Screening whole candidate sequences on the device (issue 9).
+"""Screening whole candidate sequences on the device.
 
 :func:`screen_sequences` takes K candidate sequences of L option indices and
 returns, per row, whether it can be flown in order, where it first fails and its

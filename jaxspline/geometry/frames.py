@@ -10,7 +10,7 @@ coordinates come from one rotation about z by the Greenwich mean sidereal time
 (IAU 1982) with UT1 = UTC and no polar motion, i.e. TEME -> pseudo-Earth-fixed
 (Vallado, *Fundamentals of Astrodynamics*, 4th ed., alg. 24 and eq. 3-45). Measured
 against the GCRF/ITRF chain of the aeossp checker (zero EOP): 1.5e-7 deg in off-nadir
-angle and 3.6e-7 deg in slew angle (README, aeossp section).
+angle and 3.6e-7 deg in slew angle (docs/aeossp.md).
 
 Array namespaces. Functions marked *generic* accept numpy arrays (and return numpy,
 float64 for bulk host geometry) or JAX arrays / tracers (and return JAX arrays, for

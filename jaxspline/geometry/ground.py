@@ -219,7 +219,10 @@ def strip_footprint(lat, lon, azimuth, length, swath, samples: int, alt=0.0):
     left side forward, then the right side back (ends cut square).
 
     Args:
-      lat, lon, azimuth, length: float [...], the strips (as :func:`strip_centerline`).
+      lat: float [...], geodetic latitude of the strip's start [rad].
+      lon: float [...], longitude of the start [rad].
+      azimuth: float [...], direction at the start, clockwise from north [rad].
+      length: float [...], strip length [m].
       swath: float [...], imaged width [m] (> 0).
       samples: int >= 2, centreline points per strip.
       alt: float [...], start heights [m].

@@ -331,8 +331,10 @@ def propagate_tle(line1: str, line2: str, jd, fr=0.0, gravity: str = "wgs84"):
     """Propagate one TLE with SGP4 (vectorized ``SatrecArray.sgp4``) on numpy arrays.
 
     Args:
-      line1, line2: the two TLE lines.
-      jd, fr: Julian date split into integer-ish and fractional parts (arrays, UTC).
+      line1: first TLE line.
+      line2: second TLE line.
+      jd: integer-ish part of the Julian date (array, UTC).
+      fr: fractional part of the Julian date (array).
       gravity: geopotential constants, "wgs84" (default) or "wgs72".
     Returns:
       (r [..., 3] [m], v [..., 3] [m/s], error [...] int) in TEME; error != 0 marks

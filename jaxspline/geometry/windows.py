@@ -86,7 +86,8 @@ def visibility_windows_all(
       allowed: bool [S, R], satellite s may image target r (sensor type).
       off_nadir_limit: [S] off-nadir limit minus margin [rad].
       horizon: the elevation sine must exceed this.
-      t_lo, t_hi: [R] target windows [s] (-inf/+inf: free).
+      t_lo: [R] start of each target's window [s] (-inf: free).
+      t_hi: [R] end of each target's window [s] (+inf: free).
       duration: horizon end [s] (windows lie in [0, duration]).
     Returns:
       :class:`Windows`.

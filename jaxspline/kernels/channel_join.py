@@ -69,9 +69,14 @@ def channel_join_peaks(p0, v0, a0, j0, p1, v1, a1, j1, T, n_samples=DEFAULT_JOIN
     A duration ``T <= 0`` is no join: every peak is +inf (never NaN).
 
     Args:
-      p0, v0, a0, j0: float [C], angle [rad], rate [rad/s], acceleration [rad/s²]
-        and jerk [rad/s³] per channel at t = 0.
-      p1, v1, a1, j1: float [C], the same at t = T.
+      p0: float [C], angle per channel at t = 0 [rad].
+      v0: float [C], rate at t = 0 [rad/s].
+      a0: float [C], acceleration at t = 0 [rad/s²].
+      j0: float [C], jerk at t = 0 [rad/s³].
+      p1: float [C], angle at t = T [rad].
+      v1: float [C], rate at t = T [rad/s].
+      a1: float [C], acceleration at t = T [rad/s²].
+      j1: float [C], jerk at t = T [rad/s³].
       T: float scalar, duration [s].
       n_samples: static int >= 2, grid points of τ in [0, 1].
     Returns:

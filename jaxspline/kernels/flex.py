@@ -243,7 +243,10 @@ def mode_rate_kernel(tau, T, T0, T1, accel, t, freq, damping, gain):
     cancellation). Zero initial conditions (body at rest, mode at rest).
 
     Args:
-      tau, T, T0, T1: profile parameters [s] (:class:`jaxspline.kernels.slew.SlewProfile`).
+      tau: jerk-ramp time of the profile [s] (:class:`jaxspline.kernels.slew.SlewProfile`).
+      T: constant-acceleration time [s].
+      T0: braking return time [s].
+      T1: coast time at the rate bound [s].
       accel: acceleration bound eps [rad/s^2].
       t: time since the slew start [s].
       freq: coupled (free-free) circular frequency nu [rad/s], > 0.

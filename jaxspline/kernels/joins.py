@@ -360,10 +360,14 @@ def maneuver_check_kernel(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, 
     cache (``maneuver_check`` chunks larger batches itself).
 
     Args:
-      q0, q1: float [4], start / end attitude quaternions (scalar first).
-      w0, w1: float [3], start / end body angular velocity [rad/s].
-      e0, e1: float [3], start / end body angular acceleration [rad/s²].
-      j0, j1: float [3], start / end angular jerk [rad/s³].
+      q0: float [4], start attitude quaternion (scalar first).
+      q1: float [4], end attitude quaternion (scalar first).
+      w0: float [3], start body angular velocity [rad/s].
+      w1: float [3], end body angular velocity [rad/s].
+      e0: float [3], start body angular acceleration [rad/s²].
+      e1: float [3], end body angular acceleration [rad/s²].
+      j0: float [3], start angular jerk [rad/s³].
+      j1: float [3], end angular jerk [rad/s³].
       T: scalar, duration [s].
       rate: scalar, bound on |ω| [rad/s].
       accel: scalar, bound on |ε| [rad/s²].
@@ -448,10 +452,14 @@ def join7_coeffs(p0, v0, a0, j0, p1, v1, a1, j1, T):
     conjugation, eq. 27; SPEC §3).
 
     Args:
-      p0, p1: float [...], angle at 0 and T [rad].
-      v0, v1: float [...], rate at 0 and T [rad/s].
-      a0, a1: float [...], acceleration at 0 and T [rad/s²].
-      j0, j1: float [...], jerk at 0 and T [rad/s³].
+      p0: float [...], angle at 0 [rad].
+      p1: float [...], angle at T [rad].
+      v0: float [...], rate at 0 [rad/s].
+      v1: float [...], rate at T [rad/s].
+      a0: float [...], acceleration at 0 [rad/s²].
+      a1: float [...], acceleration at T [rad/s²].
+      j0: float [...], jerk at 0 [rad/s³].
+      j1: float [...], jerk at T [rad/s³].
       T: float [...], duration [s], > 0.
     Returns:
       float [..., 8], normalized coefficients c_k [rad].
@@ -476,10 +484,14 @@ def spline7_coeffs(p0, v0, a0, p_third, p_two_thirds, p1, v1, a1, T):
     from (i)–(iii)). Elementwise over broadcast inputs (per component).
 
     Args:
-      p0, p1: float [...], angle at 0 and T [rad].
-      v0, v1: float [...], rate at 0 and T [rad/s].
-      a0, a1: float [...], acceleration at 0 and T [rad/s²].
-      p_third, p_two_thirds: float [...], angle at T/3 and 2T/3 [rad].
+      p0: float [...], angle at 0 [rad].
+      p1: float [...], angle at T [rad].
+      v0: float [...], rate at 0 [rad/s].
+      v1: float [...], rate at T [rad/s].
+      a0: float [...], acceleration at 0 [rad/s²].
+      a1: float [...], acceleration at T [rad/s²].
+      p_third: float [...], angle at T/3 [rad].
+      p_two_thirds: float [...], angle at 2T/3 [rad].
       T: float [...], duration [s], > 0.
     Returns:
       float [..., 8], normalized coefficients c_k [rad].
@@ -537,12 +549,15 @@ def maneuver_plan(q0, w0, e0, q1, w1, e1, T, j0=None, j1=None) -> Maneuver:
     vector-spline-guidance-laws eq. 3, plus ε') holds exactly.
 
     Args:
-      q0, q1: float [..., 4], attitude quaternions
-        (scalar first, body -> reference) at t = 0 and t = T.
-      w0, w1: float [..., 3], body angular velocity ω at 0 and T [rad/s].
-      e0, e1: float [..., 3], body angular acceleration ε = dω/dt at 0 and T [rad/s²].
+      q0: float [..., 4], attitude quaternion (scalar first, body -> reference) at t = 0.
+      q1: float [..., 4], attitude quaternion at t = T.
+      w0: float [..., 3], body angular velocity ω at 0 [rad/s].
+      w1: float [..., 3], body angular velocity ω at T [rad/s].
+      e0: float [..., 3], body angular acceleration ε = dω/dt at 0 [rad/s²].
+      e1: float [..., 3], body angular acceleration ε at T [rad/s²].
       T: float [...], duration [s], > 0.
-      j0, j1: float [..., 3], ε' at 0 and T [rad/s³]; None means 0.
+      j0: float [..., 3], ε' at 0 [rad/s³]; None means 0.
+      j1: float [..., 3], ε' at T [rad/s³]; None means 0.
     Returns:
       Maneuver, the join (batch shape of the broadcast inputs).
     Raises:
@@ -561,10 +576,15 @@ def attitude_spline(q0, w0, e0, q_third, q_two_thirds, q1, w1, e1, T) -> Maneuve
     coefficients (seed vector-spline-guidance-laws). Evaluate with ``maneuver_eval``.
 
     Args:
-      q0, q_third, q_two_thirds, q1: float [..., 4], attitude quaternions
-        (scalar first, body -> reference) of the law at 0, T/3, 2T/3, T.
-      w0, w1: float [..., 3], body angular velocity ω at 0 and T [rad/s].
-      e0, e1: float [..., 3], body angular acceleration ε at 0 and T [rad/s²].
+      q0: float [..., 4], attitude quaternion (scalar first, body -> reference) of the law
+        at 0.
+      q_third: float [..., 4], the same at T/3.
+      q_two_thirds: float [..., 4], the same at 2T/3.
+      q1: float [..., 4], the same at T.
+      w0: float [..., 3], body angular velocity ω at 0 [rad/s].
+      w1: float [..., 3], body angular velocity ω at T [rad/s].
+      e0: float [..., 3], body angular acceleration ε at 0 [rad/s²].
+      e1: float [..., 3], body angular acceleration ε at T [rad/s²].
       T: float [...], duration [s], > 0.
     Returns:
       Maneuver, the spline segment.
@@ -617,9 +637,17 @@ def maneuver_check(
     in chunks of that size (one compile, bounded memory).
 
     Args:
-      q0, w0, e0, q1, w1, e1, T, j0, j1: as in ``maneuver_plan``.
+      q0: as in ``maneuver_plan``.
+      w0: as in ``maneuver_plan``.
+      e0: as in ``maneuver_plan``.
+      q1: as in ``maneuver_plan``.
+      w1: as in ``maneuver_plan``.
+      e1: as in ``maneuver_plan``.
+      T: as in ``maneuver_plan``.
       limits: AxisLimits, rate [rad/s], accel [rad/s²], jerk [rad/s³] bounds on the
         Euclidean norms of body ω, ε and ε'.
+      j0: as in ``maneuver_plan``.
+      j1: as in ``maneuver_plan``.
       n_samples: static int >= 2, equally spaced samples on [0, T] including both ends.
     Returns:
       ManeuverCheck, float [...] peaks and bool [...] feasible.

@@ -151,8 +151,10 @@ def is_reachable_kernel(a1, b1, a2, b2, T, rate, accel):
     transcendental functions.
 
     Args:
-      a1, a2: scalars, start / end angle [rad].
-      b1, b2: scalars, start / end rate [rad/s].
+      a1: scalar, start angle [rad].
+      a2: scalar, end angle [rad].
+      b1: scalar, start rate [rad/s].
+      b2: scalar, end rate [rad/s].
       T: scalar, duration [s].
       rate: scalar, rate bound b [rad/s].
       accel: scalar, acceleration bound d [rad/s^2].
@@ -230,7 +232,8 @@ def rate_interval_kernel(a1, b1, a2, T, rate, accel):
     (The paper's steps 3-7 of its second algorithm are garbled; this is re-derived.)
 
     Args:
-      a1, a2: scalars, start / end angle [rad].
+      a1: scalar, start angle [rad].
+      a2: scalar, end angle [rad].
       b1: scalar, start rate [rad/s].
       T: scalar, duration [s].
       rate: scalar, rate bound b [rad/s].

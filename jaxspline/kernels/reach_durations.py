@@ -73,8 +73,10 @@ def feasible_durations_kernel(a1, b1, a2, b2, rate, accel):
     as D = E0 (T0 itself feasible).
 
     Args:
-      a1, a2: scalars, start / end angle [rad].
-      b1, b2: scalars, start / end rate [rad/s].
+      a1: scalar, start angle [rad].
+      a2: scalar, end angle [rad].
+      b1: scalar, start rate [rad/s].
+      b2: scalar, end rate [rad/s].
       rate: scalar, rate bound b [rad/s].
       accel: scalar, acceleration bound d [rad/s^2].
     Returns:

@@ -442,9 +442,10 @@ def min_peak_retarget(
 
     Args:
       model: :class:`AttitudeModel`.
-      sigma_a, sigma_b: float [..., 3], pitch, roll, yaw [rad] at t = 0 and t = T
-        (|roll| < π/2).
-      omega_a, omega_b: float [..., 3], ω̃ body x, y, z [rad/s] at t = 0 and t = T.
+      sigma_a: float [..., 3], pitch, roll, yaw at t = 0 [rad] (|roll| < π/2).
+      sigma_b: float [..., 3], pitch, roll, yaw at t = T [rad] (|roll| < π/2).
+      omega_a: float [..., 3], ω̃ body x, y, z at t = 0 [rad/s].
+      omega_b: float [..., 3], ω̃ body x, y, z at t = T [rad/s].
       T: float [...], duration [s] > 0, broadcast over the leading axes.
       tol: convergence tolerance on σ(T) [rad] (default 1″).
       rate_tol: convergence tolerance on ω̃(T) [rad/s] (default 1″/s).

@@ -100,8 +100,10 @@ def min_peak_channel_kernel(a1, b1, a2, b2, T, rate):
     t2 = max(T − (rate − s b2)/d, tA).
 
     Args:
-      a1, a2: start / end angle [rad] (broadcast together).
-      b1, b2: start / end rate [rad/s].
+      a1: start angle [rad] (broadcast with a2).
+      a2: end angle [rad].
+      b1: start rate [rad/s].
+      b2: end rate [rad/s].
       T: duration [s], > 0.
       rate: rate bound [rad/s], > 0 or inf.
     Returns:
@@ -150,8 +152,10 @@ def min_peak_channel(a1, b1, a2, b2, T, rate=float("inf")):
     """Minimum peak |f''| for one channel, batched (see :func:`min_peak_channel_kernel`).
 
     Args:
-      a1, a2: float [...], start / end angle [rad].
-      b1, b2: float [...], start / end rate [rad/s].
+      a1: float [...], start angle [rad].
+      a2: float [...], end angle [rad].
+      b1: float [...], start rate [rad/s].
+      b2: float [...], end rate [rad/s].
       T: float [...], duration [s], > 0.
       rate: float [...], rate bound [rad/s], > 0 or inf (no bound).
     Returns:
@@ -209,8 +213,10 @@ def min_peak_linear(angle_a, rate_a, angle_b, rate_b, T, rate=float("inf"), gain
     ``max_k d*_k / |gain_k|`` and the per-channel minimum-peak controls realise it.
 
     Args:
-      angle_a, angle_b: float [..., K], start / end angles per channel [rad].
-      rate_a, rate_b: float [..., K], start / end rates per channel [rad/s].
+      angle_a: float [..., K], start angle per channel [rad].
+      angle_b: float [..., K], end angle per channel [rad].
+      rate_a: float [..., K], start rate per channel [rad/s].
+      rate_b: float [..., K], end rate per channel [rad/s].
       T: float [...], duration [s], broadcast over the leading axes.
       rate: float [K] or scalar, rate bound per channel [rad/s] (inf: none).
       gain: float [K] or scalar, [rad/s² per unit u], nonzero.

@@ -433,7 +433,10 @@ def profile_state_kernel(tau, T, T0, T1, accel, t):
     end the state holds (accel 0, rate 0 for A-D, angle phi).
 
     Args:
-      tau, T, T0, T1: profile parameters [s].
+      tau: jerk-ramp time of the profile [s].
+      T: constant-acceleration time [s].
+      T0: braking return time [s].
+      T1: coast time at the rate bound [s].
       accel: acceleration bound eps [rad/s^2].
       t: time since the slew start [s].
     Returns:

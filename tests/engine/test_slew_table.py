@@ -1,4 +1,4 @@
-"""The rest-to-rest SlewTable is an upper bound of the exact slew time (issue 20, item 5).
+"""The rest-to-rest SlewTable is an upper bound of the exact slew time.
 
 Reference: :func:`jaxspline.engine.models.slew_time`, the exact profile time (slew
 kernel + settle + gap margin) that the plan's final check uses. The flexible

@@ -57,7 +57,7 @@ time_limit_s = 10.0
 RING = [[13.5, 45.5], [14.5, 45.55], [14.45, 46.1], [13.9, 46.0], [13.55, 46.05]]
 AREA = f'[[areas]]\nname = "karst"\nlonlat_deg = {json.dumps(RING)}\npriority = 20.0\n'
 R_TEST = 6371e3  # sphere of the reference projection [m]
-COVERAGE_TOL = 0.01  # the target: covered fraction to 1 %
+COVERAGE_TOL = 0.01  # target: covered fraction to 1 %
 
 
 def _write(tmp_path, text, name="s.toml"):
