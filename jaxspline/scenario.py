@@ -116,6 +116,7 @@ required::
     shadow_guard_steps = 0              # battery steps of sunlight required around a step
     exact_max_options = 60              # solve exactly up to this many options
     lagrangian_share = 0.3              # search budget share of the Lagrangian phase
+    bound_worker = true                 # iterate the bound on a second CPU during the search
     refine_steps = 100                  # optax steps refining per-channel start times (0 = off)
     time_limit_s = 30.0                 # default search budget [s]
 
@@ -209,7 +210,7 @@ _KEYS = {
         "power": "capacity_wh initial_wh idle_w imaging_w slew_w charge_w",
         "planner": "time_step_s geometry_step_s scan_speeds_km_s sun_elevation_min_deg "
         "off_nadir_margin_deg horizon_margin gap_margin_s battery_margin_wh shadow_guard_steps "
-        "exact_max_options lagrangian_share refine_steps time_limit_s",
+        "exact_max_options lagrangian_share bound_worker refine_steps time_limit_s",
     }.items()
 }
 _TOP = frozenset("scenario satellites satellite planner areas area".split()) | TARGET_SECTIONS
@@ -390,6 +391,9 @@ def _planner(ctx, pl, duration: float) -> PlannerConfig:
                 ctx, "planner.exact_max_options", pl.get("exact_max_options", d.exact_max_options)
             ),
             lagrangian_share=num("lagrangian_share", d.lagrangian_share, lo=0.0, hi=0.99),
+            bound_worker=field_bool(
+                ctx, "planner.bound_worker", pl.get("bound_worker", d.bound_worker)
+            ),
             refine_steps=field_int(
                 ctx, "planner.refine_steps", pl.get("refine_steps", d.refine_steps)
             ),

@@ -426,6 +426,8 @@ class PlannerConfig:
       exact_max_options: instances with at most this many options are solved exactly
         (branch and bound over the per-satellite timelines).
       lagrangian_share: share of the search budget for the Lagrangian / DP phase.
+      bound_worker: on a machine with at least two CPUs, iterate the bound in a
+        second process during the search (:class:`jaxspline.engine.search.BoundWorker`).
       refine_steps: optax steps of start-time refinement of per-channel satellites'
         sequences (:mod:`jaxspline.engine.refine_starts`; 0 = off).
       default_time_limit: search budget [s] when :func:`plan` gets no time limit.
@@ -438,6 +440,7 @@ class PlannerConfig:
     margins: Margins = Margins()
     exact_max_options: int = 60
     lagrangian_share: float = 0.3
+    bound_worker: bool = True
     refine_steps: int = 100
     default_time_limit: float = 30.0
 

@@ -27,6 +27,7 @@ from __future__ import annotations
 import functools
 import math
 import numbers
+import os
 import resource
 import sys
 import time
@@ -74,6 +75,7 @@ _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks 
 _JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
 _REFILL_S = 2.0  # [s] budget of one refill after join rejections
 _REFILL_ITERS = 2000  # LNS iterations of one refill in iteration-capped runs
+_WORKER_MIN_CPUS = 2  # the bound worker runs only with a second CPU
 
 
 def _peak_rss_mb() -> float:
@@ -395,6 +397,14 @@ def build_problem(
     return Prepared(pb, opp, windows, scene, table, battery, far)
 
 
+def _cpus() -> int:
+    """CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
+
+
 def _search(pb, deadline, seed, max_iters, pc, clock):
     """Stage 5 with a progress bar over the search budget."""
     clock.bar = clock.search_bar(deadline - time.monotonic())
@@ -407,6 +417,7 @@ def _search(pb, deadline, seed, max_iters, pc, clock):
             lagrangian_share=pc.lagrangian_share,
             exact_max_options=pc.exact_max_options,
             max_iters=max_iters,
+            bound_worker=pc.bound_worker and _cpus() >= _WORKER_MIN_CPUS,
             report=clock.say,
         )
     finally:

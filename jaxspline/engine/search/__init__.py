@@ -10,6 +10,9 @@
 3. exact branch and bound when the instance is tiny (``exact_max_options``);
 4. large-neighbourhood search until the deadline (:func:`lns`);
 5. earliest-start pass (:func:`earliest_pass`).
+
+With ``bound_worker``, a forked process iterates the bound alone over the whole search
+budget (:class:`BoundWorker`) and the smaller of the two bounds is reported.
 """
 
 from __future__ import annotations
@@ -19,7 +22,9 @@ import random
 import time
 from dataclasses import dataclass
 
+from jaxspline.engine.search import clock
 from jaxspline.engine.search.battery import BatteryModel
+from jaxspline.engine.search.bound_worker import BoundWorker
 from jaxspline.engine.search.exact import exact_search
 from jaxspline.engine.search.lagrangian import (
     BoundResult,
@@ -37,6 +42,7 @@ from jaxspline.engine.search.timeline import Timeline
 __all__ = [
     "BatteryModel",
     "BoundResult",
+    "BoundWorker",
     "Problem",
     "SearchResult",
     "MipBound",
@@ -57,6 +63,8 @@ _EARLIEST_SHARE = 0.05  # share of the budget reserved for the earliest-start pa
 _EARLIEST_MAX = 2.0  # ... at most this many seconds
 _EXACT_SHARE = 0.5  # share of the remaining budget the exact search may use
 _EXACT_MAX_S = 60.0  # [s] budget cap of the exact search when the deadline is +inf
+_OPTIMAL_TOL = 1e-9  # relative bound - plan below which the plan is optimal
+_WORKER_ITERS = 3  # the bound worker's iteration cap, in Lagrangian-phase caps
 
 
 @dataclass
@@ -86,6 +94,7 @@ def solve(
     lagrangian_share: float = 0.3,
     exact_max_options: int = 0,
     max_iters: int | None = None,
+    bound_worker: bool = False,
     report=None,
 ) -> SearchResult:
     """Run the search stages (module docstring) until ``deadline``.
@@ -126,6 +135,49 @@ def solve(
     say("greedy", f"value {tl.W:.6g}")
     t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())
     cap = None if max_iters is None else max(10, max_iters // 10)
+    worker = None
+    if bound_worker and pb.n_options:
+        w_cap = None if cap is None else _WORKER_ITERS * cap
+        worker = BoundWorker(pb, tl.W, deadline - tail, w_cap)
+    try:
+        return _stages(
+            pb,
+            tl,
+            order,
+            deadline,
+            now,
+            tail,
+            t_dp,
+            cap,
+            seed,
+            exact_max_options,
+            max_iters,
+            stats,
+            worker,
+            say,
+        )
+    finally:
+        if worker is not None:
+            worker.stop()
+
+
+def _stages(
+    pb,
+    tl,
+    order,
+    deadline,
+    now,
+    tail,
+    t_dp,
+    cap,
+    seed,
+    exact_max_options,
+    max_iters,
+    stats,
+    worker,
+    say,
+):
+    """Stages 2-5 of :func:`solve` and the bound worker's result."""
     res = lagrangian(
         tl,
         t_dp,
@@ -157,4 +209,13 @@ def solve(
         )
     stats.update(lns_iterations=its, lns_value=tl.W)
     earliest_pass(tl, deadline)
-    return SearchResult(tl, res.bound, res.status, exact, stats)
+    bound, status = res.bound, res.status
+    if worker is not None:
+        wr = worker.result(wait=not clock.stop_requested())
+        if wr is not None:
+            stats.update(worker_bound=wr.bound, worker_iterations=wr.iterations)
+            if wr.bound < bound:
+                bound, status = wr.bound, wr.status
+                if bound - tl.W <= _OPTIMAL_TOL * max(1.0, bound):
+                    status = "optimal"
+    return SearchResult(tl, bound, status, exact, stats)
