@@ -17,8 +17,8 @@ by ``scripts/make_scale_scenario.py --preset 12x12h`` into the work folder),
 scenario TOML. A field missing from ``plan.json`` (an older or newer planner, or a
 killed run) is shown as "-".
 
-Memory guard: the child's process tree is polled every ``POLL_S`` (resident set of
-every process in it, from ``/proc``, or psutil when installed); above ``--max-rss-gb``
+Memory guard: the child's process tree is polled every ``POLL_S`` (proportional set
+size of every process in it, from ``/proc``: pages a fork shares count once); above ``--max-rss-gb``
 the whole process group is killed (SIGKILL) and the run is reported as killed with the
 last stage it finished. The child may overshoot by what it allocates in one poll
 interval. ``RLIMIT_AS`` is no use here: XLA reserves far more address space than it
@@ -88,35 +88,23 @@ def _children_proc(pid: int) -> list[int]:
 
 
 def _rss_proc(pid: int) -> int:
-    try:
-        with open(f"/proc/{pid}/status") as fh:
-            for line in fh:
-                if line.startswith("VmRSS:"):
-                    return int(line.split()[1]) * 1024
-    except OSError:
-        pass
+    """Memory of one process [bytes]: its proportional set size (shared pages split
+    among the processes mapping them, so a fork's copy-on-write pages count once),
+    else its resident set; 0 once it is gone."""
+    for path, key in ((f"/proc/{pid}/smaps_rollup", "Pss:"), (f"/proc/{pid}/status", "VmRSS:")):
+        try:
+            with open(path) as fh:
+                for line in fh:
+                    if line.startswith(key):
+                        return int(line.split()[1]) * 1024
+        except OSError:
+            pass
     return 0
 
 
 def tree_rss_bytes(pid: int) -> int:
-    """Resident set of ``pid`` and all its descendants [bytes] (0 once it is gone)."""
-    try:
-        import psutil
-    except ImportError:
-        psutil = None
-    if psutil is not None:
-        try:
-            root = psutil.Process(pid)
-            procs = [root, *root.children(recursive=True)]
-        except psutil.Error:
-            return 0
-        total = 0
-        for p in procs:
-            try:
-                total += p.memory_info().rss
-            except psutil.Error:
-                pass
-        return total
+    """Memory of ``pid`` and all its descendants [bytes] (:func:`_rss_proc` summed; 0
+    once it is gone)."""
     total, todo, seen = 0, [pid], set()
     while todo:
         p = todo.pop()
