@@ -4,13 +4,13 @@ The search proper (greedy, LNS) is single-threaded Python; the bound's per-satel
 DP is numpy. On a machine with a second core, :class:`BoundWorker` forks a process
 that iterates :func:`jaxspline.engine.search.lagrangian.upper_bound` over the same
 :class:`Problem` until the search's deadline, and hands back its bound. The worker
-relaxes the battery (the search's own Lagrangian phase prices its budgets): pricing
-them made an iteration 2.5 times dearer on constellation_day (per-pair energy terms
-derived anew each time) and bought nothing measurable on the 12 x 12 h preset. The fork shares the problem's arrays copy-on-write (nothing is pickled on the
-way in); the child only runs numpy code (no JAX) and sends three numbers back. Any
-bound is an upper bound of every plan, so the search reports the smaller of its own
-and the worker's; the plan itself is never touched, and with an iteration cap the
-worker's result is a function of the problem and the cap alone.
+relaxes the battery (the search's own Lagrangian phase prices its budgets): the
+per-pair energy terms would be derived anew in every iteration, and the relaxed bound is
+the looser one by little (docs/scale.md). The fork shares the problem's arrays copy-on-write
+(nothing is pickled on the way in); the child only runs numpy code (no JAX) and sends
+three numbers back. Any bound is an upper bound of every plan, so the search reports the
+smaller of its own and the worker's; the plan itself is never touched, and with an
+iteration cap the worker's result is a function of the problem and the cap alone.
 
 The child ignores SIGINT (a Ctrl-C reaches the whole process group; the parent decides)
 and is terminated when the parent stops early or gives up waiting.
