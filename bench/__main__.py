@@ -52,12 +52,16 @@ def _parse(argv):
     )
     p.add_argument(
         "--sizes",
-        default="default,12x12h,day",
+        default="default:20,12x12h:120,day:540",
         help="scale section: comma-separated sizes, default / 12x12h / day or a scenario "
-        "TOML (default default,12x12h,day)",
+        "TOML, each optionally SIZE:SECONDS for its own planning budget (default "
+        "default:20,12x12h:120,day:540)",
     )
     p.add_argument(
-        "--time-limit", type=float, default=60.0, help="scale section: planning budget [s]"
+        "--time-limit",
+        type=float,
+        default=60.0,
+        help="scale section: planning budget [s] of a size given without one",
     )
     p.add_argument(
         "--max-rss-gb",

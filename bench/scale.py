@@ -1,6 +1,6 @@
 """Scale section: whole ``jaxspline plan`` runs as subprocesses, peak RSS and stage times.
 
-``python -m bench --section scale [--sizes default,12x12h,day] [--time-limit S]
+``python -m bench --section scale [--sizes default:20,12x12h:120,day:540] [--time-limit S]
 [--max-rss-gb G]`` plans each size with
 
     jaxspline plan [SCENARIO] --no-aem --no-plots --time-limit S -o DIR
@@ -14,7 +14,8 @@ into the output folder. Plots are skipped: they measure matplotlib, not the plan
 Sizes: ``default`` (the packaged default job, no scenario argument), ``12x12h`` (made
 by ``scripts/make_scale_scenario.py --preset 12x12h`` into the work folder),
 ``day`` (the packaged ``jaxspline/data/constellation_day.toml``), or a path to any
-scenario TOML. A field missing from ``plan.json`` (an older or newer planner, or a
+scenario TOML; ``SIZE:SECONDS`` gives that size its own planning budget (the others take
+``--time-limit``). A field missing from ``plan.json`` (an older or newer planner, or a
 killed run) is shown as "-".
 
 Memory guard: the child's process tree is polled every ``POLL_S`` (proportional set
@@ -50,6 +51,20 @@ _STAGE_LINE = re.compile(r"\[plan [^\]]*\] (\w+)\s")
 
 
 # ------------------------------------------------------------------ sizes
+def split_limit(token: str, time_limit: float) -> tuple[str, float]:
+    """(size, planning budget [s]) of a ``--sizes`` token ``SIZE`` or ``SIZE:SECONDS``."""
+    size, sep, limit = token.rpartition(":")
+    if not sep or not size:
+        return token, time_limit
+    try:
+        seconds = float(limit)
+    except ValueError:
+        raise SystemExit(f"--sizes: {token!r}: the budget after ':' must be seconds") from None
+    if not seconds > 0:
+        raise SystemExit(f"--sizes: {token!r}: the budget must be positive, got {seconds:g}")
+    return size, seconds
+
+
 def resolve_size(token: str, workdir: Path) -> tuple[str, Path | None]:
     """(label, scenario TOML or None for the packaged default) of a ``--sizes`` token."""
     if token == "default":
@@ -234,6 +249,9 @@ def parse_plan_json(path: Path) -> dict:
         "gap": gap,
         "gap_pct": gap_pct,
         "bound_status": _get(doc, "stats.bound_status"),
+        "lagrangian_iterations": _get(doc, "stats.lagrangian_iterations"),
+        "worker_iterations": _get(doc, "stats.worker_iterations"),
+        "lns_iterations": _get(doc, "stats.lns_iterations"),
         "valid": _get(doc, "summary.valid", "report.valid"),
         "timings_s": _get(doc, "timings_s", default={}),
         "stage_peak_rss_mb": _get(doc, "stats.peak_rss_mb", default={}),
@@ -296,9 +314,10 @@ def bench_scale(
     runs = []
     try:
         for token in sizes:
-            label, scenario = resolve_size(token, wd)
-            print(f"scale: planning {label} ({time_limit:g} s limit) ...", flush=True)
-            r = run_size(label, scenario, time_limit, max_rss_gb, max_wall_min, wd)
+            size, limit = split_limit(token, time_limit)
+            label, scenario = resolve_size(size, wd)
+            print(f"scale: planning {label} ({limit:g} s limit) ...", flush=True)
+            r = run_size(label, scenario, limit, max_rss_gb, max_wall_min, wd)
             runs.append(r)
             print("  " + summary_line(r), flush=True)
     finally:
@@ -340,12 +359,14 @@ def scale_table(report: dict) -> list[str]:
     """Markdown: one summary row per size, then per-stage wall time and peak RSS."""
     runs = report.get("runs", [])
     lines = [
-        f"\nScale runs: `jaxspline plan --no-aem --no-plots --time-limit "
-        f"{report.get('time_limit_s', 0):g}`, one subprocess each, guard "
-        f"{report.get('max_rss_gb', 0):g} GB RSS.",
-        "\n| size | sats | targets | exit | wall s | peak RSS MB | windows | options | near pairs "
-        "| bytes/pair | store MB | value | bound | gap % | valid | load |",
-        "|" + "---|" * 16,
+        "\nScale runs: `jaxspline plan --no-aem --no-plots --time-limit LIMIT`, one "
+        f"subprocess each, guard {report.get('max_rss_gb', 0):g} GB RSS. *Lagr. it.* are "
+        "the search's own bound iterations, *worker it.* those of the bound worker on the "
+        "second CPU, *LNS it.* the search's.",
+        "\n| size | sats | targets | limit s | exit | wall s | peak RSS MB | windows | options "
+        "| near pairs | bytes/pair | store MB | Lagr. it. | worker it. | LNS it. | value "
+        "| bound | bound status | gap % | valid | load |",
+        "|" + "---|" * 21,
     ]
     for r in runs:
         state = "killed" if r.get("killed") else str(r.get("exit"))
@@ -357,6 +378,7 @@ def scale_table(report: dict) -> list[str]:
                     r["size"],
                     _f(r.get("satellites"), "{:d}"),
                     _f(r.get("targets"), "{:d}"),
+                    _f(r.get("time_limit_s", report.get("time_limit_s")), "{:g}"),
                     state,
                     _f(r.get("wall_s"), "{:.1f}"),
                     _f(r.get("peak_rss_mb"), "{:.0f}"),
@@ -365,8 +387,12 @@ def scale_table(report: dict) -> list[str]:
                     _f(r.get("near_pairs"), "{:d}"),
                     _f(r.get("bytes_per_pair"), "{:.2f}"),
                     _f(None if store is None else store / 1e6, "{:.1f}"),
+                    _f(r.get("lagrangian_iterations"), "{:d}"),
+                    _f(r.get("worker_iterations"), "{:d}"),
+                    _f(r.get("lns_iterations"), "{:d}"),
                     _f(r.get("value"), "{:g}"),
                     _f(r.get("bound"), "{:.6g}"),
+                    _f(r.get("bound_status")),
                     _f(r.get("gap_pct"), "{:.2f}"),
                     _f(r.get("valid")),
                     _f(r.get("load_avg_before"), "{:.2f}"),

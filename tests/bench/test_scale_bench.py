@@ -78,8 +78,9 @@ def test_plan_json_fields_and_missing_ones(tmp_path):
         {"size": "dead", "exit": -9, "wall_s": 1.0, "peak_rss_mb": 9e3, "killed": "RSS"},
     ]
     text = "\n".join(scale.scale_table({"runs": runs, "time_limit_s": 5, "max_rss_gb": 8}))
-    assert "| full | 2 | 9 | 0 | 4.0 | 310 | 5 | 40 | 1000 | 8.00 | 0.0 | 90 | 100 |" in text
-    assert "| bare | - | - | 1 |" in text and "| dead | - | - | killed |" in text
+    row = "| full | 2 | 9 | 5 | 0 | 4.0 | 310 | 5 | 40 | 1000 | 8.00 | 0.0 | - | - | - | 90 | 100 |"
+    assert row in text
+    assert "| bare | - | - | 5 | 1 |" in text and "| dead | - | - | 5 | killed |" in text
     assert "| full | 0.50 / 200 | 2.00 / 300 |" in text
     assert "dead: killed, RSS" in text
 
@@ -91,3 +92,16 @@ def test_made_by_reads_the_generator_command(tmp_path):
     )
     assert scale.made_by(toml) == "python scripts/make_scale_scenario.py --out t.toml"
     assert scale.made_by(None) is None and scale.made_by(tmp_path / "none.toml") is None
+
+
+def test_size_tokens_take_their_own_budget():
+    assert scale.split_limit("day:540", 60.0) == ("day", 540.0)
+    assert scale.split_limit("default", 60.0) == ("default", 60.0)
+    assert scale.split_limit("/tmp/x.toml:7.5", 60.0) == ("/tmp/x.toml", 7.5)
+    for bad in ("day:soon", "day:0"):
+        try:
+            scale.split_limit(bad, 60.0)
+        except SystemExit as e:
+            assert bad in str(e)
+        else:
+            raise AssertionError(bad)
