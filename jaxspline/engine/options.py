@@ -87,8 +87,7 @@ def take_options(options: RouteOptions, idx) -> RouteOptions:
 class RouteModel(Protocol):
     """A differentiable map from route start times to boundary states (for refinement).
 
-    Implemented by :class:`jaxspline.geometry.routes.RouteSet` (exact) and
-    :class:`jaxspline.geometry.routes.TabulatedRouteModel` (interpolated).
+    Implemented by :class:`jaxspline.geometry.routes.RouteSet`.
     """
 
     def states(self, route, t0):
