@@ -81,8 +81,8 @@ def test_aeossp_checker_is_independent(name):
 def test_the_rule_can_fail(tmp_path):
     """The parser sees an upward import (guards the test against a vacuous pass)."""
     bad = tmp_path / "reach.py"
-    bad.write_text("from jaxspline.engine.screen import screen_pairs\nfrom .. import scenario\n")
+    bad.write_text("from jaxspline.screen.pairs import screen_pairs\nfrom .. import scenario\n")
     deps = imports_of("jaxspline.kernels.reach", bad, False)
-    assert "jaxspline.engine.screen" in deps
-    assert "jaxspline.scenario" in deps
+    assert "jaxspline.screen.pairs" in deps
+    assert "jaxspline.io.scenario" in deps
     assert any(_layer(m) > 0 for m in deps)

@@ -7,7 +7,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.engine.options import RouteOptions
+from jaxspline.screen.options import RouteOptions
 
 
 class LinearRouteModel(NamedTuple):

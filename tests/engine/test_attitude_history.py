@@ -22,17 +22,17 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.interpolate import BPoly
 
-from jaxspline.aem import aem_file_name, read_aem, write_aems
-from jaxspline.engine.attitude_history import attitude_history, plan_scene
-from jaxspline.engine.mission import FlexMode, PlannerConfig, Satellite, Scenario, make_targets
-from jaxspline.engine.plan_joins import NADIR, join_limits, plan_joins, reject_unflyable
-from jaxspline.engine.result import Observations, PlanResult
 from jaxspline.geometry.frames import OMEGA_EARTH, geodetic_to_ecef, gmst, julian_date, rot_z
 from jaxspline.geometry.orbit import circular_orbit_over, orbit_state
 from jaxspline.geometry.pointing import Scene, pointing_state
 from jaxspline.kernels.attitude import attitude_angle, quat_to_dcm
 from jaxspline.kernels.joins import Maneuver, maneuver_eval
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.ops.aem import aem_file_name, read_aem, write_aems
+from jaxspline.ops.attitude_history import attitude_history, plan_scene
+from jaxspline.planning.joins import NADIR, join_limits, plan_joins, reject_unflyable
+from jaxspline.planning.mission import FlexMode, PlannerConfig, Satellite, Scenario, make_targets
+from jaxspline.planning.result import Observations, PlanResult
 
 EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)
 DURATION = 900.0
@@ -175,13 +175,13 @@ def test_continuity_at_junctions(case):
     sc, res, att = case
     j = att.joins
     scene = plan_scene(sc)
-    from jaxspline.engine.attitude_history import observation_laws
-    from jaxspline.engine.plan_joins import _laws
+    from jaxspline.ops.attitude_history import observation_laws
+    from jaxspline.planning.joins import _laws
 
     obs = res.observations
     params = observation_laws(sc, obs.target, obs.speed)
     mode = np.array([1.0 if s.model == "per_channel" else 0.0 for s in sc.satellites])
-    from jaxspline.engine.attitude_laws import law_states
+    from jaxspline.planning.attitude_laws import law_states
 
     man = Maneuver(j.q_ref, j.coeffs, j.t_end - j.t_start)
     for side, idx, tt, tau in ((0, j.before, j.t_start, 0.0), (1, j.after, j.t_end, None)):
@@ -256,7 +256,7 @@ def test_aem_round_trip(case, tmp_path):
 def test_rejection_drops_the_later_observation(case):
     sc, res, att = case
     obs = res.observations
-    from jaxspline.engine.attitude_history import observation_laws
+    from jaxspline.ops.attitude_history import observation_laws
 
     # a second observation 1 s after the first one of each satellite cannot be joined
     params = observation_laws(sc, obs.target, obs.speed)

@@ -17,7 +17,10 @@ import numpy as np
 import pytest
 
 from jaxspline import build_problem, plan
-from jaxspline.engine.mission import (
+from jaxspline.geometry.frames import gmst, julian_date
+from jaxspline.geometry.orbit import circular_orbit_over
+from jaxspline.kernels.limits import AxisLimits
+from jaxspline.planning.mission import (
     POINT,
     STRIP,
     PlannerConfig,
@@ -25,10 +28,7 @@ from jaxspline.engine.mission import (
     Scenario,
     make_targets,
 )
-from jaxspline.engine.plan_check import check_plan
-from jaxspline.geometry.frames import gmst, julian_date
-from jaxspline.geometry.orbit import circular_orbit_over
-from jaxspline.kernels.limits import AxisLimits
+from jaxspline.planning.plan_check import check_plan
 
 EPOCH = dt.datetime(2026, 4, 14, 9, 0, tzinfo=dt.UTC)
 DESIRED, TOL = 610.0, 7.0  # [s] target 1: midpoint within [603, 617]

@@ -5,7 +5,7 @@ import stat
 
 import pytest
 
-from jaxspline.engine._io import atomic_path, atomic_write_text, refuse_overwrite
+from jaxspline.planning.files import atomic_path, atomic_write_text, refuse_overwrite
 
 
 def test_written_file_has_umask_permissions_and_content(tmp_path):

@@ -1,6 +1,6 @@
 """The join screen against the exact check of the flown joins, and its use by the planner.
 
-Reference: :func:`jaxspline.engine.plan_joins.plan_joins`, which plans the spatial
+Reference: :func:`jaxspline.planning.joins.plan_joins`, which plans the spatial
 degree-7 MRP join between the scan laws and checks it on 129 samples (per-channel
 angles through the orbital frame for ``per_channel``). Every screened pair is checked
 as its own one-satellite plan (copies of one orbit), without the re-timing.
@@ -14,15 +14,15 @@ import jax
 import numpy as np
 import pytest
 
-from jaxspline.engine.attitude_history import observation_laws
-from jaxspline.engine.join_screen import channel_states, screen_first_joins, screen_joins
-from jaxspline.engine.mission import FlexMode, PlannerConfig, Satellite, Scenario, make_targets
-from jaxspline.engine.plan_joins import NADIR, plan_joins
-from jaxspline.engine.planner import orbit_scene
-from jaxspline.engine.search import Problem
 from jaxspline.geometry.frames import gmst, julian_date
 from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.ops.attitude_history import observation_laws
+from jaxspline.planning.join_screen import channel_states, screen_first_joins, screen_joins
+from jaxspline.planning.joins import NADIR, plan_joins
+from jaxspline.planning.mission import FlexMode, PlannerConfig, Satellite, Scenario, make_targets
+from jaxspline.planning.planner import orbit_scene
+from jaxspline.search import Problem
 
 EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)
 DURATION = 900.0
@@ -123,7 +123,7 @@ def test_first_join_from_nadir(case):
 
 def test_problem_lookup_makes_removed_rest_to_rest_pairs_infeasible(case):
     """A rest-to-rest pair the screen removed is infeasible for the search (need = inf)."""
-    from jaxspline.engine.search.battery import BatteryModel
+    from jaxspline.search.battery import BatteryModel
 
     n = case.s.size
     o = SimpleNamespace(
@@ -134,7 +134,7 @@ def test_problem_lookup_makes_removed_rest_to_rest_pairs_infeasible(case):
         start_los=np.tile([0.0, 0.0, 1.0], (n, 1)),
         end_los=np.tile([0.0, 0.0, 1.0], (n, 1)),
     )
-    from jaxspline.engine.models import slew_table
+    from jaxspline.screen.models import slew_table
 
     tables = [None] + [slew_table(s) for s in case.sats[1:]]
     keep = case.screened

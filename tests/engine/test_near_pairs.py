@@ -1,8 +1,8 @@
 """The planner's near pairs through the fused screen equal the host-built reference.
 
 ``_near_pairs_host`` is the planner's former implementation (pairs built on the host
-with ``ragged_positions``, screened with ``models.pair_requirements``), kept here as
-the reference for the same inputs as :func:`jaxspline.engine.planner.build_problem`.
+with ``ragged_positions``, screened with ``requirements.pair_requirements``), kept here as
+the reference for the same inputs as :func:`jaxspline.planning.planner.build_problem`.
 """
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ import numpy as np
 import pytest
 from test_planner import _scenario
 
-from jaxspline.engine import planner
-from jaxspline.engine.models import pair_requirements
-from jaxspline.engine.search.store import NearPairs, start_order
 from jaxspline.kernels._batch import ragged_positions
+from jaxspline.planning import planner
+from jaxspline.screen.requirements import pair_requirements
+from jaxspline.search.store import NearPairs, start_order
 
 _PAIR_BLOCK = 1 << 20
 

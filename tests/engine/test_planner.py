@@ -18,15 +18,6 @@ import numpy as np
 import pytest
 
 from jaxspline import build_problem, plan
-from jaxspline.engine.mission import (
-    POINT,
-    STRIP,
-    FlexMode,
-    PlannerConfig,
-    Satellite,
-    Scenario,
-    make_targets,
-)
 from jaxspline.geometry.frames import (
     earth_rotation_angle,
     ecef_to_geodetic,
@@ -39,6 +30,15 @@ from jaxspline.geometry.frames import (
 from jaxspline.geometry.orbit import circular_orbit_over, orbit_position, orbit_state
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.slew import bang_coast_bang_time
+from jaxspline.planning.mission import (
+    POINT,
+    STRIP,
+    FlexMode,
+    PlannerConfig,
+    Satellite,
+    Scenario,
+    make_targets,
+)
 
 EPOCH = dt.datetime(2026, 6, 21, 10, 0, tzinfo=dt.UTC)
 G0 = float(gmst(julian_date(EPOCH)))

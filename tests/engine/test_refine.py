@@ -7,8 +7,9 @@ import pytest
 from _ref_refine import LinearRouteModel
 from test_screen import reach_kernels, ref_reachable  # noqa: F401
 
-from jaxspline.engine import refine, screen, sequence
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.planning import refine, sequence
+from jaxspline.screen import pairs as screen
 
 LIM = AxisLimits(rate=np.array([0.05, 0.05]), accel=np.array([0.01, 0.01]))
 

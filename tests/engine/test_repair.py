@@ -16,10 +16,10 @@ import pytest
 from test_planner import _scenario
 
 from jaxspline import build_problem
-from jaxspline.engine.opportunities import Opportunities
-from jaxspline.engine.plan_check import check_plan
-from jaxspline.engine.repair import DROP_REASONS, repair
-from jaxspline.engine.search import solve
+from jaxspline.planning.opportunities import Opportunities
+from jaxspline.planning.plan_check import check_plan
+from jaxspline.planning.repair import DROP_REASONS, repair
+from jaxspline.search import solve
 
 SMALL = dict(n_points=36, n_strips=3, off_nadir_deg=14.0, exact_max_options=0)
 

@@ -15,10 +15,12 @@ import textwrap
 import numpy as np
 import pytest
 
-from jaxspline.engine import screen, screen_fused
-from jaxspline.engine.options import RouteOptions, take_options
-from jaxspline.engine.screen_sequences import screen_sequences
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.screen import fused as screen_fused
+from jaxspline.screen import pairs as screen
+from jaxspline.screen import transitions
+from jaxspline.screen.options import RouteOptions, take_options
+from jaxspline.screen.sequences import screen_sequences
 
 # ----------------------------------------------------------------------------
 # numpy references and synthetic instances
@@ -293,7 +295,7 @@ _SHARD_SCRIPT = textwrap.dedent(
     import numpy as np
     sys.path.insert(0, {tests!r})
     import test_screen as ts
-    from jaxspline.engine import screen
+    from jaxspline.screen import pairs as screen
     opt = ts.synthetic_options(np.random.default_rng(5), n_routes=12, per_route=4)
     tr = screen.screen_transitions(opt, ts.LIMITS, progress=False, chunk_size=64)
     print(json.dumps({{"ndev": jax.local_device_count(),
@@ -387,7 +389,7 @@ def test_tiny_chunks_empty_runs_and_screen_pairs(reach_kernels):
 def test_prefaulted_columns_are_plain_writable_arrays():
     """Large result columns come from one pre-populated mapping; they behave like np.empty."""
     for n, dt in ((3_000_000, np.float64), (2_500_000, np.int64), (20_000_000, bool), (10, float)):
-        a = screen._prefaulted(n, dt)
+        a = transitions._prefaulted(n, dt)
         assert a.shape == (n,) and a.dtype == np.dtype(dt) and a.flags.writeable
         a[:] = 1
         a[-1] = 0
@@ -405,7 +407,7 @@ _DIST_SCRIPT = textwrap.dedent(
     import numpy as np
     sys.path.insert(0, {tests!r})
     import test_screen as ts
-    from jaxspline.engine import screen
+    from jaxspline.screen import pairs as screen
     opt = ts.synthetic_options(np.random.default_rng(5), n_routes=12, per_route=4)
     # process_index / process_count come from jax.distributed
     tr = screen.screen_transitions(opt, ts.LIMITS, progress=False, chunk_size=64)
@@ -594,8 +596,8 @@ def test_sink_lazy_columns_and_list_fallback_agree():
         + [rng.normal(size=n) for _ in range(3)]
         for n in (5, 0, 7)
     ]
-    lazy = screen._Sink(12, np.float64, True, lazy=True)
-    plain = screen._Sink(12, np.float64, True)
+    lazy = transitions._Sink(12, np.float64, True, lazy=True)
+    plain = transitions._Sink(12, np.float64, True)
     for c in chunks:
         lazy.add_rows(c)
         plain.add_rows(c)
@@ -648,7 +650,7 @@ def test_row_top_k_matches_a_stable_sort(k):
     with picks past the row's last finite score marked not real (never duplicated)."""
     import jax
 
-    from jaxspline.engine.screen_fused import _row_top_k
+    from jaxspline.screen.fused import _row_top_k
 
     rng = np.random.default_rng(k)
     score = np.round(rng.normal(size=(300, 64)), 1)  # many exact ties

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from test_screen import LIMITS, synthetic_options
 
-from jaxspline.engine import screen
+from jaxspline.screen import pairs as screen
 
 _COLS = ("src", "dst", "T", "feasible", "margin", "effort", "t_min")
 _FLOATS = ("t_start", "t_end", "start_angle", "start_rate", "end_angle", "end_rate", "value")

@@ -1,6 +1,6 @@
 """Rest-to-rest (SlewTable) maneuver model on the fused screening engine.
 
-References: :func:`jaxspline.engine.models.pair_requirements` (numpy table lookup)
+References: :func:`jaxspline.screen.requirements.pair_requirements` (numpy table lookup)
 and an independent table rebuilt here from ``kernels.slew.bang_coast_bang_time`` +
 settle + gap margin on the same fine angle grid, read in numpy.
 """
@@ -14,12 +14,14 @@ import numpy as np
 import pytest
 from test_screen import synthetic_options
 
-from jaxspline.engine import models, screen, screen_fused
-from jaxspline.engine.mission import FlexMode, Satellite
 from jaxspline.geometry.frames import angle_between
 from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.slew import bang_coast_bang_time
+from jaxspline.planning.mission import FlexMode, Satellite
+from jaxspline.screen import fused as screen_fused
+from jaxspline.screen import models, requirements, transitions
+from jaxspline.screen import pairs as screen
 
 SETTLE, GAP_MARGIN, SIZE = 2.0, 0.5, 4096
 _COLS = ("src", "dst", "T", "feasible", "margin", "effort", "t_min")
@@ -93,7 +95,7 @@ def test_slew_table_screen_matches_numpy_references(model):
     tr = screen.screen_transitions(opt, table, progress=False, chunk_size=512)
     assert tr.src.size > 3000 and 0.1 < tr.feasible.mean() < 0.9
     # numpy reference of the planner: t_req where feasible, inf elsewhere
-    need = models.pair_requirements(sat, opt, tr.src, tr.dst, table)
+    need = requirements.pair_requirements(sat, opt, tr.src, tr.dst, table)
     np.testing.assert_array_equal(tr.feasible, np.isfinite(need))
     np.testing.assert_allclose(tr.t_min[tr.feasible], need[tr.feasible], rtol=1e-12, atol=0)
     # independent table from the slew kernel + settle + margin
@@ -122,7 +124,7 @@ def test_slew_table_screen_matches_numpy_references(model):
         np.testing.assert_array_equal(getattr(only, k), getattr(tr, k)[tr.feasible], err_msg=k)
     for k in (1, 3):
         best = screen.screen_transitions(opt, table, progress=False, top_k=k, chunk_size=16)
-        ref = screen.best_per_source(_rank(opt)[only.src], only.margin, k)
+        ref = transitions.best_per_source(_rank(opt)[only.src], only.margin, k)
         for c in _COLS:
             np.testing.assert_array_equal(getattr(best, c), getattr(only, c)[ref], err_msg=c)
     # the pairs entry point and the host path agree exactly with the fused path
@@ -194,7 +196,7 @@ def test_slew_table_value_errors():
 def test_slew_table_screen_sequences_match_a_numpy_composition(model):
     """Whole sequences under a SlewTable: first failure = first of (scan_ok false, route
     repeated, T <= 0 or T below the numpy table lookup of ``pair_requirements``)."""
-    from jaxspline.engine.screen_sequences import screen_sequences
+    from jaxspline.screen.sequences import screen_sequences
 
     sat = _sat(model)
     table = models.slew_table(sat, GAP_MARGIN, SIZE)
@@ -216,7 +218,7 @@ def test_slew_table_screen_sequences_match_a_numpy_composition(model):
         for p, j in enumerate(row):
             bad = not scan_ok[j] or opt.route[j] in opt.route[row[:p]]
             if p and not bad:
-                need = models.pair_requirements(sat, opt, [row[p - 1]], [j], table)[0]
+                need = requirements.pair_requirements(sat, opt, [row[p - 1]], [j], table)[0]
                 bad = not np.isfinite(need)
             if bad:
                 want_first[r] = p

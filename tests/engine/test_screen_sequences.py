@@ -16,12 +16,12 @@ import pytest
 from test_screen import LIMITS, synthetic_options
 
 import jaxspline
-from jaxspline.engine import screen
-from jaxspline.engine.options import RouteOptions
 from jaxspline.kernels import reach
+from jaxspline.screen import pairs as screen
+from jaxspline.screen.options import RouteOptions
 
-# the module (``jaxspline.engine.screen_sequences`` is the function after the re-export)
-seqmod = importlib.import_module("jaxspline.engine.screen_sequences")
+# the module (``jaxspline.screen.sequences`` is the function after the re-export)
+seqmod = importlib.import_module("jaxspline.screen.sequences")
 
 
 def reference_screen_sequences(options, sequences, limits):
@@ -228,7 +228,7 @@ def test_float32_tables_and_x64_off():
 
 def test_public_names_and_value_errors():
     f = seqmod.screen_sequences
-    assert jaxspline.screen_sequences is f and jaxspline.engine.screen_sequences is f
+    assert jaxspline.screen_sequences is f and jaxspline.screen.sequences is f
     assert jaxspline.__all__.count("screen_sequences") == 1
     assert not hasattr(screen, "screen_sequences")  # one home
     opt = _options()

@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
-from jaxspline.engine import screen, sequence
-from jaxspline.engine.options import RouteOptions, take_options
-from jaxspline.engine.steps_check import check_steps
+from jaxspline.planning import sequence
+from jaxspline.planning.steps_check import check_steps
+from jaxspline.screen import pairs as screen
+from jaxspline.screen.options import RouteOptions, take_options
 
 
 def brute_force(opt: RouteOptions, tr) -> float:

@@ -1,6 +1,6 @@
 """The rest-to-rest SlewTable is an upper bound of the exact slew time.
 
-Reference: :func:`jaxspline.engine.models.slew_time`, the exact profile time (slew
+Reference: :func:`jaxspline.screen.models.slew_time`, the exact profile time (slew
 kernel + settle + gap margin) that the plan's final check uses. The flexible
 profile's time is not monotone in the angle (SPEC section 2: profile A ends at
 ``7/6 omega^2/eps`` with ``sqrt(28/3) b`` and profile C starts there at ``3 b``), so a
@@ -19,12 +19,13 @@ import numpy as np
 import pytest
 
 import jaxspline
-from jaxspline.engine import models, screen
-from jaxspline.engine.mission import FlexMode, Satellite
-from jaxspline.engine.options import RouteOptions
 from jaxspline.geometry.frames import angle_between
 from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.planning.mission import FlexMode, Satellite
+from jaxspline.screen import models, requirements
+from jaxspline.screen import pairs as screen
+from jaxspline.screen.options import RouteOptions
 
 _SC = jaxspline.default_scenario()
 _GAP = float(_SC.planner.margins.gap)  # what planner.plan passes to slew_table
@@ -149,4 +150,4 @@ def test_slew_table_screen_lookup_never_below_the_plan_check(sat, size):
     assert (under > 0).sum() == 0, f"{(under > 0).sum()} pairs, up to {under.max():.3g} s"
     # the planner's numpy path (first_requirements, pair_requirements) likewise; its angle
     # formula differs from the screen's by rounding, so the cells may differ near 0
-    assert np.all(models.pair_requirements(sat, opt, src, dst, table) >= exact)
+    assert np.all(requirements.pair_requirements(sat, opt, src, dst, table) >= exact)

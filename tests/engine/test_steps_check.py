@@ -6,9 +6,10 @@ import numpy as np
 import pytest
 from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
-from jaxspline.engine import screen, sequence, steps_check
-from jaxspline.engine.options import RouteOptions, take_options
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.planning import sequence, steps_check
+from jaxspline.screen import pairs as screen
+from jaxspline.screen.options import RouteOptions, take_options
 
 
 def steps_of(opt, idx):

@@ -1,6 +1,6 @@
 """Area targets: schema and named errors, cutting, and the coverage report against references.
 
-References are independent of :mod:`jaxspline.areas`: the ground track's azimuth from
+References are independent of :mod:`jaxspline.io.areas`: the ground track's azimuth from
 finite differences of the sub-satellite point (spherical bearing formula); coverage of
 the cut strips by Monte Carlo points tested against every strip on the sphere; and the
 covered fraction of a plan rebuilt with shapely from the *observations' geometry* (the
@@ -16,10 +16,7 @@ import pytest
 import shapely
 from shapely.geometry import LineString, Polygon
 
-from jaxspline.areas import area_coverage, coverage_line
-from jaxspline.areas_io import read_geojson
 from jaxspline.cli import main
-from jaxspline.engine.planner import orbit_scene, plan
 from jaxspline.geometry.frames import (
     earth_rotation_angle,
     ecef_to_geodetic,
@@ -29,7 +26,10 @@ from jaxspline.geometry.frames import (
 from jaxspline.geometry.orbit import orbit_position
 from jaxspline.geometry.pointing import aim_geometry, aim_params
 from jaxspline.geometry.routes import strip_direction
-from jaxspline.scenario import load_scenario
+from jaxspline.io.areas import area_coverage, coverage_line
+from jaxspline.io.areas_io import read_geojson
+from jaxspline.io.scenario import load_scenario
+from jaxspline.planning.planner import orbit_scene, plan
 
 HEAD = """
 [scenario]
@@ -357,7 +357,7 @@ def test_area_without_pass_and_without_targets_is_an_error(tmp_path):
     ],
 )
 def test_passes_group_into_cuttings(axes_deg, want):
-    from jaxspline.areas import _cuttings
+    from jaxspline.io.areas import _cuttings
 
     got = _cuttings(np.radians(axes_deg))
     assert [c for _, c in got] == [c for _, c in want]
@@ -367,7 +367,7 @@ def test_passes_group_into_cuttings(axes_deg, want):
 
 
 def test_example_scenario_file():
-    from jaxspline.scenario import DEFAULT_SCENARIO_PATH
+    from jaxspline.io.scenario import DEFAULT_SCENARIO_PATH
 
     sc = load_scenario(DEFAULT_SCENARIO_PATH.parent / "areas_example.toml")
     assert [a.name for a in sc.areas] == ["central-slovenia", "karst"]

@@ -19,10 +19,10 @@ import re
 
 import pytest
 
-from jaxspline.aem import aem_file_name
 from jaxspline.cli import main
-from jaxspline.cli_plan import ATTITUDE_FIGURE, OUTPUT_FILES
-from jaxspline.plan_html import HTML_FILE
+from jaxspline.cli.plan import ATTITUDE_FIGURE, OUTPUT_FILES
+from jaxspline.io.plan_html import HTML_FILE
+from jaxspline.ops.aem import aem_file_name
 
 EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)
 DURATION_S = 1800.0

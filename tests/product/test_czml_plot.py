@@ -6,12 +6,12 @@ import json
 import numpy as np
 import pytest
 
-from jaxspline.czml import write_czml
-from jaxspline.engine.mission import Satellite, Scenario, make_targets
-from jaxspline.engine.result import Observations, PlanResult
 from jaxspline.geometry.orbit import circular_orbit
+from jaxspline.io.czml import write_czml
+from jaxspline.io.plot_plan import plot_plan_ground_tracks, plot_plan_slack, plot_plan_timeline
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.plot_plan import plot_plan_ground_tracks, plot_plan_slack, plot_plan_timeline
+from jaxspline.planning.mission import Satellite, Scenario, make_targets
+from jaxspline.planning.result import Observations, PlanResult
 
 ISS_TLE = (
     "1 25544U 98067A   26103.50000000  .00016717  00000-0  10270-3 0  9005",

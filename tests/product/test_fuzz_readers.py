@@ -51,10 +51,10 @@ from _fuzz_inputs import (
 )
 
 from jaxspline.aeossp.case import Case, load_case
-from jaxspline.areas_io import read_geojson
-from jaxspline.engine.mission import Scenario, Targets
 from jaxspline.geometry.orbit import CircularOrbit
-from jaxspline.scenario import load_scenario, load_targets_csv
+from jaxspline.io.areas_io import read_geojson
+from jaxspline.io.scenario import load_scenario, load_targets_csv
+from jaxspline.planning.mission import Scenario, Targets
 
 # --- no writes: an audit hook, active only while a reader runs ---
 

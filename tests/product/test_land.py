@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from jaxspline.land import is_land
+from jaxspline.io.land import is_land
 
 
 def test_is_land_equals_the_package_on_random_points():

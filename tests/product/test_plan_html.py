@@ -25,14 +25,14 @@ import shutil
 import numpy as np
 import pytest
 
-from jaxspline.areas import area_coverage
 from jaxspline.cli import main
-from jaxspline.engine.mission import Area, Satellite, Scenario, make_targets
-from jaxspline.engine.result import Observations, PlanResult
 from jaxspline.geometry.orbit import circular_orbit
+from jaxspline.io.areas import area_coverage
+from jaxspline.io.plan_html import PASS_PAD_S, plan_document, read_plan
+from jaxspline.io.plan_view import view_data
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.plan_html import PASS_PAD_S, plan_document, read_plan
-from jaxspline.plan_view import view_data
+from jaxspline.planning.mission import Area, Satellite, Scenario, make_targets
+from jaxspline.planning.result import Observations, PlanResult
 
 ISS_TLE = (
     "1 25544U 98067A   26103.50000000  .00016717  00000-0  10270-3 0  9005",

@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 from jaxspline import load_scenario
-from jaxspline.engine.mission import STRIP
-from jaxspline.land import is_land
+from jaxspline.io.land import is_land
+from jaxspline.planning.mission import STRIP
 
 ROOT = Path(__file__).resolve().parents[2]
 DATA = ROOT / "jaxspline" / "data"

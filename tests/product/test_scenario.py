@@ -7,15 +7,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jaxspline.engine.mission import POINT, STRIP
 from jaxspline.geometry.orbit import CircularOrbit, sso_inclination, tabulate_orbits
-from jaxspline.scenario import (
+from jaxspline.io.scenario import (
     DEFAULT_SCENARIO_PATH,
     default_scenario,
     load_scenario,
     load_targets_csv,
     parse_scenario,
 )
+from jaxspline.planning.mission import POINT, STRIP
 
 EXAMPLE = Path(__file__).resolve().parents[2] / "scripts" / "example_scenario.toml"
 TLE = [

@@ -15,9 +15,9 @@ from pathlib import Path
 
 import pytest
 
-from jaxspline.engine.planner import build_problem
-from jaxspline.engine.search import BoundWorker, solve, upper_bound
-from jaxspline.scenario import load_scenario
+from jaxspline.io.scenario import load_scenario
+from jaxspline.planning.planner import build_problem
+from jaxspline.search import BoundWorker, solve, upper_bound
 
 sys.path.insert(0, str(Path(__file__).parents[2] / "product"))
 from test_cli_plan import SMALL  # noqa: E402

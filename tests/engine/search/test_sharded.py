@@ -24,18 +24,18 @@ import jax
 import numpy as np
 import pytest
 
-from jaxspline.engine.plan_check import check_plan
-from jaxspline.engine.planner import build_problem
-from jaxspline.engine.repair import drop_failing
-from jaxspline.engine.search import solve, upper_bound
-from jaxspline.engine.search.sharded import (
+from jaxspline.io.scenario import load_scenario
+from jaxspline.planning.plan_check import check_plan
+from jaxspline.planning.planner import build_problem
+from jaxspline.planning.repair import drop_failing
+from jaxspline.search import solve, upper_bound
+from jaxspline.search.sharded import (
     owned_satellites,
     restrict_tasks,
     sharded_plan,
     sharded_upper_bound,
     task_owners,
 )
-from jaxspline.scenario import load_scenario
 
 sys.path.insert(0, str(Path(__file__).parents[2] / "product"))
 from test_cli_plan import SMALL  # noqa: E402

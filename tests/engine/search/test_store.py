@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from jaxspline.engine.search.store import NearPairs, PairsBuilder, start_order
+from jaxspline.search.store import NearPairs, PairsBuilder, start_order
 
 
 def _random_pairs(rng, n_sats=3, per_sat=60, density=0.3):

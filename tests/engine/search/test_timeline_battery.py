@@ -18,9 +18,9 @@ import numpy as np
 import pytest
 
 from jaxspline.aeossp.adapter import AEOSSP_MARGINS
-from jaxspline.engine.mission import Power
-from jaxspline.engine.search import BatteryModel, Problem, Timeline
-from jaxspline.engine.search.store import NearPairs
+from jaxspline.planning.mission import Power
+from jaxspline.search import BatteryModel, Problem, Timeline
+from jaxspline.search.store import NearPairs
 
 DT = 5.0  # [s] battery step
 TIE = 1e-7  # [Wh] levels this close to the margin are not compared (rounding)
