@@ -15,7 +15,8 @@ __all__ = ["plot_ground_track", "plot_attitude", "plot_margins", "save_figure"]
 _CH = ("roll", "pitch", "yaw")
 
 
-def _plt():
+def pyplot():
+    """matplotlib.pyplot on the Agg backend, imported on first use (plots are optional)."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -35,7 +36,7 @@ def save_figure(fig, path) -> None:
         with atomic_path(path, suffix=".tmp.png") as tmp:
             fig.savefig(tmp, dpi=110)
     finally:
-        _plt().close(fig)
+        pyplot().close(fig)
 
 
 def plot_ground_track(
@@ -68,7 +69,7 @@ def plot_ground_track(
       visible: bool [R], routes with at least one feasible option (None: all).
       track_t: float [M], times of the track points [s] (labelled every 100 s).
     """
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(10, 8))
     d = np.degrees
     r = np.arange(len(cand_lat))
@@ -163,7 +164,7 @@ def plot_attitude(path, t, angle, rate, accel, rate_limit, accel_limit, scans, t
       scans: list of (t_start, t_end) [s], shaded as imaging.
       title: figure title.
     """
-    plt = _plt()
+    plt = pyplot()
     fig, axes = plt.subplots(3, 3, figsize=(13, 8), sharex=True)
     d = np.degrees
     rows = (
@@ -204,7 +205,7 @@ def plot_margins(path, margins, chosen_before=None, chosen_after=None, title="")
       chosen_after: float [K-1], the same after refinement [rad].
       title: figure title.
     """
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(8, 4.5))
     m = np.degrees(np.asarray(margins, np.float64))
     m = m[np.isfinite(m)]

@@ -16,7 +16,7 @@ import jax
 import numpy as np
 
 from jaxspline.io.czml import SATELLITE_COLORS
-from jaxspline.io.plot import _plt, save_figure
+from jaxspline.io.plot import pyplot, save_figure
 from jaxspline.ops.attitude_history import PHASES, plan_scene
 from jaxspline.planning.attitude_laws import state_angles
 from jaxspline.planning.joins import join_limits
@@ -69,7 +69,7 @@ def plot_attitude_profile(result, attitude, path) -> None:
       attitude: :class:`PlanAttitude` of the plan.
       path: str or Path of the image (written atomically).
     """
-    plt = _plt()
+    plt = pyplot()
     sc = result.scenario
     with jax.enable_x64(True):
         scene = plan_scene(sc)

@@ -17,7 +17,7 @@ import numpy as np
 from jaxspline.geometry.frames import ecef_to_geodetic
 from jaxspline.io.czml import SATELLITE_COLORS, satellite_tracks
 from jaxspline.io.land import land_fraction
-from jaxspline.io.plot import _plt, save_figure
+from jaxspline.io.plot import pyplot, save_figure
 
 __all__ = ["land_fraction", "plot_plan_ground_tracks", "plot_plan_slack", "plot_plan_timeline"]
 
@@ -67,7 +67,7 @@ def plot_plan_ground_tracks(result, path, *, step: float = 30.0) -> None:
       path: str or Path of the image.
       step: track sampling step [s].
     """
-    plt = _plt()
+    plt = pyplot()
     sc = result.scenario
     obs = result.observations
     t, r, ok = satellite_tracks(sc, step)
@@ -123,7 +123,7 @@ def plot_plan_timeline(result, path) -> None:
       result: PlanResult.
       path: str or Path of the image.
     """
-    plt = _plt()
+    plt = pyplot()
     sc = result.scenario
     obs = result.observations
     battery = {k: v for k, v in (result.battery or {}).items() if len(v[0])}
@@ -195,7 +195,7 @@ def plot_plan_slack(result, path) -> None:
       result: PlanResult.
       path: str or Path of the image.
     """
-    plt = _plt()
+    plt = pyplot()
     sc = result.scenario
     obs = result.observations
     slack = np.asarray(obs.slack, np.float64)

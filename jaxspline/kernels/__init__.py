@@ -7,7 +7,9 @@
 ``channel_join`` (peaks of the channel-wise degree-7 join),
 ``retarget_channel`` / ``retarget`` (minimum-peak control: one channel, 3-D).
 Private helpers: ``_safe`` (numerical guards), ``_validate`` (eager input checks),
-``_batch`` (batching, padding, chunks). Kernels import nothing above this package.
+``_batch`` (batching, padding, chunks).
+
+Layer 0: imports nothing of the package outside this folder.
 """
 
 from jaxspline.kernels import (

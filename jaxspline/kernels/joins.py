@@ -307,8 +307,12 @@ def _rates_sq(s, d1, d2, d3):
     return 4.0 * _cdot(w, w), 4.0 * _cdot(e, e), 4.0 * _cdot(j, j)
 
 
-# the whole join as one constant map: c = _HERMITE @ (p0, p0_τ, p0_ττ, p0_τττ, p1, ..., p1_τττ)
-_HERMITE = _exact_inverse([[_dmono(k, d, e) for k in range(8)] for e in (0, 1) for d in range(4)])
+# the whole join as one constant map: c = HERMITE_MAP @ (p0, p0_τ, p0_ττ, p0_τττ, p1, ..., p1_τττ)
+HERMITE_MAP = _exact_inverse(
+    [[_dmono(k, d, e) for k in range(8)] for e in (0, 1) for d in range(4)]
+)
+"""The degree-7 join as one exact 8x8 map from the end derivatives (value and three
+derivatives at tau = 0 and 1) to the monomial coefficients."""
 
 
 def _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples):
@@ -323,7 +327,7 @@ def _check(q0, w0, e0, j0, q1, w1, e1, j1, T, rate, accel, jerk, n_samples):
     db = _cmrp_derivs(s1, *cq[5:8])
     # boundary derivatives with respect to τ = t/T, then the constant Hermite map
     sc = (Ts, T2, T2 * Ts)
-    H = _HERMITE.tolist()
+    H = HERMITE_MAP.tolist()
     c = []
     for i in range(3):
         b = (s0[i], *(sc[k] * da[k][i] for k in range(3)))

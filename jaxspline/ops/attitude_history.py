@@ -27,7 +27,7 @@ from jaxspline.kernels.joins import Maneuver, maneuver_eval
 from jaxspline.planning.attitude_laws import LAW_POINTING, LAW_ZERO_YAW, NADIR_LAW, law_states
 from jaxspline.planning.joins import NADIR, Joins, join_summary, plan_joins
 from jaxspline.planning.mission import STRIP
-from jaxspline.planning.opportunities import _aim_laws
+from jaxspline.planning.opportunities import aim_laws
 from jaxspline.planning.planner import orbit_scene
 
 __all__ = ["PHASES", "AttitudeHistory", "PlanAttitude", "attitude_history", "plan_scene"]
@@ -90,7 +90,7 @@ def plan_scene(sc) -> Scene:
 
 def observation_laws(sc, target, speed) -> np.ndarray:
     """Aim laws [K, 8] of observations (targets [K], scan speeds [K] [m/s], 0 for points)."""
-    laws = _aim_laws(sc)
+    laws = aim_laws(sc)
     speeds = np.array([lw[0] for lw in laws])
     target, speed = np.asarray(target, np.int64), np.asarray(speed, np.float64)
     strip = sc.targets.kind[target] == STRIP

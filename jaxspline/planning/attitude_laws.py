@@ -33,8 +33,8 @@ import numpy as np
 
 from jaxspline.geometry.frames import R_EARTH
 from jaxspline.geometry.orbit import orbit_state
-from jaxspline.kernels.attitude import _dcm2q, _q2dcm
-from jaxspline.planning.opportunities import _state_batched, evaluate
+from jaxspline.kernels.attitude import dcm_to_quat_kernel, quat_to_dcm_kernel
+from jaxspline.planning.opportunities import evaluate, state_batched
 
 __all__ = [
     "LAW_NADIR",
@@ -177,7 +177,7 @@ def compose(ang, rate, acc, b, w, wd):
       (q float [4], ω float [3] [rad/s], ε float [3] [rad/s^2]), body -> TEME.
     """
     omega, eps = jax.jvp(_body_rate, (ang, rate, w), (rate, acc, wd))
-    return _dcm2q(b.T @ dcm_from_angles(ang)), omega, eps
+    return dcm_to_quat_kernel(b.T @ dcm_from_angles(ang)), omega, eps
 
 
 def decompose(q, omega, eps, b, w, wd):
@@ -196,7 +196,7 @@ def decompose(q, omega, eps, b, w, wd):
     Returns:
       (angles [rad], rates [rad/s], accelerations [rad/s^2]), float [3] each.
     """
-    ang = angles_from_dcm(b @ _q2dcm(q))
+    ang = angles_from_dcm(b @ quat_to_dcm_kernel(q))
     rate, acc = jax.jvp(lambda a, o, ww: _angle_rate(a, o, ww), (ang, omega, w), (
         _angle_rate(ang, omega, w), eps, wd))  # fmt: skip
     return ang, rate, acc
@@ -259,7 +259,7 @@ def law_states(scene, sat, law, t0, t, jerk: bool = True):
     keep = np.stack([law[:, 8] != LAW_NADIR] * 2 + [law[:, 8] == LAW_POINTING], -1)
 
     def at(tt):
-        state = evaluate(_state_batched, scene, sat, law[:, :8], t0, tt)
+        state = evaluate(state_batched, scene, sat, law[:, :8], t0, tt)
         ang, rate, acc = (np.where(keep, x, 0.0) for x in state)
         b, w, wd = frame_rates(scene, sat, tt)
         x = np.concatenate([ang, rate, acc, w, wd, b.reshape(-1, 9)], -1)

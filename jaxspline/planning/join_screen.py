@@ -49,7 +49,7 @@ from jaxspline.kernels._batch import map_chunked
 from jaxspline.kernels.channel_join import DEFAULT_JOIN_SAMPLES, channel_join_peaks
 from jaxspline.planning.attitude_laws import JERK_STEP_S
 from jaxspline.planning.joins import DIRECT_MAX_S, RETURN_S, SAMPLING_MARGIN, join_limits
-from jaxspline.planning.opportunities import _state_batched, evaluate
+from jaxspline.planning.opportunities import evaluate, state_batched
 
 __all__ = [
     "JOIN_FAR_SAFETY",
@@ -101,7 +101,7 @@ def channel_states(scene, sats, opp) -> ChannelStates:
     t0 = np.asarray(o.t_start, np.float64)
 
     def at(t):
-        state = evaluate(_state_batched, scene, sat, opp.params, t0, t)
+        state = evaluate(state_batched, scene, sat, opp.params, t0, t)
         return [np.where(keep, x, 0.0) for x in state]
 
     def full(t):

@@ -36,7 +36,7 @@ from jaxspline.geometry.frames import (
     sun_direction,
     sun_elevation,
 )
-from jaxspline.geometry.pointing import Scene, _aim_point, aim_geometry, aim_params, aim_state
+from jaxspline.geometry.pointing import Scene, aim_geometry, aim_params, aim_point, aim_state
 from jaxspline.geometry.routes import strip_direction
 from jaxspline.geometry.windows import Windows
 from jaxspline.kernels._batch import map_chunked, ragged_positions
@@ -87,8 +87,10 @@ def _state(scene, sat, p, t0, t):
     return ang, rate, acc
 
 
-_geometry_batched = jax.jit(jax.vmap(_geometry, in_axes=(None, 0, 0, 0, 0)))
-_state_batched = jax.jit(jax.vmap(_state, in_axes=(None, 0, 0, 0, 0)))
+geometry_batched = jax.jit(jax.vmap(_geometry, in_axes=(None, 0, 0, 0, 0)))
+"""``aim_geometry`` batched over (sat, law, t0, t) for :func:`evaluate`."""
+state_batched = jax.jit(jax.vmap(_state, in_axes=(None, 0, 0, 0, 0)))
+"""``aim_state`` (angles, rates, accelerations) batched like :data:`geometry_batched`."""
 
 
 def evaluate(fn, scene: Scene, sat, p, t0, t):
@@ -114,7 +116,7 @@ def evaluate(fn, scene: Scene, sat, p, t0, t):
     return map_chunked(lambda *a: fn(scene, *(jnp.asarray(x) for x in a)), args, _CHUNK)
 
 
-def _aim_laws(sc: Scenario):
+def aim_laws(sc: Scenario):
     """Per scan speed: (speed [m/s], aim laws [R, 8], durations [R] [s])."""
     tg = sc.targets
     g0 = np.asarray(geodetic_to_ecef(tg.lat, tg.lon, tg.alt))
@@ -140,9 +142,9 @@ def reference_points(sc: Scenario) -> np.ndarray:
       numpy float [R, 3], Earth-fixed points [m].
     """
     tg = sc.targets
-    _, p, _ = _aim_laws(sc)[0]
+    _, p, _ = aim_laws(sc)[0]
     half = (tg.length / 2.0) / np.linalg.norm(p[:, :3], axis=-1)
-    mid = np.asarray(jax.vmap(_aim_point)(jnp.asarray(p), jnp.asarray(half))[0])
+    mid = np.asarray(jax.vmap(aim_point)(jnp.asarray(p), jnp.asarray(half))[0])
     return np.where((tg.kind == STRIP)[:, None], mid, p[:, :3])
 
 
@@ -196,7 +198,7 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     pc = sc.planner
     step, gstep = pc.time_step, pc.geometry_step
     tg = sc.targets
-    laws = _aim_laws(sc)
+    laws = aim_laws(sc)
     sats = sc.satellites
     limit = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
     per_ch = np.array([s.model == "per_channel" for s in sats])
@@ -242,11 +244,11 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     if idx.size:
         owner, ts = observation_samples(t0[idx], t1[idx], gstep)
         o = idx[owner]
-        offn, elev, _, _ = evaluate(_geometry_batched, scene, sat[o], params[o], t0[o], ts)
+        offn, elev, _, _ = evaluate(geometry_batched, scene, sat[o], params[o], t0[o], ts)
         good = (offn <= limit[sat[o]]) & (elev > pc.margins.horizon) & table_ok(sat[o], ts)
         if per_ch.any():
             pcm = per_ch[sat[o]]
-            res = evaluate(_state_batched, scene, sat[o][pcm], params[o][pcm], t0[o][pcm], ts[pcm])
+            res = evaluate(state_batched, scene, sat[o][pcm], params[o][pcm], t0[o][pcm], ts[pcm])
             if res is not None:
                 _, rate, acc = res
                 rl, al = _limit_table(sats, "rate"), _limit_table(sats, "accel")
@@ -267,21 +269,23 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     sat, tgt, t0, t1, speed, params = sat[sel], tgt[sel], t0[sel], t1[sel], speed[sel], params[sel]
     order = np.lexsort((tgt, t0, sat))
     sat, tgt, t0, t1, speed, params = (x[order] for x in (sat, tgt, t0, t1, speed, params))
-    return Opportunities(_states(sc, scene, sat, tgt, t0, t1, params, per_ch), speed, params)
+    return Opportunities(option_states(sc, scene, sat, tgt, t0, t1, params, per_ch), speed, params)
 
 
-def _states(sc, scene, sat, tgt, t0, t1, params, per_ch) -> RouteOptions:
+def option_states(sc, scene, sat, tgt, t0, t1, params, per_ch) -> RouteOptions:
+    """The option table of given options: boundary lines of sight and nadirs, and (with
+    ``per_ch``) the boundary attitude states per channel."""
     n = sat.size
     zeros = np.zeros((n, 3))
-    st = evaluate(_geometry_batched, scene, sat, params, t0, t0)
-    en = evaluate(_geometry_batched, scene, sat, params, t0, t1)
+    st = evaluate(geometry_batched, scene, sat, params, t0, t0)
+    en = evaluate(geometry_batched, scene, sat, params, t0, t1)
     los0, nad0 = (st[2], st[3]) if n else (zeros, zeros)
     los1 = en[2] if n else zeros
     a0, r0, a1, r1 = zeros.copy(), zeros.copy(), zeros.copy(), zeros.copy()
     m = per_ch[sat] if n else np.zeros(0, bool)
     if m.any():
-        s0 = evaluate(_state_batched, scene, sat[m], params[m], t0[m], t0[m])
-        s1 = evaluate(_state_batched, scene, sat[m], params[m], t0[m], t1[m])
+        s0 = evaluate(state_batched, scene, sat[m], params[m], t0[m], t0[m])
+        s1 = evaluate(state_batched, scene, sat[m], params[m], t0[m], t1[m])
         a0[m], r0[m], a1[m], r1[m] = s0[0], s0[1], s1[0], s1[1]
     return RouteOptions(
         route=tgt,

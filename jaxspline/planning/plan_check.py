@@ -32,7 +32,7 @@ from jaxspline.geometry.frames import angle_between
 from jaxspline.kernels._batch import pad_rows, round_up
 from jaxspline.kernels.reach_durations import min_transfer_time
 from jaxspline.planning.mission import Scenario
-from jaxspline.planning.opportunities import _geometry_batched, evaluate, observation_samples
+from jaxspline.planning.opportunities import evaluate, geometry_batched, observation_samples
 from jaxspline.planning.steps_check import check_steps
 from jaxspline.screen.models import REST_TO_REST, slew_time
 from jaxspline.screen.options import RouteOptions, take_options
@@ -78,7 +78,7 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
     # --- geometry at every sample
     owner, ts = observation_samples(t0, t1, step, tol=0.0)
     offn, elev, _, _ = evaluate(
-        _geometry_batched, scene, sat[owner], opp.params[chosen][owner], t0[owner], ts
+        geometry_batched, scene, sat[owner], opp.params[chosen][owner], t0[owner], ts
     )
     lim = np.array([s.off_nadir_max for s in sc.satellites])
     ok_s = (offn <= lim[sat[owner]]) & (elev > 0.0) & table_ok(sat[owner], ts)

@@ -22,7 +22,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.planning.opportunities import Opportunities, _states
+from jaxspline.planning.opportunities import Opportunities, option_states
 from jaxspline.planning.refine import refine_plan
 from jaxspline.planning.sequence import Plan
 from jaxspline.screen.options import take_options
@@ -60,7 +60,7 @@ class _QuadraticStarts(NamedTuple):
 
 def _exact(sc, scene, o, opp, ids, t0, per_ch):
     dur = np.asarray(o.t_end)[ids] - np.asarray(o.t_start)[ids]
-    return _states(
+    return option_states(
         sc,
         scene,
         np.asarray(o.sat)[ids],

@@ -213,7 +213,7 @@ class BoundResult:
     status: str
 
 
-class _Prices:
+class Prices:
     """Projected Polyak subgradient iteration on the prices (shared by both users).
 
     ``lam`` holds the task prices, then (``energy``) the prices of the energy budgets
@@ -321,7 +321,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     best_w = tl.W
     if pb.n_options == 0:
         return BoundResult(best, 0.0, 0, "optimal")
-    pr = _Prices(pb, energy=True)
+    pr = Prices(pb, energy=True)
     status = "time"
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
@@ -361,7 +361,7 @@ def upper_bound(
     """
     if pb.n_options == 0:
         return BoundResult([], 0.0, 0, "optimal")
-    pr = _Prices(pb, energy=energy)
+    pr = Prices(pb, energy=energy)
     status = "time"
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         pr.solve_dp()

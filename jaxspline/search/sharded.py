@@ -51,7 +51,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jaxspline.search import Timeline, clock, greedy, lns, solve
-from jaxspline.search.lagrangian import BoundResult, _Prices, dp_paths
+from jaxspline.search.lagrangian import BoundResult, Prices, dp_paths
 from jaxspline.search.problem import Problem
 from jaxspline.search.store import NearPairs
 
@@ -108,8 +108,8 @@ def jax_allgather(x: np.ndarray) -> np.ndarray:
     return np.asarray(multihost_utils.process_allgather(np.asarray(x)), np.float64)
 
 
-class _ShardPrices(_Prices):
-    """:class:`_Prices` whose DP covers the owned satellites and whose totals are gathered."""
+class _ShardPrices(Prices):
+    """:class:`Prices` whose DP covers the owned satellites and whose totals are gathered."""
 
     def __init__(self, pb: Problem, sat_ids, n_sats: int, allgather):
         super().__init__(pb, energy=False)

@@ -228,7 +228,7 @@ def test_float32_tables_and_x64_off():
 
 def test_public_names_and_value_errors():
     f = seqmod.screen_sequences
-    assert jaxspline.screen_sequences is f and jaxspline.screen.sequences is f
+    assert jaxspline.screen_sequences is f and jaxspline.screen.screen_sequences is f
     assert jaxspline.__all__.count("screen_sequences") == 1
     assert not hasattr(screen, "screen_sequences")  # one home
     opt = _options()
