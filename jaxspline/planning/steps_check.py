@@ -3,7 +3,7 @@
 Words: *validate* is the eager check of arguments (ValueError); *check* is an
 independent re-check of a result, returned as a report (this module,
 :mod:`jaxspline.planning.plan_check`, :mod:`jaxspline.aeossp.check`,
-:func:`jaxspline.kernels.joins.maneuver_check`).
+:func:`jaxspline.kernels.join_check.maneuver_check`).
 
 The screening engine decides feasibility with closed-form kernels; this module
 does not trust that verdict. For each transition of a plan it rebuilds the
