@@ -558,4 +558,4 @@ def write_plan_html(doc, path, *, force: bool = False) -> Path:
     return atomic_write_text(path, text, force=force)
 
 
-_result.HTML_WRITERS.append(write_plan_html)  # PlanResult.to_html (the engine never imports us)
+_result.HTML_WRITERS.append(write_plan_html)  # PlanResult.to_html (planning never imports io)

@@ -1,4 +1,4 @@
-"""What a planning problem is: satellites, targets, planner settings (engine-level data types).
+"""What a planning problem is: satellites, targets, planner settings (the planner's data types).
 
 A :class:`Scenario` is everything :func:`jaxspline.plan` needs; the product layer
 builds it from TOML/CSV files (:mod:`jaxspline.io.scenario`) and the aeossp adapter from a

@@ -22,7 +22,7 @@ differentiable :class:`jaxspline.screen.options.RouteModel`. The best iterate
 
 The geometry layer provides the real RouteModel
 (:class:`jaxspline.geometry.routes.RouteSet`); the tests use a linear toy
-(tests/engine/_ref_refine.py).
+(tests/planning/_ref_refine.py).
 """
 
 from __future__ import annotations

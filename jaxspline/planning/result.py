@@ -23,7 +23,7 @@ __all__ = ["Observations", "PlanResult"]
 
 #: Writers of the plan's web page, ``writer(result, path, force=...)``, for
 #: :meth:`PlanResult.to_html`: the product layer's :mod:`jaxspline.io.plan_html` (imported
-#: by ``import jaxspline``) appends its own; the engine never imports the product.
+#: by ``import jaxspline``) appends its own; planning never imports io (it sits above).
 HTML_WRITERS: list = []
 
 

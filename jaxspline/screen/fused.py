@@ -5,7 +5,7 @@
 Each source's run of destinations is cut into rows of ``width`` slots; the
 time-sorted option table goes to the devices once, and chunk k costs its ``rows``
 rows of the row table. One program screens a chunk with the model's pair function
-(the same one as the host path's ``screen_host._chunk_program``,
+(the same one as the host path's ``host._chunk_program``,
 :mod:`jaxspline.screen.pair_models`), a second compacts the kept rows to the
 front. :func:`fused_chunks` yields the compacted chunks one by one, with one chunk
 in flight on the devices.

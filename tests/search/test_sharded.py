@@ -37,7 +37,7 @@ from jaxspline.search.sharded import (
     task_owners,
 )
 
-sys.path.insert(0, str(Path(__file__).parents[2] / "product"))
+sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from test_cli_plan import SMALL  # noqa: E402
 
 TARGET = 100.0

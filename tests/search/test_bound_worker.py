@@ -19,7 +19,7 @@ from jaxspline.io.scenario import load_scenario
 from jaxspline.planning.planner import build_problem
 from jaxspline.search import BoundWorker, solve, upper_bound
 
-sys.path.insert(0, str(Path(__file__).parents[2] / "product"))
+sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from test_cli_plan import SMALL  # noqa: E402
 
 TARGET = 100.0

@@ -17,7 +17,7 @@ every ``open`` for writing, rename, removal or directory creation while a reader
 
 Areas across the antimeridian are refused with the remedy in the message (two areas,
 one each side), and that remedy is checked to cut both halves where they are. The
-generators live in ``_fuzz_inputs.py``; ``python tests/product/test_fuzz_readers.py``
+generators live in ``_fuzz_inputs.py``; ``python tests/io/test_fuzz_readers.py``
 prints a summary of the failing cases by kind.
 
 The baseline results are parsed once per test; no plan is built. The random targets
@@ -414,7 +414,7 @@ def test_areas_either_side_of_the_antimeridian_are_cut_in_place(tmp_path):
         assert np.all(dlon < 0.6) and np.all(np.abs(lat - 10.4) < 0.6), (lon, lat)
 
 
-if __name__ == "__main__":  # python tests/product/test_fuzz_readers.py: the failure summary
+if __name__ == "__main__":  # python tests/io/test_fuzz_readers.py: the failure summary
     import tempfile
 
     with tempfile.TemporaryDirectory() as tmp:
