@@ -1,17 +1,18 @@
-"""The ``jaxspline`` command line: the parser, the sub-command registry and :func:`main`.
-
-Layer 7: may import everything below (``kernels`` ... ``io``); only the ``aeossp``
-adapter sits above, and its sub-command is registered by name (``_SUBCOMMANDS``), not
-imported here. One module per sub-command: ``plan`` (``jaxspline plan``), ``bound``
-(``jaxspline bound``), ``view`` (``jaxspline view``). The entry point lives in this
-``__init__`` so the console script ``jaxspline = "jaxspline.cli:main"`` and
-``python -m jaxspline.cli`` (``__main__``) keep working.
+"""The ``jaxspline`` command line.
 
 Compiled programs are kept between runs in a persistent XLA cache (a run of the
 default job compiles ~160 programs, 20-40 s on 2 cores, most of its first run):
 ``$JAXSPLINE_CACHE_DIR``, else ``$XDG_CACHE_HOME/jaxspline/xla`` (``~/.cache`` when
 unset). ``JAXSPLINE_CACHE_DIR=off`` (or empty) disables it; a cache directory set for
 JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left alone.
+
+This package: the parser, the sub-command registry and :func:`main`. Layer 7: may
+import everything below (``kernels`` ... ``io``); only the ``aeossp`` adapter sits above,
+and its sub-command is registered by name (``_SUBCOMMANDS``), not imported here. One
+module per sub-command: ``plan`` (``jaxspline plan``), ``bound`` (``jaxspline bound``),
+``view`` (``jaxspline view``). The entry point lives in this ``__init__`` so the console
+script ``jaxspline = "jaxspline.cli:main"`` and ``python -m jaxspline.cli``
+(``__main__``) keep working.
 """
 
 from __future__ import annotations
@@ -27,6 +28,8 @@ __all__ = ["CACHE_ENV", "cache_dir", "main"]
 
 CACHE_ENV = "JAXSPLINE_CACHE_DIR"
 _CACHE_OFF = ("", "off", "0", "none")
+# the command's help: the docstring up to the package notes
+_DESCRIPTION = __doc__[: __doc__.index("\n\nThis package:")]
 
 
 def cache_dir() -> Path | None:
@@ -73,7 +76,7 @@ def build_parser() -> argparse.ArgumentParser:
     """The argument parser of the ``jaxspline`` command (sub-commands register here)."""
     import importlib
 
-    parser = argparse.ArgumentParser(prog="jaxspline", description=__doc__)
+    parser = argparse.ArgumentParser(prog="jaxspline", description=_DESCRIPTION)
     sub = parser.add_subparsers(dest="command", required=True)
     for name in _SUBCOMMAND_MODULES:
         importlib.import_module(name).register(sub)
