@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
 from _ref_refine import LinearRouteModel
-from test_screen import reach_kernels, ref_reachable  # noqa: F401
 
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planning import refine, sequence
 from jaxspline.screen import pairs as screen
+
+# the screening fixtures and references live with the screen tests
+sys.path.insert(0, str(Path(__file__).parents[1] / "screen"))
+from test_screen import reach_kernels, ref_reachable  # noqa: E402, F401
 
 LIM = AxisLimits(rate=np.array([0.05, 0.05]), accel=np.array([0.01, 0.01]))
 

@@ -3,15 +3,20 @@
 from __future__ import annotations
 
 import functools
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
-from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
 from jaxspline.planning import sequence
 from jaxspline.planning.steps_check import check_steps
 from jaxspline.screen import pairs as screen
 from jaxspline.screen.options import RouteOptions, take_options
+
+# the screening fixtures and references live with the screen tests
+sys.path.insert(0, str(Path(__file__).parents[1] / "screen"))
+from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: E402, F401
 
 
 def brute_force(opt: RouteOptions, tr) -> float:

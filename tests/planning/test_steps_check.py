@@ -2,14 +2,20 @@
 
 from __future__ import annotations
 
+import sys
+from pathlib import Path
+
 import numpy as np
 import pytest
-from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: F401
 
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planning import sequence, steps_check
 from jaxspline.screen import pairs as screen
 from jaxspline.screen.options import RouteOptions, take_options
+
+# the screening fixtures and references live with the screen tests
+sys.path.insert(0, str(Path(__file__).parents[1] / "screen"))
+from test_screen import LIMITS, reach_kernels, synthetic_options  # noqa: E402, F401
 
 
 def steps_of(opt, idx):
