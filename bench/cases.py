@@ -82,7 +82,7 @@ class Workload:
 
 def workloads() -> list[Workload]:
     """All benchmarked workloads (kernels imported from jaxspline)."""
-    import jaxspline.kernels.joins as J
+    import jaxspline.kernels.join_check as J
     import jaxspline.kernels.reach as R
     import jaxspline.kernels.reach_durations as RD
     import jaxspline.kernels.slew as S

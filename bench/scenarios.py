@@ -44,8 +44,8 @@ def synthetic_options(n_routes: int, seed: int = 0):
     """
     import numpy as np
 
-    from jaxspline.engine.options import RouteOptions
     from jaxspline.kernels.limits import AxisLimits
+    from jaxspline.screen.options import RouteOptions
 
     rng = np.random.default_rng(seed)
     c = 3
@@ -79,19 +79,20 @@ def synthetic_options(n_routes: int, seed: int = 0):
 def _host_top_k(opts, limits, max_gap, chunk, progress, feasible_only, pi, pc, top_k=None):
     """The host path, then the ``top_k`` selection per source on the host (the baseline)."""
 
-    from jaxspline.engine import screen
+    from jaxspline.screen import pairs as screen
+    from jaxspline.screen import transitions
 
     tr = screen._screen_transitions_host(
         opts, limits, max_gap, chunk, progress, feasible_only, pi, pc
     )
     if top_k is None:
         return tr
-    keep = screen.best_per_source(tr.src, tr.margin, int(top_k))
+    keep = transitions.best_per_source(tr.src, tr.margin, int(top_k))
     return screen.Transitions(*(x[keep] for x in tr[:-1]), n_screened=tr.n_screened)
 
 
 def _paths():
-    from jaxspline.engine import screen_fused
+    from jaxspline.screen import fused as screen_fused
 
     return {"host": _host_top_k, "fused": screen_fused.screen_transitions_fused}
 
@@ -112,15 +113,16 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     import jax.numpy as jnp
     import numpy as np
 
-    from jaxspline.engine import screen, screen_host
     from jaxspline.kernels._batch import ragged_positions
+    from jaxspline.screen import host as screen_host
+    from jaxspline.screen import transitions
 
-    runs = screen._runs(opts, MAX_GAP)
+    runs = transitions.candidate_runs(opts, MAX_GAP)
     k, p = ragged_positions(runs.counts)
     src, dst = runs.order[k[:n]], runs.order[runs.lo[k[:n]] + p[:n]]
     keep = np.asarray(opts.route)[src] != np.asarray(opts.route)[dst]
     src, dst = src[keep], dst[keep]
-    sc = screen_host._Screener(opts, limits)
+    sc = screen_host.Screener(opts, limits)
     T = sc.t_start[dst] - sc.t_end[src]
     chunks = [
         tuple(
@@ -159,12 +161,12 @@ def _fits(opts, mode: str, path: str = "host") -> dict | None:
     2 for the host path's ``feasible_only`` (masked parts plus their concatenation);
     the fused top-k screen keeps O(options x TOP_K) rows.
     """
-    from jaxspline.engine import screen
+    from jaxspline.screen import transitions
 
     feasible_only, top_k = MODES[mode]
     if top_k is not None and path == "fused":
         return None
-    n = int(screen._runs(opts, MAX_GAP).counts.sum())
+    n = int(transitions.candidate_runs(opts, MAX_GAP).counts.sum())
     factor = 2.0 if (feasible_only and path == "host") else 1.0
     need = n * 49 * factor / 1e6
     avail = _meminfo("MemAvailable")

@@ -59,7 +59,7 @@ def compare(k: int, length: int, routes: int) -> dict:
     """Seconds, sequences/s and transitions/s of the host and the fused path."""
     import importlib
 
-    mod = importlib.import_module("jaxspline.engine.screen_sequences")
+    mod = importlib.import_module("jaxspline.screen.sequences")
     opts, limits = synthetic_options(routes)
     seq = plausible_sequences(opts, k, length)
     n_tr = int((seq[:, 1:] >= 0).sum())
@@ -94,16 +94,16 @@ def repeats(k: int, routes: int, lengths=(8, 20, 64, 128)) -> dict:
 
     import jax.numpy as jnp
 
-    mod = importlib.import_module("jaxspline.engine.screen_sequences")
-    from jaxspline.engine.screen import _mesh
+    mod = importlib.import_module("jaxspline.screen.sequences")
+    from jaxspline.screen.transitions import device_mesh
 
     opts, limits = synthetic_options(routes)
-    pair, table, params, aux = mod._device_inputs(opts, limits, _mesh())
+    pair, table, params, aux = mod._device_inputs(opts, limits, device_mesh())
     res = {}
     for length in lengths:
         seq = jnp.asarray(plausible_sequences(opts, k, length).astype(np.int32))
         for how in ("pairwise", "sorted"):
-            prog = mod._sequence_program(pair, k, length, _mesh(), how)
+            prog = mod._sequence_program(pair, k, length, device_mesh(), how)
             jax.block_until_ready(prog(table, params, aux, seq))
             res[f"L={length} {how}"] = _median_time(
                 lambda p=prog, s=seq: jax.block_until_ready(p(table, params, aux, s))

@@ -10,12 +10,12 @@ horizon 0), so every grid-aligned observation of a valid plan is an option here 
 frame differences to the official chain are < 4e-7 deg; the slew table over-estimates
 by < 1e-3 s), and each satellite's sequence, first slew from nadir included, is a path
 of the per-satellite DP. Only "each task counts once" (priced with 0 <= lambda <= w, see
-:mod:`jaxspline.engine.search.lagrangian` for the argument that covers repeats) and the battery
+:mod:`jaxspline.search.lagrangian` for the argument that covers repeats) and the battery
 (dropped) are relaxed, so every iteration's value bounds the optimum; the smallest is
 reported. ``--achieved`` (a WCR some plan reaches) only sets the step size.
 
 ``--mip SECONDS`` also solves the same candidate model as a 0/1 program with HiGHS
-(:func:`jaxspline.engine.search.mip_bound`, repeats counted once, battery dropped) and reports
+(:func:`jaxspline.search.mip_bound`, repeats counted once, battery dropped) and reports
 its dual bound after that many seconds: cuts and branching close gaps the Lagrangian
 (= linear) relaxation cannot. Needs scipy.
 
@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from jaxspline.engine.mission import Margins
+from jaxspline.planning.mission import Margins
 
 LOOSE = Margins(off_nadir=math.radians(-1e-5), horizon=0.0, gap=-0.01)
 
@@ -42,9 +42,9 @@ def upper_bound(case_dir: str, iterations: int, achieved: float, mip: float = 0.
     HiGHS dual bound after ``mip`` seconds if > 0)."""
     from jaxspline.aeossp.adapter import case_scenario
     from jaxspline.aeossp.case import load_case
-    from jaxspline.engine.planner import build_problem
-    from jaxspline.engine.search import mip_bound
-    from jaxspline.engine.search import upper_bound as lagrangian_bound
+    from jaxspline.planning.planner import build_problem
+    from jaxspline.search import mip_bound
+    from jaxspline.search import upper_bound as lagrangian_bound
 
     t0 = time.monotonic()
     case = load_case(case_dir)

@@ -133,7 +133,7 @@ def law_state(dcm_fn, t):
         return 0.5 * jnp.array([W[2, 1] - W[1, 2], W[0, 2] - W[2, 0], W[1, 0] - W[0, 1]])
 
     eps = jax.jacfwd(omega)
-    q = js.kernels.attitude._dcm2q(dcm_fn(t))
+    q = js.kernels.attitude.dcm_to_quat_kernel(dcm_fn(t))
     return q, omega(t), eps(t), jax.jacfwd(eps)(t)
 
 

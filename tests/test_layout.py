@@ -1,10 +1,29 @@
-"""The import graph points down only: kernels <- geometry <- engine <- product.
+"""The import graph points down only, has no circle, and shares no private names.
 
-Parses every module of the package with ``ast`` (no import side effects): a
-module of the kernels imports nothing above the kernels, geometry imports the
-kernels at most, the engine never imports the product (top-level modules,
-``aeossp``). The aeossp checker (``check``, ``check_frames``) imports nothing of
-the package but the case reader: it shares no code with what it checks.
+The folders follow the pipeline, one subsystem each::
+
+    kernels (0) <- geometry (1) <- screen (2) <- search (3) <- planning (4)
+        <- ops (5) <- io (6) <- cli (7) <- aeossp (8)
+
+Every module of the package is parsed with ``ast`` (no import side effects). A module
+imports nothing of a higher layer; ``jaxspline/__init__.py`` is the façade on top and may
+import anything (and nothing below may import it). The aeossp checker (``check``,
+``check_frames``) imports nothing of the package but the case reader: it shares no code
+with what it checks.
+
+The module graph is acyclic. Its edges, read from every ``import`` statement (including
+the lazy ones inside functions): ``import a.b`` -> ``a.b``; ``from a import b`` ->
+``a.b`` when ``a.b`` is a module, else ``a`` (a name defined or re-exported by ``a``).
+Not edges: a submodule's implied import of its parent package (Python runs a package's
+``__init__`` before any of its submodules, so ``from pkg import sub`` inside ``pkg``
+needs no edge ``pkg``; counting it would make every re-exporting ``__init__`` a circle
+with its own modules). A package ``__init__``'s own imports of its submodules (its
+re-exports) ARE edges, so a submodule that imports a name from its package's ``__init__``
+while that ``__init__`` imports it back is caught.
+
+No module imports an underscore name from another module of the package (``from x
+import _y``, absolute or relative, ``__init__`` re-exports included; ``__future__``
+aside): a helper two modules share is public there, with a docstring.
 """
 
 from __future__ import annotations
@@ -17,12 +36,27 @@ import pytest
 import jaxspline
 
 ROOT = Path(jaxspline.__file__).parent
-RANK = {"kernels": 0, "geometry": 1, "engine": 2}  # anything else: product (3)
+RANK = {
+    "kernels": 0,
+    "geometry": 1,
+    "screen": 2,
+    "search": 3,
+    "planning": 4,
+    "ops": 5,
+    "io": 6,
+    "cli": 7,
+    "aeossp": 8,
+}
+FACADE = 9  # jaxspline/__init__.py: on top of everything
+MAX_LINES = 600
+LONG_MODULES: dict[str, int] = {}  # module -> its allowed length (none today)
 
 
 def _layer(module: str) -> int:
     parts = module.split(".")
-    return RANK.get(parts[1], 3) if len(parts) > 1 else 3
+    if len(parts) == 1:
+        return FACADE
+    return RANK.get(parts[1], -1)  # -1: a module outside every layer (a test fails)
 
 
 def _modules():
@@ -35,39 +69,135 @@ def _modules():
         yield ".".join(parts), path, is_pkg
 
 
-def imports_of(module: str, path: Path, is_pkg: bool) -> set[str]:
-    """Package modules imported by ``module`` (absolute and relative, any depth)."""
+MODULES = list(_modules())
+KNOWN = {m for m, _, _ in MODULES}
+
+
+def _from_target(module: str, is_pkg: bool, node: ast.ImportFrom) -> str:
+    """The absolute module ``from ... import`` reads from (relative imports resolved)."""
+    if not node.level:
+        return node.module or ""
     package = module if is_pkg else module.rsplit(".", 1)[0]
+    parts = package.split(".")
+    base = parts[: len(parts) - node.level + 1]
+    return ".".join(base + ([node.module] if node.module else []))
+
+
+def imports_of(module: str, path: Path, is_pkg: bool, known=None) -> set[str]:
+    """Package modules imported by ``module`` (absolute and relative, any depth).
+
+    The edges of the module docstring: ``from a import b`` gives ``a.b`` when that is a
+    module, else ``a``.
+    """
+    known = KNOWN if known is None else known
     found = set()
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             found.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
-            if node.level:
-                base = package.split(".")[: len(package.split(".")) - node.level + 1]
-                target = ".".join(base + ([node.module] if node.module else []))
-            else:
-                target = node.module or ""
-            found.add(target)
-            found.update(f"{target}.{a.name}" for a in node.names)  # `from pkg import mod`
-    known = {m for m, _, _ in _modules()}
+            target = _from_target(module, is_pkg, node)
+            for a in node.names:
+                sub = f"{target}.{a.name}"
+                found.add(sub if sub in known else target)
     return {m for m in found if m in known and m != module}
 
 
-MODULES = list(_modules())
+def private_imports(module: str, path: Path, is_pkg: bool) -> list[str]:
+    """``from x import _y`` of ``module`` where x is another module of the package."""
+    bad = []
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module != "__future__":
+            target = _from_target(module, is_pkg, node)
+            if target.split(".")[0] != "jaxspline" or target == module:
+                continue
+            bad += [f"{target}.{a.name}" for a in node.names if a.name.startswith("_")]
+    return bad
+
+
+def graph(modules=None) -> dict[str, set[str]]:
+    """The module graph: module -> the package modules it imports."""
+    modules = MODULES if modules is None else modules
+    known = {m for m, _, _ in modules}
+    return {m: imports_of(m, p, pkg, known) for m, p, pkg in modules}
+
+
+def find_cycle(edges: dict[str, set[str]]) -> list[str] | None:
+    """One import circle of ``edges`` (as a path that closes on its first module), or None."""
+    state: dict[str, int] = {}  # 1: on the current path, 2: done
+    path: list[str] = []
+
+    def visit(m):
+        state[m] = 1
+        path.append(m)
+        for d in sorted(edges.get(m, ())):
+            if state.get(d) == 1:
+                return path[path.index(d) :] + [d]
+            if d not in state and (found := visit(d)):
+                return found
+        path.pop()
+        state[m] = 2
+        return None
+
+    for m in sorted(edges):
+        if m not in state and (found := visit(m)):
+            return found
+    return None
 
 
 def test_every_layer_is_a_folder():
-    assert {"kernels", "geometry", "engine"} <= {p.name for p in ROOT.iterdir() if p.is_dir()}
+    folders = {p.name for p in ROOT.iterdir() if p.is_dir() and (p / "__init__.py").exists()}
+    assert set(RANK) <= folders
+    assert not (folders - set(RANK)), f"a folder outside the layers: {folders - set(RANK)}"
+
+
+def test_every_module_is_in_a_layer():
+    """Only the façade sits at the package top; every other module is in a layer folder."""
+    loose = [m for m, _, _ in MODULES if _layer(m) < 0]
+    assert not loose, loose
+    assert [m for m, _, _ in MODULES if _layer(m) == FACADE] == ["jaxspline"]
+
+
+def test_every_layer_says_what_it_may_import():
+    for name in RANK:
+        doc = ast.get_docstring(ast.parse((ROOT / name / "__init__.py").read_text()))
+        assert doc and "import" in doc.lower(), f"jaxspline.{name}.__init__ needs a docstring"
 
 
 @pytest.mark.parametrize("module,path,is_pkg", MODULES, ids=[m for m, _, _ in MODULES])
 def test_imports_point_down(module, path, is_pkg):
     layer = _layer(module)
-    if layer == 3:
-        return  # the product may import anything
+    if layer == FACADE:
+        return  # the façade may import anything
     up = sorted(m for m in imports_of(module, path, is_pkg) if _layer(m) > layer)
     assert not up, f"{module} (layer {layer}) imports from above: {up}"
+
+
+def test_no_upward_import_at_all():
+    """The count over the whole package (the per-module test names the culprit)."""
+    up = [
+        (m, d)
+        for m, p, pkg in MODULES
+        if _layer(m) != FACADE
+        for d in imports_of(m, p, pkg)
+        if _layer(d) > _layer(m)
+    ]
+    assert len(up) == 0, up
+
+
+def test_no_import_circle():
+    assert find_cycle(graph()) is None, " -> ".join(find_cycle(graph()))
+
+
+def test_no_private_name_crosses_a_module():
+    bad = {m: private_imports(m, p, pkg) for m, p, pkg in MODULES}
+    bad = {m: names for m, names in bad.items() if names}
+    assert len(bad) == 0, bad
+
+
+@pytest.mark.parametrize("module,path,is_pkg", MODULES, ids=[m for m, _, _ in MODULES])
+def test_modules_stay_short(module, path, is_pkg):
+    n = len(path.read_text().splitlines())
+    assert n <= LONG_MODULES.get(module, MAX_LINES), f"{module}: {n} lines"
 
 
 @pytest.mark.parametrize("name", ["check", "check_frames"])
@@ -81,8 +211,37 @@ def test_aeossp_checker_is_independent(name):
 def test_the_rule_can_fail(tmp_path):
     """The parser sees an upward import (guards the test against a vacuous pass)."""
     bad = tmp_path / "reach.py"
-    bad.write_text("from jaxspline.engine.screen import screen_pairs\nfrom .. import scenario\n")
+    bad.write_text(
+        "from jaxspline.screen.pairs import screen_pairs\n"
+        "from ..io import scenario\n"
+        "import jaxspline\n"
+        "from jaxspline.kernels.slew import _private\n"
+        "from .limits import _also_private\n"
+    )
     deps = imports_of("jaxspline.kernels.reach", bad, False)
-    assert "jaxspline.engine.screen" in deps
-    assert "jaxspline.scenario" in deps
+    assert {"jaxspline.screen.pairs", "jaxspline.io.scenario", "jaxspline"} <= deps
     assert any(_layer(m) > 0 for m in deps)
+    assert private_imports("jaxspline.kernels.reach", bad, False) == [
+        "jaxspline.kernels.slew._private",
+        "jaxspline.kernels.limits._also_private",
+    ]
+
+
+def test_the_circle_check_can_fail(tmp_path):
+    """A two-module circle through a package ``__init__`` is found; a parent edge is not one."""
+    pkg = tmp_path / "pkg"
+    pkg.mkdir()
+    (pkg / "__init__.py").write_text("from jaxspline.pkg.a import f\n")
+    (pkg / "a.py").write_text("from jaxspline.pkg import b\n")
+    (pkg / "b.py").write_text("from jaxspline.pkg import helper\n")  # a name of __init__
+    mods = [
+        ("jaxspline.pkg", pkg / "__init__.py", True),
+        ("jaxspline.pkg.a", pkg / "a.py", False),
+        ("jaxspline.pkg.b", pkg / "b.py", False),
+    ]
+    edges = graph(mods)
+    assert edges["jaxspline.pkg.a"] == {"jaxspline.pkg.b"}  # a submodule: no parent edge
+    cycle = find_cycle(edges)
+    assert cycle is not None and cycle[0] == cycle[-1] and len(cycle) == 4
+    (pkg / "b.py").write_text("import numpy\n")
+    assert find_cycle(graph(mods)) is None

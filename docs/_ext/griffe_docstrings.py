@@ -3,7 +3,7 @@
 The docstrings are Google style and written to be read in the source, with two
 habits that Markdown reads differently:
 
-* Sphinx roles (``:func:`plan```, ``:mod:`jaxspline.engine.screen```) would show up
+* Sphinx roles (``:func:`plan```, ``:mod:`jaxspline.screen.pairs```) would show up
   verbatim. A role whose target is a public name of ``jaxspline`` becomes a link to
   its entry in the API reference; any other role becomes inline code.
 * Shapes and units in adjacent brackets (``float [M, 3] [m/s]``) are a Markdown

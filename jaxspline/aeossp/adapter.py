@@ -19,7 +19,7 @@ chain: at most 1.5e-7 deg in off-nadir angle and 3.6e-7 deg in slew angle):
 * maneuver gap 0.05 s: an angle error delta changes the bang-coast-bang time by at
   most ``2 sqrt(delta / a)`` = 3.1e-3 s at the smallest a = 0.15 deg/s^2 (16 x);
 * battery: level >= 10 Wh on the conservative profile
-  (:class:`jaxspline.engine.search.BatteryModel`), one shadow-guard step.
+  (:class:`jaxspline.search.BatteryModel`), one shadow-guard step.
 """
 
 from __future__ import annotations
@@ -30,7 +30,8 @@ from pathlib import Path
 import numpy as np
 
 from jaxspline.aeossp.case import format_time, load_case
-from jaxspline.engine.mission import (
+from jaxspline.kernels.limits import AxisLimits
+from jaxspline.planning.mission import (
     POINT,
     Margins,
     PlannerConfig,
@@ -39,7 +40,6 @@ from jaxspline.engine.mission import (
     Scenario,
     make_targets,
 )
-from jaxspline.kernels.limits import AxisLimits
 
 __all__ = ["AEOSSP_MARGINS", "case_scenario", "solve_case", "solution_from_result"]
 
@@ -158,7 +158,7 @@ def solve_case(
     Returns:
       ``(solution dict, PlanResult)``.
     """
-    from jaxspline.engine.planner import plan
+    from jaxspline.planning.planner import plan
 
     case = load_case(case_dir) if isinstance(case_dir, str | Path) else case_dir
     sc = case_scenario(case, time_limit=time_limit)

@@ -25,10 +25,10 @@ from typing import Any
 import numpy as np
 import yaml
 
-from jaxspline._fields import read_text
-from jaxspline.engine._io import atomic_write_text, refuse_overwrite
 from jaxspline.geometry.frames import jd_split, julian_date
 from jaxspline.geometry.orbit import propagate_tle
+from jaxspline.io.fields import read_text
+from jaxspline.planning.files import atomic_write_text, refuse_overwrite
 
 __all__ = [
     "ALTITUDE_RANGE_M",

@@ -4,7 +4,9 @@
 SGP4/TLE, tables for many satellites) -> ``pointing`` (aim laws, pointing
 states) -> ``routes`` (targets and strips, route models) and ``windows`` (every
 visibility window), ``ground`` (local projections, strips between points, footprints,
-ground tracks). Imports the kernels at most.
+ground tracks).
+
+Layer 1: imports the kernels at most.
 """
 
 from jaxspline.geometry import frames, ground, orbit, pointing, routes, windows

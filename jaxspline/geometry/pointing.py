@@ -100,7 +100,7 @@ def aim_params(target_ecef, direction_ecef=None, speed=0.0):
     return jnp.concatenate([g0, d, speed[..., None], strip[..., None]], -1)
 
 
-def _aim_point(p, delta):
+def aim_point(p, delta):
     """Aim point and unit ground tangent (ECEF) after an arc delta [rad] along the great circle.
 
     g(delta) = |g0| (u cos delta + d sin delta), u = g0/|g0|, d the start direction
@@ -136,7 +136,7 @@ def _frame_los(scene: Scene, p, t0, t, sat=None):
     theta = earth_rotation_angle(scene.gmst0, t)
     rad_g = jnp.linalg.norm(p[:3])
     delta = p[6] * (t - t0) / rad_g
-    g, tan = _aim_point(p, delta)
+    g, tan = aim_point(p, delta)
     g_eci = rot_z(-theta, g)
     tan_eci = rot_z(-theta, tan)
     g_dot = OMEGA_EARTH * jnp.stack([-g_eci[1], g_eci[0], jnp.zeros_like(g_eci[0])])
@@ -241,7 +241,7 @@ def aim_geometry(scene: Scene, p, t0, t, sat=None):
     """
     r, _ = orbit_state(scene.orbit, t, sat)
     theta = earth_rotation_angle(scene.gmst0, t)
-    g, _ = _aim_point(p, p[6] * (t - t0) / jnp.linalg.norm(p[:3]))
+    g, _ = aim_point(p, p[6] * (t - t0) / jnp.linalg.norm(p[:3]))
     g_eci = rot_z(-theta, g)
     d = g_eci - r
     dn = jnp.linalg.norm(d)

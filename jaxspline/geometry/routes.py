@@ -13,9 +13,9 @@ scan-pattern-optimization, Steps 1-3) every route gets a grid of start times
 ``t0`` in its window and, for strips, a small set of scan speeds; each option's
 scan is checked (visible, rates/accelerations within limits, Sun elevation) into
 ``scan_ok``, and the boundary states (angle, rate per channel at start and end)
-go into a :class:`jaxspline.engine.options.RouteOptions` table.
+go into a :class:`jaxspline.screen.options.RouteOptions` table.
 
-:class:`RouteSet` implements :class:`jaxspline.engine.options.RouteModel`: a
+:class:`RouteSet` implements :class:`jaxspline.screen.options.RouteModel`: a
 differentiable ``states(route, t0)`` for refinement.
 """
 
@@ -198,7 +198,7 @@ def sample_aim_states(scene, p, t0, t, chunk=8192, desc=None):
 
 
 class RouteSet(NamedTuple):
-    """R routes ready for pointing: a :class:`jaxspline.engine.options.RouteModel` implementation.
+    """R routes ready for pointing: a :class:`jaxspline.screen.options.RouteModel` implementation.
 
     Attributes:
       scene: the :class:`jaxspline.geometry.pointing.Scene`.

@@ -4,16 +4,20 @@
 ``reach_durations`` (feasible durations, minimum transfer time and peak acceleration),
 ``slew`` (eigen-axis slew profiles, SPEC §2), ``flex`` (flexible-mode residual),
 ``attitude`` (quaternions, MRPs), ``joins`` (degree-7 joins, spatial maneuvers),
-``channel_join`` (peaks of the channel-wise degree-7 join),
+``join_check`` (their sampled limit check), ``channel_join`` (peaks of the
+channel-wise degree-7 join),
 ``retarget_channel`` / ``retarget`` (minimum-peak control: one channel, 3-D).
 Private helpers: ``_safe`` (numerical guards), ``_validate`` (eager input checks),
-``_batch`` (batching, padding, chunks). Kernels import nothing above this package.
+``_batch`` (batching, padding, chunks).
+
+Layer 0: imports nothing of the package outside this folder.
 """
 
 from jaxspline.kernels import (
     attitude,
     channel_join,
     flex,
+    join_check,
     joins,
     limits,
     reach,
@@ -25,6 +29,7 @@ from jaxspline.kernels import (
 from jaxspline.kernels.attitude import *  # noqa: F403
 from jaxspline.kernels.channel_join import *  # noqa: F403
 from jaxspline.kernels.flex import *  # noqa: F403
+from jaxspline.kernels.join_check import *  # noqa: F403
 from jaxspline.kernels.joins import *  # noqa: F403
 from jaxspline.kernels.limits import *  # noqa: F403
 from jaxspline.kernels.reach import *  # noqa: F403
@@ -41,6 +46,7 @@ _MODULES = (
     flex,
     attitude,
     joins,
+    join_check,
     channel_join,
     retarget_channel,
     retarget,

@@ -216,3 +216,22 @@ def finite_vector(name: str, x, last: int | None = None):
         raise ValueError(f"{name} must have last axis of length {last}, got shape {arr.shape}")
     check_finite(name, arr)
     return arr
+
+
+def positive_duration(T):
+    """``T`` as a float array, checked finite and > 0 (a maneuver's duration [s])."""
+    T = as_float_array("T", T)
+    check_positive("T", T)
+    return T
+
+
+def boundary_states(q0, w0, e0, j0, q1, w1, e1, j1):
+    """The end states of a maneuver, checked: quaternions [..., 4], body rate, acceleration
+    and jerk [..., 3] (finite); a missing jerk (None) is zero."""
+    q0, q1 = finite_vector("q0", q0, 4), finite_vector("q1", q1, 4)
+    w0, e0, w1, e1 = (
+        finite_vector(n, x, 3) for n, x in (("w0", w0), ("e0", e0), ("w1", w1), ("e1", e1))
+    )
+    j0 = jnp.zeros_like(e0) if j0 is None else finite_vector("j0", j0, 3)
+    j1 = jnp.zeros_like(e1) if j1 is None else finite_vector("j1", j1, 3)
+    return q0, w0, e0, j0, q1, w1, e1, j1

@@ -99,7 +99,8 @@ def _qrotate(q, v):
     return v + w * t + _cross(u, t)
 
 
-def _q2dcm(q):
+def quat_to_dcm_kernel(q):
+    """DCM [3, 3] of one unit quaternion ``q`` = (w, x, y, z) (no normalization)."""
     w, x, y, z = q[0], q[1], q[2], q[3]
     return jnp.stack(
         [
@@ -110,7 +111,8 @@ def _q2dcm(q):
     )
 
 
-def _dcm2q(R):
+def dcm_to_quat_kernel(R):
+    """Unit quaternion (w, x, y, z) of one DCM ``R`` [3, 3] (Shepperd, branchless)."""
     # Shepperd's method, branchless: the candidate with the largest 4*c^2 >= 1 is
     # selected; the other candidates get a clamped (safe) square-root argument.
     tr = R[0, 0] + R[1, 1] + R[2, 2]
@@ -226,12 +228,12 @@ _qmul_batched = batched(_qmul, "(4),(4)->(4)")
 _qconj_batched = batched(_qconj, "(4)->(4)")
 _qnorm_batched = batched(_qnormalize, "(4)->(4)")
 _qrot_batched = batched(_qrotate, "(4),(3)->(3)")
-_q2dcm_batched = batched(lambda q: _q2dcm(_qnormalize(q)), "(4)->(3,3)")
-_dcm2q_batched = batched(_dcm2q, "(3,3)->(4)")
+_q2dcm_batched = batched(lambda q: quat_to_dcm_kernel(_qnormalize(q)), "(4)->(3,3)")
+_dcm2q_batched = batched(dcm_to_quat_kernel, "(3,3)->(4)")
 _q2mrp_batched = batched(_q2mrp, "(4)->(3)")
 _mrp2q_batched = batched(_mrp2q, "(3)->(4)")
-_mrp2dcm_batched = batched(lambda s: _q2dcm(_mrp2q(s)), "(3)->(3,3)")
-_dcm2mrp_batched = batched(lambda R: _q2mrp(_dcm2q(R)), "(3,3)->(3)")
+_mrp2dcm_batched = batched(lambda s: quat_to_dcm_kernel(_mrp2q(s)), "(3)->(3,3)")
+_dcm2mrp_batched = batched(lambda R: _q2mrp(dcm_to_quat_kernel(R)), "(3,3)->(3)")
 _shadow_batched = batched(_mrp_shadow, "(3)->(3)")
 _angle_batched = batched(_angle, "(4),(4)->()")
 _qrate_batched = batched(_qrate, "(4),(3)->(4)")

@@ -8,7 +8,7 @@ the exact inverse of the Hermite conditions (:mod:`jaxspline.kernels.joins`).
 Its derivatives are polynomials again, so their peaks over [0, T] are read on a
 uniform grid of τ (``n_samples`` points including both ends).
 
-The engine screens candidate transitions with it (:mod:`jaxspline.engine.join_screen`):
+The engine screens candidate transitions with it (:mod:`jaxspline.planning.join_screen`):
 the spatial join the plan finally flies is the same polynomial in the MRP chart of
 the attitude, and in the per-channel angles its peaks are close to these (the
 flown join is checked exactly afterwards).
@@ -22,7 +22,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.kernels._safe import safe_norm
-from jaxspline.kernels.joins import _HERMITE
+from jaxspline.kernels.joins import HERMITE_MAP
 
 __all__ = ["ChannelJoinPeaks", "channel_join_peaks", "DEFAULT_JOIN_SAMPLES"]
 
@@ -87,7 +87,7 @@ def channel_join_peaks(p0, v0, a0, j0, p1, v1, a1, j1, T, n_samples=DEFAULT_JOIN
     b = jnp.stack(
         [p0, Ts * v0, Ts**2 * a0, Ts**3 * j0, p1, Ts * v1, Ts**2 * a1, Ts**3 * j1], axis=-1
     )
-    c = b @ jnp.asarray(_HERMITE.T, dtype=b.dtype)  # [C, 8] monomial coefficients
+    c = b @ jnp.asarray(HERMITE_MAP.T, dtype=b.dtype)  # [C, 8] monomial coefficients
     grid = jnp.asarray(_derivative_grid(n_samples), dtype=b.dtype)
     inf = jnp.asarray(jnp.inf, dtype=b.dtype)
     peaks, norms = [], []

@@ -80,7 +80,8 @@ RTOL_ULPS = 64.0
 # ----------------------------------------------------------------------------- helpers
 
 
-def _rtol(x):
+def rtol_of(x):
+    """Relative tolerance of the reach tests in the dtype of ``x``: ``RTOL_ULPS`` ulps."""
     return RTOL_ULPS * jnp.finfo(jnp.result_type(x)).eps
 
 
@@ -100,7 +101,7 @@ def _lo(a1, b1, b2, T, b, d):
 
 
 def _rates_ok(b1, b2, T, b, d):
-    r = _rtol(b1)
+    r = rtol_of(b1)
     return (
         (jnp.abs(b1) <= b * (1.0 + r))
         & (jnp.abs(b2) <= b * (1.0 + r))
@@ -109,7 +110,7 @@ def _rates_ok(b1, b2, T, b, d):
 
 
 def _angle_tol(a1, a2, T, b):
-    return _rtol(a1) * (jnp.abs(a1) + jnp.abs(a2) + 2.0 * b * T)
+    return rtol_of(a1) * (jnp.abs(a1) + jnp.abs(a2) + 2.0 * b * T)
 
 
 # ----------------------------------------------------------------------------- kernels
@@ -243,7 +244,7 @@ def rate_interval_kernel(a1, b1, a2, T, rate, accel):
       [lo(L), hi(U)] (module tolerance applies).
     """
     a1, b1, a2, T, b, d = common_float(a1, b1, a2, T, rate, accel)
-    r = _rtol(a1)
+    r = rtol_of(a1)
     tol = _angle_tol(a1, a2, T, b)
     b1c = jnp.clip(b1, -b, b)
     lower = jnp.maximum(-b, b1c - d * T)
@@ -350,7 +351,7 @@ _envelopes_batched = batched(envelopes_kernel)
 _transfer_batched = batched(transfer_kernel)
 
 
-def _prepare(limits, need_accel=True, **named):
+def prepare_inputs(limits, need_accel=True, **named):
     """Validate named inputs + limits and return them broadcast in one float dtype."""
     if need_accel:
         lim = validate_limits(limits)
@@ -383,7 +384,7 @@ def angle_interval(a1, b1, b2, T, limits: AxisLimits):
     Raises:
       ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
-    return _angle_interval_batched(*_prepare(limits, a1=a1, b1=b1, b2=b2, T=T))
+    return _angle_interval_batched(*prepare_inputs(limits, a1=a1, b1=b1, b2=b2, T=T))
 
 
 def rate_interval(a1, b1, a2, T, limits: AxisLimits):
@@ -402,7 +403,7 @@ def rate_interval(a1, b1, a2, T, limits: AxisLimits):
     Raises:
       ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
-    return _rate_interval_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, T=T))
+    return _rate_interval_batched(*prepare_inputs(limits, a1=a1, b1=b1, a2=a2, T=T))
 
 
 def is_reachable(a1, b1, a2, b2, T, limits: AxisLimits):
@@ -423,7 +424,7 @@ def is_reachable(a1, b1, a2, b2, T, limits: AxisLimits):
     Raises:
       ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
-    return _is_reachable_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
+    return _is_reachable_batched(*prepare_inputs(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
 
 
 def reach_margin(a1, b1, a2, b2, T, limits: AxisLimits):
@@ -444,7 +445,7 @@ def reach_margin(a1, b1, a2, b2, T, limits: AxisLimits):
     Raises:
       ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
-    return _reach_margin_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
+    return _reach_margin_batched(*prepare_inputs(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T))
 
 
 def envelopes(a1, b1, b2, T, limits: AxisLimits, t):
@@ -464,7 +465,7 @@ def envelopes(a1, b1, b2, T, limits: AxisLimits, t):
     Raises:
       ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
-    a1, b1, b2, T, t, rate, accel = _prepare(limits, a1=a1, b1=b1, b2=b2, T=T, t=t)
+    a1, b1, b2, T, t, rate, accel = prepare_inputs(limits, a1=a1, b1=b1, b2=b2, T=T, t=t)
     return _envelopes_batched(a1, b1, b2, T, rate, accel, t)
 
 
@@ -487,5 +488,5 @@ def transfer(a1, b1, a2, b2, T, limits: AxisLimits, t):
     Raises:
       ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
-    a1, b1, a2, b2, T, t, rate, accel = _prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T, t=t)
+    a1, b1, a2, b2, T, t, rate, accel = prepare_inputs(limits, a1=a1, b1=b1, a2=a2, b2=b2, T=T, t=t)
     return _transfer_batched(a1, b1, a2, b2, T, rate, accel, t)

@@ -17,7 +17,7 @@ from jaxspline.kernels._batch import batched
 from jaxspline.kernels._safe import safe_div, safe_sqrt
 from jaxspline.kernels._validate import common_float
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.kernels.reach import _prepare, _rtol
+from jaxspline.kernels.reach import prepare_inputs, rtol_of
 
 __all__ = [
     "feasible_durations",
@@ -84,7 +84,7 @@ def feasible_durations_kernel(a1, b1, a2, b2, rate, accel):
       == t_min; impossible (|b_i| > b) gives all +inf.
     """
     a1, b1, a2, b2, b, d = common_float(a1, b1, a2, b2, rate, accel)
-    r = _rtol(a1)
+    r = rtol_of(a1)
     ok = (jnp.abs(b1) <= b * (1.0 + r)) & (jnp.abs(b2) <= b * (1.0 + r))
     b1 = jnp.clip(b1, -b, b)
     b2 = jnp.clip(b2, -b, b)
@@ -164,7 +164,7 @@ def min_peak_accel_kernel(a1, b1, a2, b2, T, rate):
       states coincide (within tolerance) else +inf.
     """
     a1, b1, a2, b2, T, b = common_float(a1, b1, a2, b2, T, rate)
-    r = _rtol(a1)
+    r = rtol_of(a1)
     ok = (jnp.abs(b1) <= b * (1.0 + r)) & (jnp.abs(b2) <= b * (1.0 + r))
     b1 = jnp.clip(b1, -b, b)
     b2 = jnp.clip(b2, -b, b)
@@ -206,7 +206,7 @@ def feasible_durations(a1, b1, a2, b2, limits: AxisLimits):
     Raises:
       ValueError: an argument is not finite, T < 0 or a limit is not positive (named).
     """
-    return _feasible_durations_batched(*_prepare(limits, a1=a1, b1=b1, a2=a2, b2=b2))
+    return _feasible_durations_batched(*prepare_inputs(limits, a1=a1, b1=b1, a2=a2, b2=b2))
 
 
 def min_transfer_time(a1, b1, a2, b2, limits: AxisLimits):
@@ -246,5 +246,5 @@ def min_peak_accel(a1, b1, a2, b2, T, rate):
     Raises:
       ValueError: an argument is not finite, T < 0 or rate is not positive (named).
     """
-    args = _prepare(None, need_accel=False, a1=a1, b1=b1, a2=a2, b2=b2, T=T, rate=rate)
+    args = prepare_inputs(None, need_accel=False, a1=a1, b1=b1, a2=a2, b2=b2, T=T, rate=rate)
     return _min_peak_accel_batched(*args)

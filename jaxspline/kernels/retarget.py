@@ -81,13 +81,13 @@ from jaxspline.kernels._validate import (
     is_concrete,
 )
 from jaxspline.kernels.retarget_channel import (
-    _P,
-    _PINV,
     ARCSEC,
+    AXIS_CHANNEL,
+    CHANNEL_AXIS,
     ChannelControl,
-    _control_from_peak,
-    _unbounded_peak,
     channel_control_eval,
+    control_from_peak,
+    unbounded_peak,
 )
 
 __all__ = [
@@ -202,7 +202,7 @@ def attitude_rhs(model: AttitudeModel, sigma, omega_rel, accel_body):
 def _channel_accel(ctrl: ChannelControl, t):
     """Per-channel a(t) (pitch, roll, yaw) mapped to body axes (x, y, z)."""
     a = channel_control_eval(ctrl, t)
-    return a[jnp.array(_PINV)]
+    return a[jnp.array(AXIS_CHANNEL)]
 
 
 def _rk4_segment(model, x, a, t0, t1, steps):
@@ -307,14 +307,14 @@ def _retarget_kernel(
     method,
 ):
     model = AttitudeModel(inertia, gain, omega0, gg)
-    p = jnp.array(_P)
+    p = jnp.array(CHANNEL_AXIS)
     ra = euler_rates_matrix(sigma_a) @ omega_a  # σ'(0)
     rb = euler_rates_matrix(sigma_b) @ omega_b  # σ'(T) target
     inf = jnp.asarray(jnp.inf, T.dtype)
 
     def solve(c):
-        d = _unbounded_peak(sigma_a, ra, c[:3], c[3:], T)
-        return _control_from_peak(sigma_a, ra, c[:3], c[3:], T, inf, d)
+        d = unbounded_peak(sigma_a, ra, c[:3], c[3:], T)
+        return control_from_peak(sigma_a, ra, c[:3], c[3:], T, inf, d)
 
     def end(c):
         s, w = _simulate_kernel(model, sigma_a, omega_a, solve(c), T, steps)
@@ -504,4 +504,4 @@ def body_control(model: AttitudeModel, ctrl: ChannelControl, t):
     if t.ndim:
         ctrl, t = ChannelControl(*(c[..., None, :] for c in ctrl)), t[..., None]
     a = channel_control_eval(ctrl, t)
-    return a[..., jnp.array(_PINV)] / jnp.asarray(model.gain, a.dtype)
+    return a[..., jnp.array(AXIS_CHANNEL)] / jnp.asarray(model.gain, a.dtype)

@@ -39,9 +39,10 @@ __all__ = [
 ARCSEC = math.pi / 648000.0
 """One arc-second in radians."""
 
-# channel k of sigma = (pitch, roll, yaw) <-> body axis _P[k]; body axis i <-> channel _PINV[i]
-_P = (2, 0, 1)
-_PINV = (1, 2, 0)
+CHANNEL_AXIS = (2, 0, 1)
+"""Body axis of channel k of sigma = (pitch, roll, yaw)."""
+AXIS_CHANNEL = (1, 2, 0)
+"""Channel of body axis i (the inverse of ``CHANNEL_AXIS``)."""
 
 
 class ChannelControl(NamedTuple):
@@ -64,7 +65,7 @@ class ChannelControl(NamedTuple):
 # ----------------------------------------------------------------------------- linear
 
 
-def _unbounded_peak(a1, b1, a2, b2, T):
+def unbounded_peak(a1, b1, a2, b2, T):
     """d* = (2|D| + sqrt(4D² + T²Δ²))/T² (no rate bound), finite gradients at D = Δ = 0."""
     D = a2 - a1 - 0.5 * T * (b1 + b2)
     dv = b2 - b1
@@ -112,13 +113,13 @@ def min_peak_channel_kernel(a1, b1, a2, b2, T, rate):
     """
     a1, b1, a2, b2, T, rate = jnp.broadcast_arrays(a1, b1, a2, b2, T, rate)
     fin = jnp.isfinite(rate)
-    d_unb = _unbounded_peak(a1, b1, a2, b2, T)
+    d_unb = unbounded_peak(a1, b1, a2, b2, T)
     rate_safe = jnp.where(fin, rate, 1.0)
     d = jnp.where(fin, min_peak_accel_kernel(a1, b1, a2, b2, T, rate_safe), d_unb)
-    return _control_from_peak(a1, b1, a2, b2, T, rate, d)
+    return control_from_peak(a1, b1, a2, b2, T, rate, d)
 
 
-def _control_from_peak(a1, b1, a2, b2, T, rate, d):
+def control_from_peak(a1, b1, a2, b2, T, rate, d):
     """Envelope choice s and switch times t1, t2 for the optimal peak d (see kernel)."""
     fin = jnp.isfinite(rate)
     ok = jnp.isfinite(d) & (d > 0)

@@ -21,8 +21,6 @@ import pytest
 
 from jaxspline import build_problem, plan
 from jaxspline.aeossp.adapter import AEOSSP_MARGINS, case_scenario, solve_case
-from jaxspline.engine.mission import POINT, PlannerConfig, Power, Satellite, Scenario, make_targets
-from jaxspline.engine.search import BatteryModel, dp_paths, dp_prepare, mip_bound, upper_bound
 from jaxspline.geometry.frames import (
     R_EARTH,
     WGS84_F,
@@ -35,6 +33,15 @@ from jaxspline.geometry.frames import (
 )
 from jaxspline.geometry.orbit import circular_orbit_over, orbit_position
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.planning.mission import (
+    POINT,
+    PlannerConfig,
+    Power,
+    Satellite,
+    Scenario,
+    make_targets,
+)
+from jaxspline.search import BatteryModel, dp_paths, dp_prepare, mip_bound, upper_bound
 
 DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="aeossp training data not available")
@@ -159,7 +166,7 @@ def test_options_complete_against_brute_force(small_case, small_prep):
 def test_battery_profile_against_dense_integration(small_case, guard):
     """BatteryModel.profile == a 1-s re-integration with the same step conventions."""
     from jaxspline.aeossp.check import Ephemeris, sunlit
-    from jaxspline.engine.mission import Power
+    from jaxspline.planning.mission import Power
 
     dt_ = small_case.geometry_step_s
     n = int(3 * 3600 / dt_)  # 3 h: two shadow passes

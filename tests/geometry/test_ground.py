@@ -1,6 +1,6 @@
 """Ground geometry: projections, strips between points, footprints, ground tracks.
 
-References: the planner's own strip kernel (``aim_params`` + ``_aim_point``, JAX) for
+References: the planner's own strip kernel (``aim_params`` + ``aim_point``, JAX) for
 the strip inversion; collinearity of great-circle points (gnomonic); the area of a
 spherical cap ``2 pi (1 - cos a)`` and of a lune (equal-area); great-circle distances
 by the haversine formula (footprint widths); finite differences of the orbit
@@ -33,7 +33,7 @@ from jaxspline.geometry.ground import (
     unit_vectors,
 )
 from jaxspline.geometry.orbit import circular_orbit, orbit_state
-from jaxspline.geometry.pointing import _aim_point, aim_params
+from jaxspline.geometry.pointing import aim_params, aim_point
 from jaxspline.geometry.routes import strip_direction
 
 RNG = np.random.default_rng(11)
@@ -58,7 +58,7 @@ def test_strip_between_inverts_the_planner_strip():
     )
     p = aim_params(jnp.asarray(g0), jnp.asarray(strip_direction(lat, lon, az)), 7000.0)
     for i in range(len(u_a)):
-        g, _ = _aim_point(p[i], length[i] / np.linalg.norm(g0[i]))
+        g, _ = aim_point(p[i], length[i] / np.linalg.norm(g0[i]))
         np.testing.assert_allclose(unit_vectors(np.asarray(g)), u_b[i], atol=1e-13)
     assert np.all((az >= 0) & (az < 2 * np.pi))
     np.testing.assert_allclose(
@@ -74,7 +74,7 @@ def test_strip_centerline_matches_the_planner_kernel():
     p = aim_params(jnp.asarray(g0), jnp.asarray(strip_direction(lat, lon, az)), 7000.0)
     for i in range(3):
         for j, f in enumerate(np.linspace(0, 1, 7)):
-            g, t = _aim_point(p[i], f * length[i] / rad[i])
+            g, t = aim_point(p[i], f * length[i] / rad[i])
             np.testing.assert_allclose(u[i, j], unit_vectors(np.asarray(g)), atol=1e-14)
             np.testing.assert_allclose(tan[i, j], np.asarray(t), atol=1e-14)
     with pytest.raises(ValueError, match="samples"):

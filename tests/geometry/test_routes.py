@@ -5,7 +5,6 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxspline.engine.options import RouteOptions, build_route_options
 from jaxspline.geometry.frames import geodetic_to_ecef, gmst, julian_date
 from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.geometry.pointing import Scene, off_nadir, pointing_angles
@@ -17,6 +16,7 @@ from jaxspline.geometry.routes import (
     strip_direction,
 )
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.screen.options import RouteOptions, build_route_options
 
 JD = julian_date("2026-06-21T10:00:00Z")
 G0 = float(gmst(JD))

@@ -10,6 +10,7 @@ from numpy.polynomial import Chebyshev, Polynomial
 from scipy.integrate import solve_ivp
 from scipy.spatial.transform import Rotation
 
+from jaxspline.kernels import join_check as JC
 from jaxspline.kernels import joins as J
 from jaxspline.kernels.attitude import attitude_angle, quat_normalize
 from jaxspline.kernels.limits import AxisLimits
@@ -211,7 +212,7 @@ def test_check_vs_dense_numpy_sampling():
     # limits shaped [3] like the per-candidate limits below (and in the kernel test): the
     # public check is compiled once for the whole module
     lim = AxisLimits(*(np.ones(3) for _ in range(3)))
-    chk = J.maneuver_check(q0, w0, e0, q1, w1, e1, T, lim, j0=j0, j1=j1, n_samples=1025)
+    chk = JC.maneuver_check(q0, w0, e0, q1, w1, e1, T, lim, j0=j0, j1=j1, n_samples=1025)
     for i in range(3):
         mi = J.Maneuver(m.q_ref[i], m.coeffs[i], m.duration[i])
         ref = _dense_numpy_peaks(mi)
@@ -223,7 +224,7 @@ def test_check_vs_dense_numpy_sampling():
             vals = [chk.peak_rate, chk.peak_accel, chk.peak_jerk]
             lims = [v * 1.5 for v in vals]
             lims[k] = vals[k] * f
-            c2 = J.maneuver_check(
+            c2 = JC.maneuver_check(
                 q0, w0, e0, q1, w1, e1, T, AxisLimits(*lims), j0=j0, j1=j1, n_samples=1025
             )
             assert (np.asarray(c2.feasible) == expect).all()
@@ -236,10 +237,10 @@ def test_check_chunked_batches_match(monkeypatch):
     lim = AxisLimits(*(np.ones(5) for _ in range(3)))
     args = (*st[:3], *st[4:7], st[8], lim)
     kw = dict(j0=st[3], j1=st[7], n_samples=1025)
-    full = J.maneuver_check(*(a[:3] for a in args[:7]), AxisLimits(*(x[:3] for x in lim)),
+    full = JC.maneuver_check(*(a[:3] for a in args[:7]), AxisLimits(*(x[:3] for x in lim)),
                             j0=st[3][:3], j1=st[7][:3], n_samples=1025)  # fmt: skip
-    monkeypatch.setattr(J, "_CHUNK", 3)
-    chunked = J.maneuver_check(*args, **kw)
+    monkeypatch.setattr(JC, "_CHUNK", 3)
+    chunked = JC.maneuver_check(*args, **kw)
     for a, b in zip(chunked, full, strict=True):
         assert a.shape == (5,)
         np.testing.assert_array_equal(a[:3], b)
@@ -249,9 +250,9 @@ def test_check_chunked_batches_match(monkeypatch):
 def test_kernel_scalar_jit_vmap_agree_and_grads():
     st = _states(3, 3, scale=3.0)  # shapes shared with test_check_vs_dense_numpy_sampling
     lim = (1.0, 1.0, 1.0)
-    kern = functools.partial(J.maneuver_check_kernel, n_samples=1025)
+    kern = functools.partial(JC.maneuver_check_kernel, n_samples=1025)
     batched = jax.jit(jax.vmap(kern))(*st, *(np.full(3, x) for x in lim))
-    public = J.maneuver_check(*st[:3], *st[4:7], st[8], AxisLimits(*(np.full(3, x) for x in lim)),
+    public = JC.maneuver_check(*st[:3], *st[4:7], st[8], AxisLimits(*(np.full(3, x) for x in lim)),
                               j0=st[3], j1=st[7], n_samples=1025)  # fmt: skip
     jk = jax.jit(kern)
     # an infeasible candidate is a value, not NaN or an exception (T typed like st[8][i]:
@@ -271,7 +272,7 @@ def test_kernel_gradients_finite():
     # zero maneuver (identical attitudes at rest: |ω| = 0 everywhere)
     st = _states(1, 4)
     lim = (0.05, 0.01, 0.001)
-    kern = functools.partial(J.maneuver_check_kernel, n_samples=65)
+    kern = functools.partial(JC.maneuver_check_kernel, n_samples=65)
 
     def peaks(T, w, q0, q1):
         out = kern(q0, w, *(a[0] for a in st[2:4]), q1, *(a[0] for a in st[5:8]), T, *lim)
@@ -305,7 +306,7 @@ def test_float32_maneuver():
     tol = 1e-6 * (1 + np.abs(np.asarray(m.coeffs)).sum(-1).max())
     assert float(jnp.max(attitude_angle(q, quat_normalize(st[4])))) < tol
     np.testing.assert_allclose(w, st[5], atol=tol / 10)
-    chk = J.maneuver_check(*st[:3], *st[4:7], st[8], AxisLimits(1.0, 1.0, 1.0))
+    chk = JC.maneuver_check(*st[:3], *st[4:7], st[8], AxisLimits(1.0, 1.0, 1.0))
     assert chk.peak_rate.dtype == jnp.float32
 
 
@@ -318,9 +319,9 @@ def test_value_errors():
     with pytest.raises(ValueError, match="q1"):
         J.maneuver_plan(q, z, z, z, z, z, 10.0)
     with pytest.raises(ValueError, match="limits.rate"):
-        J.maneuver_check(q, z, z, q, z, z, 10.0, AxisLimits(-1.0, 1.0))
+        JC.maneuver_check(q, z, z, q, z, z, 10.0, AxisLimits(-1.0, 1.0))
     with pytest.raises(ValueError, match="n_samples"):
-        J.maneuver_check(q, z, z, q, z, z, 10.0, AxisLimits(1.0, 1.0), n_samples=1)
+        JC.maneuver_check(q, z, z, q, z, z, 10.0, AxisLimits(1.0, 1.0), n_samples=1)
     with pytest.raises(ValueError, match="deriv"):
         J.poly_eval(np.ones(8), 1.0, 0.5, deriv=-1)
     with pytest.raises(ValueError, match="maneuver"):

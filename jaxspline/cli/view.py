@@ -1,0 +1,62 @@
+"""``jaxspline view PLAN.json``: rebuild the plan's web page from an existing ``plan.json``.
+
+Reads the plan document that ``jaxspline plan`` wrote (with its ``"view"`` section:
+ground tracks, targets, footprints, areas, battery; :mod:`jaxspline.io.plan_view`) and
+writes the self-contained page (:mod:`jaxspline.io.plan_html`), by default ``plan.html``
+next to it. Nothing is re-planned. An existing page is never overwritten unless
+``--force``; the file is written atomically.
+"""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+__all__ = ["register", "run_view"]
+
+
+def register(sub) -> None:
+    """Register the ``view`` sub-command.
+
+    Args:
+      sub: the ``argparse`` sub-parsers object of the ``jaxspline`` command.
+    """
+    p = sub.add_parser(
+        "view",
+        help="rebuild the web page (plan.html) of a plan from its plan.json",
+        description=__doc__,
+    )
+    p.add_argument("plan", help="plan.json written by jaxspline plan")
+    p.add_argument(
+        "-o", "--output", default=None, help="page to write (default: plan.html next to PLAN)"
+    )
+    p.add_argument("--force", action="store_true", help="overwrite an existing page")
+    p.set_defaults(func=_main)
+
+
+def _main(args) -> int:
+    path = run_view(args.plan, args.output, force=args.force)
+    print(f"page          {path}", file=sys.stdout)
+    return 0
+
+
+def run_view(plan, output=None, *, force: bool = False) -> Path:
+    """Write the page of a ``plan.json``.
+
+    Args:
+      plan: str or Path of the plan document.
+      output: str or Path of the page; None: ``plan.html`` in the plan's folder.
+      force: overwrite an existing page.
+    Returns:
+      Path of the page.
+    Raises:
+      FileNotFoundError: no such plan file.
+      FileExistsError: the page exists and ``force`` is false.
+      ValueError: the file is not a plan document.
+    """
+    from jaxspline.io.plan_html import HTML_FILE, read_plan, write_plan_html
+
+    plan = Path(plan)
+    out = plan.parent / HTML_FILE if output is None else Path(output)
+    doc = read_plan(plan)
+    return write_plan_html(doc, out, force=force)

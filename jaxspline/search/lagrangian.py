@@ -1,0 +1,371 @@
+"""Per-satellite exact DP coordinated by Lagrangian task prices: plans and an upper bound.
+
+Relaxing "each task is imaged at most once" with prices ``lam_t`` splits the problem
+into one longest-path problem per satellite over its options in start order
+(:func:`dp_paths`): ``best[j] = w_j - lam_t(j) + max(base_j, far predecessors, near
+compatible predecessors)``, far ones (gap >= ``far[sat]``, always compatible) through
+a running maximum, near ones through the screened feasible pairs. In
+:func:`lagrangian` the battery enters as interval energy budgets priced by ``nu >= 0``
+(:mod:`jaxspline.search.energy`: options and near pairs pay for their energy, the
+bound gains ``sum nu``); otherwise it is dropped.
+``UB(lam) = sum_k DP_k(lam) + sum_t lam_t (+ sum_I nu_I)``.
+
+Weak duality with repeats. The rules let a plan image a task more than once (it
+counts once), and dropping a repeat is not always possible (an observation can be
+the bridge that makes a long maneuver feasible). Let a plan image task t ``n_t`` times.
+Its satellites' sequences are feasible paths, so ``sum_k DP_k >= sum_t n_t (w_t -
+lam_t)`` and ``UB >= sum_t [n_t w_t - (n_t - 1) lam_t]``. For ``0 <= lam_t <= w_t``
+each term is ``>= w_t`` if ``n_t >= 1`` and ``>= 0`` otherwise: UB >= the plan's value.
+Prices are therefore kept in ``[0, w_t]`` (projected subgradient), which makes UB an
+upper bound of every plan of the candidate model, repeats included.
+
+Every :data:`_REPAIR_EVERY`-th iteration also repairs the DP paths into a feasible
+plan (each task once, heaviest first, re-checked insertion incl. battery, then greedy
+fill); its value is the step target.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from jaxspline.search import clock
+from jaxspline.search.energy import EnergyBudgets
+from jaxspline.search.lns import greedy
+from jaxspline.search.problem import Problem
+from jaxspline.search.timeline import Timeline
+
+__all__ = ["BoundResult", "DPData", "dp_paths", "dp_prepare", "lagrangian", "upper_bound"]
+
+_STALL_ITERS = 4  # iterations without a better bound before the step halves
+_MU_MIN = 1e-4  # the iteration stops (stalled) below this step factor
+_GAP_TOL = 1e-9  # bound - best plan below this: optimal
+_PATH_TOL = 1e-9  # tolerance of the path back-tracking
+_REPAIR_EVERY = 4  # DP iterations per repaired plan (a repair costs ~2 block DPs)
+
+
+@dataclass
+class DPData:
+    """Structure of the per-satellite longest-path DP (see :func:`dp_paths`).
+
+    Options are processed in start order (``order``, the row order of ``pb.pairs``)
+    in blocks of starts at most ``width`` apart (``groups``: slices of ``order``, so a
+    block's near predecessors are one contiguous range of ``pb.pairs``). With
+    ``width`` <= the shortest observation, a predecessor of any option of a block
+    starts before the block, so a block is one vectorized step; with
+    ``width`` <= ``near_slack``, a far predecessor that only becomes far inside the
+    block (``end + far`` between the block's first start and the option's start) is
+    among the near pairs. ``absorb`` lists options by ``end + far[sat]``, the time
+    from which they are far predecessors of everything.
+
+    Attributes:
+      order: int [N], option ids sorted by start (then satellite).
+      sat: int [N], satellite of each option.
+      start: float [N], start time of each option [s].
+      groups: list of ``(ga, gb)``: block ``order[ga:gb]``.
+      first_ok: bool [N], the option may be its satellite's first observation.
+      absorb: int [N], option ids sorted by ``end + far[sat]``.
+      absorb_t: float [N], those times [s].
+    """
+
+    order: np.ndarray
+    sat: np.ndarray
+    start: np.ndarray
+    groups: list
+    first_ok: np.ndarray
+    absorb: np.ndarray
+    absorb_t: np.ndarray
+
+
+def dp_prepare(pb: Problem) -> DPData:
+    """Group the options in start-order blocks for :func:`dp_paths`.
+
+    Args:
+      pb: Problem.
+    Returns:
+      DPData.
+    """
+    n = pb.n_options
+    s = np.asarray(pb.c_start)
+    e = np.asarray(pb.c_end)
+    sat = np.asarray(pb.c_sat, np.int64)
+    far = np.asarray(pb.far)
+    order = pb.pairs.rows  # start order (Problem keeps the pair rows so)
+    so = s[order]
+    width = min(float(np.min(e - s)), pb.near_slack) if n else 0.0
+    bounds = [0]
+    while bounds[-1] < n:
+        b0 = bounds[-1]
+        b1 = int(np.searchsorted(so, so[b0] + width, side="right"))
+        bounds.append(max(b1, int(np.searchsorted(so, so[b0], side="right"))))
+    groups = list(zip(bounds[:-1], bounds[1:], strict=True))
+    rt = e + far[sat] if n else np.zeros(0)
+    ab = np.argsort(rt, kind="stable")
+    first_ok = np.asarray(pb.c_first) <= s
+    return DPData(order, sat, s, groups, first_ok, ab, rt[ab])
+
+
+def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
+    """Exact per-satellite maximum-value sequences for option values ``w``.
+
+    Args:
+      arc: optional cost of each near pair, in ``pb.pairs`` order (far transitions and
+        first observations cost nothing).
+      used: optional list; the near-pair positions (``pb.pairs`` order) of the
+        returned paths are appended to it.
+    Returns ``(paths, values)``: per satellite the option ids of an optimal sequence
+    (time order) and its value (0 for the empty sequence). Battery not modelled.
+    """
+    n = len(w)
+    n_s = pb.n_sats
+    pairs = pb.pairs
+    src, ptr = pairs.src, pairs.ptr
+    best = np.full(n, -np.inf)
+    run = np.full(n_s, -np.inf)
+    base = np.where(d.first_ok, 0.0, -np.inf)
+    order, sat = d.order, d.sat
+    ap = 0
+    s_order = d.start[order]
+    for ga, gb in d.groups:
+        aq = int(np.searchsorted(d.absorb_t, s_order[ga], side="right"))
+        if aq > ap:
+            sl = d.absorb[ap:aq]
+            np.maximum.at(run, sat[sl], best[sl])
+            ap = aq
+        J = order[ga:gb]
+        v = np.maximum(base[J], run[sat[J]])
+        pa, pz = int(ptr[ga]), int(ptr[gb])
+        if pz > pa:
+            pv = best[src[pa:pz]]
+            if arc is not None:
+                pv = pv - arc[pa:pz]
+            at = ptr[ga:gb] - pa
+            has = ptr[ga + 1 : gb + 1] > ptr[ga:gb]
+            v[has] = np.maximum(v[has], np.maximum.reduceat(pv, at[has]))
+        best[J] = w[J] + v
+    ends = np.asarray(pb.c_end)
+    far = np.asarray(pb.far)
+    paths, values = [], []
+    for k in range(n_s):
+        lo, hi = pb.sat_lo[k], pb.sat_hi[k]
+        if hi <= lo or not best[lo:hi].max() > 0.0:
+            paths.append([])
+            values.append(0.0)
+            continue
+        j = lo + int(np.argmax(best[lo:hi]))
+        values.append(float(best[j]))
+        path = [j]
+        ids = np.arange(lo, hi)
+        while True:
+            target = best[j] - w[j]
+            if d.first_ok[j] and target <= _PATH_TOL:
+                break
+            row = pairs.row(j)
+            q0, q1 = row.start, row.stop
+            cand = src[q0:q1]
+            cv = best[cand] if arc is None else best[cand] - arc[q0:q1]
+            ok = np.flatnonzero(cv >= target - _PATH_TOL)
+            hit = cand[ok]
+            if hit.size and used is not None:
+                used.append(q0 + int(ok[0]))
+            if hit.size == 0:
+                fp = ids[ends[ids] + far[k] <= d.start[j]]
+                hit = fp[best[fp] >= target - _PATH_TOL]
+            if hit.size == 0:  # cannot happen; stop defensively
+                break
+            j = int(hit[0])
+            path.append(j)
+        paths.append(path[::-1])
+    return paths, values
+
+
+def _plan_from_paths(tl: Timeline, paths, order_fill, deadline: float):
+    """Feasible plan from DP paths: each task once (heaviest first, earliest option),
+    every insertion re-checked (maneuvers, battery); then a greedy fill."""
+    pb = tl.pb
+    tl.restore([])
+    chosen = sorted(
+        (c for p in paths for c in p), key=lambda c: (-pb.weight[pb.c_task[c]], pb.c_start[c])
+    )
+    for c in chosen:
+        if tl.assigned[pb.c_task[c]] < 0 and tl.check(c) is not None:
+            tl.insert(c)
+    greedy(tl, deadline, order_fill)
+
+
+@dataclass(frozen=True)
+class BoundResult:
+    """Outcome of :func:`lagrangian`.
+
+    Attributes:
+      best: task -> option assignment of the best repaired plan.
+      bound: the smallest upper bound seen (``inf`` if no iteration ran).
+      iterations: subgradient iterations.
+      status: "optimal" (bound met by a plan), "converged" (zero subgradient or the
+        step fell below its floor) or "time" (stopped by the deadline / cap).
+    """
+
+    best: list
+    bound: float
+    iterations: int
+    status: str
+
+
+class Prices:
+    """Projected Polyak subgradient iteration on the prices (shared by both users).
+
+    ``lam`` holds the task prices, then (``energy``) the prices of the energy budgets
+    the unpriced DP optimum overdraws (:mod:`jaxspline.search.energy`).
+    ``lam += mu (UB - target) / |g|^2 g`` with ``g = takers - 1`` (tasks) and
+    ``g = scaled usage - 1`` (budgets), projected on ``[0, w]`` / ``[0, inf)``; after
+    :data:`_STALL_ITERS` iterations without a better bound ``mu`` halves and the prices
+    restart from the best ones seen.
+    """
+
+    def __init__(self, pb: Problem, energy: bool = False):
+        self.pb = pb
+        self.d = dp_prepare(pb)
+        self.W = np.asarray(pb.weight, np.float64)
+        self.ctask = np.asarray(pb.c_task, np.int64)
+        self.en = EnergyBudgets(pb) if energy else None
+        if self.en is not None:
+            if self.en.m:
+                # price only the budgets the unpriced optimum overdraws (any subset is
+                # valid; the others rarely bind and would slow every iteration)
+                paths, _ = dp_paths(pb, self.d, self.W[self.ctask], None, used := [])
+                self.en.restrict(self._energy_usage(paths, used) > 1.0)
+            if not self.en.m:
+                self.en = None
+        m = self.en.m if self.en is not None else 0
+        # prices: tasks (in [0, w]) then energy budgets (>= 0, see search.energy)
+        self.hi = np.r_[self.W, np.full(m, np.inf)]
+        self.lam = np.zeros(self.hi.size)
+        self.best_lam = self.lam.copy()
+        self.ub, self.mu, self.stall, self.it = math.inf, 1.0, 0, 0
+
+    def solve_dp(self):
+        """DP paths at the current prices; updates the bound. Returns the paths."""
+        self.it += 1
+        n_t = self.W.size
+        w = self.W[self.ctask] - self.lam[self.ctask]
+        arc, self.used = None, None
+        if self.en is not None:
+            node_pen, arc_pen = self.en.penalties(self.lam[n_t:])
+            w, arc, self.used = w - node_pen, arc_pen, []
+        paths, vals = dp_paths(self.pb, self.d, w, arc, self.used)
+        self._record(vals, paths)
+        return paths
+
+    def _record(self, vals, paths):
+        """Bound of this iteration from the satellites' DP values (satellite order)."""
+        bound = float(sum(vals) + self.lam.sum())
+        if bound < self.ub - _GAP_TOL:
+            self.ub, self.best_lam, self.stall = bound, self.lam.copy(), 0
+        else:
+            self.stall += 1
+        self.paths = paths
+
+    def _takers(self, paths) -> np.ndarray:
+        """Number of paths taking each task (float [T])."""
+        cnt = np.zeros(self.W.size)
+        for p in paths:
+            np.add.at(cnt, self.ctask[p], 1.0)
+        return cnt
+
+    def _subgradient(self) -> np.ndarray:
+        cnt = self._takers(self.paths)
+        if self.used is None:
+            return cnt - 1.0
+        return np.r_[cnt, self._energy_usage(self.paths, self.used)] - 1.0
+
+    def _energy_usage(self, paths, used) -> np.ndarray:
+        nodes = np.zeros(self.pb.n_options, bool)
+        nodes[[c for p in paths for c in p]] = True
+        arcs = np.zeros(self.en.n_near, bool)
+        arcs[used] = True
+        return self.en.usage(nodes, arcs)
+
+    def step(self, target: float) -> bool:
+        """Move the prices toward ``target``; False when the iteration has converged."""
+        if self.stall >= _STALL_ITERS:
+            self.mu, self.stall, self.lam = self.mu * 0.5, 0, self.best_lam.copy()
+            return self.mu >= _MU_MIN
+        g = self._subgradient()
+        lam, hi = self.lam, self.hi
+        g[((lam <= 0.0) & (g < 0.0)) | ((lam >= hi) & (g > 0.0))] = 0.0
+        gn = float(np.dot(g, g))
+        if gn == 0.0 or self.mu < _MU_MIN:
+            return False
+        self.lam = np.clip(lam + self.mu * max(self.ub - target, 1e-3) / gn * g, 0.0, hi)
+        return True
+
+
+def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report=None):
+    """Lagrangian phase with repaired plans (see module docstring).
+
+    The step target is the best repaired plan's value; ``tl`` ends at the best plan.
+
+    Args:
+      tl: Timeline over the problem (its plan is replaced).
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      order_fill: task order used to fill each repaired plan greedily.
+      max_iters: cap on the subgradient iterations (None: the deadline alone).
+      report: callable ``report(iteration, bound, best_value)`` or None.
+    Returns:
+      BoundResult.
+    """
+    pb = tl.pb
+    best = list(tl.assigned)
+    best_w = tl.W
+    if pb.n_options == 0:
+        return BoundResult(best, 0.0, 0, "optimal")
+    pr = Prices(pb, energy=True)
+    status = "time"
+    while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
+        paths = pr.solve_dp()
+        if (pr.it - 1) % _REPAIR_EVERY == 0:
+            _plan_from_paths(tl, paths, order_fill, deadline)
+            if tl.W > best_w:
+                best_w, best = tl.W, list(tl.assigned)
+        if pr.ub - best_w <= _GAP_TOL * max(1.0, pr.ub):
+            status = "optimal"
+            break
+        if not pr.step(best_w):
+            status = "converged"
+            break
+        if report is not None:
+            report(pr.it, pr.ub, best_w)
+    tl.restore(best)
+    return BoundResult(best, pr.ub, pr.it, status)
+
+
+def upper_bound(
+    pb: Problem, target: float, deadline: float, max_iters=None, energy: bool = False
+) -> BoundResult:
+    """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
+
+    Deterministic for a given ``max_iters``.
+
+    Args:
+      pb: Problem.
+      target: float, a value some plan reaches (it sets the step size only; any value
+        gives a valid bound).
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      max_iters: cap on the iterations (None: the deadline alone).
+      energy: price the battery budgets of :mod:`jaxspline.search.energy` too
+        (off: the battery is dropped).
+    Returns:
+      BoundResult with status "converged" or "time" (cap / deadline reached).
+    """
+    if pb.n_options == 0:
+        return BoundResult([], 0.0, 0, "optimal")
+    pr = Prices(pb, energy=energy)
+    status = "time"
+    while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
+        pr.solve_dp()
+        if not pr.step(target):
+            status = "converged"
+            break
+    return BoundResult([], pr.ub, pr.it, status)

@@ -1,0 +1,230 @@
+"""Greedy construction, large-neighbourhood search and the earliest-start pass.
+
+* Greedy: tasks by value (heaviest first; fewest satellites, then fewest options
+  first among equals) are inserted at the feasible option that consumes the least
+  timeline time (maneuver in + imaging + maneuver out minus the maneuver it
+  replaces), earlier end as tie-break.
+* LNS until the deadline: destroy a window of one satellite's timeline (80 %: around
+  an option of an unscheduled task picked with probability proportional to its
+  value, that option then forced in; 20 %: around a random scheduled observation),
+  then re-insert the removed tasks anywhere together with the unscheduled tasks that
+  have options in the window, heaviest first with 20 % noise; threshold acceptance
+  (a step may lose up to ``temp * U(0, 1)`` value early on, nothing at the end); the
+  best plan is kept. Where a battery binds, the moves weigh energy
+  (:mod:`jaxspline.search.lns_energy`): targets by value times value per Wh,
+  the destroy around the cheapest of a few observations, re-insertion by value per Wh,
+  and a forced option that fails on the battery alone gets room by removing the
+  observations of least value per Wh that can reach it.
+* Earliest pass: each observation moves to the earliest feasible option of its task.
+"""
+
+from __future__ import annotations
+
+import bisect
+import itertools
+import time
+
+from jaxspline.search import clock
+from jaxspline.search.lns_energy import EnergyRank, make_room
+from jaxspline.search.timeline import Timeline
+
+__all__ = ["earliest_pass", "greedy", "greedy_order", "lns"]
+
+_RAD_TARGET = (30.0, 60.0, 90.0, 150.0)  # destroy half-widths [s] around an unscheduled task
+_RAD_RANDOM = (60.0, 120.0, 240.0)  # ... around a random scheduled observation
+_P_TARGETED = 0.8  # share of targeted destroy moves
+_POOL_LOOKBACK = 400.0  # [s] options starting this long before a window are re-offered
+_ORDER_NOISE = 0.2  # relative noise of the re-insertion order
+_REPORT_EVERY = 5.0  # [s] between progress reports
+_REFRESH_EVERY = 16  # iterations between refreshes of the unscheduled list
+_DEADLINE_CHECK = 64  # greedy insertions between deadline checks
+_TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
+
+
+def greedy_order(tl: Timeline):
+    """Tasks with options, heaviest first, fewest satellites / options first among equals.
+
+    Args:
+      tl: Timeline.
+    Returns:
+      list of task indices.
+    """
+    pb = tl.pb
+    return sorted(
+        (t for t in range(len(pb.weight)) if pb.task_cands[t]),
+        key=lambda t: (
+            -pb.weight[t],
+            len({pb.c_sat[c] for c in pb.task_cands[t]}),
+            len(pb.task_cands[t]),
+            t,
+        ),
+    )
+
+
+def greedy(tl: Timeline, deadline: float, order=None):
+    """Insert the tasks greedily (see module docstring) until done or the deadline.
+
+    Args:
+      tl: Timeline (tasks already assigned stay).
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      order: task order; None uses :func:`greedy_order`.
+    """
+    for i, t in enumerate(order if order is not None else greedy_order(tl)):
+        if i % _DEADLINE_CHECK == 0 and clock.now() > deadline:
+            break
+        if tl.assigned[t] < 0:
+            tl.best_insert(t)
+    tl.commit()
+
+
+def _destroy(tl: Timeline, k: int, lo: float, hi: float):
+    """Remove satellite k's observations touching [lo, hi]; None if that is infeasible."""
+    pb = tl.pb
+    line = tl.tl[k]
+    b = bisect.bisect_right(tl.tl_s[k], hi)
+    a = b
+    while a > 0 and pb.c_end[line[a - 1]] >= lo:
+        a -= 1
+    removed = line[a:b]
+    for c in removed:
+        tl.remove(c)
+    return removed if (not removed or tl.removal_ok(k, a)) else None
+
+
+def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
+    """Large-neighbourhood search until ``deadline`` (or ``max_iters``).
+
+    Args:
+      tl: Timeline holding the start plan; it ends at the best plan.
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      rng: numpy Generator.
+      max_iters: cap on the iterations (None: the deadline alone).
+      report: callable ``report(it, improved)`` called every few seconds (progress
+        display), or None.
+    Returns:
+      int, the number of iterations.
+    """
+    pb = tl.pb
+    t_start = time.monotonic()
+    best_key = (tl.W, tl.N)
+    best = list(tl.assigned)
+    has = [t for t in range(len(pb.weight)) if pb.task_cands[t]]
+    if not has:
+        return 0
+    er = EnergyRank(pb)
+    un = [t for t in has if tl.assigned[t] < 0]
+    cw = list(itertools.accumulate(er.target_weights(tl, un)))
+    it = improved = 0
+    dirty = False
+    last = time.monotonic()
+    while (max_iters is None or it < max_iters) and clock.now() < deadline:
+        it += 1
+        base = tl.score()
+        mark = len(tl.log)
+        forced = -1
+        if un and rng.random() < _P_TARGETED:
+            t = rng.choices(un, cum_weights=cw, k=1)[0]
+            if tl.assigned[t] >= 0:
+                continue
+            c = rng.choice(pb.task_cands[t])
+            k = pb.c_sat[c]
+            rad = rng.choice(_RAD_TARGET)
+            lo, hi = pb.c_start[c] - rad, pb.c_end[c] + rad
+            forced = c
+        else:
+            k = rng.randrange(pb.n_sats)
+            if not tl.tl[k]:
+                continue
+            c0 = er.cheap_pick(tl, k, rng) if er.binds(tl, k) else rng.choice(tl.tl[k])
+            rad = rng.choice(_RAD_RANDOM)
+            lo, hi = pb.c_start[c0] - rad, pb.c_end[c0] + rad
+        removed = _destroy(tl, k, lo, hi)
+        if removed is None:
+            tl.undo_to(mark)
+            continue
+        if forced >= 0:
+            if tl.check(forced) is not None:
+                tl.insert(forced)
+            elif tl.battery_failed:
+                m2 = len(tl.log)
+                room = make_room(tl, forced, er, rng)
+                if room is None:
+                    tl.undo_to(m2)
+                else:
+                    removed += room
+                    tl.insert(forced)
+        moved = {pb.c_task[c] for c in removed}
+        pool = set(moved)
+        a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
+        b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
+        for c in range(a, b):
+            if tl.assigned[pb.c_task[c]] < 0:
+                pool.add(pb.c_task[c])
+        if er.binds(tl, k):
+            pool = er.order(pool, rng)
+        else:
+            pool = sorted(
+                pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t)
+            )
+        for t in pool:  # only satellite k has new room for a task that was waiting
+            if tl.assigned[t] < 0:
+                tl.best_insert(t, rng=rng, sat=None if t in moved else k)
+        if max_iters is not None:
+            frac = it / max_iters
+        else:
+            frac = (time.monotonic() - t_start) / max(1e-9, deadline - t_start)
+        thr = _TEMPERATURE * max(0.0, 1.0 - frac)
+        if tl.W < base[0] - thr * rng.random() - 1e-9:
+            tl.undo_to(mark)
+        else:
+            dirty |= tl.score() != base
+            if dirty and it % _REFRESH_EVERY == 0:
+                un = [t for t in has if tl.assigned[t] < 0]
+                cw = list(itertools.accumulate(er.target_weights(tl, un)))
+                dirty = False
+            if (tl.W, tl.N) > best_key:
+                improved += 1
+                best_key = (tl.W, tl.N)
+                best = list(tl.assigned)
+            tl.commit()
+        if report is not None and time.monotonic() - last > _REPORT_EVERY:
+            last = time.monotonic()
+            report(it, improved)
+    if (tl.W, tl.N) < best_key:
+        tl.restore(best)
+    return it
+
+
+def earliest_pass(tl: Timeline, deadline: float):
+    """Move each observation to the earliest feasible option of its task (value unchanged).
+
+    Args:
+      tl: Timeline, modified in place.
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+    """
+    pb = tl.pb
+    for t in range(len(pb.weight)):
+        if clock.now() > deadline:
+            return
+        c = tl.assigned[t]
+        if c < 0:
+            continue
+        mark = len(tl.log)
+        base = tl.score()
+        k = pb.c_sat[c]
+        pos0 = tl.tl[k].index(c)
+        tl.remove(c)
+        if not tl.removal_ok(k, pos0):
+            tl.undo_to(mark)
+            continue
+        best = -1
+        for c2 in sorted(pb.task_cands[t], key=lambda x: pb.c_end[x]):
+            if pb.c_end[c2] >= pb.c_end[c]:
+                break
+            if tl.check(c2) is not None:
+                best = c2
+                break
+        tl.insert(best if best >= 0 else c)
+        if tl.score() < base:
+            tl.undo_to(mark)
+        tl.commit()

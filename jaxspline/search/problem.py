@@ -1,0 +1,177 @@
+"""The search's view of a planning problem: options, their near pairs, transition rules.
+
+Built by :func:`jaxspline.plan` from the screened options. Times are seconds. The
+transition rule between two options i -> j of one satellite is the required time
+``need(i, j)`` (:mod:`jaxspline.screen.models`): feasible iff ``t_start[j] - t_end[i] >=
+need``. Rest-to-rest satellites evaluate it from the lines of sight through their
+slew table (cheap, any pair); per-channel satellites look it up among the screened
+near pairs (:class:`jaxspline.search.store.NearPairs`, 8 bytes a pair); pairs
+at least ``far[sat]`` apart are always feasible. When the engine
+also screened the flown joins (:mod:`jaxspline.planning.join_screen`), every satellite
+looks its near pairs up (``lookup``): a pair the join screen removed is infeasible.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from jaxspline.search.battery import BatteryModel
+from jaxspline.search.store import NearPairs, start_order
+
+__all__ = ["Problem"]
+
+
+@dataclass
+class Problem:
+    """Options, tasks and transition data for the search (see module docstring).
+
+    Attributes:
+      n_sats: number of satellites.
+      weight: per task (target) value.
+      c_task, c_sat: per option target / satellite index.
+      c_start, c_end: per option imaging interval [s].
+      c_first: per option required time before it as its satellite's first
+        observation (inf: not allowed first).
+      c_ls, c_le: per option unit lines of sight (tuples) at start / end.
+      tables: per satellite a :class:`jaxspline.screen.models.SlewTable` (rest-to-rest) or None.
+      pairs: :class:`NearPairs`, every feasible near pair (every model) by destination.
+      far: per satellite the always-feasible gap [s].
+      battery: :class:`BatteryModel`.
+      task_cands: per task its option ids.
+      sat_lo, sat_hi: option id range per satellite (options sorted by sat, start).
+      sat_starts: per satellite the sorted starts of its options.
+      near_slack: the near pairs include every feasible pair with gap < far + this [s]
+        (at least the shortest observation: the DP's block width, see ``dp_prepare``).
+      lookup: per satellite, True when pairs closer than ``far`` are feasible only if
+        they are among the near pairs (per-channel satellites, and every satellite
+        whose joins were screened).
+    """
+
+    n_sats: int
+    weight: list
+    c_task: list
+    c_sat: list
+    c_start: list
+    c_end: list
+    c_first: list
+    c_ls: list
+    c_le: list
+    tables: list
+    pairs: NearPairs
+    far: list
+    battery: BatteryModel
+    task_cands: list
+    sat_lo: list
+    sat_hi: list
+    sat_starts: list
+    near_slack: float = 0.0
+    lookup: list | None = None
+
+    def __post_init__(self):
+        if self.lookup is None:  # the model alone decides: tables where there are tables
+            self.lookup = [t is None for t in self.tables]
+        # the hot path of need(): tables of satellites whose near pairs are not looked up
+        self._free = [None if look else t for t, look in zip(self.tables, self.lookup, strict=True)]
+        rows = start_order(self.c_start, self.c_sat)
+        if not np.array_equal(self.pairs.rows, rows):  # the DP walks rows in start order
+            p = self.pairs
+            self.pairs = NearPairs.from_arrays(self.n_options, p.src, p.dst(), p.need, rows)
+
+    @property
+    def near_src(self) -> np.ndarray:
+        """int64 [P] source of every near pair (``pairs`` order; built on demand)."""
+        return self.pairs.src.astype(np.int64)
+
+    @property
+    def near_dst(self) -> np.ndarray:
+        """int64 [P] destination of every near pair (``pairs`` order; built on demand)."""
+        return self.pairs.dst()
+
+    @property
+    def n_options(self) -> int:
+        """Number of options."""
+        return len(self.c_task)
+
+    def need(self, i: int, j: int) -> float:
+        """Required time between the end of option i and the start of option j (same satellite).
+
+        Args:
+          i: int, option id.
+          j: int, option id.
+        Returns:
+          float [s]; inf when (i, j) is not a feasible near pair of a per-channel satellite.
+        """
+        k = self.c_sat[j]
+        table = self._free[k]
+        if table is None:
+            gap = self.c_start[j] - self.c_end[i]
+            if gap < self.far[k]:
+                return self.pairs.lookup(i, j)
+            table = self.tables[k]
+            if table is None:
+                return self.far[k]
+        a, b = self.c_le[i], self.c_ls[j]
+        cx = a[1] * b[2] - a[2] * b[1]
+        cy = a[2] * b[0] - a[0] * b[2]
+        cz = a[0] * b[1] - a[1] * b[0]
+        th = math.atan2(
+            math.sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+        )
+        return table.scalar(th)
+
+    @classmethod
+    def build(cls, opp, sats, first, near_pairs, far, tables, battery, weights, lookup=None):
+        """Assemble from numpy data.
+
+        Args:
+          opp: :class:`jaxspline.planning.opportunities.Opportunities` sorted by (sat, start).
+          sats: the scenario's satellites.
+          first: [N] required time before each option as a first observation.
+          near_pairs: :class:`NearPairs`, or (src, dst, need) arrays of the feasible
+            pairs closer than far.
+          far: [S] always-feasible gaps.
+          tables: per satellite SlewTable or None.
+          battery: :class:`BatteryModel`.
+          weights: per target value.
+          lookup: [S] bool, satellites whose near pairs are authoritative (default:
+            the per-channel ones).
+        """
+        o = opp.options
+        sat = np.asarray(o.sat, np.int64)
+        n = sat.size
+        n_s = len(sats)
+        task = np.asarray(o.route, np.int64)
+        n_t = len(weights)
+        task_cands = [[] for _ in range(n_t)]
+        for ci, t in enumerate(task.tolist()):
+            task_cands[t].append(ci)
+        lo = np.searchsorted(sat, np.arange(n_s), side="left").tolist()
+        hi = np.searchsorted(sat, np.arange(n_s), side="right").tolist()
+        starts = np.asarray(o.t_start, np.float64).tolist()
+        if not isinstance(near_pairs, NearPairs):
+            near_pairs = NearPairs.from_arrays(n, *near_pairs, rows=start_order(o.t_start, sat))
+        pc = np.array([s.model == "per_channel" for s in sats], bool)
+        look = pc if lookup is None else np.asarray(lookup, bool) | pc
+        return cls(
+            n_sats=n_s,
+            weight=[float(w) for w in weights],
+            c_task=task.tolist(),
+            c_sat=sat.tolist(),
+            c_start=starts,
+            c_end=np.asarray(o.t_end, np.float64).tolist(),
+            c_first=np.asarray(first, np.float64).tolist(),
+            c_ls=[tuple(v) for v in np.asarray(o.start_los).tolist()],
+            c_le=[tuple(v) for v in np.asarray(o.end_los).tolist()],
+            tables=list(tables),
+            pairs=near_pairs,
+            far=[float(f) for f in far],
+            battery=battery,
+            task_cands=task_cands,
+            sat_lo=lo,
+            sat_hi=hi,
+            sat_starts=[starts[a:b] for a, b in zip(lo, hi, strict=True)],
+            lookup=look.tolist(),
+        )

@@ -1,0 +1,457 @@
+"""The Lagrangian bound and the plan search, sharded by satellite across processes.
+
+**Bound.** Under task prices the bound splits into one longest-path DP per satellite
+(:mod:`jaxspline.search.lagrangian`). Here every process owns some satellites:
+it screens and stores only their options and near pairs (its own
+:class:`jaxspline.search.Problem`, so memory is split too) and solves only their
+DPs. Once per iteration the processes exchange one float64 vector through
+``jax.distributed`` (:func:`jax.experimental.multihost_utils.process_allgather`):
+
+    [DP value of every satellite (0 where not owned) | takers per task | stop flag]
+
+Owned values are combined by satellite (adding exact zeros) and summed in satellite
+order, takers are integers, so every process holds the same bound and subgradient as
+a single process would and takes the same projected Polyak step: the prices, the bound
+and the iteration count equal :func:`jaxspline.search.upper_bound` (battery
+relaxed) bit for bit. A process that reaches its deadline raises the stop flag; all
+stop together at the end of that iteration (no process waits for a missing peer).
+
+**Plan** (:func:`sharded_plan`). After the bound phase every process holds the same
+best prices. The merge rule gives every task exactly one owner process
+(:func:`task_owners`, computed identically everywhere from one all-gather of two
+per-task vectors): the process whose satellites' DP paths at the best prices take the
+task most often; among equals the one holding most of the task's options; then the
+lowest index. Each process then runs the ordinary search
+(:func:`jaxspline.search.solve`: greedy, Lagrangian with repaired plans, LNS,
+earliest pass) on its problem restricted to the tasks it owns
+(:func:`restrict_tasks`). A task that no process imaged is handed to the best other
+process by the same rule (when that one has options of it), which inserts it in a
+second round (greedy, then LNS on :data:`_SECOND_SHARE` of the budget) on its plan
+restricted to its new set of tasks. Each process optionally checks its plan
+(``check``), and one more all-gather of a per-task vector (satellite, option, start,
+end) merges the plans. The processes' plans are disjoint in satellites and in tasks,
+every transition is between two observations of one satellite, the battery is per
+satellite: their union is a plan of the whole scenario that images each task at most
+once, valid wherever each part is, of value the sum of the parts. Its value can be
+below a single process's plan (a task is only tried on the satellites of its owner
+and then of one other process, and no move exchanges tasks across processes); the
+bound is the single-process one.
+
+Satellite ``k`` belongs to process ``k % process_count``.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import resource
+import time
+from typing import NamedTuple
+
+import numpy as np
+
+from jaxspline.search import Timeline, clock, greedy, lns, solve
+from jaxspline.search.lagrangian import BoundResult, Prices, dp_paths
+from jaxspline.search.problem import Problem
+from jaxspline.search.store import NearPairs
+
+__all__ = [
+    "ShardedPlan",
+    "jax_allgather",
+    "owned_satellites",
+    "restrict_tasks",
+    "sharded_plan",
+    "sharded_upper_bound",
+    "task_owners",
+]
+
+# per-process figures gathered with the plans (ShardedPlan.processes); the real-valued ones
+_STATS = (
+    "tasks",
+    "handed_in",
+    "searched",
+    "dropped",
+    "lns_iterations",
+    "options",
+    "near_pairs",
+    "peak_rss_mb",
+)
+_REAL_STATS = ("searched", "peak_rss_mb")
+_SECOND_SHARE = 0.25  # share of the search budget (time, LNS iterations) of the second round
+
+
+def owned_satellites(n_sats: int, index: int, count: int) -> list[int]:
+    """Satellites of process ``index`` among ``count``: ``k % count == index``.
+
+    Args:
+      n_sats: number of satellites of the scenario.
+      index: this process (0-based).
+      count: number of processes.
+    Returns:
+      sorted list of satellite indices (possibly empty).
+    """
+    if not (0 <= index < count):
+        raise ValueError(f"process index {index!r} outside [0, {count})")
+    return list(range(index, n_sats, count))
+
+
+def jax_allgather(x: np.ndarray) -> np.ndarray:
+    """[P, ...] stack of every process's ``x`` (jax.distributed must be initialized).
+
+    Args:
+      x: this process's array (the same shape in every process).
+    Returns:
+      float64 [P, ...], row p from process p.
+    """
+    from jax.experimental import multihost_utils
+
+    return np.asarray(multihost_utils.process_allgather(np.asarray(x)), np.float64)
+
+
+class _ShardPrices(Prices):
+    """:class:`Prices` whose DP covers the owned satellites and whose totals are gathered."""
+
+    def __init__(self, pb: Problem, sat_ids, n_sats: int, allgather):
+        super().__init__(pb, energy=False)
+        self.sat_ids = np.asarray(sat_ids, np.int64)
+        self.n_sats = int(n_sats)
+        self.allgather = allgather
+        self.stop = False
+
+    def solve_dp(self, want_stop: bool = False):
+        self.it += 1
+        n_t = self.W.size
+        w = self.W[self.ctask] - self.lam[self.ctask]
+        paths, vals = dp_paths(self.pb, self.d, w)
+        local = np.zeros(self.n_sats + n_t + 1)
+        local[self.sat_ids] = vals
+        local[self.n_sats : -1] = self._takers(paths)
+        local[-1] = float(want_stop)
+        every = self.allgather(local)
+        vals_all = every[:, : self.n_sats].sum(axis=0)  # one owner each: exact
+        self.cnt = every[:, self.n_sats : -1].sum(axis=0)
+        self.stop = bool(every[:, -1].max() > 0.0)
+        self._record(vals_all.tolist(), paths)
+        return paths
+
+    def _subgradient(self) -> np.ndarray:
+        return self.cnt - 1.0
+
+
+def _iterate(pb, sat_ids, n_sats, target, deadline, max_iters, allgather):
+    """The sharded subgradient iteration; returns (prices state, BoundResult)."""
+    if len(sat_ids) != pb.n_sats:
+        raise ValueError(f"sat_ids has {len(sat_ids)} entries for {pb.n_sats} satellites")
+    pr = _ShardPrices(pb, sat_ids, n_sats, allgather)
+    status = "time"
+    while max_iters is None or pr.it < max_iters:
+        pr.solve_dp(want_stop=not clock.now() < deadline)
+        if pr.stop:
+            break
+        if not pr.step(target):
+            status = "converged"
+            break
+    ub = pr.ub if pr.it else math.inf
+    return pr, BoundResult([], ub, pr.it, status)
+
+
+def sharded_upper_bound(
+    pb: Problem,
+    sat_ids,
+    n_sats: int,
+    target: float,
+    deadline: float,
+    max_iters=None,
+    allgather=jax_allgather,
+) -> BoundResult:
+    """The Lagrangian bound (battery relaxed) of a scenario whose satellites are sharded.
+
+    Every process calls it with its own problem; all return the same result.
+
+    Args:
+      pb: this process's Problem (its satellites only, all the scenario's tasks).
+      sat_ids: the scenario-wide index of each of ``pb``'s satellites.
+      n_sats: satellites of the whole scenario.
+      target: a plan value reached (sets the step size only; any value gives a bound);
+        must be the same in every process.
+      deadline: ``time.monotonic()`` value at which this process asks to stop [s].
+      max_iters: cap on the iterations (None: the deadlines alone).
+      allgather: callable ``x [L] -> [P, L]`` over the processes (default: through
+        ``jax.distributed``); a single process passes ``lambda x: x[None]``.
+    Returns:
+      BoundResult (``best`` empty), status "converged" or "time".
+    """
+    return _iterate(pb, sat_ids, n_sats, target, deadline, max_iters, allgather)[1]
+
+
+def task_owners(takes, options) -> np.ndarray:
+    """The merge rule: the one process that may image each task.
+
+    For each task, the process with the most DP paths taking it at the best prices;
+    among equals the one with the most options of the task; then the lowest index.
+
+    Args:
+      takes: [P, T] per process, the number of its satellites' DP paths that take
+        each task at the best prices.
+      options: [P, T] per process, its options of each task.
+    Returns:
+      int64 [T], the owner process of each task.
+    """
+    takes = np.asarray(takes, np.float64)
+    options = np.asarray(options, np.float64)
+    if takes.ndim != 2 or takes.shape != options.shape or not takes.shape[0]:
+        raise ValueError(
+            f"takes {takes.shape} and options {options.shape} must be one [P, T] shape, P >= 1"
+        )
+    cand = takes == takes.max(axis=0)
+    opts = np.where(cand, options, -1.0)
+    cand &= opts == opts.max(axis=0)
+    return np.argmax(cand, axis=0).astype(np.int64)  # the first True: lowest index
+
+
+def restrict_tasks(pb: Problem, keep) -> tuple[Problem, np.ndarray]:
+    """``pb`` with only the options of the kept tasks (the others keep no option).
+
+    Tasks keep their indices and weights; options keep their order (satellite, then
+    start), data and near pairs among themselves. A plan of the result is a plan of
+    ``pb`` (through ``ids``) that images kept tasks only.
+
+    Args:
+      pb: Problem.
+      keep: bool [T], the tasks to keep.
+    Returns:
+      (Problem, ids): the restricted problem and int64 [N'] the ``pb`` option id of
+      each of its options (ascending).
+    """
+    keep = np.asarray(keep, bool)
+    if keep.shape != (len(pb.weight),):
+        raise ValueError(
+            f"keep has shape {keep.shape}, expected one flag a task ({len(pb.weight)},)"
+        )
+    on = keep[np.asarray(pb.c_task, np.int64)] if pb.n_options else np.zeros(0, bool)
+    ids = np.flatnonzero(on)
+    new = np.full(pb.n_options, -1, np.int64)
+    new[ids] = np.arange(ids.size)
+    p = pb.pairs
+    row_on = on[p.rows]
+    pair_on = on[p.src] & np.repeat(row_on, np.diff(p.ptr))
+    kept = np.r_[0, np.cumsum(pair_on)]
+    per_row = (kept[p.ptr[1:]] - kept[p.ptr[:-1]])[row_on]
+    del kept
+    pairs = NearPairs(
+        np.r_[0, np.cumsum(per_row)], new[p.src[pair_on]], p.need[pair_on], new[p.rows[row_on]]
+    )
+    sat = np.asarray(pb.c_sat, np.int64)[ids]
+    lo = np.searchsorted(sat, np.arange(pb.n_sats), side="left").tolist()
+    hi = np.searchsorted(sat, np.arange(pb.n_sats), side="right").tolist()
+    sel = ids.tolist()
+    starts = [pb.c_start[c] for c in sel]
+    newl = new.tolist()
+    sub = Problem(
+        n_sats=pb.n_sats,
+        weight=list(pb.weight),
+        c_task=[pb.c_task[c] for c in sel],
+        c_sat=sat.tolist(),
+        c_start=starts,
+        c_end=[pb.c_end[c] for c in sel],
+        c_first=[pb.c_first[c] for c in sel],
+        c_ls=[pb.c_ls[c] for c in sel],
+        c_le=[pb.c_le[c] for c in sel],
+        tables=list(pb.tables),
+        pairs=pairs,
+        far=list(pb.far),
+        battery=pb.battery,
+        task_cands=[
+            [newl[c] for c in cands] if keep[t] else [] for t, cands in enumerate(pb.task_cands)
+        ],
+        sat_lo=lo,
+        sat_hi=hi,
+        sat_starts=[starts[a:b] for a, b in zip(lo, hi, strict=True)],
+        near_slack=pb.near_slack,
+        lookup=list(pb.lookup),
+    )
+    return sub, ids
+
+
+class ShardedPlan(NamedTuple):
+    """Outcome of :func:`sharded_plan`, the same in every process.
+
+    Attributes:
+      bound: BoundResult of the sharded bound phase (``best`` empty).
+      owner: int64 [T], the process allowed to image each task (after the hand-over).
+      sat: int64 [T], the scenario-wide satellite imaging each task (-1: none).
+      option: int64 [T], that option's index among its satellite's options in start
+        order (the planner's option table of that satellite; -1: none).
+      start, end: float64 [T], its imaging interval [s] (nan: none).
+      value: total value of the merged plan.
+      processes: per process a dict: ``tasks`` (owned tasks with options there),
+        ``handed_in`` (tasks received in the second round), ``searched`` (value of its
+        plan before ``check``), ``dropped`` (observations ``check`` removed),
+        ``lns_iterations`` (both rounds), ``options`` and ``near_pairs`` (of its first
+        restricted problem), ``peak_rss_mb`` (before the merge).
+    """
+
+    bound: BoundResult
+    owner: np.ndarray
+    sat: np.ndarray
+    option: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    value: float
+    processes: list
+
+
+def sharded_plan(
+    pb: Problem,
+    sat_ids,
+    n_sats: int,
+    index: int,
+    target: float,
+    bound_deadline: float,
+    search_time: float,
+    *,
+    bound_iters: int | None = None,
+    search_iters: int | None = None,
+    seed: int = 0,
+    lagrangian_share: float = 0.3,
+    exact_max_options: int = 0,
+    check=None,
+    allgather=jax_allgather,
+) -> ShardedPlan:
+    """Bound, owners, per-process search and merged plan (module docstring).
+
+    Every process calls it with its own problem and the same other arguments (except
+    ``index``); all return the same result. After the bound phase come three
+    all-gathers: the owner rule's inputs, the first round's imaged tasks (more than
+    one process) and the plans; each process searches alone in between.
+
+    Args:
+      pb: this process's Problem (its satellites only, all the scenario's tasks).
+      sat_ids: the scenario-wide index of each of ``pb``'s satellites.
+      n_sats: satellites of the whole scenario.
+      index: this process's row in ``allgather``'s result.
+      target: step-size target of the bound (as :func:`sharded_upper_bound`).
+      bound_deadline: ``time.monotonic()`` value at which the bound phase stops [s].
+      search_time: budget of this process's search after the bound phase [s]
+        (``inf`` with ``search_iters``).
+      bound_iters: cap on the bound iterations (None: ``bound_deadline`` alone).
+      search_iters: cap of the search (``max_iters`` of
+        :func:`jaxspline.search.solve` in the first round, a quarter of it for
+        the second round's LNS; None: ``search_time`` alone). With both caps the
+        result is a function of the inputs alone.
+      seed: seed of every process's search.
+      lagrangian_share, exact_max_options: as :func:`jaxspline.search.solve`.
+      check: optional callable ``option ids of pb -> the ids that pass``, run on this
+        process's plan before the merge (e.g. the independent check, dropping
+        violations); None: the search's plan as it is.
+      allgather: callable ``x [L] -> [P, L]`` over the processes.
+    Returns:
+      ShardedPlan.
+    """
+    if not search_time >= 0:  # nan and negatives out; +inf with search_iters
+        raise ValueError(f"search_time must be a number of seconds >= 0, got {search_time!r}")
+    pr, bound = _iterate(pb, sat_ids, n_sats, target, bound_deadline, bound_iters, allgather)
+    n_t = pr.W.size
+    paths, _ = dp_paths(pb, pr.d, pr.W[pr.ctask] - pr.best_lam[pr.ctask])
+    opts = np.bincount(pr.ctask, minlength=n_t).astype(np.float64)
+    every = allgather(np.r_[pr._takers(paths), opts])
+    n_p = every.shape[0]
+    if not (0 <= index < n_p):
+        raise ValueError(f"index {index!r} outside the {n_p} processes")
+    takes, options = every[:, :n_t], every[:, n_t:]
+    owner = task_owners(takes, options)
+    if search_iters is not None:  # iteration-bound: the clock does not cut (as solve)
+        first_end = search_end = math.inf
+    else:
+        t0 = time.monotonic()
+        search_end = t0 + search_time
+        first_end = t0 + (1.0 - _SECOND_SHARE * (n_p > 1)) * search_time
+    # first round: the ordinary search on the tasks this process owns
+    sub, ids = restrict_tasks(pb, owner == index)
+    res = solve(
+        sub,
+        first_end,
+        seed=seed,
+        lagrangian_share=lagrangian_share,
+        exact_max_options=exact_max_options,
+        max_iters=search_iters,
+    )
+    chosen = [int(ids[c]) for c in res.timeline.assigned if c >= 0]
+    its, handed = res.stats["lns_iterations"], 0
+    if n_p > 1:  # second round: the tasks their owners left out, to the next process
+        imaged = np.zeros(n_t)
+        imaged[[pb.c_task[c] for c in chosen]] = 1.0
+        left = allgather(imaged).sum(axis=0) == 0.0
+        first = owner
+        owner = _hand_over(first, left, takes, options)
+        incoming = (owner == index) & (first != index)
+        handed = int(incoming.sum())
+        if handed:
+            chosen, its2 = _second_round(pb, chosen, owner == index, search_end, search_iters, seed)
+            its += its2
+    searched = float(pr.W[[pb.c_task[c] for c in chosen]].sum())
+    kept = chosen if check is None else [int(c) for c in check(chosen)]
+    local = np.full((4, n_t), -1.0)
+    local[2:] = np.nan
+    for c in kept:
+        k = pb.c_sat[c]
+        local[:, pb.c_task[c]] = (sat_ids[k], c - pb.sat_lo[k], pb.c_start[c], pb.c_end[c])
+    rss = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)  # Linux: KiB
+    tasks = sum(1 for t in range(n_t) if sub.task_cands[t])
+    stats = [tasks, handed, searched, len(chosen) - len(kept), its, sub.n_options]
+    stats += [len(sub.pairs), rss]
+    every = allgather(np.r_[local.ravel(), stats])
+    return _merge(every, owner, pr.W, bound)
+
+
+def _hand_over(owner, left, takes, options) -> np.ndarray:
+    """Owners after the first round: a task its owner left out goes to the best other
+    process by :func:`task_owners` when that process has options of it."""
+    n_p, n_t = takes.shape
+    other = owner[None] != np.arange(n_p)[:, None]
+    nxt = task_owners(np.where(other, takes, -1.0), np.where(other, options, -1.0))
+    go = left & (options[nxt, np.arange(n_t)] > 0.0)
+    return np.where(go, nxt, owner)
+
+
+def _second_round(pb, chosen, keep, deadline, search_iters, seed):
+    """The first round's plan (``pb`` option ids) on the tasks ``keep``, then a greedy
+    pass and a short LNS; returns (option ids of ``pb``, LNS iterations)."""
+    sub, ids = restrict_tasks(pb, keep)
+    tl = Timeline(sub)
+    at = np.minimum(np.searchsorted(ids, chosen), max(ids.size - 1, 0)).astype(np.int64)
+    if len(chosen) and not np.array_equal(ids[at], chosen):
+        raise RuntimeError("the second round lost a task of the first round's plan")
+    assigned = [-1] * len(pb.weight)
+    for c, a in zip(chosen, at.tolist(), strict=True):
+        assigned[pb.c_task[c]] = a
+    tl.restore(assigned)
+    greedy(tl, math.inf)  # complete, as the first greedy of solve
+    iters = None if search_iters is None else int(_SECOND_SHARE * search_iters)
+    its = lns(tl, deadline, random.Random(seed), iters)
+    return [int(ids[c]) for c in tl.assigned if c >= 0], its
+
+
+def _merge(every, owner, weight, bound) -> ShardedPlan:
+    """The merged plan from the gathered per-task vectors (see :func:`sharded_plan`)."""
+    n_p, n_t = every.shape[0], weight.size
+    per = every[:, : 4 * n_t].reshape(n_p, 4, n_t)
+    taken = per[:, 0] >= 0.0
+    if (taken & (owner[None] != np.arange(n_p)[:, None])).any():
+        raise RuntimeError("a process imaged a task it does not own: the merge rule is broken")
+    pick = per[owner, :, np.arange(n_t)]  # [T, 4]: the owner's row of each task
+    sat = pick[:, 0].astype(np.int64)
+    processes = []
+    for row in every[:, 4 * n_t :].tolist():
+        st = dict(zip(_STATS, row, strict=True))
+        processes.append({k: v if k in _REAL_STATS else int(v) for k, v in st.items()})
+    return ShardedPlan(
+        bound=bound,
+        owner=owner,
+        sat=sat,
+        option=pick[:, 1].astype(np.int64),
+        start=pick[:, 2].copy(),
+        end=pick[:, 3].copy(),
+        value=float(weight[sat >= 0].sum()),
+        processes=processes,
+    )

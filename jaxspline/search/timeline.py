@@ -1,0 +1,393 @@
+"""Mutable per-satellite timelines with feasibility checks, battery bounds and an undo log.
+
+A :class:`Timeline` holds, per satellite, its chosen options in start order and, per
+task, the option that images it (each task at most once). :meth:`Timeline.check`
+tests one insertion: no overlap, the transition from the predecessor (or the first
+maneuver) and to the successor fit their gaps, and the battery stays above its margin.
+Every change is logged so a search step can be undone.
+
+Battery bookkeeping, cheapest test first:
+
+1. ``levels[k]`` (:class:`jaxspline.search.battery.Levels`) is satellite k's
+   profile for a past state of its timeline and ``debt[k]`` an upper bound of the load
+   energy added since (the clamped battery recursion is monotone in its inputs, so
+   ``tail_min - debt`` is a lower bound of the current suffix minimum): an insertion
+   whose energy bound fits under it is accepted in O(1);
+2. otherwise the profile is refreshed (once per change of the timeline) and the
+   insertion's exact load change (imaging, the maneuver into it, the successor's new
+   maneuver) is tested on its window alone (:meth:`BatteryModel.change_ok`), spill
+   at capacity included;
+3. a full re-simulation only when that test cannot tell (the old profile infeasible).
+"""
+
+from __future__ import annotations
+
+import bisect
+import math
+
+from jaxspline.search.problem import Problem
+
+__all__ = ["Timeline"]
+
+_CACHE_LIMIT = 3_000_000  # memoized transition times before the cache is cleared
+_TURNAROUND_WEIGHT = 0.02  # tie-break weight of the end time in insertion costs
+_INSERT_NOISE = 0.3  # relative noise of randomized insertion costs
+
+
+class Timeline:
+    """Per-satellite timelines over a :class:`Problem` (see module docstring).
+
+    Attributes:
+      pb: the Problem.
+      tl: per satellite, its option ids in start order.
+      tl_s: per satellite, their start times [s].
+      assigned: per task, the option that images it (-1: none).
+      levels: per satellite, the battery :class:`Levels` of a past state (None: not
+        computed).
+      debt: per satellite, an upper bound of the load energy added since [Wh].
+      stale: per satellite, whether its timeline changed since ``levels``.
+      battery_failed: whether the last :meth:`check` failed on the battery alone.
+      W: total value of the plan.
+      N: number of observations.
+      tat: sum of the observations' end times [s] (tie-break).
+      log: undo log of the changes since the last :meth:`commit`.
+      cache: memoized transition times.
+      saved: battery bounds saved for :meth:`undo_to`.
+    """
+
+    def __init__(self, pb: Problem):
+        self.pb = pb
+        n_s = pb.n_sats
+        self.tl = [[] for _ in range(n_s)]  # option ids by start
+        self.tl_s = [[] for _ in range(n_s)]  # their starts
+        self.assigned = [-1] * len(pb.weight)
+        self.levels = [None] * n_s
+        self.debt = [0.0] * n_s
+        self.stale = [True] * n_s
+        self.battery_failed = False
+        self._win = pb.battery.steps_of(pb.c_start, pb.c_end)  # per option (s0, e0, s1)
+        self.W = 0.0
+        self.N = 0
+        self.tat = 0.0
+        self.log = []
+        self.cache = {}
+        self.saved = {}
+        self._n = pb.n_options  # key stride of the need cache
+
+    # ------------------------------------------------------------ transitions
+    def need(self, i: int, j: int) -> float:
+        """Required time from option i to option j (memoized :meth:`Problem.need`).
+
+        Args:
+          i: int, option id.
+          j: int, option id.
+        Returns:
+          float [s].
+        """
+        key = i * self._n + j
+        v = self.cache.get(key)
+        if v is None:
+            if len(self.cache) > _CACHE_LIMIT:
+                self.cache.clear()
+            v = self.pb.need(i, j)
+            self.cache[key] = v
+        return v
+
+    def maneuver_into(self, k: int, pos: int) -> float:
+        """Required time of the maneuver into position ``pos`` of satellite k's timeline.
+
+        Args:
+          k: int, satellite index.
+          pos: int, position in its timeline.
+        Returns:
+          float [s].
+        """
+        tl = self.tl[k]
+        return self.pb.c_first[tl[pos]] if pos == 0 else self.need(tl[pos - 1], tl[pos])
+
+    def insert_position(self, c: int) -> int:
+        """Position option c would take in its satellite's timeline.
+
+        Args:
+          c: int, option id.
+        Returns:
+          int.
+        """
+        return bisect.bisect_left(self.tl_s[self.pb.c_sat[c]], self.pb.c_start[c])
+
+    def score(self):
+        """Comparable quality: (value, count, -sum of end times).
+
+        Returns:
+          tuple, larger is better.
+        """
+        return (round(self.W, 9), self.N, -round(self.tat, 6))
+
+    # ------------------------------------------------------------ battery
+    def _timeline_loads(self, k, extra=None):
+        """(starts, ends, maneuvers) of satellite k's timeline, with option ``extra``."""
+        pb = self.pb
+        tl = list(self.tl[k])
+        if extra is not None:
+            tl.insert(bisect.bisect_left(self.tl_s[k], pb.c_start[extra]), extra)
+        man, prev = [], -1
+        for c in tl:
+            man.append(pb.c_first[c] if prev < 0 else self.need(prev, c))
+            prev = c
+        return [pb.c_start[c] for c in tl], [pb.c_end[c] for c in tl], man
+
+    def _levels(self, k):
+        """Satellite k's current battery Levels (recomputed when stale)."""
+        if self.stale[k] or self.levels[k] is None:
+            self.levels[k] = self.pb.battery.levels(k, *self._timeline_loads(k))
+            self.debt[k] = 0.0
+            self.stale[k] = False
+        return self.levels[k]
+
+    def battery_level(self, k: int):
+        """Battery level of satellite k's current timeline at the grid instants.
+
+        Args:
+          k: int, satellite index.
+        Returns:
+          float [n + 1] [Wh], or None without a power model.
+        """
+        return self._levels(k).level if self.pb.battery.has(k) else None
+
+    def battery_low(self, k: int):
+        """Lowest battery level of satellite k, from the last computed profile (cheap:
+        no re-simulation unless none exists; a heuristic's view, not a feasibility test).
+
+        Args:
+          k: int, satellite index.
+        Returns:
+          float [Wh], or None without a power model.
+        """
+        if not self.pb.battery.has(k):
+            return None
+        lv = self.levels[k] if self.levels[k] is not None else self._levels(k)
+        return float(lv.tail_min[0])
+
+    def _battery_ok(self, k, c, n_in, q, n_out, n_old):
+        """Battery test of inserting c (maneuver n_in) before q (maneuver n_out, was n_old)."""
+        pb = self.pb
+        bat = pb.battery
+        lv = self.levels[k]
+        if lv is not None:
+            k0 = bat.slew_step(pb.c_start[c], n_in)
+            de = self._energy(k, c, n_in, n_out)
+            if lv.tail_min[k0] - self.debt[k] - de >= bat.margin_wh:
+                return True
+        ok = bat.change_ok(k, self._levels(k), self._changes(k, c, n_in, q, n_out, n_old))
+        if ok is None:
+            ok = bool(bat.profile(k, *self._timeline_loads(k, extra=c)).min() >= bat.margin_wh)
+        return ok
+
+    def _changes(self, k, c, n_in, q, n_out, n_old):
+        """Load changes ``(lo, hi, watts)`` of inserting c (maneuver n_in) before q."""
+        pb = self.pb
+        bat = pb.battery
+        p = bat.powers[k]
+        s0, e0, s1 = self._win[c]
+        out = [(s0, e0, p.imaging_w), (bat.slew_step(pb.c_start[c], n_in), s1, p.slew_w)]
+        if q >= 0:
+            a_new = bat.slew_step(pb.c_start[q], n_out)
+            a_old = bat.slew_step(pb.c_start[q], n_old)
+            if a_new < a_old:
+                out.append((a_new, a_old, p.slew_w))
+            elif a_old < a_new:
+                out.append((a_old, a_new, -p.slew_w))
+        return out
+
+    def _energy(self, k, c, n_in, n_out):
+        pb = self.pb
+        if not pb.battery.has(k):
+            return 0.0
+        return pb.battery.extra_energy(k, pb.c_end[c] - pb.c_start[c], n_in + n_out)
+
+    # ------------------------------------------------------------ moves
+    def check(self, c: int):
+        """Feasibility of inserting option c.
+
+        Args:
+          c: int, option id.
+        Returns:
+          float, the time it consumes [s], or None when infeasible.
+        """
+        pb = self.pb
+        k = pb.c_sat[c]
+        self.battery_failed = False
+        if self.assigned[pb.c_task[c]] >= 0:
+            return None
+        s, e = pb.c_start[c], pb.c_end[c]
+        pos = bisect.bisect_left(self.tl_s[k], s)
+        tl = self.tl[k]
+        if pos > 0:
+            p = tl[pos - 1]
+            if pb.c_end[p] > s:
+                return None
+            n_in = self.need(p, c)
+            if s - pb.c_end[p] < n_in:
+                return None
+        else:
+            p = -1
+            n_in = pb.c_first[c]
+            if s < n_in:
+                return None
+        if pos < len(tl):
+            q = tl[pos]
+            if e > pb.c_start[q]:
+                return None
+            n_out = self.need(c, q)
+            if pb.c_start[q] - e < n_out:
+                return None
+            n_old = pb.c_first[q] if p < 0 else self.need(p, q)
+        else:
+            q = -1
+            n_out = n_old = 0.0
+        if pb.battery.has(k) and not self._battery_ok(k, c, n_in, q, n_out, n_old):
+            self.battery_failed = True
+            return None
+        return n_in + (e - s) + n_out - n_old
+
+    def insert(self, c: int):
+        """Insert option c (feasibility is the caller's business: :meth:`check`).
+
+        Args:
+          c: int, option id.
+        """
+        pb = self.pb
+        k, t = pb.c_sat[c], pb.c_task[c]
+        pos = bisect.bisect_left(self.tl_s[k], pb.c_start[c])
+        tl = self.tl[k]
+        if k not in self.saved:
+            self.saved[k] = (self.levels[k], self.debt[k], self.stale[k])
+        self.stale[k] = True
+        n_in = pb.c_first[c] if pos == 0 else self.need(tl[pos - 1], c)
+        n_out = self.need(c, tl[pos]) if pos < len(tl) else 0.0
+        self.debt[k] += self._energy(k, c, n_in, n_out)
+        tl.insert(pos, c)
+        self.tl_s[k].insert(pos, pb.c_start[c])
+        self.assigned[t] = c
+        self.W += pb.weight[t]
+        self.N += 1
+        self.tat += pb.c_end[c]
+        self.log.append(("i", c))
+
+    def remove(self, c: int):
+        """Remove option c from its satellite's timeline.
+
+        Args:
+          c: int, option id.
+        """
+        pb = self.pb
+        k, t = pb.c_sat[c], pb.c_task[c]
+        tl = self.tl[k]
+        if k not in self.saved:
+            self.saved[k] = (self.levels[k], self.debt[k], self.stale[k])
+        self.stale[k] = True
+        pos = tl.index(c)
+        del tl[pos]
+        del self.tl_s[k][pos]
+        if pos < len(tl) and pb.battery.has(k):  # the successor's maneuver may get longer
+            self.debt[k] += pb.battery.extra_energy(k, 0.0, self.maneuver_into(k, pos))
+        self.assigned[t] = -1
+        self.W -= pb.weight[t]
+        self.N -= 1
+        self.tat -= pb.c_end[c]
+        self.log.append(("r", c))
+
+    def removal_ok(self, k: int, pos: int) -> bool:
+        """Whether a removal at index ``pos`` of satellite k keeps the plan feasible.
+
+        After removing a block at ``pos``: the new transition into ``tl[pos]`` and the
+        battery still hold.
+
+        Args:
+          k: int, satellite index.
+          pos: int, position in its timeline.
+        Returns:
+          bool.
+        """
+        pb = self.pb
+        tl = self.tl[k]
+        if pos < len(tl):
+            q = tl[pos]
+            prev_end = 0.0 if pos == 0 else pb.c_end[tl[pos - 1]]
+            if pb.c_start[q] - prev_end < self.maneuver_into(k, pos):
+                return False
+        if not pb.battery.has(k):
+            return True
+        margin = pb.battery.margin_wh
+        lv = self.levels[k]
+        if lv is not None and lv.tail_min[0] - self.debt[k] >= margin:
+            return True
+        return bool(self._levels(k).tail_min[0] >= margin)
+
+    def commit(self):
+        """Forget the undo log (the current state becomes the base of the next step)."""
+        self.log.clear()
+        self.saved.clear()
+
+    def undo_to(self, mark: int):
+        """Undo the changes logged after ``mark``; at mark 0 the battery bounds come back too.
+
+        Args:
+          mark: int, length of the log to return to.
+        """
+        while len(self.log) > mark:
+            op, c = self.log.pop()
+            if op == "i":
+                self.remove(c)
+            else:
+                self.insert(c)
+            self.log.pop()
+        if mark == 0:
+            for k, (lv, debt, stale) in self.saved.items():
+                self.levels[k], self.debt[k], self.stale[k] = lv, debt, stale
+            self.saved.clear()
+
+    def best_insert(self, t: int, rng=None, sat: int | None = None) -> bool:
+        """Insert task t at its cheapest feasible option (noisy costs with ``rng``).
+
+        Args:
+          t: int, task index.
+          rng: numpy Generator for randomized costs, or None.
+          sat: only options of this satellite (None: every satellite).
+        Returns:
+          bool, whether the task was inserted.
+        """
+        pb = self.pb
+        c_sat = pb.c_sat
+        best, best_cost = -1, math.inf
+        for c in pb.task_cands[t]:
+            if sat is not None and c_sat[c] != sat:
+                continue
+            cost = self.check(c)
+            if cost is None:
+                continue
+            cost += _TURNAROUND_WEIGHT * pb.c_end[c]
+            if rng is not None:
+                cost *= 1.0 + _INSERT_NOISE * rng.random()
+            if cost < best_cost:
+                best, best_cost = c, cost
+        if best >= 0:
+            self.insert(best)
+            return True
+        return False
+
+    def restore(self, assigned):
+        """Reset to the given task -> option assignment (-1: unassigned).
+
+        Args:
+          assigned: list of option ids per task.
+        """
+        pb = self.pb
+        for k in range(pb.n_sats):
+            self.tl[k], self.tl_s[k] = [], []
+            self.levels[k], self.debt[k], self.stale[k] = None, 0.0, True
+        self.assigned = [-1] * len(pb.weight)
+        self.W, self.N, self.tat = 0.0, 0, 0.0
+        for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.c_start[c]):
+            self.insert(c)
+        self.commit()

@@ -1,0 +1,62 @@
+"""The forked bound worker against the in-process bound and the search without it.
+
+References: :func:`upper_bound` iterated in this process (the worker must return the
+same bits across the fork), :func:`solve` without the worker (the plan must not change
+and the bound may only get smaller), and every plan value the search finds (a bound
+below one would be wrong).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from jaxspline.io.scenario import load_scenario
+from jaxspline.planning.planner import build_problem
+from jaxspline.search import BoundWorker, solve, upper_bound
+
+sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
+from test_cli_plan import SMALL  # noqa: E402
+
+TARGET = 100.0
+CAP = 60  # worker iterations
+SEARCH_ITERS = 400
+
+
+@pytest.fixture(scope="module")
+def problem(tmp_path_factory):
+    path = tmp_path_factory.mktemp("worker") / "small.toml"
+    path.write_text(SMALL, encoding="utf-8")
+    return build_problem(load_scenario(path)).problem
+
+
+def test_worker_bound_equals_in_process_bound(problem):
+    ref = upper_bound(problem, TARGET, math.inf, CAP, energy=False)
+    got = BoundWorker(problem, TARGET, math.inf, CAP).result()
+    assert got is not None
+    assert got.bound == ref.bound  # bit for bit across the fork
+    assert got.iterations == ref.iterations
+    assert got.status == ref.status
+
+
+def test_solve_with_worker_keeps_the_plan_and_tightens_the_bound(problem):
+    base = solve(problem, math.inf, seed=3, max_iters=SEARCH_ITERS)
+    with_w = solve(problem, math.inf, seed=3, max_iters=SEARCH_ITERS, bound_worker=True)
+    assert with_w.timeline.assigned == base.timeline.assigned
+    assert "worker_bound" in with_w.stats
+    assert with_w.bound <= base.bound
+    assert with_w.bound == min(base.bound, with_w.stats["worker_bound"])
+    assert with_w.bound >= with_w.timeline.W - 1e-9
+
+
+def test_result_without_waiting_ends_the_process(problem):
+    w = BoundWorker(problem, TARGET, time.monotonic() + 600.0, None)
+    t0 = time.monotonic()
+    out = w.result(wait=False)
+    assert time.monotonic() - t0 < 10.0
+    assert out is None or out.bound >= 0.0
+    assert not w.alive

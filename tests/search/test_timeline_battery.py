@@ -1,0 +1,276 @@
+"""Incremental battery tests of the search timeline against full re-simulation.
+
+References: a step-by-step re-simulation of the clamped battery recursion written
+here from the rules (charge while sunlit at both ends of a step, idle always, imaging
+on the steps an observation meets, slew on the maneuver window's steps, clamp at
+capacity), over the whole horizon, for every tested insertion; for a complete
+battery-bound plan, the independent aeossp checker.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import random
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from jaxspline.aeossp.adapter import AEOSSP_MARGINS
+from jaxspline.planning.mission import Power
+from jaxspline.search import BatteryModel, Problem, Timeline
+from jaxspline.search.store import NearPairs
+
+DT = 5.0  # [s] battery step
+TIE = 1e-7  # [Wh] levels this close to the margin are not compared (rounding)
+
+
+def _random_model(rng, n, n_sats=1, charge_max=400.0):
+    """BatteryModel with random shadows and a small battery that both spills and runs low."""
+    lit = np.ones((n_sats, n + 1), bool)
+    for k in range(n_sats):
+        for _ in range(rng.integers(1, 4)):
+            a = int(rng.integers(0, n))
+            lit[k, a : a + int(rng.integers(5, n // 3))] = False
+    powers = []
+    for _ in range(n_sats):
+        cap = float(rng.uniform(5.0, 40.0))
+        powers.append(
+            Power(
+                capacity_wh=cap,
+                initial_wh=float(rng.uniform(0.2, 1.0)) * cap,
+                idle_w=float(rng.uniform(0.0, 60.0)),
+                imaging_w=float(rng.uniform(50.0, 600.0)),
+                slew_w=float(rng.uniform(20.0, 400.0)),
+                charge_w=float(rng.uniform(0.0, charge_max)),
+            )
+        )
+    m = float(rng.uniform(0.0, 3.0))
+    return BatteryModel(lit, powers, DT, margin_wh=m, guard=0), lit
+
+
+def _steps(s, e, man):
+    """Step windows of one observation (imaging, slew), from the rules' step conventions."""
+    img = (math.floor(s / DT + 1e-9), math.ceil(e / DT - 1e-9))
+    slew = (math.floor((s - man) / DT + 1e-9) if s - man > 0 else 0, math.ceil(s / DT - 1e-9))
+    return img, slew
+
+
+def _resimulate(p, lit, obs, n):
+    """Level at every grid instant; obs = [(start, end, maneuver)], step by step."""
+    load = np.zeros(n)
+    for s, e, man in obs:
+        (a, b), (c, d) = _steps(s, e, man)
+        load[max(a, 0) : min(b, n)] += p.imaging_w
+        load[max(c, 0) : min(d, n)] += p.slew_w
+    b, out = p.initial_wh, [p.initial_wh]
+    for i in range(n):
+        charge = p.charge_w if (lit[i] and lit[i + 1]) else 0.0
+        b = min(p.capacity_wh, b + (charge - p.idle_w - load[i]) * DT / 3600.0)
+        out.append(b)
+    return np.array(out)
+
+
+def _random_obs(rng, n, count):
+    """Non-overlapping observations on a 1 s grid (off the battery grid too)."""
+    t = float(rng.integers(0, 40))
+    out = []
+    for _ in range(count):
+        man = float(rng.integers(0, 40))
+        s = t + man + float(rng.integers(0, 60))
+        e = s + float(rng.integers(1, 40))
+        if e >= n * DT:
+            break
+        out.append((s, e, man))
+        t = e
+    return out
+
+
+def test_change_ok_matches_resimulation():
+    """change_ok == re-simulation for random load changes (either sign), 4000 cases."""
+    rng = np.random.default_rng(1)
+    decided = spilled = low = 0
+    for _ in range(4000):
+        n = int(rng.integers(20, 200))
+        bm, lit = _random_model(rng, n)
+        p = bm.powers[0]
+        obs = _random_obs(rng, n, int(rng.integers(0, 8)))
+        lv = bm.levels(0, *zip(*obs, strict=True)) if obs else bm.levels(0, [], [], [])
+        np.testing.assert_allclose(lv.level, _resimulate(p, lit[0], obs, n), atol=1e-9)
+        changes = []
+        full = np.flatnonzero(lv.level[:-1] >= p.capacity_wh - 1e-12)
+        for _ in range(int(rng.integers(1, 4))):
+            lo = int(rng.integers(0, n))
+            hi = min(n, lo + int(rng.integers(0, 60)))
+            w = float(rng.choice([-1.0, 1.0]) * rng.uniform(10.0, 800.0))
+            if full.size and rng.random() < 0.5:  # straddle a spill, sized to the slack
+                lo = int(max(0, rng.choice(full) - rng.integers(0, 10)))
+                hi = min(n, lo + int(rng.integers(1, 40)))
+                slack = max(lv.tail_min[lo] - bm.margin_wh, 0.1) * rng.uniform(0.5, 3.0)
+                w = slack / ((hi - lo) * DT / 3600.0)
+            changes.append((lo, hi, w))
+        got = bm.change_ok(0, lv, changes)
+        load = np.zeros(n)
+        for lo, hi, w in changes:
+            load[lo:hi] += w
+        b, ref = p.initial_wh, [p.initial_wh]
+        for i in range(n):
+            b = min(p.capacity_wh, b + lv.net[i] - load[i] * DT / 3600.0)
+            ref.append(b)
+        ref_min = min(ref)
+        spilled += bool(np.any(np.isclose(ref, p.capacity_wh)))
+        low += ref_min < bm.margin_wh
+        if got is None:  # only when the old profile dips below the margin after the change
+            assert lv.level.min() < bm.margin_wh + 1e-9
+            continue
+        decided += 1
+        if abs(ref_min - bm.margin_wh) > TIE:
+            assert got == (ref_min >= bm.margin_wh), (changes, ref_min, bm.margin_wh)
+    assert decided > 3500 and spilled > 1000 and 500 < low < 3500
+
+
+def _problem(rng, n_steps, n_sats=2, n_tasks=60, far=40.0):
+    """A per-channel-style Problem: random options, random near transition times."""
+    bm, lit = _random_model(rng, n_steps, n_sats, charge_max=150.0)
+    horizon = n_steps * DT
+    opts = []
+    for t in range(n_tasks):
+        for _ in range(int(rng.integers(1, 4))):
+            k = int(rng.integers(0, n_sats))
+            s = float(rng.integers(0, int(horizon) - 40))
+            opts.append((k, s, s + float(rng.integers(2, 30)), t))
+    opts.sort()
+    sat = [o[0] for o in opts]
+    n = len(opts)
+    near = {}
+    for i in range(n):
+        for j in range(n):
+            gap = opts[j][1] - opts[i][2]
+            if sat[i] == sat[j] and 0.0 <= gap < far and rng.random() < 0.8:
+                near[i * n + j] = float(rng.uniform(0.0, far))
+    task_cands = [[] for _ in range(n_tasks)]
+    for i, o in enumerate(opts):
+        task_cands[o[3]].append(i)
+    lo = [sat.index(k) if k in sat else n for k in range(n_sats)]
+    hi = [n - sat[::-1].index(k) if k in sat else n for k in range(n_sats)]
+    keys = np.fromiter(near, np.int64, len(near))
+    need = np.fromiter(near.values(), np.float64, len(near))
+    pb = Problem(
+        n_sats=n_sats,
+        weight=[float(w) for w in rng.integers(1, 6, n_tasks)],
+        c_task=[o[3] for o in opts],
+        c_sat=sat,
+        c_start=[o[1] for o in opts],
+        c_end=[o[2] for o in opts],
+        c_first=[float(rng.uniform(0.0, 30.0)) for _ in opts],
+        c_ls=[(0.0, 0.0, 1.0)] * n,
+        c_le=[(0.0, 0.0, 1.0)] * n,
+        tables=[None] * n_sats,
+        pairs=NearPairs.from_arrays(n, keys // n, keys % n, need),
+        far=[far] * n_sats,
+        battery=bm,
+        task_cands=task_cands,
+        sat_lo=lo,
+        sat_hi=hi,
+        sat_starts=[[o[1] for o in opts[a:b]] for a, b in zip(lo, hi, strict=True)],
+    )
+    return pb, lit
+
+
+def _brute_insert(tl, c, lit, n_steps):
+    """(fits in time, battery fits) of inserting c, from scratch."""
+    pb = tl.pb
+    k = pb.c_sat[c]
+    if tl.assigned[pb.c_task[c]] >= 0:
+        return False, None
+    seq = sorted([*tl.tl[k], c], key=lambda x: pb.c_start[x])
+    man = []
+    for i, x in enumerate(seq):
+        need = pb.c_first[x] if i == 0 else pb.need(seq[i - 1], x)
+        gap = pb.c_start[x] - (0.0 if i == 0 else pb.c_end[seq[i - 1]])
+        if gap < need:
+            return False, None
+        man.append(need)
+    obs = [(pb.c_start[x], pb.c_end[x], m) for x, m in zip(seq, man, strict=True)]
+    lev = _resimulate(pb.battery.powers[k], lit[k], obs, n_steps)
+    return True, float(lev.min())
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_timeline_check_matches_brute_force(seed):
+    """Timeline.check (incremental battery) == from-scratch re-simulation of the new
+    timeline, for every option at every state of random insert / remove / undo runs."""
+    rng = np.random.default_rng(100 + seed)
+    n_steps = int(rng.integers(60, 240))
+    pb, lit = _problem(rng, n_steps)
+    tl = Timeline(pb)
+    py = random.Random(seed)
+    compared = battery_cut = 0
+    for _step in range(60):
+        for c in range(pb.n_options):
+            fits, level = _brute_insert(tl, c, lit, n_steps)
+            got = tl.check(c)
+            if not fits:
+                assert got is None and not tl.battery_failed
+                continue
+            if abs(level - pb.battery.margin_wh) <= TIE:
+                continue
+            compared += 1
+            assert (got is not None) == (level >= pb.battery.margin_wh), (c, level)
+            assert tl.battery_failed == (got is None)
+            battery_cut += got is None
+        for k in range(pb.n_sats):  # the cached levels follow the timeline
+            obs = [(pb.c_start[x], pb.c_end[x], 0.0) for x in tl.tl[k]]
+            obs = [(s, e, tl.maneuver_into(k, i)) for i, (s, e, _) in enumerate(obs)]
+            ref = _resimulate(pb.battery.powers[k], lit[k], obs, n_steps)
+            np.testing.assert_allclose(tl.battery_level(k), ref, atol=1e-9)
+        mark = len(tl.log)
+        r = py.random()
+        if r < 0.6:
+            for _ in range(3):
+                ok = [c for c in range(pb.n_options) if tl.check(c) is not None]
+                if ok:
+                    tl.insert(py.choice(ok))
+        elif r < 0.8 and tl.N:
+            k = py.choice([k for k in range(pb.n_sats) if tl.tl[k]])
+            pos = py.randrange(len(tl.tl[k]))
+            tl.remove(tl.tl[k][pos])
+            if not tl.removal_ok(k, pos):
+                tl.undo_to(mark)
+        elif tl.N:
+            tl.undo_to(0)
+        if py.random() < 0.5:
+            tl.commit()
+    assert compared > 1000 and battery_cut > 50
+
+
+DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
+
+
+@pytest.mark.skipif(not DATA.is_dir(), reason="aeossp training data not available")
+def test_battery_bound_plan_is_valid_under_the_checker():
+    """3 satellites, 367 tasks, 12 h, 20 % initial charge and 30 % charging: the battery
+    binds, the plan stays valid under the independent aeossp checker."""
+    from jaxspline.aeossp.adapter import solve_case
+    from jaxspline.aeossp.case import load_case
+    from jaxspline.aeossp.check import check_solution
+
+    case = load_case(DATA)
+    sats = tuple(
+        dataclasses.replace(
+            s,
+            initial_battery_wh=0.2 * s.initial_battery_wh,
+            sunlit_charge_power_w=0.3 * s.sunlit_charge_power_w,
+        )
+        for s in case.satellites[:3]
+    )
+    case = dataclasses.replace(case, case_id="bound", satellites=sats, tasks=case.tasks[::5])
+    sol, res = solve_case(case, time_limit=60.0, progress=False, max_iters=800)
+    assert res.report["valid"] and res.report["dropped_total"] == 0
+    assert res.stats["greedy_value"] <= res.value <= res.bound
+    rep = check_solution(case, sol)
+    assert rep.valid, [v.message for v in rep.violations[:5]]
+    assert len(sol["actions"]) > 20
+    low = min(v["min_battery_wh"] for v in rep.satellites.values())
+    assert 0.0 <= low < AEOSSP_MARGINS.battery_wh + 5.0  # the battery binds
