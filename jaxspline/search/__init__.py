@@ -29,6 +29,7 @@ import math
 import random
 import time
 from dataclasses import dataclass
+from typing import NamedTuple
 
 from jaxspline.search import clock
 from jaxspline.search.battery import BatteryModel
@@ -148,44 +149,27 @@ def solve(
         w_cap = None if cap is None else _WORKER_ITERS * cap
         worker = BoundWorker(pb, tl.W, deadline - tail, w_cap)
     try:
-        return _stages(
-            pb,
-            tl,
-            order,
-            deadline,
-            now,
-            tail,
-            t_dp,
-            cap,
-            seed,
-            exact_max_options,
-            max_iters,
-            stats,
-            worker,
-            say,
-        )
+        budget = _Budget(deadline, now, tail, t_dp, cap, max_iters)
+        return _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say)
     finally:
         if worker is not None:
             worker.stop()
 
 
-def _stages(
-    pb,
-    tl,
-    order,
-    deadline,
-    now,
-    tail,
-    t_dp,
-    cap,
-    seed,
-    exact_max_options,
-    max_iters,
-    stats,
-    worker,
-    say,
-):
+class _Budget(NamedTuple):
+    """Clock and iteration caps of one :func:`solve` call (its docstring)."""
+
+    deadline: float  # end of the whole search [monotonic s]
+    now: float  # start of the search [monotonic s]
+    tail: float  # time kept for the earliest-pass stage [s]
+    t_dp: float  # end of the Lagrangian phase [monotonic s]
+    cap: int | None  # Lagrangian iteration cap
+    max_iters: int | None  # LNS iteration cap
+
+
+def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
     """Stages 2-5 of :func:`solve` and the bound worker's result."""
+    deadline, now, tail, t_dp, cap, max_iters = budget
     res = lagrangian(
         tl,
         t_dp,
