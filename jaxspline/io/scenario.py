@@ -159,7 +159,6 @@ from jaxspline.io.targets_io import TARGET_SECTIONS, load_targets_csv, scenario_
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planning.mission import (
     DEFAULT_SWATH,
-    MODELS,
     FlexMode,
     Margins,
     PlannerConfig,
@@ -168,6 +167,7 @@ from jaxspline.planning.mission import (
     Scenario,
     make_targets,
 )
+from jaxspline.screen.maneuvers import maneuver_model
 
 __all__ = [
     "DEFAULT_SCENARIO_PATH",
@@ -263,7 +263,7 @@ def _orbit(ctx, f, sat, epoch_jd, duration):
 
 
 def _rate(ctx, field, value, model):
-    if model != "per_channel":
+    if maneuver_model(model).limit_shape == ():
         if isinstance(value, list):
             raise ctx.error(field, f"must be one number for model {model!r}, got {value!r}")
         return math.radians(field_number(ctx, field, value, positive=True))
@@ -281,8 +281,10 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
     name = field_str(ctx, f"{f}.name", sat.get("name", default_name), allow_empty=False)
     orbit = _orbit(ctx, f, sat, epoch_jd, duration)
     model = sat.get("model", "per_channel")
-    if model not in MODELS:
-        raise ctx.error(f"{f}.model", f"must be one of {MODELS}, got {model!r}")
+    try:
+        maneuver = maneuver_model(model)
+    except ValueError as exc:
+        raise ctx.error(f"{f}.model", str(exc).removeprefix("model ")) from None
     rate = _rate(ctx, f"{f}.rate_deg_s", sat.get("rate_deg_s", DEFAULT_RATE_DEG_S), model)
     accel = _rate(ctx, f"{f}.accel_deg_s2", sat.get("accel_deg_s2", DEFAULT_ACCEL_DEG_S2), model)
     off = field_number(
@@ -296,7 +298,7 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
     settle = field_number(ctx, f"{f}.settle_s", sat.get("settle_s", 0.0), nonneg=True)
     flex = None
     if "flex" in sat:
-        if model != "flexible":
+        if "flex" not in maneuver.extra_fields:
             raise ctx.error(f"{f}.flex", f"only used by model 'flexible' (model is {model!r})")
         fx = field_table(ctx, f"{f}.flex", sat["flex"], _KEYS["flex"])
         freq_hz = field_number(ctx, f"{f}.flex.freq_hz", fx.get("freq_hz"), positive=True)
@@ -307,7 +309,7 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
             tol = field_number(ctx, f"{f}.flex.tolerance_deg", fx["tolerance_deg"], positive=True)
             kw["tolerance"] = math.radians(tol)
         flex = FlexMode(**kw)
-    elif model == "flexible":
+    elif "flex" in maneuver.extra_fields:
         raise ctx.error(
             f"{f}.model",
             "'flexible' needs flex = { freq_hz = ..., damping = ..., tolerance_deg = ... }",

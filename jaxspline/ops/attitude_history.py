@@ -24,7 +24,7 @@ import numpy as np
 
 from jaxspline.geometry.pointing import Scene
 from jaxspline.kernels.joins import Maneuver, maneuver_eval
-from jaxspline.planning.attitude_laws import LAW_POINTING, LAW_ZERO_YAW, NADIR_LAW, law_states
+from jaxspline.planning.attitude_laws import NADIR_LAW, law_modes, law_states
 from jaxspline.planning.joins import NADIR, Joins, join_summary, plan_joins
 from jaxspline.planning.mission import STRIP
 from jaxspline.planning.opportunities import aim_laws
@@ -121,9 +121,7 @@ def _history(result, step: float) -> PlanAttitude:
     scene = plan_scene(sc)
     params = observation_laws(sc, obs.target, obs.speed)
     joins = plan_joins(scene, sc.satellites, obs.sat, obs.start, obs.end, params)
-    mode = np.array(
-        [LAW_POINTING if s.model == "per_channel" else LAW_ZERO_YAW for s in sc.satellites]
-    )
+    mode = law_modes(sc.satellites)
     grid = np.arange(0.0, sc.duration + _TIME_TOL, float(step))
     hist = {}
     for k, s in enumerate(sc.satellites):

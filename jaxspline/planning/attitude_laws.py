@@ -46,6 +46,7 @@ __all__ = [
     "dcm_from_angles",
     "decompose",
     "frame_rates",
+    "law_modes",
     "law_states",
     "orbital_basis",
     "state_angles",
@@ -55,6 +56,17 @@ LAW_POINTING, LAW_ZERO_YAW, LAW_NADIR = 1.0, 0.0, -1.0  # law[8]: yaw mode of a 
 # the nadir law: a point law on the equator (finite anywhere) whose angles are zeroed
 NADIR_LAW = np.array([R_EARTH, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, LAW_NADIR])
 JERK_STEP_S = 1e-2  # [s] half step of the central difference of the exact eps giving eps'
+_LAW_OF_MODEL = {"pointing": LAW_POINTING, "zero_yaw": LAW_ZERO_YAW}
+
+
+def law_modes(sats) -> np.ndarray:
+    """[S] yaw mode of each satellite's laws between observations (its model's law).
+
+    Args:
+      sats: the satellites; each model's ``attitude_law`` is ``"pointing"``
+        (:data:`LAW_POINTING`) or ``"zero_yaw"`` (:data:`LAW_ZERO_YAW`).
+    """
+    return np.array([_LAW_OF_MODEL[s.maneuver.attitude_law] for s in sats])
 
 
 def orbital_basis(scene, t, sat=None):

@@ -1,6 +1,6 @@
 """Screening transitions with the degree-7 join the plan flies (SPEC section 3).
 
-A satellite's maneuver model (:mod:`jaxspline.screen.models`) says whether a
+A satellite's maneuver model (:mod:`jaxspline.screen.maneuvers`) says whether a
 time-optimal transfer fits the gap; the attitude history of a plan
 (:mod:`jaxspline.planning.joins`) flies instead the degree-7 join between the scan
 laws, which needs 1.5-1.9 times the peak rate or acceleration of those profiles.
@@ -96,7 +96,7 @@ def channel_states(scene, sats, opp) -> ChannelStates:
     """
     o = opp.options
     sat = np.asarray(o.sat, np.int64)
-    pointing = np.array([s.model == "per_channel" for s in sats], bool)[sat]
+    pointing = np.array([s.maneuver.attitude_law == "pointing" for s in sats], bool)[sat]
     keep = np.stack([np.ones_like(pointing)] * 2 + [pointing], -1)
     t0 = np.asarray(o.t_start, np.float64)
 
@@ -126,7 +126,7 @@ def join_far_gap(sat, far: float, nadir_rate: float) -> float:
     """The gap up to which the join screen runs for satellite ``sat`` (module docstring).
 
     Rest-to-rest models: two lines of sight g apart differ by at most
-    ``2 eta + omega g`` (as :func:`jaxspline.screen.models.far_gap`); the fixed point
+    ``2 eta + omega g`` (as the rest-to-rest models' ``far_gap``); the fixed point
     of g = septic time of that turn, times :data:`JOIN_FAR_SAFETY`. ``per_channel``:
     the model's far gap, whose braking terms already exceed that for the roll and
     pitch spans (on the default scenario 0.6-0.9 % of random pairs up to 1.5 times
@@ -135,7 +135,7 @@ def join_far_gap(sat, far: float, nadir_rate: float) -> float:
 
     Args:
       sat: Satellite.
-      far: its model's far gap [s] (:func:`jaxspline.screen.models.far_gap`).
+      far: its model's far gap [s] (``sat.maneuver.far_gap``).
       nadir_rate: inertial turn rate of nadir [rad/s].
     Returns:
       float [s].

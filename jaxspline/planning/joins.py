@@ -47,13 +47,11 @@ from jaxspline.kernels.join_check import maneuver_check
 from jaxspline.kernels.joins import Maneuver, maneuver_eval, maneuver_plan
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planning.attitude_laws import (
-    LAW_POINTING,
-    LAW_ZERO_YAW,
     NADIR_LAW,
+    law_modes,
     law_states,
     state_angles,
 )
-from jaxspline.screen.models import flex_tau
 
 __all__ = [
     "DIRECT_MAX_S",
@@ -131,13 +129,12 @@ def join_limits(sat) -> tuple[AxisLimits, AxisLimits]:
       (AxisLimits of scalars [rad/s, rad/s², rad/s³], AxisLimits of float [3] or None).
     """
     lim = sat.limits
-    if sat.model == "per_channel":
+    if not sat.maneuver.rest_to_rest:
         return AxisLimits(NO_LIMIT, NO_LIMIT), AxisLimits(
             np.asarray(lim.rate, np.float64), np.asarray(lim.accel, np.float64)
         )
     rate, accel = float(lim.rate), float(lim.accel)
-    jerk = accel / flex_tau(sat) if sat.model == "flexible" else float("inf")
-    return AxisLimits(rate, accel, jerk), None
+    return AxisLimits(rate, accel, sat.maneuver.jerk_limit(sat)), None
 
 
 def _layout(sat, start, end, n_sats):
@@ -260,7 +257,7 @@ def plan_joins(scene, sats, sat, start, end, params) -> Joins:
         z = np.zeros(0)
         return Joins(js, jb, ja, z, z, z, z, np.zeros((0, 4)), np.zeros((0, 3, 8)), z, z, z,
                      np.zeros((0, 3)), np.zeros(0, bool), np.zeros(0, bool))  # fmt: skip
-    mode = np.array([LAW_POINTING if s.model == "per_channel" else LAW_ZERO_YAW for s in sats])
+    mode = law_modes(sats)
     law0, s0 = _laws(jb, start, params, mode[js])
     law1, s1 = _laws(ja, start, params, mode[js])
     man, peaks, ratio, ok = _check_rows(scene, sats, js, law0, s0, law1, s1, ta, tb)

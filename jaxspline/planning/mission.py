@@ -6,7 +6,9 @@ benchmark case (:mod:`jaxspline.aeossp.adapter`). All fields are SI units and ra
 times are seconds from the scenario epoch. Every constructor validates eagerly and
 raises ``ValueError`` naming the field and the value.
 
-Maneuver models (:data:`MODELS`), one per satellite:
+Maneuver models (:data:`MODELS` names the built-in ones; each is a
+:class:`~jaxspline.screen.maneuvers.ManeuverModel`, ``Satellite.maneuver``), one per
+satellite:
 
 * ``"per_channel"`` - roll, pitch, yaw each under a rate and acceleration bound, the
   exact-T reachable sets of SPEC section 1; the spacecraft leaves each observation
@@ -30,6 +32,7 @@ from jaxspline.geometry.frames import julian_date
 from jaxspline.geometry.orbit import CircularOrbit
 from jaxspline.geometry.routes import POINT, STRIP
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.screen.maneuvers import ManeuverModel, maneuver_model, model_names
 
 __all__ = [
     "DEFAULT_SWATH",
@@ -45,7 +48,7 @@ __all__ = [
     "make_targets",
 ]
 
-MODELS = ("per_channel", "eigen_axis", "flexible")
+MODELS = model_names()  # the built-in maneuver models
 DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
 
 
@@ -142,8 +145,10 @@ class Satellite:
 
     def __post_init__(self):
         who = f"satellite {self.name!r}"
-        if self.model not in MODELS:
-            raise ValueError(f"{who}: model must be one of {MODELS}, got {self.model!r}")
+        try:
+            maneuver = maneuver_model(self.model)
+        except ValueError as exc:
+            raise ValueError(f"{who}: {exc}") from None
         if not isinstance(self.orbit, CircularOrbit):
             ok = isinstance(self.orbit, tuple | list) and len(self.orbit) == 2
             if not ok or not all(isinstance(x, str) for x in self.orbit):
@@ -153,7 +158,7 @@ class Satellite:
                 )
         rate = np.asarray(self.limits.rate, np.float64)
         accel = np.asarray(self.limits.accel, np.float64)
-        shape = (3,) if self.model == "per_channel" else ()
+        shape = maneuver.limit_shape
         for name, x in (("rate", rate), ("accel", accel)):
             if np.shape(x) not in ((), (3,)) or (shape == () and np.ndim(x) != 0):
                 raise ValueError(f"{who}: limits.{name} must be {shape or 'a scalar'}, got {x!r}")
@@ -170,8 +175,12 @@ class Satellite:
             )
         _positive(f"{who}: settle", self.settle, allow_zero=True)
         _positive(f"{who}: swath", self.swath)
-        if self.model == "flexible" and self.flex is None:
-            raise ValueError(f"{who}: model 'flexible' needs flex=FlexMode(...)")
+        maneuver.check(self)
+
+    @property
+    def maneuver(self) -> ManeuverModel:
+        """The :class:`~jaxspline.screen.maneuvers.ManeuverModel` that ``model`` names."""
+        return maneuver_model(self.model)
 
 
 @dataclasses.dataclass(frozen=True)

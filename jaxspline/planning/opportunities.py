@@ -179,7 +179,7 @@ def _limit_table(sats, name: str) -> np.ndarray:
     return np.stack(
         [
             np.broadcast_to(getattr(s.limits, name), (3,))
-            if s.model == "per_channel"
+            if not s.maneuver.rest_to_rest
             else np.full(3, np.inf)
             for s in sats
         ]
@@ -201,7 +201,7 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     laws = aim_laws(sc)
     sats = sc.satellites
     limit = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
-    per_ch = np.array([s.model == "per_channel" for s in sats])
+    per_ch = np.array([not s.maneuver.rest_to_rest for s in sats])
     cols = {k: [] for k in ("sat", "target", "t0", "speed", "law")}
     strip = tg.kind[windows.target] == STRIP
     for li, (speed, _, dur_all) in enumerate(laws):

@@ -12,7 +12,7 @@ every constraint of the scenario *without* margins from the kernels:
   ``[mid_lo, mid_hi]`` (desired time +- tolerance) and ``end - start`` reaches its
   ``min_duration`` (both to 1e-6 s);
 * maneuvers: rest-to-rest models need the exact slew time
-  (:func:`jaxspline.screen.models.slew_time`) plus settling within the gap; per-channel
+  (``sat.maneuver.slew_time``) plus settling within the gap; per-channel
   satellites' transfers (from rest at zero angles at t = 0 for the first one) are
   checked by sampling their Theorem-1 trajectories (:func:`jaxspline.check_steps`);
 * battery: the conservative profile (:class:`jaxspline.search.BatteryModel`) with
@@ -34,7 +34,6 @@ from jaxspline.kernels.reach_durations import min_transfer_time
 from jaxspline.planning.mission import Scenario
 from jaxspline.planning.opportunities import evaluate, geometry_batched, observation_samples
 from jaxspline.planning.steps_check import check_steps
-from jaxspline.screen.models import REST_TO_REST, slew_time
 from jaxspline.screen.options import RouteOptions, take_options
 
 __all__ = ["check_plan"]
@@ -125,10 +124,10 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
         m = np.flatnonzero(sat == k)
         if m.size == 0:
             continue
-        if s.model in REST_TO_REST:
+        if s.maneuver.rest_to_rest:
             frm = np.where(first[m, None], o.start_nadir[chosen[m]], o.end_los[prev[m]])
             th = angle_between(frm, o.start_los[chosen[m]])
-            need = slew_time(s, th)
+            need = s.maneuver.slew_time(s, th)
             man[m], slack[m] = need, gap[m] - need
             for i in m[gap[m] < need]:
                 bad.setdefault(int(chosen[i]), "maneuver")

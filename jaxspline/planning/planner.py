@@ -10,7 +10,7 @@ process-wide setting is left alone):
 3. **options** - the valid (target, satellite, start) options on the action grid
    with their boundary states (:mod:`jaxspline.planning.opportunities`);
 4. **screening** - per satellite, every option pair closer than the always-feasible
-   gap through the satellite's maneuver model (:mod:`jaxspline.screen.models`);
+   gap through the satellite's maneuver model (:mod:`jaxspline.screen.maneuvers`);
 5. **search** - greedy, Lagrangian/DP bound, exact search on tiny instances, LNS
    (:mod:`jaxspline.search`) until the time limit;
 6. **repair** - start-time refinement, an independent re-check without margins
@@ -50,12 +50,6 @@ from jaxspline.planning.mission import Scenario
 from jaxspline.planning.opportunities import build_opportunities, nadir_rate, reference_points
 from jaxspline.planning.repair import dropped_line, repair
 from jaxspline.planning.result import Observations, PlanResult
-from jaxspline.screen.models import (
-    REST_TO_REST,
-    far_gap,
-    first_requirements,
-    slew_table,
-)
 from jaxspline.screen.options import take_options
 from jaxspline.screen.pairs import screen_chunks
 from jaxspline.search import BatteryModel, Problem, mip_bound, solve
@@ -241,11 +235,10 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
             continue
         n = ids.size
         sub = take_options(o, ids)._replace(route=np.arange(n), scan_ok=np.ones(n, bool))
-        rest = sat.model in REST_TO_REST
         pending, held = [], 0
         for tr in screen_chunks(
             sub,
-            tables[k] if rest else sat.limits,
+            tables[k],
             max_gap=far[k] + slack + _WINDOW_GUARD,
             chunk_size=_NEAR_CHUNK,
             feasible_only=True,
@@ -255,7 +248,7 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
         ):
             ii, jj = ids[tr.src], ids[tr.dst]
             keep = o.t_end[ii] > o.t_start[jj] - far[k] - slack
-            need = tr.t_min if rest else np.minimum(tr.t_min, tr.T)
+            need = sat.maneuver.need(tr.t_min, tr.T)
             part = (ii[keep], jj[keep], need[keep])
             if join_filter is None:
                 builder.add(*part)
@@ -357,14 +350,14 @@ def build_problem(
         opp = build_opportunities(sc, scene, table.usable, windows)
         clock.lap("options", f"{len(opp)} options")
         o = opp.options
-        tables = [slew_table(s, pc.margins.gap) if s.model in REST_TO_REST else None for s in sats]
+        tables = [s.maneuver.screen_model(s, pc.margins.gap) for s in sats]
         omega = nadir_rate(scene)
         far = np.zeros(len(sats))
         first = np.full(len(opp), np.inf)
         for k, s in enumerate(sats):
             ids = np.flatnonzero(o.sat == k)
-            far[k] = far_gap(s, o, ids, float(omega[k]), tables[k])
-            first[ids] = first_requirements(s, o, ids, tables[k])
+            far[k] = s.maneuver.far_gap(s, o, ids, float(omega[k]), tables[k])
+            first[ids] = s.maneuver.first_requirements(s, o, ids, tables[k])
         slack = float(np.min(o.t_end - o.t_start)) if len(opp) else math.inf
         if reduce_slack is not None:
             slack = float(reduce_slack(slack))
@@ -431,7 +424,7 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     deadline = clock.t0 + limit
     pc = sc.planner
     sats = sc.satellites
-    refining = pc.refine_steps > 0 and any(s.model == "per_channel" for s in sats)
+    refining = pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sats)
     reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
     reserve += refining * min(_REFINE_SHARE * limit, _REFINE_MAX_S)
     tg = sc.targets

@@ -90,7 +90,7 @@ def refine_starts(sc, scene, opp: Opportunities, chosen, steps: int):
     chosen = np.asarray(chosen, np.int64)
     tg = sc.targets
     h = 0.5 * sc.planner.time_step
-    per_ch = np.array([s.model == "per_channel" for s in sc.satellites])
+    per_ch = np.array([not s.maneuver.rest_to_rest for s in sc.satellites])
     t_new = np.array(o.t_start, np.float64)
     step = sc.planner.time_step
     key = np.round(np.asarray(o.t_start) / step).astype(np.int64)
@@ -114,7 +114,7 @@ def refine_starts(sc, scene, opp: Opportunities, chosen, steps: int):
 
     stats = {}
     for k, s in enumerate(sc.satellites):
-        if s.model != "per_channel":
+        if s.maneuver.rest_to_rest:
             continue
         ids = chosen[np.asarray(o.sat)[chosen] == k]
         ids = ids[np.argsort(np.asarray(o.t_start)[ids])]

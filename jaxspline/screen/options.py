@@ -53,7 +53,7 @@ class RouteOptions(NamedTuple):
 
     A transition option i -> option j (same satellite) takes T = t_start[j] -
     t_end[i] seconds; what it must achieve in T depends on the satellite's maneuver
-    model (:mod:`jaxspline.screen.models`). For the per-channel model every channel goes from
+    model (:mod:`jaxspline.screen.maneuvers`). For the per-channel model every channel goes from
     (end_angle[i], end_rate[i]) to (start_angle[j], start_rate[j]) in exactly T.
     """
 

@@ -7,7 +7,7 @@ The second argument of :func:`jaxspline.screen.pairs.screen_transitions`,
 * :class:`jaxspline.kernels.limits.AxisLimits` - per-channel exact-T reachable sets
   (SPEC section 1): every channel goes from ``(end_angle[i], end_rate[i])`` to
   ``(start_angle[j], start_rate[j])`` in exactly T (:class:`ChannelPairs`).
-* :class:`jaxspline.screen.models.SlewTable` - a tabulated rest-to-rest slew
+* :class:`jaxspline.screen.slew_table.SlewTable` - a tabulated rest-to-rest slew
   (eigen-axis bang-coast-bang or flexible profile, settle and gap margin included)
   through the angle between ``end_los[i]`` and ``start_los[j]`` (:class:`SlewPairs`).
 
@@ -32,8 +32,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.kernels.limits import AxisLimits, validate_limits
-from jaxspline.screen.models import SlewTable
 from jaxspline.screen.options import RouteOptions, validate_options
+from jaxspline.screen.slew_table import SlewTable
 
 __all__ = ["ChannelPairs", "SlewPairs", "model_arrays", "validate_model"]
 
@@ -151,7 +151,7 @@ class ChannelPairs:
 
 @dataclasses.dataclass(frozen=True)
 class SlewPairs:
-    """Rest-to-rest pair function: a :class:`~jaxspline.screen.models.SlewTable` lookup.
+    """Rest-to-rest pair function: a :class:`~jaxspline.screen.slew_table.SlewTable` lookup.
 
     ``table`` = (end_los, start_los), component-major [3, N], unit vectors
     (:func:`model_arrays` normalizes them); ``params`` = (time [S + 1],), the table's

@@ -9,7 +9,7 @@ channel c the spacecraft must move from ``(end_angle[i, c], end_rate[i, c])`` to
 rate[c]``, ``|f''| <= accel[c]``; the per-channel exact-T kernels of
 :mod:`jaxspline.kernels.reach` decide it (SPEC section 1; feasible durations are
 not an interval, so ``T >= t_min`` is not enough). With a
-:class:`jaxspline.screen.models.SlewTable`, a rest-to-rest slew through the angle
+:class:`jaxspline.screen.slew_table.SlewTable`, a rest-to-rest slew through the angle
 between ``end_los[i]`` and ``start_los[j]`` (settle and gap margin included) must
 fit in T.
 
@@ -162,7 +162,7 @@ def screen_chunks(
 
     Args:
       options: RouteOptions table (N options, C channels).
-      model: AxisLimits (per channel) or :class:`jaxspline.screen.models.SlewTable`
+      model: AxisLimits (per channel) or :class:`jaxspline.screen.slew_table.SlewTable`
         (rest to rest; needs ``options.end_los`` / ``start_los``), see
         :func:`screen_transitions`.
       max_gap: optional upper bound on T [s].
@@ -216,7 +216,7 @@ def screen_transitions(
       model: the maneuver model (:mod:`jaxspline.screen.pair_models`):
         AxisLimits with ``rate`` [rad/s] and ``accel`` [rad/s^2], scalars or
         arrays of shape [C] (``jerk`` is ignored: the model of SPEC section 1 has
-        none), or a :class:`jaxspline.screen.models.SlewTable` (then
+        none), or a :class:`jaxspline.screen.slew_table.SlewTable` (then
         ``options.end_los`` and ``start_los`` [N, 3] are required).
       max_gap: optional upper bound on T [s]; bounds the work to the pairs that
         lie within ``max_gap`` of each other in time.

@@ -206,7 +206,7 @@ def screen_sequences(
         end of a row.
       model: the maneuver model, as in
         :func:`~jaxspline.screen.pairs.screen_transitions`: AxisLimits (per-channel
-        exact-T reach sets) or a :class:`~jaxspline.screen.models.SlewTable` (rest to
+        exact-T reach sets) or a :class:`~jaxspline.screen.slew_table.SlewTable` (rest to
         rest, tabulated eigen-axis or flexible slew with settling).
       chunk_size: transitions per compiled chunk (a chunk is
         ``max(1, chunk_size // (L - 1))`` rows; device memory ~ 100 bytes per

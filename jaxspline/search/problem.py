@@ -2,7 +2,7 @@
 
 Built by :func:`jaxspline.plan` from the screened options. Times are seconds. The
 transition rule between two options i -> j of one satellite is the required time
-``need(i, j)`` (:mod:`jaxspline.screen.models`): feasible iff ``t_start[j] - t_end[i] >=
+``need(i, j)`` (:mod:`jaxspline.screen.maneuvers`): feasible iff ``t_start[j] - t_end[i] >=
 need``. Rest-to-rest satellites evaluate it from the lines of sight through their
 slew table (cheap, any pair); per-channel satellites look it up among the screened
 near pairs (:class:`jaxspline.search.store.NearPairs`, 8 bytes a pair); pairs
@@ -36,7 +36,7 @@ class Problem:
       c_first: per option required time before it as its satellite's first
         observation (inf: not allowed first).
       c_ls, c_le: per option unit lines of sight (tuples) at start / end.
-      tables: per satellite a :class:`jaxspline.screen.models.SlewTable` (rest-to-rest) or None.
+      tables: per satellite a :class:`jaxspline.screen.slew_table.SlewTable` (rest-to-rest) or None.
       pairs: :class:`NearPairs`, every feasible near pair (every model) by destination.
       far: per satellite the always-feasible gap [s].
       battery: :class:`BatteryModel`.
@@ -133,7 +133,8 @@ class Problem:
           near_pairs: :class:`NearPairs`, or (src, dst, need) arrays of the feasible
             pairs closer than far.
           far: [S] always-feasible gaps.
-          tables: per satellite SlewTable or None.
+          tables: per satellite its model's screen model (``sat.maneuver.screen_model``);
+            kept for rest-to-rest satellites (their SlewTable), None for the others.
           battery: :class:`BatteryModel`.
           weights: per target value.
           lookup: [S] bool, satellites whose near pairs are authoritative (default:
@@ -153,7 +154,7 @@ class Problem:
         starts = np.asarray(o.t_start, np.float64).tolist()
         if not isinstance(near_pairs, NearPairs):
             near_pairs = NearPairs.from_arrays(n, *near_pairs, rows=start_order(o.t_start, sat))
-        pc = np.array([s.model == "per_channel" for s in sats], bool)
+        pc = np.array([not s.maneuver.rest_to_rest for s in sats], bool)
         look = pc if lookup is None else np.asarray(lookup, bool) | pc
         return cls(
             n_sats=n_s,
@@ -165,7 +166,9 @@ class Problem:
             c_first=np.asarray(first, np.float64).tolist(),
             c_ls=[tuple(v) for v in np.asarray(o.start_los).tolist()],
             c_le=[tuple(v) for v in np.asarray(o.end_los).tolist()],
-            tables=list(tables),
+            tables=[
+                t if s.maneuver.rest_to_rest else None for s, t in zip(sats, tables, strict=True)
+            ],
             pairs=near_pairs,
             far=[float(f) for f in far],
             battery=battery,

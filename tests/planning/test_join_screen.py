@@ -134,7 +134,7 @@ def test_problem_lookup_makes_removed_rest_to_rest_pairs_infeasible(case):
         start_los=np.tile([0.0, 0.0, 1.0], (n, 1)),
         end_los=np.tile([0.0, 0.0, 1.0], (n, 1)),
     )
-    from jaxspline.screen.models import slew_table
+    from jaxspline.screen.slew_table import slew_table
 
     tables = [None] + [slew_table(s) for s in case.sats[1:]]
     keep = case.screened

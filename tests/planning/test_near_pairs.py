@@ -1,7 +1,7 @@
 """The planner's near pairs through the fused screen equal the host-built reference.
 
 ``_near_pairs_host`` is the planner's former implementation (pairs built on the host
-with ``ragged_positions``, screened with ``requirements.pair_requirements``), kept here as
+with ``ragged_positions``, screened with the model's ``pair_requirements``), kept here as
 the reference for the same inputs as :func:`jaxspline.planning.planner.build_problem`.
 """
 
@@ -13,7 +13,6 @@ from test_planner import _scenario
 
 from jaxspline.kernels._batch import ragged_positions
 from jaxspline.planning import planner
-from jaxspline.screen.requirements import pair_requirements
 from jaxspline.search.store import NearPairs, start_order
 
 _PAIR_BLOCK = 1 << 20
@@ -38,7 +37,7 @@ def _near_pairs_host(sc, opp, tables, far, slack):
             owner, off = ragged_positions(cnt[sl])
             jj = ids[sl][owner]
             ii = eo[a[sl][owner] + off]
-            need = pair_requirements(sat, o, ii, jj, tables[k])
+            need = sat.maneuver.pair_requirements(sat, o, ii, jj, tables[k])
             ok = np.isfinite(need)
             src_all.append(ii[ok])
             dst_all.append(jj[ok])

@@ -1,6 +1,6 @@
 """Rest-to-rest (SlewTable) maneuver model on the fused screening engine.
 
-References: :func:`jaxspline.screen.requirements.pair_requirements` (numpy table lookup)
+References: ``sat.maneuver.pair_requirements`` (numpy table lookup)
 and an independent table rebuilt here from ``kernels.slew.bang_coast_bang_time`` +
 settle + gap margin on the same fine angle grid, read in numpy.
 """
@@ -20,8 +20,8 @@ from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.slew import bang_coast_bang_time
 from jaxspline.planning.mission import FlexMode, Satellite
 from jaxspline.screen import fused as screen_fused
-from jaxspline.screen import models, requirements, transitions
 from jaxspline.screen import pairs as screen
+from jaxspline.screen import slew_table, transitions
 
 SETTLE, GAP_MARGIN, SIZE = 2.0, 0.5, 4096
 _COLS = ("src", "dst", "T", "feasible", "margin", "effort", "t_min")
@@ -73,7 +73,7 @@ def _independent_table(sat):
     if sat.model == "eigen_axis":
         t = np.asarray(bang_coast_bang_time(up, rate, accel))
     else:
-        t = np.asarray(models.slew_time(sat, up)) - sat.settle
+        t = np.asarray(sat.maneuver.slew_time(sat, up)) - sat.settle
         th_s = 7.0 / 6.0 * rate * rate / accel
         k = np.ceil(SIZE * np.sqrt(th_s * (1.0 + np.array([-1e-9, 1e-9])) / math.pi) - 1e-12)
         k0, k1 = k.astype(int)
@@ -90,12 +90,12 @@ def _ref_t_req(opt, src, dst, time):
 @pytest.mark.parametrize("model", ["eigen_axis", "flexible"])
 def test_slew_table_screen_matches_numpy_references(model):
     sat = _sat(model)
-    table = models.slew_table(sat, GAP_MARGIN, size=SIZE)
+    table = slew_table.slew_table(sat, GAP_MARGIN, size=SIZE)
     opt = _los_options(41)
     tr = screen.screen_transitions(opt, table, progress=False, chunk_size=512)
     assert tr.src.size > 3000 and 0.1 < tr.feasible.mean() < 0.9
     # numpy reference of the planner: t_req where feasible, inf elsewhere
-    need = requirements.pair_requirements(sat, opt, tr.src, tr.dst, table)
+    need = sat.maneuver.pair_requirements(sat, opt, tr.src, tr.dst, table)
     np.testing.assert_array_equal(tr.feasible, np.isfinite(need))
     np.testing.assert_allclose(tr.t_min[tr.feasible], need[tr.feasible], rtol=1e-12, atol=0)
     # independent table from the slew kernel + settle + margin
@@ -110,7 +110,7 @@ def test_slew_table_screen_matches_numpy_references(model):
     assert np.all((tr.effort <= 1) == tr.feasible)
     # the table never under-estimates the exact time; it over-estimates by the rise over
     # one cell, except in the cell of the flexible model's A -> C switch (the whole drop)
-    exact = np.asarray(models.slew_time(sat, theta, GAP_MARGIN))
+    exact = np.asarray(sat.maneuver.slew_time(sat, theta, GAP_MARGIN))
     assert np.all(tr.t_min >= exact)
     rate, accel = float(sat.limits.rate), float(sat.limits.accel)
     k_sw = math.ceil(SIZE * math.sqrt(7.0 / 6.0 * rate * rate / accel / math.pi) - 1e-12)
@@ -145,7 +145,7 @@ def _rank(opt):
 
 def test_slew_table_t_le_zero_chunks_and_float32():
     sat = _sat()
-    table = models.slew_table(sat, GAP_MARGIN, size=SIZE)
+    table = slew_table.slew_table(sat, GAP_MARGIN, size=SIZE)
     opt = _los_options(42, n_routes=12)
     # T <= 0 pairs through screen_pairs: infeasible, margin -inf, effort +inf
     src, dst = np.arange(10), np.arange(10)
@@ -174,18 +174,18 @@ def test_slew_table_t_le_zero_chunks_and_float32():
 
 def test_slew_table_value_errors():
     sat = _sat()
-    table = models.slew_table(sat, 0.0, size=64)
+    table = slew_table.slew_table(sat, 0.0, size=64)
     opt = _los_options(43, n_routes=4)
     with pytest.raises(ValueError, match="end_los"):
         screen.screen_transitions(opt._replace(end_los=None), table, progress=False)
     with pytest.raises(ValueError, match="start_los"):
         screen.screen_pairs(opt._replace(start_los=opt.start_los[:, :2]), table, [0], [1])
     with pytest.raises(ValueError, match="model.time"):
-        screen.screen_transitions(opt, models.SlewTable(table.time[:-1], 64), progress=False)
+        screen.screen_transitions(opt, slew_table.SlewTable(table.time[:-1], 64), progress=False)
     with pytest.raises(ValueError, match="model must be an AxisLimits"):
         screen.screen_transitions(opt, table.time, progress=False)
     # the pair function keys the compile cache by value: one program for both tables
-    other = models.slew_table(sat, 1.0, size=64)
+    other = slew_table.slew_table(sat, 1.0, size=64)
     screen.screen_transitions(opt, table, progress=False)
     n = screen_fused._fused_program.cache_info().currsize
     screen.screen_transitions(opt, other, progress=False)
@@ -199,7 +199,7 @@ def test_slew_table_screen_sequences_match_a_numpy_composition(model):
     from jaxspline.screen.sequences import screen_sequences
 
     sat = _sat(model)
-    table = models.slew_table(sat, GAP_MARGIN, SIZE)
+    table = slew_table.slew_table(sat, GAP_MARGIN, SIZE)
     opt = _los_options(7)
     rng = np.random.default_rng(3)
     n, kk, ll = len(opt.route), 400, 6
@@ -218,7 +218,7 @@ def test_slew_table_screen_sequences_match_a_numpy_composition(model):
         for p, j in enumerate(row):
             bad = not scan_ok[j] or opt.route[j] in opt.route[row[:p]]
             if p and not bad:
-                need = requirements.pair_requirements(sat, opt, [row[p - 1]], [j], table)[0]
+                need = sat.maneuver.pair_requirements(sat, opt, [row[p - 1]], [j], table)[0]
                 bad = not np.isfinite(need)
             if bad:
                 want_first[r] = p

@@ -1,6 +1,6 @@
 """The rest-to-rest SlewTable is an upper bound of the exact slew time.
 
-Reference: :func:`jaxspline.screen.models.slew_time`, the exact profile time (slew
+Reference: :func:```sat.maneuver.slew_time```, the exact profile time (slew
 kernel + settle + gap margin) that the plan's final check uses. The flexible
 profile's time is not monotone in the angle (SPEC section 2: profile A ends at
 ``7/6 omega^2/eps`` with ``sqrt(28/3) b`` and profile C starts there at ``3 b``), so a
@@ -23,13 +23,13 @@ from jaxspline.geometry.frames import angle_between
 from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planning.mission import FlexMode, Satellite
-from jaxspline.screen import models, requirements
 from jaxspline.screen import pairs as screen
+from jaxspline.screen import slew_table
 from jaxspline.screen.options import RouteOptions
 
 _SC = jaxspline.default_scenario()
 _GAP = float(_SC.planner.margins.gap)  # what planner.plan passes to slew_table
-_REST = [s for s in _SC.satellites if s.model in models.REST_TO_REST]
+_REST = [s for s in _SC.satellites if s.maneuver.rest_to_rest]
 
 
 def _slow_flexible():
@@ -83,14 +83,16 @@ def _angles(sat, size):
 
 
 def _table(sat, size):
-    return models.slew_table(sat, _GAP) if size is None else models.slew_table(sat, _GAP, size)
+    return (
+        slew_table.slew_table(sat, _GAP) if size is None else slew_table.slew_table(sat, _GAP, size)
+    )
 
 
 @pytest.mark.parametrize(("sat", "size"), CASES, ids=IDS)
 def test_slew_table_never_below_exact_time(sat, size):
     table = _table(sat, size)
     theta = _angles(sat, table.size)
-    exact = np.asarray(models.slew_time(sat, theta, _GAP))
+    exact = np.asarray(sat.maneuver.slew_time(sat, theta, _GAP))
     batched = table(theta)
     under = exact - batched
     assert (under > 0).sum() == 0, (
@@ -145,9 +147,9 @@ def test_slew_table_screen_lookup_never_below_the_plan_check(sat, size):
     )
     src, dst = np.arange(n), n + np.arange(n)
     t_req = screen.screen_pairs(opt, table, src, dst).t_min
-    exact = np.asarray(models.slew_time(sat, angle_between(u, v), _GAP))  # plan_check's
+    exact = np.asarray(sat.maneuver.slew_time(sat, angle_between(u, v), _GAP))  # plan_check's
     under = exact - t_req
     assert (under > 0).sum() == 0, f"{(under > 0).sum()} pairs, up to {under.max():.3g} s"
     # the planner's numpy path (first_requirements, pair_requirements) likewise; its angle
     # formula differs from the screen's by rounding, so the cells may differ near 0
-    assert np.all(requirements.pair_requirements(sat, opt, src, dst, table) >= exact)
+    assert np.all(sat.maneuver.pair_requirements(sat, opt, src, dst, table) >= exact)
