@@ -300,45 +300,68 @@ def make_targets(
         "mid_hi": mid_hi,
         "min_duration": min_duration,
     }
-    try:
-        arrs = np.broadcast_arrays(kind, *(np.asarray(v, np.float64) for v in num.values()))
-    except ValueError as exc:
-        raise ValueError(f"target fields are not broadcastable: {exc}") from None
-    kind, out = arrs[0], dict(zip(num, (np.array(a) for a in arrs[1:]), strict=True))
+    kind, out = _broadcast_fields(kind, num)
+    _check_target_fields(kind, out)
     n = kind.size
-
-    def bad(field, mask, why):
-        if mask.any():
-            i = int(np.flatnonzero(mask)[0])
-            raise ValueError(f"targets[{i}].{field}: {why}, got {out.get(field, kind)[i]!r}")
-
-    bad("kind", ~np.isin(kind, (POINT, STRIP)), "must be 0 (point) or 1 (strip)")
-    for f in ("lat", "lon", "alt", "duration", "length", "azimuth", "value"):
-        bad(f, ~np.isfinite(out[f]), "must be finite")
-    bad("lat", np.abs(out["lat"]) > np.pi / 2, "must be within [-pi/2, pi/2] rad")
-    bad("value", out["value"] <= 0, "must be > 0")
-    bad("length", (kind == STRIP) & (out["length"] <= 0), "must be > 0 for a strip")
-    bad("duration", (kind == POINT) & (out["duration"] <= 0), "must be > 0 for a point")
-    bad("t_hi", ~(out["t_lo"] <= out["t_hi"]), "must be >= t_lo")
-    bad("mid_hi", ~(out["mid_lo"] <= out["mid_hi"]), "must be >= mid_lo")
-    bad(
-        "min_duration",
-        ~(np.isfinite(out["min_duration"]) & (out["min_duration"] >= 0)),
-        "must be finite and >= 0",
-    )
-    bad(
-        "duration",
-        (kind == POINT) & (out["duration"] < out["min_duration"]),
-        "must be >= min_duration for a point",
-    )
     sensor = np.broadcast_to(np.asarray(sensor, dtype=object), (n,)).astype(str)
-    names = np.array([f"t{i}" for i in range(n)]) if name is None else np.asarray(name, str)
-    if names.shape != (n,):
-        raise ValueError(f"targets.name must have {n} entries, got shape {names.shape}")
+    names = _target_names(name, n)
     out["duration"] = np.where(kind == POINT, out["duration"], 0.0)
     out["length"] = np.where(kind == STRIP, out["length"], 0.0)
     out["azimuth"] = np.where(kind == STRIP, out["azimuth"], 0.0)
     return Targets(name=names, kind=np.array(kind), sensor=sensor, **out)
+
+
+def _broadcast_fields(kind: np.ndarray, num: dict) -> tuple[np.ndarray, dict]:
+    """Broadcast ``kind`` and the numeric fields ``num`` (name -> value) to one shape
+    (ValueError when they do not broadcast). Returns ``(kind, out)``: the broadcast
+    kinds and a dict of the fields as fresh writable float64 arrays, in ``num``'s
+    order."""
+    try:
+        arrs = np.broadcast_arrays(kind, *(np.asarray(v, np.float64) for v in num.values()))
+    except ValueError as exc:
+        raise ValueError(f"target fields are not broadcastable: {exc}") from None
+    return arrs[0], dict(zip(num, (np.array(a) for a in arrs[1:]), strict=True))
+
+
+def _reject_first(field: str, mask: np.ndarray, why: str, values: np.ndarray) -> None:
+    """Raise ValueError naming the first target where ``mask`` holds
+    (``targets[i].field: why, got value``); nothing when ``mask`` is all False."""
+    if mask.any():
+        i = int(np.flatnonzero(mask)[0])
+        raise ValueError(f"targets[{i}].{field}: {why}, got {values[i]!r}")
+
+
+def _check_target_fields(kind: np.ndarray, out: dict) -> None:
+    """The rules of :func:`make_targets` on the broadcast fields, in order: a known
+    kind, finite numbers, latitude within the poles, positive value, a length for
+    strips and a duration for points, ordered windows, and a finite non-negative
+    ``min_duration`` that a point's duration reaches. Raises ValueError at the first
+    target breaking the first rule it breaks."""
+    _reject_first("kind", ~np.isin(kind, (POINT, STRIP)), "must be 0 (point) or 1 (strip)", kind)
+    for f in ("lat", "lon", "alt", "duration", "length", "azimuth", "value"):
+        _reject_first(f, ~np.isfinite(out[f]), "must be finite", out[f])
+    lat, value, length, duration = out["lat"], out["value"], out["length"], out["duration"]
+    _reject_first("lat", np.abs(lat) > np.pi / 2, "must be within [-pi/2, pi/2] rad", lat)
+    _reject_first("value", value <= 0, "must be > 0", value)
+    _reject_first("length", (kind == STRIP) & (length <= 0), "must be > 0 for a strip", length)
+    point = kind == POINT
+    _reject_first("duration", point & (duration <= 0), "must be > 0 for a point", duration)
+    _reject_first("t_hi", ~(out["t_lo"] <= out["t_hi"]), "must be >= t_lo", out["t_hi"])
+    _reject_first("mid_hi", ~(out["mid_lo"] <= out["mid_hi"]), "must be >= mid_lo", out["mid_hi"])
+    min_d = out["min_duration"]
+    ok = np.isfinite(min_d) & (min_d >= 0)
+    _reject_first("min_duration", ~ok, "must be finite and >= 0", min_d)
+    short = point & (duration < min_d)
+    _reject_first("duration", short, "must be >= min_duration for a point", duration)
+
+
+def _target_names(name, n: int) -> np.ndarray:
+    """The targets' names: ``name`` as str [n], or "t0", "t1", ... when None
+    (ValueError when ``name`` has not n entries)."""
+    names = np.array([f"t{i}" for i in range(n)]) if name is None else np.asarray(name, str)
+    if names.shape != (n,):
+        raise ValueError(f"targets.name must have {n} entries, got shape {names.shape}")
+    return names
 
 
 @dataclasses.dataclass(frozen=True)

@@ -223,6 +223,66 @@ def refine_plan(
       history, and the independent validation of the refined plan. Steps keep
       the ``scan_ok`` flag of their original option.
     """
+    limits, idx = _validated(plan, options, limits, objective, steps, learning_rate)
+    st = _start(options, model, limits, idx)
+    if idx.size < 2:
+        return _unrefined(model, st, limits, samples)
+    leaves, static = _split_model(model)
+    m0, e0 = _costs_jit(leaves, static, st.route, st.t_init, st.rate, st.accel)
+    if temperature is None:
+        temperature = _default_temperature(m0)
+    run = _Run(float(learning_rate), objective, int(steps), jnp.asarray(temperature, st.dtype))
+    t_best, history = _best_starts(st, run, leaves, static)
+    m1, e1 = _costs_jit(leaves, static, st.route, t_best, st.rate, st.accel)
+    steps_tab = _steps_table(model, st.route, t_best, st.scan_ok, st.dtype)
+    rep = check_steps(steps_tab, limits, windows=(st.lo_np, st.hi_np), samples=samples)
+    return RefineResult(
+        t0=np.asarray(t_best),
+        steps=steps_tab,
+        margin_before=np.asarray(jnp.min(m0, axis=1)),
+        margin_after=np.asarray(jnp.min(m1, axis=1)),
+        effort_before=np.asarray(jnp.max(e0, axis=1)),
+        effort_after=np.asarray(jnp.max(e1, axis=1)),
+        history=np.asarray(history),
+        report=rep,
+        ok=rep.ok,
+    )
+
+
+class _Start(NamedTuple):
+    """Where the refinement starts: the plan's ``route`` [K] and start times ``t_init``
+    [K] [s], their windows ``lo``, ``hi`` [K] (jax, and as numpy ``lo_np``, ``hi_np``
+    for the final check), the window fractions ``u0`` [K] of ``t_init``, the steps'
+    ``scan_ok`` [K], the bounds ``rate``, ``accel`` [C] and the float ``dtype``."""
+
+    route: jax.Array
+    t_init: jax.Array
+    lo: jax.Array
+    hi: jax.Array
+    lo_np: np.ndarray
+    hi_np: np.ndarray
+    u0: jax.Array
+    scan_ok: np.ndarray
+    rate: jax.Array
+    accel: jax.Array
+    dtype: np.dtype
+
+
+class _Run(NamedTuple):
+    """The optimizer's settings: Adam's ``learning_rate`` (window fractions), the
+    ``objective`` name, the number of ``steps`` and the soft-minimum ``temperature``
+    [rad] (a jax scalar of the plan's dtype)."""
+
+    learning_rate: float
+    objective: str
+    steps: int
+    temperature: jax.Array
+
+
+def _validated(plan: Plan, options: RouteOptions, limits, objective, steps, learning_rate):
+    """Check the arguments of :func:`refine_plan` (ValueError naming the first bad one)
+    and return ``(limits, idx)``: the validated AxisLimits and the plan's option
+    indices as int64 [K], every one an index of ``options``."""
     validate_options(options)
     limits = validate_limits(limits)
     if objective not in _OBJECTIVES:
@@ -235,6 +295,15 @@ def refine_plan(
     n = np.shape(options.t_start)[0]
     if idx.size and (idx.min() < 0 or idx.max() >= n):
         raise ValueError(f"plan.chosen must index the {n} options, got {idx.tolist()}")
+    return limits, idx
+
+
+def _start(options: RouteOptions, model, limits: AxisLimits, idx: np.ndarray) -> _Start:
+    """The starting point of the refinement of the options ``idx``: routes, start times
+    and windows from ``model.window`` (ValueError when a start time lies outside its
+    window by more than 1e-9 relative), the window fractions u0 (0 for an empty
+    window), and the bounds in the options' float dtype (jax's default float when the
+    options' states are not floats)."""
     dtype = np.asarray(options.start_angle).dtype
     if not np.issubdtype(dtype, np.floating):
         dtype = np.dtype(jnp.result_type(float))
@@ -254,53 +323,52 @@ def refine_plan(
     width = jnp.where(hi > lo, hi - lo, 1.0)
     u0 = jnp.clip((t_init - lo) / width, 0.0, 1.0)
     u0 = jnp.where(hi > lo, u0, 0.0)
+    return _Start(route, t_init, lo, hi, lo_np, hi_np, u0, scan_ok, rate, accel, dtype)
 
-    if idx.size < 2:
-        steps_tab = _steps_table(model, route, t_init, scan_ok, dtype)
-        rep = check_steps(steps_tab, limits, windows=(lo_np, hi_np), samples=samples)
-        z = np.zeros(0, dtype)
-        return RefineResult(t_np, steps_tab, z, z, z, z, np.zeros(0), rep, rep.ok)
 
-    leaves, static = _split_model(model)
-    m0, e0 = _costs_jit(leaves, static, route, t_init, rate, accel)
-    if temperature is None:
-        finite = jnp.where(jnp.isfinite(m0), jnp.abs(m0), 0.0)
-        temperature = max(0.05 * float(jnp.max(finite)), 1e-9)
+def _unrefined(model, st: _Start, limits: AxisLimits, samples: int) -> RefineResult:
+    """The result for a plan of fewer than two steps (no transition, nothing to
+    optimize): its steps at their own start times, checked, with empty margins,
+    efforts and history."""
+    steps_tab = _steps_table(model, st.route, st.t_init, st.scan_ok, st.dtype)
+    rep = check_steps(steps_tab, limits, windows=(st.lo_np, st.hi_np), samples=samples)
+    z = np.zeros(0, st.dtype)
+    return RefineResult(np.asarray(st.t_init), steps_tab, z, z, z, z, np.zeros(0), rep, rep.ok)
+
+
+def _default_temperature(m0) -> float:
+    """The default soft-minimum temperature: 5 % of the largest finite |margin| [rad]
+    of the starting plan ``m0`` [K-1, C], at least 1e-9."""
+    finite = jnp.where(jnp.isfinite(m0), jnp.abs(m0), 0.0)
+    return max(0.05 * float(jnp.max(finite)), 1e-9)
+
+
+def _best_starts(st: _Start, run: _Run, leaves, static):
+    """Run the projected Adam iteration from ``st`` and pick its best iterate: the one
+    of largest minimum margin for ``"softmin_margin"`` (or when no iterate is
+    feasible), else the feasible one of least effort. Returns (its start times [K]
+    [s], the objective history [steps])."""
     us, vals, mins, efforts = _optimize(
-        u0,
-        lo,
-        jnp.where(hi > lo, hi, lo),
-        route,
-        rate,
-        accel,
-        jnp.asarray(temperature, dtype),
-        float(learning_rate),
+        st.u0,
+        st.lo,
+        jnp.where(st.hi > st.lo, st.hi, st.lo),
+        st.route,
+        st.rate,
+        st.accel,
+        run.temperature,
+        run.learning_rate,
         leaves,
         static,
-        objective,
-        int(steps),
+        run.objective,
+        run.steps,
     )
     mins, efforts = np.asarray(mins), np.asarray(efforts)
     feasible = mins >= 0
-    if objective == "softmin_margin" or not feasible.any():
+    if run.objective == "softmin_margin" or not feasible.any():
         best = int(np.argmax(mins))
     else:
         best = int(np.flatnonzero(feasible)[np.argmin(efforts[feasible])])
-    t_best = lo + (hi - lo) * us[best]
-    m1, e1 = _costs_jit(leaves, static, route, t_best, rate, accel)
-    steps_tab = _steps_table(model, route, t_best, scan_ok, dtype)
-    rep = check_steps(steps_tab, limits, windows=(lo_np, hi_np), samples=samples)
-    return RefineResult(
-        t0=np.asarray(t_best),
-        steps=steps_tab,
-        margin_before=np.asarray(jnp.min(m0, axis=1)),
-        margin_after=np.asarray(jnp.min(m1, axis=1)),
-        effort_before=np.asarray(jnp.max(e0, axis=1)),
-        effort_after=np.asarray(jnp.max(e1, axis=1)),
-        history=np.asarray(vals),
-        report=rep,
-        ok=rep.ok,
-    )
+    return st.lo + (st.hi - st.lo) * us[best], vals
 
 
 def try_insert(

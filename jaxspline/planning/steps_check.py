@@ -93,28 +93,80 @@ def check_steps(
       StepsReport(ok, violations, peak_rate [C], peak_accel [C]).
     """
     c = validate_options(steps, "steps")
+    cfg = _settings(c, steps, limits, samples, rtol)
+    s = _float_steps(steps)
+    v, blame = _plan_rule_violations(steps.scan_ok, s, windows, cfg.rtol)
+    v_rate, blame_rate, peak_rate = _boundary_rate_violations(s, cfg, np.zeros(c))
+    v_man, blame_man, peak_rate, peak_accel = _maneuver_violations(s, cfg, peak_rate)
+    v = v + v_rate + v_man
+    blame = blame | blame_rate | blame_man
+    return StepsReport(not v, v, peak_rate, peak_accel, tuple(sorted(blame)))
+
+
+class _Settings(NamedTuple):
+    """What every check of :func:`check_steps` compares against: the bounds ``rate``
+    [C] [rad/s] and ``accel`` [C] [rad/s^2] in float64, the relative tolerance
+    ``rtol``, the dtype the maneuvers are rebuilt in, and the samples per maneuver."""
+
+    rate: np.ndarray
+    accel: np.ndarray
+    rtol: float
+    dtype: np.dtype
+    samples: int
+
+
+class _Steps(NamedTuple):
+    """The plan's K steps as plain numpy arrays: ``route`` [K] as given, the start and
+    end times ``ts``, ``te`` [K] and the boundary states ``sa``, ``sr`` (start angle,
+    rate) and ``ea``, ``er`` (end angle, rate) [K, C] in float64."""
+
+    route: np.ndarray
+    ts: np.ndarray
+    te: np.ndarray
+    sa: np.ndarray
+    sr: np.ndarray
+    ea: np.ndarray
+    er: np.ndarray
+
+
+def _settings(c: int, steps: RouteOptions, limits, samples, rtol) -> _Settings:
+    """Validate ``limits`` and ``samples`` (ValueError) and resolve the settings of the
+    check: ``rtol`` defaults to 1e-9 in float64 and 1e-4 in float32 (the dtype of
+    ``steps``), the bounds are broadcast to the ``c`` channels."""
     limits = validate_limits(limits)
     if int(samples) < 3:
         raise ValueError(f"samples must be >= 3, got {samples!r}")
-    samples = int(samples)
     dtype = np.dtype(options_dtype(steps))
     if rtol is None:
         rtol = 1e-9 if dtype == np.float64 else 1e-4
     rate = np.broadcast_to(np.asarray(limits.rate, np.float64), (c,))
     accel = np.broadcast_to(np.asarray(limits.accel, np.float64), (c,))
-    k_steps = np.shape(steps.t_start)[0]
-    route = np.asarray(steps.route)
-    ts = np.asarray(steps.t_start, np.float64)
-    te = np.asarray(steps.t_end, np.float64)
-    sa, sr = np.asarray(steps.start_angle, np.float64), np.asarray(steps.start_rate, np.float64)
-    ea, er = np.asarray(steps.end_angle, np.float64), np.asarray(steps.end_rate, np.float64)
+    return _Settings(rate, accel, rtol, dtype, int(samples))
+
+
+def _float_steps(steps: RouteOptions) -> _Steps:
+    """The fields of ``steps`` the checks read, as numpy arrays (times and states in
+    float64, so that every check runs in double precision whatever the plan's dtype)."""
+    return _Steps(
+        route=np.asarray(steps.route),
+        ts=np.asarray(steps.t_start, np.float64),
+        te=np.asarray(steps.t_end, np.float64),
+        sa=np.asarray(steps.start_angle, np.float64),
+        sr=np.asarray(steps.start_rate, np.float64),
+        ea=np.asarray(steps.end_angle, np.float64),
+        er=np.asarray(steps.end_rate, np.float64),
+    )
+
+
+def _plan_rule_violations(scan_ok, s: _Steps, windows, rtol) -> tuple[list[str], set[int]]:
+    """The plan rules that need no maneuver: ``scan_ok`` on every step, each route at
+    most once (its repeats after the first step are blamed), and, when ``windows`` is
+    given, every start time inside its window (to ``rtol * (1 + |t|)``). Returns the
+    violations and the blamed steps."""
     v: list[str] = []
     blame: set[int] = set()
-    peak_rate = np.zeros(c)
-    peak_accel = np.zeros(c)
-
-    # plan rules
-    for k in np.flatnonzero(~np.asarray(steps.scan_ok, bool)):
+    route, ts = s.route, s.ts
+    for k in np.flatnonzero(~np.asarray(scan_ok, bool)):
         v.append(f"step {k} (route {route[k]}): scan_ok is False")
         blame.add(int(k))
     _, first, counts = np.unique(route, return_index=True, return_counts=True)
@@ -124,7 +176,7 @@ def check_steps(
             v.append(f"route {route[r_first]} imaged {cnt} times (steps {at})")
             blame.update(at[1:])
     if windows is not None:
-        lo_w, hi_w = (np.broadcast_to(np.asarray(w, np.float64), (k_steps,)) for w in windows)
+        lo_w, hi_w = (np.broadcast_to(np.asarray(w, np.float64), (ts.shape[0],)) for w in windows)
         tol_t = rtol * (1.0 + np.abs(ts))
         for k in np.flatnonzero((ts < lo_w - tol_t) | (ts > hi_w + tol_t)):
             v.append(
@@ -132,70 +184,123 @@ def check_steps(
                 f"[{lo_w[k]!r}, {hi_w[k]!r}]"
             )
             blame.add(int(k))
-    # scan boundary states within the rate bound
-    for name, x in (("start_rate", sr), ("end_rate", er)):
-        peak_rate = np.maximum(peak_rate, np.abs(x).max(axis=0, initial=0.0))
-        bad = np.abs(x) > rate * (1.0 + rtol)
-        for k, ch in zip(*np.nonzero(bad), strict=True):
-            v.append(f"step {k} channel {ch}: |{name}| = {abs(x[k, ch])!r} > rate {rate[ch]!r}")
-            blame.add(int(k))
+    return v, blame
 
-    # maneuvers
-    for k in range(k_steps - 1):
-        before = len(v)
-        T = ts[k + 1] - te[k]
+
+def _boundary_rate_violations(
+    s: _Steps, cfg: _Settings, peak_rate: np.ndarray
+) -> tuple[list[str], set[int], np.ndarray]:
+    """The scan boundary states (start and end rates of every step) within the rate
+    bound. Returns the violations, the blamed steps and ``peak_rate`` [C] raised to
+    the largest boundary |rate| of each channel."""
+    v: list[str] = []
+    blame: set[int] = set()
+    for name, x in (("start_rate", s.sr), ("end_rate", s.er)):
+        peak_rate = np.maximum(peak_rate, np.abs(x).max(axis=0, initial=0.0))
+        bad = np.abs(x) > cfg.rate * (1.0 + cfg.rtol)
+        for k, ch in zip(*np.nonzero(bad), strict=True):
+            v.append(f"step {k} channel {ch}: |{name}| = {abs(x[k, ch])!r} > rate {cfg.rate[ch]!r}")
+            blame.add(int(k))
+    return v, blame, peak_rate
+
+
+def _maneuver_violations(
+    s: _Steps, cfg: _Settings, peak_rate: np.ndarray
+) -> tuple[list[str], set[int], np.ndarray, np.ndarray]:
+    """Every transition ``k -> k + 1`` in turn: T > 0, then the rebuilt maneuver's
+    checks (:func:`_transition_violations`); a failing transition blames step
+    ``k + 1``. Returns the violations, the blamed steps, ``peak_rate`` [C] raised to the
+    maneuvers' peaks and the maneuvers' ``peak_accel`` [C] (a copy: the input stays)."""
+    v: list[str] = []
+    blame: set[int] = set()
+    peak_rate = peak_rate.copy()
+    peak_accel = np.zeros(peak_rate.shape[0])
+    for k in range(s.ts.shape[0] - 1):
+        T = s.ts[k + 1] - s.te[k]
         if not T > 0:
-            v.append(f"steps {k} -> {k + 1} overlap or touch: T = {T!r} s (needs T > 0)")
+            found = [f"steps {k} -> {k + 1} overlap or touch: T = {T!r} s (needs T > 0)"]
+        else:
+            found, peaks = _transition_violations(k, T, s, cfg)
+            for ch, pr, pa in peaks:
+                peak_rate[ch] = max(peak_rate[ch], pr)
+                peak_accel[ch] = max(peak_accel[ch], pa)
+        if found:
+            v += found
             blame.add(k + 1)
-            continue
-        t = np.linspace(0.0, T, samples)
-        a1, b1, a2, b2 = ea[k], er[k], sa[k + 1], sr[k + 1]
-        f, fd, fdd = (
-            np.asarray(x, np.float64)
-            for x in _transfer(
-                a1[:, None].astype(dtype),
-                b1[:, None].astype(dtype),
-                a2[:, None].astype(dtype),
-                b2[:, None].astype(dtype),
-                dtype.type(T),
-                AxisLimits(rate[:, None].astype(dtype), accel[:, None].astype(dtype)),
-                t[None, :].astype(dtype),
-            )
+    return v, blame, peak_rate, peak_accel
+
+
+def _transition_violations(k: int, T, s: _Steps, cfg: _Settings):
+    """Rebuild the maneuver of transition ``k -> k + 1`` (duration ``T`` > 0) from the
+    end state of step k to the start state of step k+1, sample it and check every
+    channel. Returns the violations and, per channel with a trajectory, ``(channel,
+    peak |rate|, peak |accel|)``; a channel with no trajectory in exactly T is a
+    violation with no peaks."""
+    t = np.linspace(0.0, T, cfg.samples)
+    a1, b1, a2, b2 = s.ea[k], s.er[k], s.sa[k + 1], s.sr[k + 1]
+    dtype = cfg.dtype
+    f, fd, fdd = (
+        np.asarray(x, np.float64)
+        for x in _transfer(
+            a1[:, None].astype(dtype),
+            b1[:, None].astype(dtype),
+            a2[:, None].astype(dtype),
+            b2[:, None].astype(dtype),
+            dtype.type(T),
+            AxisLimits(cfg.rate[:, None].astype(dtype), cfg.accel[:, None].astype(dtype)),
+            t[None, :].astype(dtype),
         )
-        for ch in range(c):
-            tag = f"transition {k} -> {k + 1} (T = {T:.6g} s) channel {ch}"
-            if not (np.isfinite(f[ch]).all() and np.isfinite(fd[ch]).all()):
-                v.append(f"{tag}: no trajectory (not reachable in exactly T)")
-                continue
-            atol = rtol * (1.0 + abs(a1[ch]) + abs(a2[ch]) + rate[ch] * T)
-            rtol_rate = rtol * rate[ch] + rtol * accel[ch] * T
-            ends = (
-                ("start angle", f[ch, 0], a1[ch], atol),
-                ("start rate", fd[ch, 0], b1[ch], rtol_rate),
-                ("end angle", f[ch, -1], a2[ch], atol),
-                ("end rate", fd[ch, -1], b2[ch], rtol_rate),
-            )
-            for what, got, want, tol in ends:
-                if abs(got - want) > tol:
-                    v.append(f"{tag}: {what} {got!r} != boundary state {want!r}")
-            dt = np.diff(t)
-            slope = np.abs(np.diff(fd[ch])) / dt
-            pr = np.abs(fd[ch]).max()
-            pa = max(slope.max(), np.abs(fdd[ch][np.isfinite(fdd[ch])]).max(initial=0.0))
-            peak_rate[ch] = max(peak_rate[ch], pr)
-            peak_accel[ch] = max(peak_accel[ch], pa)
-            if pr > rate[ch] * (1.0 + rtol):
-                v.append(f"{tag}: peak rate {pr!r} > limit {rate[ch]!r}")
-            if pa > accel[ch] * (1.0 + rtol) + rtol * rate[ch] / T:
-                v.append(f"{tag}: peak acceleration {pa!r} > limit {accel[ch]!r}")
-            integral = f[ch, 0] + np.concatenate(
-                [[0.0], np.cumsum(0.5 * (fd[ch, 1:] + fd[ch, :-1]) * dt)]
-            )
-            # trapezoid error on a piecewise-linear rate: <= accel dt^2 / 4 per kink (<= 4 kinks)
-            tol_int = atol + accel[ch] * dt.max() ** 2 * 2.0
-            dev = np.abs(integral - f[ch]).max()
-            if dev > tol_int:
-                v.append(f"{tag}: angle is not the integral of the rate (max deviation {dev!r})")
-        if len(v) > before:
-            blame.add(k + 1)
-    return StepsReport(not v, v, peak_rate, peak_accel, tuple(sorted(blame)))
+    )
+    v: list[str] = []
+    peaks = []
+    for ch in range(cfg.rate.shape[0]):
+        tag = f"transition {k} -> {k + 1} (T = {T:.6g} s) channel {ch}"
+        if not (np.isfinite(f[ch]).all() and np.isfinite(fd[ch]).all()):
+            v.append(f"{tag}: no trajectory (not reachable in exactly T)")
+            continue
+        ends = (a1[ch], b1[ch], a2[ch], b2[ch])
+        found, pr, pa = _channel_violations(
+            tag, t, (f[ch], fd[ch], fdd[ch]), ends, cfg.rate[ch], cfg.accel[ch], cfg.rtol
+        )
+        v += found
+        peaks.append((ch, pr, pa))
+    return v, peaks
+
+
+def _channel_violations(tag, t, samples, ends, rate, accel, rtol):
+    """The checks of one channel of one sampled maneuver: ``samples`` = (angle, rate,
+    accel) at the times ``t``, which run from 0 to the duration T = ``t[-1]``; ``ends``
+    = the boundary states (a1, b1, a2, b2); ``rate``, ``accel`` = this channel's bounds.
+    Checks the four boundary states, the peak rate and acceleration (returned
+    accelerations and finite-difference slopes of the rate), and the angle as the
+    trapezoid integral of the rate. Returns the violations (each prefixed with
+    ``tag``), the peak |rate| and the peak |accel|."""
+    f, fd, fdd = samples
+    a1, b1, a2, b2 = ends
+    T = t[-1]
+    v: list[str] = []
+    atol = rtol * (1.0 + abs(a1) + abs(a2) + rate * T)
+    rtol_rate = rtol * rate + rtol * accel * T
+    for what, got, want, tol in (
+        ("start angle", f[0], a1, atol),
+        ("start rate", fd[0], b1, rtol_rate),
+        ("end angle", f[-1], a2, atol),
+        ("end rate", fd[-1], b2, rtol_rate),
+    ):
+        if abs(got - want) > tol:
+            v.append(f"{tag}: {what} {got!r} != boundary state {want!r}")
+    dt = np.diff(t)
+    slope = np.abs(np.diff(fd)) / dt
+    pr = np.abs(fd).max()
+    pa = max(slope.max(), np.abs(fdd[np.isfinite(fdd)]).max(initial=0.0))
+    if pr > rate * (1.0 + rtol):
+        v.append(f"{tag}: peak rate {pr!r} > limit {rate!r}")
+    if pa > accel * (1.0 + rtol) + rtol * rate / T:
+        v.append(f"{tag}: peak acceleration {pa!r} > limit {accel!r}")
+    integral = f[0] + np.concatenate([[0.0], np.cumsum(0.5 * (fd[1:] + fd[:-1]) * dt)])
+    # trapezoid error on a piecewise-linear rate: <= accel dt^2 / 4 per kink (<= 4 kinks)
+    tol_int = atol + accel * dt.max() ** 2 * 2.0
+    dev = np.abs(integral - f).max()
+    if dev > tol_int:
+        v.append(f"{tag}: angle is not the integral of the rate (max deviation {dev!r})")
+    return v, pr, pa

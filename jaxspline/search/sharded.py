@@ -351,6 +351,51 @@ def sharded_plan(
     if not search_time >= 0:  # nan and negatives out; +inf with search_iters
         raise ValueError(f"search_time must be a number of seconds >= 0, got {search_time!r}")
     pr, bound = _iterate(pb, sat_ids, n_sats, target, bound_deadline, bound_iters, allgather)
+    takes, options = _owner_inputs(pb, pr, index, allgather)
+    owner = task_owners(takes, options)
+    first_end, search_end = _search_ends(search_time, search_iters, takes.shape[0])
+    budget = _Budget(seed, lagrangian_share, exact_max_options, search_iters)
+    sub, ids = restrict_tasks(pb, owner == index)  # first round: the tasks it owns
+    chosen, its = _first_round(sub, ids, first_end, budget)
+    owner, chosen, handed, its2 = _hand_over_round(
+        pb, chosen, _Owners(owner, takes, options), index, search_end, budget, allgather
+    )
+    searched = float(pr.W[[pb.c_task[c] for c in chosen]].sum())
+    kept = chosen if check is None else [int(c) for c in check(chosen)]
+    local = _plan_rows(pb, kept, sat_ids, pr.W.size)
+    rss = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)  # Linux: KiB
+    tasks = sum(1 for t in range(pr.W.size) if sub.task_cands[t])
+    stats = [tasks, handed, searched, len(chosen) - len(kept), its + its2, sub.n_options]
+    stats += [len(sub.pairs), rss]
+    every = allgather(np.r_[local.ravel(), stats])
+    return _merge(every, owner, pr.W, bound)
+
+
+class _Budget(NamedTuple):
+    """The search settings every round shares: the ``seed``, the Lagrangian share and
+    exact-solve threshold of :func:`jaxspline.search.solve`, and the iteration cap
+    ``iters`` of the first round (None: the clock alone)."""
+
+    seed: int
+    lagrangian_share: float
+    exact_max_options: int
+    iters: int | None
+
+
+class _Owners(NamedTuple):
+    """The owner rule's state: ``owner`` int64 [T] (the process of each task) and its
+    gathered inputs ``takes``, ``options`` [P, T] (:func:`task_owners`)."""
+
+    owner: np.ndarray
+    takes: np.ndarray
+    options: np.ndarray
+
+
+def _owner_inputs(pb: Problem, pr: _ShardPrices, index: int, allgather):
+    """Gather the owner rule's inputs from every process: per task, how many of its
+    satellites' DP paths take the task at the best prices and how many options it has.
+    Returns (takes, options), each float64 [P, T]; ValueError when ``index`` is not
+    one of the P processes."""
     n_t = pr.W.size
     paths, _ = dp_paths(pb, pr.d, pr.W[pr.ctask] - pr.best_lam[pr.ctask])
     opts = np.bincount(pr.ctask, minlength=n_t).astype(np.float64)
@@ -358,50 +403,65 @@ def sharded_plan(
     n_p = every.shape[0]
     if not (0 <= index < n_p):
         raise ValueError(f"index {index!r} outside the {n_p} processes")
-    takes, options = every[:, :n_t], every[:, n_t:]
-    owner = task_owners(takes, options)
-    if search_iters is not None:  # iteration-bound: the clock does not cut (as solve)
-        first_end = search_end = math.inf
-    else:
-        t0 = time.monotonic()
-        search_end = t0 + search_time
-        first_end = t0 + (1.0 - _SECOND_SHARE * (n_p > 1)) * search_time
-    # first round: the ordinary search on the tasks this process owns
-    sub, ids = restrict_tasks(pb, owner == index)
+    return every[:, :n_t], every[:, n_t:]
+
+
+def _search_ends(search_time: float, search_iters, n_p: int) -> tuple[float, float]:
+    """The deadlines ``(first round, whole search)`` as ``time.monotonic()`` values [s]:
+    the first round leaves :data:`_SECOND_SHARE` of ``search_time`` to the second when
+    there is more than one process; both infinite with an iteration cap (the clock does
+    not cut, as :func:`jaxspline.search.solve`)."""
+    if search_iters is not None:
+        return math.inf, math.inf
+    t0 = time.monotonic()
+    return t0 + (1.0 - _SECOND_SHARE * (n_p > 1)) * search_time, t0 + search_time
+
+
+def _first_round(sub: Problem, ids: np.ndarray, deadline: float, budget: _Budget):
+    """The ordinary search (:func:`jaxspline.search.solve`) on ``sub``, this process's
+    problem restricted to the tasks it owns (``ids``: ``pb``'s id of each option of
+    ``sub``). Returns (its plan as option ids of ``pb``, its LNS iterations)."""
     res = solve(
         sub,
-        first_end,
-        seed=seed,
-        lagrangian_share=lagrangian_share,
-        exact_max_options=exact_max_options,
-        max_iters=search_iters,
+        deadline,
+        seed=budget.seed,
+        lagrangian_share=budget.lagrangian_share,
+        exact_max_options=budget.exact_max_options,
+        max_iters=budget.iters,
     )
-    chosen = [int(ids[c]) for c in res.timeline.assigned if c >= 0]
-    its, handed = res.stats["lns_iterations"], 0
-    if n_p > 1:  # second round: the tasks their owners left out, to the next process
-        imaged = np.zeros(n_t)
-        imaged[[pb.c_task[c] for c in chosen]] = 1.0
-        left = allgather(imaged).sum(axis=0) == 0.0
-        first = owner
-        owner = _hand_over(first, left, takes, options)
-        incoming = (owner == index) & (first != index)
-        handed = int(incoming.sum())
-        if handed:
-            chosen, its2 = _second_round(pb, chosen, owner == index, search_end, search_iters, seed)
-            its += its2
-    searched = float(pr.W[[pb.c_task[c] for c in chosen]].sum())
-    kept = chosen if check is None else [int(c) for c in check(chosen)]
+    return [int(ids[c]) for c in res.timeline.assigned if c >= 0], res.stats["lns_iterations"]
+
+
+def _hand_over_round(pb, chosen, own: _Owners, index, deadline, budget: _Budget, allgather):
+    """With more than one process: gather which tasks the first round imaged anywhere,
+    hand every task left out to the best other process (:func:`_hand_over`), and when
+    this process received some, insert them in its plan (:func:`_second_round`).
+    Returns (owners after the hand-over, the plan as option ids of ``pb``, the tasks
+    handed in, the second round's LNS iterations); a single process keeps its owners
+    and plan."""
+    if own.takes.shape[0] == 1:
+        return own.owner, chosen, 0, 0
+    imaged = np.zeros(own.owner.size)
+    imaged[[pb.c_task[c] for c in chosen]] = 1.0
+    left = allgather(imaged).sum(axis=0) == 0.0
+    owner = _hand_over(own.owner, left, own.takes, own.options)
+    handed = int(((owner == index) & (own.owner != index)).sum())
+    if not handed:
+        return owner, chosen, 0, 0
+    chosen, its = _second_round(pb, chosen, owner == index, deadline, budget.iters, budget.seed)
+    return owner, chosen, handed, its
+
+
+def _plan_rows(pb: Problem, kept, sat_ids, n_t: int) -> np.ndarray:
+    """This process's plan as the per-task rows the merge gathers: float64 [4, T] of
+    (scenario-wide satellite, option index among that satellite's options, start,
+    end) for each task of an option in ``kept`` (-1, -1, nan, nan elsewhere)."""
     local = np.full((4, n_t), -1.0)
     local[2:] = np.nan
     for c in kept:
         k = pb.c_sat[c]
         local[:, pb.c_task[c]] = (sat_ids[k], c - pb.sat_lo[k], pb.c_start[c], pb.c_end[c])
-    rss = round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)  # Linux: KiB
-    tasks = sum(1 for t in range(n_t) if sub.task_cands[t])
-    stats = [tasks, handed, searched, len(chosen) - len(kept), its, sub.n_options]
-    stats += [len(sub.pairs), rss]
-    every = allgather(np.r_[local.ravel(), stats])
-    return _merge(every, owner, pr.W, bound)
+    return local
 
 
 def _hand_over(owner, left, takes, options) -> np.ndarray:
