@@ -1,14 +1,16 @@
 """Greedy construction, large-neighbourhood search and the earliest-start pass.
 
-* Greedy: tasks by value (heaviest first; fewest satellites, then fewest options
-  first among equals) are inserted at the feasible option that consumes the least
-  timeline time (maneuver in + imaging + maneuver out minus the maneuver it
-  replaces), earlier end as tie-break.
+* Greedy (the strategy of :mod:`jaxspline.search.construct`, one decision per task):
+  tasks by value (heaviest first; fewest satellites, then fewest options first among
+  equals) are inserted at the feasible option that consumes the least timeline time
+  (maneuver in + imaging + maneuver out minus the maneuver it replaces), earlier end
+  as tie-break.
 * LNS until the deadline: destroy a window of one satellite's timeline (80 %: around
   an option of an unscheduled task picked with probability proportional to its
   value, that option then forced in; 20 %: around a random scheduled observation),
   then re-insert the removed tasks anywhere together with the unscheduled tasks that
-  have options in the window, heaviest first with 20 % noise; threshold acceptance
+  have options in the window, heaviest first with 20 % noise (the same greedy pass,
+  on insertion costs with 30 % noise); threshold acceptance
   (a step may lose up to ``temp * U(0, 1)`` value early on, nothing at the end); the
   best plan is kept. Where a battery binds, the moves weigh energy
   (:mod:`jaxspline.search.lns_energy`): targets by value times value per Wh,
@@ -25,6 +27,7 @@ import itertools
 import time
 
 from jaxspline.search import clock
+from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
 from jaxspline.search.timeline import Timeline
 
@@ -37,7 +40,6 @@ _POOL_LOOKBACK = 400.0  # [s] options starting this long before a window are re-
 _ORDER_NOISE = 0.2  # relative noise of the re-insertion order
 _REPORT_EVERY = 5.0  # [s] between progress reports
 _REFRESH_EVERY = 16  # iterations between refreshes of the unscheduled list
-_DEADLINE_CHECK = 64  # greedy insertions between deadline checks
 _TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
 
 
@@ -64,16 +66,17 @@ def greedy_order(tl: Timeline):
 def greedy(tl: Timeline, deadline: float, order=None):
     """Insert the tasks greedily (see module docstring) until done or the deadline.
 
+    The greedy strategy of :func:`jaxspline.search.construct.greedy_pass`: one decision
+    per task of ``order``, the task's options that fit as candidates, their
+    :meth:`Timeline.insert_choices` costs.
+
     Args:
       tl: Timeline (tasks already assigned stay).
       deadline: float, ``time.monotonic()`` value at which to stop [s].
       order: task order; None uses :func:`greedy_order`.
     """
-    for i, t in enumerate(order if order is not None else greedy_order(tl)):
-        if i % _DEADLINE_CHECK == 0 and clock.now() > deadline:
-            break
-        if tl.assigned[t] < 0:
-            tl.best_insert(t)
+    tasks = order if order is not None else greedy_order(tl)
+    greedy_pass(tasks, tl.insert_choices, tl.insert, deadline)
     tl.commit()
 
 
@@ -173,9 +176,8 @@ def _reinsert(tl: Timeline, er: EnergyRank, k: int, lo: float, hi: float, remove
         pool = er.order(pool, rng)
     else:
         pool = sorted(pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t))
-    for t in pool:  # only satellite k has new room for a task that was waiting
-        if tl.assigned[t] < 0:
-            tl.best_insert(t, rng=rng, sat=None if t in moved else k)
+    # the greedy on noisy costs; only satellite k has new room for a task that was waiting
+    greedy_pass(pool, lambda t: tl.insert_choices(t, rng, None if t in moved else k), tl.insert)
 
 
 def _move(tl: Timeline, w: _Walk, mark: int, rng) -> bool:
