@@ -18,7 +18,9 @@ plus O(options x width) states; the candidate table is never held.
 
 * :func:`greedy` — one chronological pass, each time taking the unvisited
   feasible successor of best value density value / (time it ends - now); it
-  looks only at the rows of the option it stands on.
+  looks only at the rows of the option it stands on. It is the search's greedy
+  strategy (:func:`jaxspline.search.construct.greedy_pass`, also the one of
+  :func:`jaxspline.search.greedy`) with one decision per position of the chain.
 * :func:`beam_search` — the dynamic programme below with at most ``width``
   partial plans kept per option.
 * :func:`exact_plan` — dynamic programming over states (last option, set of
@@ -52,6 +54,7 @@ from jaxspline.screen.stream import (
     batch_segments,
     option_order,
 )
+from jaxspline.search.construct import greedy_pass
 
 __all__ = ["Plan", "greedy", "beam_search", "exact_plan", "path_bound", "plan_value"]
 
@@ -276,6 +279,7 @@ class _Search:
         self._check_states()
 
     def run(self, rows) -> Plan:
+        """Read the admissible rows (a stream of ``(src, dst)``), return the best plan."""
         batch = -1
         for src, dst in rows:
             for b, s, d in batch_segments(self.order, src, dst):
@@ -363,6 +367,73 @@ def beam_search(options: RouteOptions, transitions, width: int = 16, seed: int =
     return _dp(options, transitions, int(width), int(seed), None)
 
 
+class _Chain:
+    """The problem of :func:`greedy` for :func:`~jaxspline.search.construct.greedy_pass`:
+    one chain over the options, extended at its end.
+
+    A decision is ``(candidates, now)``: the rows read for the last option (every
+    ``scan_ok`` option at the start) and the time the chain stands at; its admissible
+    candidates are those of an unvisited route, in ``(t_start, index)`` order, each of
+    cost minus value / (t_end - now).
+    """
+
+    def __init__(self, options: RouteOptions, order: OptionOrder):
+        self.order = order
+        self.value = np.asarray(options.value, np.float64)
+        self.ts = np.asarray(options.t_start, np.float64)
+        self.te = np.asarray(options.t_end, np.float64)
+        self.route = np.asarray(options.route, np.int64)
+        self.path: list[int] = []
+        self.visited: set[int] = set()
+
+    def choices(self, decision):
+        """The admissible candidates of ``decision`` and their costs (class docstring)."""
+        cand, t_now = decision
+        if cand.size:
+            cand = cand[[self.route[c] not in self.visited for c in cand.tolist()]]
+        cand = cand[np.argsort(self.order.rank[cand])]  # ties: earlier (t_start, index)
+        return cand, -(self.value[cand] / np.maximum(self.te[cand] - t_now, _MIN_DUR))
+
+    def commit(self, j):
+        """Append option j to the chain."""
+        self.path.append(int(j))
+        self.visited.add(int(self.route[j]))
+
+    def _last(self, n: int):
+        """The chain's last option if the decision taken at length ``n`` appended one."""
+        return self.path[-1] if len(self.path) > n else None
+
+    def decisions(self, rows):
+        """The chain's decisions, read off the admissible rows as the chain grows.
+
+        Every option first; then, after each append, the rows of the option appended
+        (they may span chunks). The decisions end when one appends nothing; the rows
+        are read to their end all the same (the stream's checks run on every chunk).
+        """
+        order, nodes = self.order, self.order.nodes
+        cur = None
+        if nodes.size:
+            yield nodes, self.ts[nodes].min()
+            cur = self._last(0)
+        succ: list[np.ndarray] = []  # rows of cur read so far
+        for src, dst in rows:
+            r = order.rank[src]
+            a = 0
+            while cur is not None:
+                a = a + int(np.searchsorted(r[a:], order.rank[cur], side="left"))
+                b = a + int(np.searchsorted(r[a:], order.rank[cur], side="right"))
+                succ.append(dst[a:b])
+                if b == r.size:
+                    break  # cur's rows may go on in the next chunk
+                n = len(self.path)
+                yield np.concatenate(succ), self.te[cur]
+                cur, succ, a = self._last(n), [], b
+        while cur is not None:  # the stream has ended: no more rows for later options
+            n = len(self.path)
+            yield (np.concatenate(succ) if succ else np.zeros(0, np.int64)), self.te[cur]
+            cur, succ = self._last(n), []
+
+
 def greedy(options: RouteOptions, transitions) -> Plan:
     """Chronological greedy plan (a fast baseline).
 
@@ -371,7 +442,9 @@ def greedy(options: RouteOptions, transitions) -> Plan:
     any option at the start) maximizing value[j] / (t_end[j] - t_now), with
     t_now the end time of the last option (the earliest t_start at the
     start); ties go to the earlier t_start, then the lower index. On a stream,
-    only the rows of the option last appended are looked at.
+    only the rows of the option last appended are looked at. This is the greedy
+    strategy of the search (:func:`jaxspline.search.construct.greedy_pass`) with
+    one decision per position of the chain.
 
     Args:
       options: RouteOptions.
@@ -384,40 +457,9 @@ def greedy(options: RouteOptions, transitions) -> Plan:
     """
     order = option_order(options)
     rows = admissible_rows(options, order, transitions)
-    value = np.asarray(options.value, np.float64)
-    ts = np.asarray(options.t_start, np.float64)
-    te = np.asarray(options.t_end, np.float64)
-    route = np.asarray(options.route, np.int64)
-    visited: set[int] = set()
-    path: list[int] = []
-
-    def pick(cand, t_now):
-        cand = cand[[route[c] not in visited for c in cand.tolist()]] if cand.size else cand
-        if cand.size == 0:
-            return None
-        score = value[cand] / np.maximum(te[cand] - t_now, _MIN_DUR)
-        j = int(cand[np.lexsort((cand, ts[cand], -score))[0]])
-        path.append(j)
-        visited.add(int(route[j]))
-        return j
-
-    nodes = order.nodes
-    cur = pick(nodes, ts[nodes].min()) if nodes.size else None
-    succ: list[np.ndarray] = []  # rows of cur read so far
-    for src, dst in rows:
-        r = order.rank[src]
-        a = 0
-        while cur is not None:
-            a = a + int(np.searchsorted(r[a:], order.rank[cur], side="left"))
-            b = a + int(np.searchsorted(r[a:], order.rank[cur], side="right"))
-            succ.append(dst[a:b])
-            if b == r.size:
-                break  # cur's rows may go on in the next chunk
-            cur, succ, a = pick(np.concatenate(succ), te[cur]), [], b
-    while cur is not None:  # the stream has ended: no more rows for later options
-        cur = pick(np.concatenate(succ) if succ else np.zeros(0, np.int64), te[cur])
-        succ = []
-    idx = np.asarray(path, np.int64)
+    chain = _Chain(options, order)
+    greedy_pass(chain.decisions(rows), chain.choices, chain.commit)
+    idx = np.asarray(chain.path, np.int64)
     return Plan(idx, plan_value(options, idx))
 
 

@@ -6,7 +6,9 @@ could sit anywhere below ``planning``; it sits above ``screen`` because it consu
 the screen produces. Inside: ``store`` / ``battery`` -> ``problem`` -> ``timeline`` /
 ``energy`` / ``mip`` -> ``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` ->
 ``bound_worker`` -> this ``__init__`` (:func:`solve`) -> ``sharded`` (not re-exported: it
-imports :func:`solve` from here). ``clock`` is the search's one time source.
+imports :func:`solve` from here). ``clock`` is the search's one time source;
+``construct`` is the one greedy strategy (:func:`greedy_pass`), used by ``timeline``,
+``lns`` and :mod:`jaxspline.planning.sequence`.
 
 :func:`solve` runs the stages on a :class:`Problem` until a deadline:
 

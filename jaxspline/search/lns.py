@@ -1,14 +1,16 @@
 """Greedy construction, large-neighbourhood search and the earliest-start pass.
 
-* Greedy: tasks by value (heaviest first; fewest satellites, then fewest options
-  first among equals) are inserted at the feasible option that consumes the least
-  timeline time (maneuver in + imaging + maneuver out minus the maneuver it
-  replaces), earlier end as tie-break.
+* Greedy (the strategy of :mod:`jaxspline.search.construct`, one decision per task):
+  tasks by value (heaviest first; fewest satellites, then fewest options first among
+  equals) are inserted at the feasible option that consumes the least timeline time
+  (maneuver in + imaging + maneuver out minus the maneuver it replaces), earlier end
+  as tie-break.
 * LNS until the deadline: destroy a window of one satellite's timeline (80 %: around
   an option of an unscheduled task picked with probability proportional to its
   value, that option then forced in; 20 %: around a random scheduled observation),
   then re-insert the removed tasks anywhere together with the unscheduled tasks that
-  have options in the window, heaviest first with 20 % noise; threshold acceptance
+  have options in the window, heaviest first with 20 % noise (the same greedy pass,
+  on insertion costs with 30 % noise); threshold acceptance
   (a step may lose up to ``temp * U(0, 1)`` value early on, nothing at the end); the
   best plan is kept. Where a battery binds, the moves weigh energy
   (:mod:`jaxspline.search.lns_energy`): targets by value times value per Wh,
@@ -25,6 +27,7 @@ import itertools
 import time
 
 from jaxspline.search import clock
+from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
 from jaxspline.search.timeline import Timeline
 
@@ -37,7 +40,6 @@ _POOL_LOOKBACK = 400.0  # [s] options starting this long before a window are re-
 _ORDER_NOISE = 0.2  # relative noise of the re-insertion order
 _REPORT_EVERY = 5.0  # [s] between progress reports
 _REFRESH_EVERY = 16  # iterations between refreshes of the unscheduled list
-_DEADLINE_CHECK = 64  # greedy insertions between deadline checks
 _TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
 
 
@@ -64,16 +66,17 @@ def greedy_order(tl: Timeline):
 def greedy(tl: Timeline, deadline: float, order=None):
     """Insert the tasks greedily (see module docstring) until done or the deadline.
 
+    The greedy strategy of :func:`jaxspline.search.construct.greedy_pass`: one decision
+    per task of ``order``, the task's options that fit as candidates, their
+    :meth:`Timeline.insert_choices` costs.
+
     Args:
       tl: Timeline (tasks already assigned stay).
       deadline: float, ``time.monotonic()`` value at which to stop [s].
       order: task order; None uses :func:`greedy_order`.
     """
-    for i, t in enumerate(order if order is not None else greedy_order(tl)):
-        if i % _DEADLINE_CHECK == 0 and clock.now() > deadline:
-            break
-        if tl.assigned[t] < 0:
-            tl.best_insert(t)
+    tasks = order if order is not None else greedy_order(tl)
+    greedy_pass(tasks, tl.insert_choices, tl.insert, deadline)
     tl.commit()
 
 
@@ -91,13 +94,132 @@ def _destroy(tl: Timeline, k: int, lo: float, hi: float):
     return removed if (not removed or tl.removal_ok(k, a)) else None
 
 
+class _Walk:
+    """The LNS's state between iterations: the unscheduled targets and the best plan.
+
+    Attributes:
+      has: the tasks with options.
+      er: :class:`EnergyRank` of the problem.
+      un: the unscheduled tasks (refreshed every :data:`_REFRESH_EVERY` iterations).
+      cw: cumulative target weights of ``un``.
+      dirty: whether the plan changed since ``un`` was refreshed.
+      best_key: (value, count) of the best plan.
+      best: its task -> option assignment.
+      improved: number of improvements of the best plan.
+    """
+
+    def __init__(self, tl: Timeline, has):
+        self.has, self.er = has, EnergyRank(tl.pb)
+        self.best_key = (tl.W, tl.N)
+        self.best = list(tl.assigned)
+        self.improved = 0
+        self.dirty = False
+        self.refresh(tl)
+
+    def refresh(self, tl: Timeline):
+        """Recompute the unscheduled tasks and their cumulative target weights."""
+        self.un = [t for t in self.has if tl.assigned[t] < 0]
+        self.cw = list(itertools.accumulate(self.er.target_weights(tl, self.un)))
+
+
+def _window(tl: Timeline, w: _Walk, rng):
+    """The destroy window ``(k, lo, hi, forced)`` of one move, None to skip the move.
+
+    80 %: around an option of an unscheduled task (value-weighted), that option then
+    ``forced`` in; else around a scheduled observation of a random satellite
+    (``forced`` -1).
+    """
+    pb, er = tl.pb, w.er
+    if w.un and rng.random() < _P_TARGETED:
+        t = rng.choices(w.un, cum_weights=w.cw, k=1)[0]
+        if tl.assigned[t] >= 0:
+            return None
+        c = rng.choice(pb.task_cands[t])
+        rad = rng.choice(_RAD_TARGET)
+        return pb.c_sat[c], pb.c_start[c] - rad, pb.c_end[c] + rad, c
+    k = rng.randrange(pb.n_sats)
+    if not tl.tl[k]:
+        return None
+    c0 = er.cheap_pick(tl, k, rng) if er.binds(tl, k) else rng.choice(tl.tl[k])
+    rad = rng.choice(_RAD_RANDOM)
+    return k, pb.c_start[c0] - rad, pb.c_end[c0] + rad, -1
+
+
+def _force(tl: Timeline, forced: int, removed, er: EnergyRank, rng):
+    """Insert option ``forced`` when it fits (making battery room if that is all it
+    lacks); the observations removed for it join ``removed``."""
+    if tl.check(forced) is not None:
+        tl.insert(forced)
+    elif tl.battery_failed:
+        m2 = len(tl.log)
+        room = make_room(tl, forced, er, rng)
+        if room is None:
+            tl.undo_to(m2)
+        else:
+            removed += room
+            tl.insert(forced)
+    return removed
+
+
+def _reinsert(tl: Timeline, er: EnergyRank, k: int, lo: float, hi: float, removed, rng):
+    """Re-insert the removed tasks anywhere and the waiting tasks with options of
+    satellite k in the window on k, heaviest (or most value per Wh) first, noisy."""
+    pb = tl.pb
+    moved = {pb.c_task[c] for c in removed}
+    pool = set(moved)
+    a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
+    b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
+    for c in range(a, b):
+        if tl.assigned[pb.c_task[c]] < 0:
+            pool.add(pb.c_task[c])
+    if er.binds(tl, k):
+        pool = er.order(pool, rng)
+    else:
+        pool = sorted(pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t))
+    # the greedy on noisy costs; only satellite k has new room for a task that was waiting
+    greedy_pass(pool, lambda t: tl.insert_choices(t, rng, None if t in moved else k), tl.insert)
+
+
+def _move(tl: Timeline, w: _Walk, mark: int, rng) -> bool:
+    """One destroy-and-repair move (module docstring); False when it was skipped."""
+    win = _window(tl, w, rng)
+    if win is None:
+        return False
+    k, lo, hi, forced = win
+    removed = _destroy(tl, k, lo, hi)
+    if removed is None:
+        tl.undo_to(mark)
+        return False
+    if forced >= 0:
+        removed = _force(tl, forced, removed, w.er, rng)
+    _reinsert(tl, w.er, k, lo, hi, removed, rng)
+    return True
+
+
+def _accept(tl: Timeline, w: _Walk, base, mark: int, thr: float, it: int, rng):
+    """Threshold acceptance of a move (loses at most ``thr * U(0, 1)``) and the
+    bookkeeping of the best plan and of the unscheduled list."""
+    if tl.W < base[0] - thr * rng.random() - 1e-9:
+        tl.undo_to(mark)
+        return
+    w.dirty |= tl.score() != base
+    if w.dirty and it % _REFRESH_EVERY == 0:
+        w.refresh(tl)
+        w.dirty = False
+    if (tl.W, tl.N) > w.best_key:
+        w.improved += 1
+        w.best_key = (tl.W, tl.N)
+        w.best = list(tl.assigned)
+    tl.commit()
+
+
 def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
     """Large-neighbourhood search until ``deadline`` (or ``max_iters``).
 
     Args:
       tl: Timeline holding the start plan; it ends at the best plan.
       deadline: float, ``time.monotonic()`` value at which to stop [s].
-      rng: numpy Generator.
+      rng: ``random.Random`` (the stream of every random choice of the moves).
       max_iters: cap on the iterations (None: the deadline alone).
       report: callable ``report(it, improved)`` called every few seconds (progress
         display), or None.
@@ -106,92 +228,28 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
     """
     pb = tl.pb
     t_start = time.monotonic()
-    best_key = (tl.W, tl.N)
-    best = list(tl.assigned)
     has = [t for t in range(len(pb.weight)) if pb.task_cands[t]]
     if not has:
         return 0
-    er = EnergyRank(pb)
-    un = [t for t in has if tl.assigned[t] < 0]
-    cw = list(itertools.accumulate(er.target_weights(tl, un)))
-    it = improved = 0
-    dirty = False
+    w = _Walk(tl, has)
+    it = 0
     last = time.monotonic()
     while (max_iters is None or it < max_iters) and clock.now() < deadline:
         it += 1
         base = tl.score()
         mark = len(tl.log)
-        forced = -1
-        if un and rng.random() < _P_TARGETED:
-            t = rng.choices(un, cum_weights=cw, k=1)[0]
-            if tl.assigned[t] >= 0:
-                continue
-            c = rng.choice(pb.task_cands[t])
-            k = pb.c_sat[c]
-            rad = rng.choice(_RAD_TARGET)
-            lo, hi = pb.c_start[c] - rad, pb.c_end[c] + rad
-            forced = c
-        else:
-            k = rng.randrange(pb.n_sats)
-            if not tl.tl[k]:
-                continue
-            c0 = er.cheap_pick(tl, k, rng) if er.binds(tl, k) else rng.choice(tl.tl[k])
-            rad = rng.choice(_RAD_RANDOM)
-            lo, hi = pb.c_start[c0] - rad, pb.c_end[c0] + rad
-        removed = _destroy(tl, k, lo, hi)
-        if removed is None:
-            tl.undo_to(mark)
+        if not _move(tl, w, mark, rng):
             continue
-        if forced >= 0:
-            if tl.check(forced) is not None:
-                tl.insert(forced)
-            elif tl.battery_failed:
-                m2 = len(tl.log)
-                room = make_room(tl, forced, er, rng)
-                if room is None:
-                    tl.undo_to(m2)
-                else:
-                    removed += room
-                    tl.insert(forced)
-        moved = {pb.c_task[c] for c in removed}
-        pool = set(moved)
-        a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
-        b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
-        for c in range(a, b):
-            if tl.assigned[pb.c_task[c]] < 0:
-                pool.add(pb.c_task[c])
-        if er.binds(tl, k):
-            pool = er.order(pool, rng)
-        else:
-            pool = sorted(
-                pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t)
-            )
-        for t in pool:  # only satellite k has new room for a task that was waiting
-            if tl.assigned[t] < 0:
-                tl.best_insert(t, rng=rng, sat=None if t in moved else k)
         if max_iters is not None:
             frac = it / max_iters
         else:
             frac = (time.monotonic() - t_start) / max(1e-9, deadline - t_start)
-        thr = _TEMPERATURE * max(0.0, 1.0 - frac)
-        if tl.W < base[0] - thr * rng.random() - 1e-9:
-            tl.undo_to(mark)
-        else:
-            dirty |= tl.score() != base
-            if dirty and it % _REFRESH_EVERY == 0:
-                un = [t for t in has if tl.assigned[t] < 0]
-                cw = list(itertools.accumulate(er.target_weights(tl, un)))
-                dirty = False
-            if (tl.W, tl.N) > best_key:
-                improved += 1
-                best_key = (tl.W, tl.N)
-                best = list(tl.assigned)
-            tl.commit()
+        _accept(tl, w, base, mark, _TEMPERATURE * max(0.0, 1.0 - frac), it, rng)
         if report is not None and time.monotonic() - last > _REPORT_EVERY:
             last = time.monotonic()
-            report(it, improved)
-    if (tl.W, tl.N) < best_key:
-        tl.restore(best)
+            report(it, w.improved)
+    if (tl.W, tl.N) < w.best_key:
+        tl.restore(w.best)
     return it
 
 

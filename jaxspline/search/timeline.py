@@ -23,8 +23,8 @@ Battery bookkeeping, cheapest test first:
 from __future__ import annotations
 
 import bisect
-import math
 
+from jaxspline.search.construct import first_least
 from jaxspline.search.problem import Problem
 
 __all__ = ["Timeline"]
@@ -347,19 +347,26 @@ class Timeline:
                 self.levels[k], self.debt[k], self.stale[k] = lv, debt, stale
             self.saved.clear()
 
-    def best_insert(self, t: int, rng=None, sat: int | None = None) -> bool:
-        """Insert task t at its cheapest feasible option (noisy costs with ``rng``).
+    def insert_choices(self, t: int, rng=None, sat: int | None = None):
+        """Task t's options that fit now and their insertion costs (one greedy decision).
+
+        The cost of an option is the timeline time it consumes (:meth:`check`) plus
+        :data:`_TURNAROUND_WEIGHT` times its end, times ``1 + U(0, 0.3)`` with ``rng``
+        (one draw per option that fits, in ``task_cands`` order).
 
         Args:
           t: int, task index.
-          rng: numpy Generator for randomized costs, or None.
+          rng: ``random.Random`` for randomized costs, or None.
           sat: only options of this satellite (None: every satellite).
         Returns:
-          bool, whether the task was inserted.
+          (options, costs), two lists in ``task_cands`` order; empty when the task is
+          already imaged.
         """
         pb = self.pb
         c_sat = pb.c_sat
-        best, best_cost = -1, math.inf
+        cands, costs = [], []
+        if self.assigned[t] >= 0:
+            return cands, costs
         for c in pb.task_cands[t]:
             if sat is not None and c_sat[c] != sat:
                 continue
@@ -369,12 +376,25 @@ class Timeline:
             cost += _TURNAROUND_WEIGHT * pb.c_end[c]
             if rng is not None:
                 cost *= 1.0 + _INSERT_NOISE * rng.random()
-            if cost < best_cost:
-                best, best_cost = c, cost
-        if best >= 0:
-            self.insert(best)
-            return True
-        return False
+            cands.append(c)
+            costs.append(cost)
+        return cands, costs
+
+    def best_insert(self, t: int, rng=None, sat: int | None = None) -> bool:
+        """Insert task t at its cheapest feasible option (:meth:`insert_choices`).
+
+        Args:
+          t: int, task index.
+          rng: ``random.Random`` for randomized costs, or None.
+          sat: only options of this satellite (None: every satellite).
+        Returns:
+          bool, whether the task was inserted.
+        """
+        cands, costs = self.insert_choices(t, rng, sat)
+        k = first_least(costs)
+        if k >= 0:
+            self.insert(cands[k])
+        return k >= 0
 
     def restore(self, assigned):
         """Reset to the given task -> option assignment (-1: unassigned).
