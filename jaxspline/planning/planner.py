@@ -323,71 +323,110 @@ def build_problem(
     sc = scenario
     clock = _clock or _Clock(sc.name, progress)
     with jax.enable_x64(True):
-        pc = sc.planner
         sats = sc.satellites
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
-        ref = reference_points(sc)
-        tg = sc.targets
-        sensors = np.array([s.sensor for s in sats])
-        allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
-        limit_k = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
-        windows = visibility_windows_all(
-            scene,
-            table.ok,
-            ref,
-            allowed,
-            limit_k,
-            pc.margins.horizon,
-            tg.t_lo,
-            tg.t_hi,
-            sc.duration,
-        )
-        clock.lap(
-            "windows",
-            f"{len(windows)} windows for {len(np.unique(windows.target))}/{len(tg)} targets",
-        )
+        windows = _windows(sc, scene, table)
+        n_tg = len(np.unique(windows.target))
+        clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
         opp = build_opportunities(sc, scene, table.usable, windows)
         clock.lap("options", f"{len(opp)} options")
-        o = opp.options
-        tables = [s.maneuver.screen_model(s, pc.margins.gap) for s in sats]
+        tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
         omega = nadir_rate(scene)
-        far = np.zeros(len(sats))
-        first = np.full(len(opp), np.inf)
-        for k, s in enumerate(sats):
-            ids = np.flatnonzero(o.sat == k)
-            far[k] = s.maneuver.far_gap(s, o, ids, float(omega[k]), tables[k])
-            first[ids] = s.maneuver.first_requirements(s, o, ids, tables[k])
-        slack = float(np.min(o.t_end - o.t_start)) if len(opp) else math.inf
-        if reduce_slack is not None:
-            slack = float(reduce_slack(slack))
-        slack = slack if math.isfinite(slack) else 0.0
-        lookup = None
+        far, first = _far_and_first(sats, opp, tables, omega)
+        slack = _near_slack(opp, reduce_slack)
+        lookup = join_filter = None
         if joins and len(opp):
-            states = channel_states(scene, sats, opp)
-            far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
-            first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
+            far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega)
             lookup = np.ones(len(sats), bool)
-        join_filter = None
-        if lookup is not None:
-            join_filter = functools.partial(screen_joins, sats, opp, states)
         near, removed = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK, join_filter)
-        screened = f" ({removed} removed by the join screen)" if lookup is not None else ""
-        clock.lap(
-            "screening",
-            f"{len(near)} feasible near pairs{screened}, {near.nbytes / max(len(near), 1):.1f} "
-            f"B/pair; far gaps {far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s",
-        )
-        battery = BatteryModel(
-            sunlit,
-            [s.power for s in sats],
-            pc.geometry_step,
-            pc.margins.battery_wh,
-            pc.margins.shadow_guard,
-        )
-        pb = Problem.build(opp, sats, first, near, far, tables, battery, tg.value, lookup)
+        clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
+        battery = _battery(sc, sunlit)
+        pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.targets.value, lookup)
         pb.near_slack = slack
     return Prepared(pb, opp, windows, scene, table, battery, far)
+
+
+def _windows(sc: Scenario, scene, table):
+    """Stage 2: every visibility window of every target's reference point on every
+    satellite allowed to image it (sensor type), within the off-nadir limit and the
+    horizon (both minus their margins) and the target's imaging window."""
+    pc = sc.planner
+    tg = sc.targets
+    sensors = np.array([s.sensor for s in sc.satellites])
+    allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
+    limit_k = np.array([s.off_nadir_max for s in sc.satellites]) - pc.margins.off_nadir
+    return visibility_windows_all(
+        scene,
+        table.ok,
+        reference_points(sc),
+        allowed,
+        limit_k,
+        pc.margins.horizon,
+        tg.t_lo,
+        tg.t_hi,
+        sc.duration,
+    )
+
+
+def _far_and_first(sats, opp, tables, omega):
+    """Per satellite, through its maneuver model and screening table: the always-feasible
+    gap ``far`` [S] [s] (``omega`` [S]: nadir turn rates [rad/s]) and, per option, the
+    time ``first`` [N] [s] a first observation needs from rest (inf: never first)."""
+    o = opp.options
+    far = np.zeros(len(sats))
+    first = np.full(len(opp), np.inf)
+    for k, s in enumerate(sats):
+        ids = np.flatnonzero(o.sat == k)
+        far[k] = s.maneuver.far_gap(s, o, ids, float(omega[k]), tables[k])
+        first[ids] = s.maneuver.first_requirements(s, o, ids, tables[k])
+    return far, first
+
+
+def _near_slack(opp, reduce_slack) -> float:
+    """The near-pair slack: the shortest observation [s] (reduced across processes by
+    ``reduce_slack`` when given; 0 when there is none)."""
+    o = opp.options
+    slack = float(np.min(o.t_end - o.t_start)) if len(opp) else math.inf
+    if reduce_slack is not None:
+        slack = float(reduce_slack(slack))
+    return slack if math.isfinite(slack) else 0.0
+
+
+def _join_screens(sats, scene, opp, far, first, omega):
+    """The flown-join screens (:mod:`jaxspline.planning.join_screen`): the far gaps
+    widened to the joins' (``far`` [S] [s], ``omega`` [S] nadir turn rates), the first
+    requirements ``first`` [N] with options whose join from nadir fails set to inf, and
+    the pair filter ``(src, dst) -> bool`` of the near-pair screen. Returns
+    ``(far, first, join_filter)``."""
+    states = channel_states(scene, sats, opp)
+    far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
+    first = first.copy()
+    first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
+    return far, first, functools.partial(screen_joins, sats, opp, states)
+
+
+def _screening_line(near, removed: int, far, joins: bool) -> str:
+    """The progress line of stage 4: near pairs (and those the join screen removed),
+    bytes per pair, the range of the far gaps."""
+    screened = f" ({removed} removed by the join screen)" if joins else ""
+    return (
+        f"{len(near)} feasible near pairs{screened}, {near.nbytes / max(len(near), 1):.1f} "
+        f"B/pair; far gaps {far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s"
+    )
+
+
+def _battery(sc: Scenario, sunlit) -> BatteryModel:
+    """The conservative battery model of the satellites (``sunlit`` [S, n+1] on the
+    geometry knots) with the planner's margins."""
+    pc = sc.planner
+    return BatteryModel(
+        sunlit,
+        [s.power for s in sc.satellites],
+        pc.geometry_step,
+        pc.margins.battery_wh,
+        pc.margins.shadow_guard,
+    )
 
 
 def _cpus() -> int:
