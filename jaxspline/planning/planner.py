@@ -40,6 +40,7 @@ from jaxspline.geometry.frames import gmst, in_shadow, jd_split, sun_direction
 from jaxspline.geometry.orbit import tabulate_orbits
 from jaxspline.geometry.pointing import Scene
 from jaxspline.geometry.windows import visibility_windows_all
+from jaxspline.planning.assemble import assemble_result
 from jaxspline.planning.join_screen import (
     channel_states,
     join_far_gap,
@@ -49,7 +50,7 @@ from jaxspline.planning.join_screen import (
 from jaxspline.planning.mission import Scenario
 from jaxspline.planning.opportunities import build_opportunities, nadir_rate, reference_points
 from jaxspline.planning.repair import dropped_line, repair
-from jaxspline.planning.result import Observations, PlanResult
+from jaxspline.planning.result import PlanResult
 from jaxspline.screen.options import take_options
 from jaxspline.screen.pairs import screen_chunks
 from jaxspline.search import BatteryModel, Problem, mip_bound, solve
@@ -459,16 +460,64 @@ def _search(pb, deadline, seed, max_iters, pc, clock):
 
 
 def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
+    """:func:`plan` after its argument checks (inside ``jax.enable_x64``): stages 1-4,
+    then search and repair under the signal guard, the optional HiGHS certificate, and
+    the result."""
     clock = _Clock(sc.name, progress)
-    deadline = clock.t0 + limit
+    budget = _budget(sc, limit, clock.t0)
+    prep = build_problem(sc, joins=flown_joins, _clock=clock)
+    res, rep, interrupted = _search_and_repair(
+        sc, prep, budget, seed, max_iters, flown_joins, clock
+    )
+    clock.lap(
+        "repair",
+        f"{len(rep.chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
+        + (f", {rep.refilled} refilled" if flown_joins else ""),
+    )
+    mip = None
+    if certify > 0:
+        mip = mip_bound(prep.problem, certify)
+        clock.lap("certify", f"HiGHS bound {mip.bound:.6g} ({mip.status})")
+    return assemble_result(
+        sc,
+        prep,
+        res,
+        rep,
+        mip,
+        flown_joins=flown_joins,
+        interrupted=interrupted,
+        timings=clock.timings,
+        peak_rss_mb=clock.peak_rss_mb,
+    )
+
+
+class _Budget(NamedTuple):
+    """The clock of one :func:`plan` call: its ``deadline`` (``time.monotonic`` [s]), the
+    ``reserve`` [s] the search leaves before it (final check and output, and start-time
+    refinement when ``refining``: the scenario has refine steps and a per-channel
+    satellite)."""
+
+    deadline: float
+    reserve: float
+    refining: bool
+
+
+def _budget(sc: Scenario, limit: float, t0: float) -> _Budget:
+    """The budget of a call started at ``t0`` (monotonic [s]) with ``limit`` seconds: a
+    share of the limit (at least ``_RESERVE_MIN``) kept for the check and output, plus
+    one for start-time refinement (at most ``_REFINE_MAX_S``) when it runs."""
     pc = sc.planner
-    sats = sc.satellites
-    refining = pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sats)
+    refining = pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sc.satellites)
     reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
     reserve += refining * min(_REFINE_SHARE * limit, _REFINE_MAX_S)
-    tg = sc.targets
-    prep = build_problem(sc, joins=flown_joins, _clock=clock)
-    pb, opp, windows, scene, table, battery, far = prep
+    return _Budget(t0 + limit, reserve, refining)
+
+
+def _search_and_repair(sc, prep: Prepared, budget: _Budget, seed, max_iters, flown_joins, clock):
+    """Stages 5-6 under the signal guard: the first Ctrl-C or SIGTERM stops the search
+    and the best plan so far goes through the repair. Returns (search result,
+    :class:`jaxspline.planning.repair.Repaired`, the signal's name or None)."""
+    pc = sc.planner
     search_clock.clear_stop()
 
     def stopping(name):
@@ -480,22 +529,17 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
         )
 
     with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
-        res = _search(pb, deadline - reserve, seed, max_iters, pc, clock)
+        res = _search(prep.problem, budget.deadline - budget.reserve, seed, max_iters, pc, clock)
         tl = res.timeline
         clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
-        steps = int(pc.refine_steps) if refining else 0
-        left = deadline - time.monotonic()
-        if steps and max_iters is None and left < _REFINE_MIN_S:
-            steps = 0
-            clock.say("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
         rep = repair(
             sc,
-            scene,
-            table.usable,
-            opp,
+            prep.scene,
+            prep.orbits.usable,
+            prep.opportunities,
             tl,
-            battery,
-            refine_steps=steps,
+            prep.battery,
+            refine_steps=_refine_steps(pc, budget, max_iters, clock),
             flown_joins=flown_joins,
             refill_s=math.inf if max_iters is not None else _REFILL_S,
             refill_iters=_REFILL_ITERS if max_iters is not None else None,
@@ -503,82 +547,15 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
             report=clock.say,
         )
     search_clock.clear_stop()
-    chosen, opp, det, refined = rep.chosen, rep.opp, rep.details, rep.refined
-    o = opp.options
-    clock.lap(
-        "repair",
-        f"{len(chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
-        + (f", {rep.refilled} refilled" if flown_joins else ""),
-    )
-    idx = np.asarray(det["order"], np.int64)
-    obs = Observations(
-        sat=np.asarray(o.sat)[idx],
-        target=np.asarray(o.route)[idx],
-        start=np.asarray(o.t_start)[idx],
-        end=np.asarray(o.t_end)[idx],
-        maneuver=det["maneuver"],
-        slack=det["slack"],
-        value=np.asarray(tg.value)[np.asarray(o.route)[idx]],
-        speed=opp.speed[idx],
-    )
-    value = float(np.sum(obs.value))
-    # every plan images only targets that have an option: their total bounds any plan
-    reachable = float(np.sum(np.asarray(tg.value)[np.unique(np.asarray(o.route))]))
-    bound = min(float(res.bound), reachable)
-    converged = res.bound_status in ("optimal", "converged")
-    mip = None
-    if certify > 0:
-        m = mip_bound(pb, certify)
-        found = m.value if math.isfinite(m.value) else None
-        mip = {"bound": m.bound, "plan_value": found, "status": m.status, "seconds": m.seconds}
-        if m.bound < bound:
-            bound, converged = m.bound, m.status == "optimal"
-        clock.lap("certify", f"HiGHS bound {m.bound:.6g} ({m.status})")
-    bat = {}
-    for k, s in enumerate(sats):
-        if battery.has(k):
-            lev = det["battery"].get(s.name)
-            if lev is None:  # no observations: the idle profile
-                lev = battery.profile(k, [], [], [])
-            bat[s.name] = (np.arange(lev.size) * battery.dt, lev)
-    report = {
-        "valid": not det["violations"],
-        "checked": len(obs),
-        "dropped": rep.dropped,
-        "dropped_total": sum(rep.dropped.values()),
-        "violations_found": rep.violations,
-        "repair_rounds": rep.rounds,
-        "violations": det["violations"],
-        "min_slack_s": float(obs.slack.min()) if len(obs) else None,
-        "min_battery_wh": det["battery_min"],
-    }
-    if flown_joins:
-        report["joins"] = {**rep.joins, "rejected": rep.dropped["joins"], "refilled": rep.refilled}
-    if stop["signal"]:
-        report["interrupted"] = stop["signal"]
-    stats = {
-        "windows": len(windows),
-        "options": len(opp),
-        "near_pairs": len(pb.pairs),
-        "pair_store_bytes": pb.pairs.nbytes,
-        "far_gap_s": far.tolist(),
-        "pair_bytes": round(pb.pairs.nbytes / max(len(pb.pairs), 1), 2),
-        "peak_rss_mb": clock.peak_rss_mb,
-        "bound_status": res.bound_status,
-        "refined": refined,
-        "exact": res.exact,
-        "mip": mip,
-        **res.stats,
-    }
-    return PlanResult(
-        scenario=sc,
-        observations=obs,
-        value=value,
-        bound=max(bound, value),
-        gap=max(bound, value) - value,
-        bound_converged=converged,
-        report=report,
-        stats=stats,
-        timings=clock.timings,
-        battery=bat,
-    )
+    return res, rep, stop["signal"]
+
+
+def _refine_steps(pc, budget: _Budget, max_iters, clock) -> int:
+    """The start-time refinement steps of the repair: the scenario's when refining, none
+    when a time-limited run has less than ``_REFINE_MIN_S`` left (said on the clock)."""
+    steps = int(pc.refine_steps) if budget.refining else 0
+    left = budget.deadline - time.monotonic()
+    if steps and max_iters is None and left < _REFINE_MIN_S:
+        steps = 0
+        clock.say("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
+    return steps
