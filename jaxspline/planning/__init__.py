@@ -7,8 +7,9 @@ The pipeline inside: ``mission`` (satellites, targets, settings) -> ``opportunit
 flown degree-7 joins of a plan, :func:`plan_joins`) -> ``join_screen`` (screening with
 those joins) -> ``sequence`` (greedy / beam / exact sequencer) -> ``steps_check`` ->
 ``refine`` -> ``refine_starts`` -> ``plan_check`` -> ``result`` -> ``repair`` ->
-``planner`` (:func:`jaxspline.plan`). ``files`` holds the atomic file writes that every
-writer above uses (:class:`PlanResult` writes its JSON with them).
+``assemble`` (a run's :class:`PlanResult`) -> ``planner`` (:func:`jaxspline.plan`).
+``files`` holds the atomic file writes that every writer above uses (:class:`PlanResult`
+writes its JSON with them).
 
 Decisions: the attitude laws, the flown joins and the join screen live here, not in
 ``ops``: the planner screens transitions with the flown joins (``channel_states``,

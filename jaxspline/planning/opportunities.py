@@ -195,30 +195,45 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
       table_ok: callable ``(sat [N], t [N]) -> bool [N]``, ephemeris usable.
       windows: visibility windows of the targets' reference points.
     """
-    pc = sc.planner
-    step, gstep = pc.time_step, pc.geometry_step
-    tg = sc.targets
-    laws = aim_laws(sc)
-    sats = sc.satellites
-    limit = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
-    per_ch = np.array([not s.maneuver.rest_to_rest for s in sats])
+    per_ch = np.array([not s.maneuver.rest_to_rest for s in sc.satellites])
+    cand = _grid_candidates(sc, aim_laws(sc), windows)
+    ok = _samples_ok(sc, scene, table_ok, cand, per_ch)
+    if sc.planner.sun_elevation_min is not None and cand.sat.size:
+        ok &= _sun_ok(sc, scene, cand)
+    sel = np.flatnonzero(ok)
+    c = _Candidates(*(x[sel] for x in cand))
+    order = np.lexsort((c.tgt, c.t0, c.sat))
+    sat, tgt, t0, t1, speed, params = (x[order] for x in c)
+    return Opportunities(option_states(sc, scene, sat, tgt, t0, t1, params, per_ch), speed, params)
+
+
+class _Candidates(NamedTuple):
+    """Candidate options, one row each: satellite ``sat``, target ``tgt``, start ``t0``
+    and end ``t1`` [s], scan ``speed`` [m/s] (0 for points) and aim law ``params``
+    [N, 8]."""
+
+    sat: np.ndarray
+    tgt: np.ndarray
+    t0: np.ndarray
+    t1: np.ndarray
+    speed: np.ndarray
+    params: np.ndarray
+
+
+def _grid_candidates(sc: Scenario, laws, windows: Windows) -> _Candidates:
+    """Every (satellite, target, start on the action grid, scan speed) whose observation
+    fits its visibility window, the target's imaging window, the horizon and the
+    midpoint window, for scan speeds long enough for ``min_duration`` (points: the first
+    law only, one option per start), without duplicates, in (satellite, target, grid
+    start, law) order, with their ends and aim laws from ``laws`` (:func:`aim_laws`)."""
+    step = sc.planner.time_step
     cols = {k: [] for k in ("sat", "target", "t0", "speed", "law")}
-    strip = tg.kind[windows.target] == STRIP
+    strip = sc.targets.kind[windows.target] == STRIP
     for li, (speed, _, dur_all) in enumerate(laws):
         # points have one option per start, whatever the speed
         keep = strip if li > 0 else np.ones(len(windows), bool)
         w_sat, w_tgt = windows.sat[keep], windows.target[keep]
-        dur = dur_all[w_tgt]
-        half = np.where(strip[keep], dur / 2.0, 0.0)
-        lo = np.maximum(windows.lo[keep] - half, tg.t_lo[w_tgt])
-        hi = np.minimum(windows.hi[keep] + half, tg.t_hi[w_tgt])
-        hi = np.minimum(hi, sc.duration) - dur
-        # the imaging midpoint start + dur / 2 within [mid_lo, mid_hi]; long enough
-        lo = np.maximum(lo, tg.mid_lo[w_tgt] - dur / 2.0)
-        hi = np.minimum(hi, tg.mid_hi[w_tgt] - dur / 2.0)
-        hi = np.where(dur >= tg.min_duration[w_tgt] - _DURATION_TOL, hi, -step)
-        k_lo = np.ceil(np.maximum(lo, 0.0) / step - 1e-9).astype(np.int64)
-        k_hi = np.floor(hi / step + 1e-9).astype(np.int64)
+        k_lo, k_hi = _start_range(sc, windows, keep, strip[keep], dur_all[w_tgt])
         wi, off = ragged_positions(np.maximum(k_hi - k_lo + 1, 0))
         cols["sat"].append(w_sat[wi])
         cols["target"].append(w_tgt[wi])
@@ -233,13 +248,48 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
     sat, tgt, t0, speed, law = sat[key], tgt[key], t0[key], speed[key], law[key]
     params = np.stack([lw[1] for lw in laws])[law, tgt]
     t1 = t0 + np.stack([lw[2] for lw in laws])[law, tgt]
-    n = sat.size
-    ok = np.ones(n, bool)
+    return _Candidates(sat, tgt, t0, t1, speed, params)
+
+
+def _start_range(sc: Scenario, windows: Windows, keep, strip, dur):
+    """The first and last action-grid indices ``k`` (int [W], empty when k_lo > k_hi) of
+    the starts ``k * time_step`` of the windows ``keep`` (``strip``: their targets are
+    strips; ``dur``: imaging times [s]) whose observation fits: the visibility window
+    (a strip's widened by half its scan, its midpoint being the reference point), the
+    target's imaging window, the horizon [0, duration] and the midpoint window; none
+    when ``dur`` is short of the target's ``min_duration``."""
+    tg = sc.targets
+    step = sc.planner.time_step
+    w_tgt = windows.target[keep]
+    half = np.where(strip, dur / 2.0, 0.0)
+    lo = np.maximum(windows.lo[keep] - half, tg.t_lo[w_tgt])
+    hi = np.minimum(windows.hi[keep] + half, tg.t_hi[w_tgt])
+    hi = np.minimum(hi, sc.duration) - dur
+    # the imaging midpoint start + dur / 2 within [mid_lo, mid_hi]; long enough
+    lo = np.maximum(lo, tg.mid_lo[w_tgt] - dur / 2.0)
+    hi = np.minimum(hi, tg.mid_hi[w_tgt] - dur / 2.0)
+    hi = np.where(dur >= tg.min_duration[w_tgt] - _DURATION_TOL, hi, -step)
+    k_lo = np.ceil(np.maximum(lo, 0.0) / step - 1e-9).astype(np.int64)
+    k_hi = np.floor(hi / step + 1e-9).astype(np.int64)
+    return k_lo, k_hi
+
+
+def _samples_ok(sc: Scenario, scene: Scene, table_ok, cand: _Candidates, per_ch) -> np.ndarray:
+    """bool [N]: the candidate holds at every sample (start, every geometry knot inside,
+    end): the off-nadir limit minus margin, the horizon margin, the usable ephemeris and,
+    on ``per_ch`` satellites, a flyable scan (:func:`_scan_flyable`). Point candidates of
+    rest-to-rest satellites starting and ending on knots pass unsampled (their window
+    was computed on every knot)."""
+    pc = sc.planner
+    gstep = pc.geometry_step
+    limit = np.array([s.off_nadir_max for s in sc.satellites]) - pc.margins.off_nadir
+    sat, t0, t1, params = cand.sat, cand.t0, cand.t1, cand.params
+    ok = np.ones(sat.size, bool)
     # samples: start, every knot inside, end (points on knots: window already exact)
     on_knots = (np.abs(t0 / gstep - np.round(t0 / gstep)) < _GRID_TOL / gstep) & (
         np.abs(t1 / gstep - np.round(t1 / gstep)) < _GRID_TOL / gstep
     )
-    need = (tg.kind[tgt] == STRIP) | ~on_knots | per_ch[sat]
+    need = (sc.targets.kind[cand.tgt] == STRIP) | ~on_knots | per_ch[sat]
     idx = np.flatnonzero(need)
     if idx.size:
         owner, ts = observation_samples(t0[idx], t1[idx], gstep)
@@ -248,28 +298,41 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
         good = (offn <= limit[sat[o]]) & (elev > pc.margins.horizon) & table_ok(sat[o], ts)
         if per_ch.any():
             pcm = per_ch[sat[o]]
-            res = evaluate(state_batched, scene, sat[o][pcm], params[o][pcm], t0[o][pcm], ts[pcm])
-            if res is not None:
-                _, rate, acc = res
-                rl, al = _limit_table(sats, "rate"), _limit_table(sats, "accel")
-                ks = sat[o][pcm]
-                fly = np.all(np.abs(rate) <= rl[ks] * (1 + _LIMIT_TOL), -1) & np.all(
-                    np.abs(acc) <= al[ks] * (1 + _LIMIT_TOL), -1
-                )
-                good[pcm] &= fly & np.isfinite(rate).all(-1)
+            fly = _scan_flyable(
+                sc.satellites, scene, sat[o][pcm], params[o][pcm], t0[o][pcm], ts[pcm]
+            )
+            if fly is not None:
+                good[pcm] &= fly
         bad = np.zeros(idx.size, bool)
         np.logical_or.at(bad, owner, ~good)
         ok[idx] = ~bad
-    if pc.sun_elevation_min is not None and n:
-        jd = sc.epoch_jd + t0 / 86400.0
-        sun_e = rot_z(earth_rotation_angle(float(scene.gmst0), t0), sun_direction(jd))
-        el = sun_elevation(tg.lat[tgt], tg.lon[tgt], sun_e)
-        ok &= el >= pc.sun_elevation_min
-    sel = np.flatnonzero(ok)
-    sat, tgt, t0, t1, speed, params = sat[sel], tgt[sel], t0[sel], t1[sel], speed[sel], params[sel]
-    order = np.lexsort((tgt, t0, sat))
-    sat, tgt, t0, t1, speed, params = (x[order] for x in (sat, tgt, t0, t1, speed, params))
-    return Opportunities(option_states(sc, scene, sat, tgt, t0, t1, params, per_ch), speed, params)
+    return ok
+
+
+def _scan_flyable(sats, scene: Scene, sat, params, t0, ts):
+    """bool [M] (None when M = 0): at the samples ``ts`` [s] of the laws ``params``
+    started at ``t0`` on the per-channel satellites ``sat``, every channel's rate and
+    acceleration are finite and within the satellite's limits (to ``_LIMIT_TOL``)."""
+    res = evaluate(state_batched, scene, sat, params, t0, ts)
+    if res is None:
+        return None
+    _, rate, acc = res
+    rl, al = _limit_table(sats, "rate"), _limit_table(sats, "accel")
+    fly = np.all(np.abs(rate) <= rl[sat] * (1 + _LIMIT_TOL), -1) & np.all(
+        np.abs(acc) <= al[sat] * (1 + _LIMIT_TOL), -1
+    )
+    return fly & np.isfinite(rate).all(-1)
+
+
+def _sun_ok(sc: Scenario, scene: Scene, cand: _Candidates) -> np.ndarray:
+    """bool [N]: the Sun is at least ``sun_elevation_min`` above the target's horizon at
+    the candidate's start."""
+    tg = sc.targets
+    t0 = cand.t0
+    jd = sc.epoch_jd + t0 / 86400.0
+    sun_e = rot_z(earth_rotation_angle(float(scene.gmst0), t0), sun_direction(jd))
+    el = sun_elevation(tg.lat[cand.tgt], tg.lon[cand.tgt], sun_e)
+    return el >= sc.planner.sun_elevation_min
 
 
 def option_states(sc, scene, sat, tgt, t0, t1, params, per_ch) -> RouteOptions:

@@ -40,6 +40,7 @@ from jaxspline.geometry.frames import gmst, in_shadow, jd_split, sun_direction
 from jaxspline.geometry.orbit import tabulate_orbits
 from jaxspline.geometry.pointing import Scene
 from jaxspline.geometry.windows import visibility_windows_all
+from jaxspline.planning.assemble import assemble_result
 from jaxspline.planning.join_screen import (
     channel_states,
     join_far_gap,
@@ -49,7 +50,7 @@ from jaxspline.planning.join_screen import (
 from jaxspline.planning.mission import Scenario
 from jaxspline.planning.opportunities import build_opportunities, nadir_rate, reference_points
 from jaxspline.planning.repair import dropped_line, repair
-from jaxspline.planning.result import Observations, PlanResult
+from jaxspline.planning.result import PlanResult
 from jaxspline.screen.options import take_options
 from jaxspline.screen.pairs import screen_chunks
 from jaxspline.search import BatteryModel, Problem, mip_bound, solve
@@ -323,71 +324,110 @@ def build_problem(
     sc = scenario
     clock = _clock or _Clock(sc.name, progress)
     with jax.enable_x64(True):
-        pc = sc.planner
         sats = sc.satellites
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
-        ref = reference_points(sc)
-        tg = sc.targets
-        sensors = np.array([s.sensor for s in sats])
-        allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
-        limit_k = np.array([s.off_nadir_max for s in sats]) - pc.margins.off_nadir
-        windows = visibility_windows_all(
-            scene,
-            table.ok,
-            ref,
-            allowed,
-            limit_k,
-            pc.margins.horizon,
-            tg.t_lo,
-            tg.t_hi,
-            sc.duration,
-        )
-        clock.lap(
-            "windows",
-            f"{len(windows)} windows for {len(np.unique(windows.target))}/{len(tg)} targets",
-        )
+        windows = _windows(sc, scene, table)
+        n_tg = len(np.unique(windows.target))
+        clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
         opp = build_opportunities(sc, scene, table.usable, windows)
         clock.lap("options", f"{len(opp)} options")
-        o = opp.options
-        tables = [s.maneuver.screen_model(s, pc.margins.gap) for s in sats]
+        tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
         omega = nadir_rate(scene)
-        far = np.zeros(len(sats))
-        first = np.full(len(opp), np.inf)
-        for k, s in enumerate(sats):
-            ids = np.flatnonzero(o.sat == k)
-            far[k] = s.maneuver.far_gap(s, o, ids, float(omega[k]), tables[k])
-            first[ids] = s.maneuver.first_requirements(s, o, ids, tables[k])
-        slack = float(np.min(o.t_end - o.t_start)) if len(opp) else math.inf
-        if reduce_slack is not None:
-            slack = float(reduce_slack(slack))
-        slack = slack if math.isfinite(slack) else 0.0
-        lookup = None
+        far, first = _far_and_first(sats, opp, tables, omega)
+        slack = _near_slack(opp, reduce_slack)
+        lookup = join_filter = None
         if joins and len(opp):
-            states = channel_states(scene, sats, opp)
-            far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
-            first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
+            far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega)
             lookup = np.ones(len(sats), bool)
-        join_filter = None
-        if lookup is not None:
-            join_filter = functools.partial(screen_joins, sats, opp, states)
         near, removed = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK, join_filter)
-        screened = f" ({removed} removed by the join screen)" if lookup is not None else ""
-        clock.lap(
-            "screening",
-            f"{len(near)} feasible near pairs{screened}, {near.nbytes / max(len(near), 1):.1f} "
-            f"B/pair; far gaps {far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s",
-        )
-        battery = BatteryModel(
-            sunlit,
-            [s.power for s in sats],
-            pc.geometry_step,
-            pc.margins.battery_wh,
-            pc.margins.shadow_guard,
-        )
-        pb = Problem.build(opp, sats, first, near, far, tables, battery, tg.value, lookup)
+        clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
+        battery = _battery(sc, sunlit)
+        pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.targets.value, lookup)
         pb.near_slack = slack
     return Prepared(pb, opp, windows, scene, table, battery, far)
+
+
+def _windows(sc: Scenario, scene, table):
+    """Stage 2: every visibility window of every target's reference point on every
+    satellite allowed to image it (sensor type), within the off-nadir limit and the
+    horizon (both minus their margins) and the target's imaging window."""
+    pc = sc.planner
+    tg = sc.targets
+    sensors = np.array([s.sensor for s in sc.satellites])
+    allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
+    limit_k = np.array([s.off_nadir_max for s in sc.satellites]) - pc.margins.off_nadir
+    return visibility_windows_all(
+        scene,
+        table.ok,
+        reference_points(sc),
+        allowed,
+        limit_k,
+        pc.margins.horizon,
+        tg.t_lo,
+        tg.t_hi,
+        sc.duration,
+    )
+
+
+def _far_and_first(sats, opp, tables, omega):
+    """Per satellite, through its maneuver model and screening table: the always-feasible
+    gap ``far`` [S] [s] (``omega`` [S]: nadir turn rates [rad/s]) and, per option, the
+    time ``first`` [N] [s] a first observation needs from rest (inf: never first)."""
+    o = opp.options
+    far = np.zeros(len(sats))
+    first = np.full(len(opp), np.inf)
+    for k, s in enumerate(sats):
+        ids = np.flatnonzero(o.sat == k)
+        far[k] = s.maneuver.far_gap(s, o, ids, float(omega[k]), tables[k])
+        first[ids] = s.maneuver.first_requirements(s, o, ids, tables[k])
+    return far, first
+
+
+def _near_slack(opp, reduce_slack) -> float:
+    """The near-pair slack: the shortest observation [s] (reduced across processes by
+    ``reduce_slack`` when given; 0 when there is none)."""
+    o = opp.options
+    slack = float(np.min(o.t_end - o.t_start)) if len(opp) else math.inf
+    if reduce_slack is not None:
+        slack = float(reduce_slack(slack))
+    return slack if math.isfinite(slack) else 0.0
+
+
+def _join_screens(sats, scene, opp, far, first, omega):
+    """The flown-join screens (:mod:`jaxspline.planning.join_screen`): the far gaps
+    widened to the joins' (``far`` [S] [s], ``omega`` [S] nadir turn rates), the first
+    requirements ``first`` [N] with options whose join from nadir fails set to inf, and
+    the pair filter ``(src, dst) -> bool`` of the near-pair screen. Returns
+    ``(far, first, join_filter)``."""
+    states = channel_states(scene, sats, opp)
+    far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
+    first = first.copy()
+    first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
+    return far, first, functools.partial(screen_joins, sats, opp, states)
+
+
+def _screening_line(near, removed: int, far, joins: bool) -> str:
+    """The progress line of stage 4: near pairs (and those the join screen removed),
+    bytes per pair, the range of the far gaps."""
+    screened = f" ({removed} removed by the join screen)" if joins else ""
+    return (
+        f"{len(near)} feasible near pairs{screened}, {near.nbytes / max(len(near), 1):.1f} "
+        f"B/pair; far gaps {far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s"
+    )
+
+
+def _battery(sc: Scenario, sunlit) -> BatteryModel:
+    """The conservative battery model of the satellites (``sunlit`` [S, n+1] on the
+    geometry knots) with the planner's margins."""
+    pc = sc.planner
+    return BatteryModel(
+        sunlit,
+        [s.power for s in sc.satellites],
+        pc.geometry_step,
+        pc.margins.battery_wh,
+        pc.margins.shadow_guard,
+    )
 
 
 def _cpus() -> int:
@@ -420,16 +460,64 @@ def _search(pb, deadline, seed, max_iters, pc, clock):
 
 
 def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
+    """:func:`plan` after its argument checks (inside ``jax.enable_x64``): stages 1-4,
+    then search and repair under the signal guard, the optional HiGHS certificate, and
+    the result."""
     clock = _Clock(sc.name, progress)
-    deadline = clock.t0 + limit
+    budget = _budget(sc, limit, clock.t0)
+    prep = build_problem(sc, joins=flown_joins, _clock=clock)
+    res, rep, interrupted = _search_and_repair(
+        sc, prep, budget, seed, max_iters, flown_joins, clock
+    )
+    clock.lap(
+        "repair",
+        f"{len(rep.chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
+        + (f", {rep.refilled} refilled" if flown_joins else ""),
+    )
+    mip = None
+    if certify > 0:
+        mip = mip_bound(prep.problem, certify)
+        clock.lap("certify", f"HiGHS bound {mip.bound:.6g} ({mip.status})")
+    return assemble_result(
+        sc,
+        prep,
+        res,
+        rep,
+        mip,
+        flown_joins=flown_joins,
+        interrupted=interrupted,
+        timings=clock.timings,
+        peak_rss_mb=clock.peak_rss_mb,
+    )
+
+
+class _Budget(NamedTuple):
+    """The clock of one :func:`plan` call: its ``deadline`` (``time.monotonic`` [s]), the
+    ``reserve`` [s] the search leaves before it (final check and output, and start-time
+    refinement when ``refining``: the scenario has refine steps and a per-channel
+    satellite)."""
+
+    deadline: float
+    reserve: float
+    refining: bool
+
+
+def _budget(sc: Scenario, limit: float, t0: float) -> _Budget:
+    """The budget of a call started at ``t0`` (monotonic [s]) with ``limit`` seconds: a
+    share of the limit (at least ``_RESERVE_MIN``) kept for the check and output, plus
+    one for start-time refinement (at most ``_REFINE_MAX_S``) when it runs."""
     pc = sc.planner
-    sats = sc.satellites
-    refining = pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sats)
+    refining = pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sc.satellites)
     reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
     reserve += refining * min(_REFINE_SHARE * limit, _REFINE_MAX_S)
-    tg = sc.targets
-    prep = build_problem(sc, joins=flown_joins, _clock=clock)
-    pb, opp, windows, scene, table, battery, far = prep
+    return _Budget(t0 + limit, reserve, refining)
+
+
+def _search_and_repair(sc, prep: Prepared, budget: _Budget, seed, max_iters, flown_joins, clock):
+    """Stages 5-6 under the signal guard: the first Ctrl-C or SIGTERM stops the search
+    and the best plan so far goes through the repair. Returns (search result,
+    :class:`jaxspline.planning.repair.Repaired`, the signal's name or None)."""
+    pc = sc.planner
     search_clock.clear_stop()
 
     def stopping(name):
@@ -441,22 +529,17 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
         )
 
     with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
-        res = _search(pb, deadline - reserve, seed, max_iters, pc, clock)
+        res = _search(prep.problem, budget.deadline - budget.reserve, seed, max_iters, pc, clock)
         tl = res.timeline
         clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
-        steps = int(pc.refine_steps) if refining else 0
-        left = deadline - time.monotonic()
-        if steps and max_iters is None and left < _REFINE_MIN_S:
-            steps = 0
-            clock.say("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
         rep = repair(
             sc,
-            scene,
-            table.usable,
-            opp,
+            prep.scene,
+            prep.orbits.usable,
+            prep.opportunities,
             tl,
-            battery,
-            refine_steps=steps,
+            prep.battery,
+            refine_steps=_refine_steps(pc, budget, max_iters, clock),
             flown_joins=flown_joins,
             refill_s=math.inf if max_iters is not None else _REFILL_S,
             refill_iters=_REFILL_ITERS if max_iters is not None else None,
@@ -464,82 +547,15 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
             report=clock.say,
         )
     search_clock.clear_stop()
-    chosen, opp, det, refined = rep.chosen, rep.opp, rep.details, rep.refined
-    o = opp.options
-    clock.lap(
-        "repair",
-        f"{len(chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
-        + (f", {rep.refilled} refilled" if flown_joins else ""),
-    )
-    idx = np.asarray(det["order"], np.int64)
-    obs = Observations(
-        sat=np.asarray(o.sat)[idx],
-        target=np.asarray(o.route)[idx],
-        start=np.asarray(o.t_start)[idx],
-        end=np.asarray(o.t_end)[idx],
-        maneuver=det["maneuver"],
-        slack=det["slack"],
-        value=np.asarray(tg.value)[np.asarray(o.route)[idx]],
-        speed=opp.speed[idx],
-    )
-    value = float(np.sum(obs.value))
-    # every plan images only targets that have an option: their total bounds any plan
-    reachable = float(np.sum(np.asarray(tg.value)[np.unique(np.asarray(o.route))]))
-    bound = min(float(res.bound), reachable)
-    converged = res.bound_status in ("optimal", "converged")
-    mip = None
-    if certify > 0:
-        m = mip_bound(pb, certify)
-        found = m.value if math.isfinite(m.value) else None
-        mip = {"bound": m.bound, "plan_value": found, "status": m.status, "seconds": m.seconds}
-        if m.bound < bound:
-            bound, converged = m.bound, m.status == "optimal"
-        clock.lap("certify", f"HiGHS bound {m.bound:.6g} ({m.status})")
-    bat = {}
-    for k, s in enumerate(sats):
-        if battery.has(k):
-            lev = det["battery"].get(s.name)
-            if lev is None:  # no observations: the idle profile
-                lev = battery.profile(k, [], [], [])
-            bat[s.name] = (np.arange(lev.size) * battery.dt, lev)
-    report = {
-        "valid": not det["violations"],
-        "checked": len(obs),
-        "dropped": rep.dropped,
-        "dropped_total": sum(rep.dropped.values()),
-        "violations_found": rep.violations,
-        "repair_rounds": rep.rounds,
-        "violations": det["violations"],
-        "min_slack_s": float(obs.slack.min()) if len(obs) else None,
-        "min_battery_wh": det["battery_min"],
-    }
-    if flown_joins:
-        report["joins"] = {**rep.joins, "rejected": rep.dropped["joins"], "refilled": rep.refilled}
-    if stop["signal"]:
-        report["interrupted"] = stop["signal"]
-    stats = {
-        "windows": len(windows),
-        "options": len(opp),
-        "near_pairs": len(pb.pairs),
-        "pair_store_bytes": pb.pairs.nbytes,
-        "far_gap_s": far.tolist(),
-        "pair_bytes": round(pb.pairs.nbytes / max(len(pb.pairs), 1), 2),
-        "peak_rss_mb": clock.peak_rss_mb,
-        "bound_status": res.bound_status,
-        "refined": refined,
-        "exact": res.exact,
-        "mip": mip,
-        **res.stats,
-    }
-    return PlanResult(
-        scenario=sc,
-        observations=obs,
-        value=value,
-        bound=max(bound, value),
-        gap=max(bound, value) - value,
-        bound_converged=converged,
-        report=report,
-        stats=stats,
-        timings=clock.timings,
-        battery=bat,
-    )
+    return res, rep, stop["signal"]
+
+
+def _refine_steps(pc, budget: _Budget, max_iters, clock) -> int:
+    """The start-time refinement steps of the repair: the scenario's when refining, none
+    when a time-limited run has less than ``_REFINE_MIN_S`` left (said on the clock)."""
+    steps = int(pc.refine_steps) if budget.refining else 0
+    left = budget.deadline - time.monotonic()
+    if steps and max_iters is None and left < _REFINE_MIN_S:
+        steps = 0
+        clock.say("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
+    return steps
