@@ -49,6 +49,8 @@ RANK = {
 }
 FACADE = 9  # jaxspline/__init__.py: on top of everything
 MAX_LINES = 600
+MAX_FUNCTION_LINES = 80  # in the layers below, docstring included
+SHORT_FUNCTION_LAYERS = ("search", "planning")
 LONG_MODULES: dict[str, int] = {}  # module -> its allowed length (none today)
 
 
@@ -198,6 +200,34 @@ def test_no_private_name_crosses_a_module():
 def test_modules_stay_short(module, path, is_pkg):
     n = len(path.read_text().splitlines())
     assert n <= LONG_MODULES.get(module, MAX_LINES), f"{module}: {n} lines"
+
+
+def _long_functions(tree: ast.AST, limit: int) -> list[str]:
+    """Functions of ``tree`` longer than ``limit`` lines (``end_lineno - lineno + 1``)."""
+    return [
+        f"{node.name} ({node.end_lineno - node.lineno + 1} lines)"
+        for node in ast.walk(tree)
+        if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef)
+        and node.end_lineno - node.lineno + 1 > limit
+    ]
+
+
+@pytest.mark.parametrize("layer", SHORT_FUNCTION_LAYERS)
+def test_search_and_planning_functions_stay_short(layer):
+    long = {
+        module: found
+        for module, path, _ in MODULES
+        if module.split(".")[1:2] == [layer]
+        and (found := _long_functions(ast.parse(path.read_text()), MAX_FUNCTION_LINES))
+    }
+    assert long == {}, f"functions over {MAX_FUNCTION_LINES} lines: {long}"
+
+
+def test_the_function_length_rule_can_fail():
+    body = "\n".join(f"    x{i} = {i}" for i in range(MAX_FUNCTION_LINES))
+    assert _long_functions(ast.parse(f"def f():\n{body}\n"), MAX_FUNCTION_LINES) == [
+        f"f ({MAX_FUNCTION_LINES + 1} lines)"
+    ]
 
 
 @pytest.mark.parametrize("name", ["check", "check_frames"])
