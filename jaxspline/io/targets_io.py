@@ -94,6 +94,7 @@ MAX_STRIP_KM = 10e3  # longest strip [km] (a quarter of a great circle)
 MAX_RANDOM_TARGETS = 1_000_000
 LAND_SAMPLE_ROUNDS = 200  # rejection-sampling batches before giving up on a region
 LAND_BATCH_MIN = 1024
+LAND_PASS_POINTS = 1 << 21  # draws tested against the land mask in one read
 
 #: Top-level keys and sections of a scenario file that this module reads.
 TARGET_SECTIONS = frozenset("targets routes targets_csv targets_file random_targets".split())
@@ -361,19 +362,37 @@ def _read_csv(path) -> tuple[Targets, list[str]]:
 
 
 def _land_positions(ctx, rng, count, lat, lon):
-    """``count`` uniform (lat, lon) [deg] in the box, rejecting sea (:func:`is_land`)."""
+    """``count`` uniform (lat, lon) [deg] in the box, rejecting sea (:func:`is_land`).
+
+    Rounds of ``batch`` draws (latitudes, then longitudes) until ``count`` land points are
+    found, at most :data:`LAND_SAMPLE_ROUNDS`. The first pass tests one round (usually
+    enough); later passes test many rounds with one read of the mask each (a read costs
+    about a second: 200 single-round reads of a sea box took minutes). The points and the
+    state ``rng`` is left in are those of testing the rounds one at a time.
+    """
     from jaxspline.io.land import is_land
 
     batch = max(4 * count, LAND_BATCH_MIN)
-    got_lat, got_lon, have = [], [], 0
-    for _ in range(LAND_SAMPLE_ROUNDS):
-        la, lo = rng.uniform(*lat, batch), rng.uniform(*lon, batch)
-        keep = is_land(la, lo)
-        got_lat.append(la[keep])
-        got_lon.append(lo[keep])
-        have += int(keep.sum())
+    per_pass = max(1, LAND_PASS_POINTS // batch)
+    got_lat, got_lon, have, done = [], [], 0, 0
+    while done < LAND_SAMPLE_ROUNDS:
+        rounds = 1 if done == 0 else min(per_pass, LAND_SAMPLE_ROUNDS - done)
+        state = rng.bit_generator.state
+        draws = [(rng.uniform(*lat, batch), rng.uniform(*lon, batch)) for _ in range(rounds)]
+        keep = is_land(np.concatenate([d[0] for d in draws]), np.concatenate([d[1] for d in draws]))
+        kept = keep.reshape(rounds, batch).sum(1)
+        need = np.cumsum(kept) + have >= count
+        used = int(np.argmax(need)) + 1 if need.any() else rounds
+        for (la, lo), k in zip(draws[:used], keep.reshape(rounds, batch)[:used], strict=True):
+            got_lat.append(la[k])
+            got_lon.append(lo[k])
+        have += int(kept[:used].sum())
         if have >= count:
+            rng.bit_generator.state = state  # as if the rounds after ``used`` were not drawn
+            for _ in range(used):
+                rng.uniform(*lat, batch), rng.uniform(*lon, batch)
             return np.concatenate(got_lat)[:count], np.concatenate(got_lon)[:count]
+        done += rounds
     raise ctx.error(
         "random_targets.land_only",
         f"found only {have} land points in {LAND_SAMPLE_ROUNDS * batch} draws in "
