@@ -262,10 +262,10 @@ def _orbit(ctx, f, sat, epoch_jd, duration):
         raise ctx.error(f"{f}.over.lat_deg", str(exc)) from None
 
 
-def _rate(ctx, field, value, model):
-    if maneuver_model(model).limit_shape == ():
+def _rate(ctx, field, value, maneuver):
+    if maneuver.limit_shape == ():
         if isinstance(value, list):
-            raise ctx.error(field, f"must be one number for model {model!r}, got {value!r}")
+            raise ctx.error(field, f"must be one number for model {maneuver.name!r}, got {value!r}")
         return math.radians(field_number(ctx, field, value, positive=True))
     if isinstance(value, list):
         if len(value) != 3:
@@ -285,8 +285,8 @@ def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
         maneuver = maneuver_model(model)
     except ValueError as exc:
         raise ctx.error(f"{f}.model", str(exc).removeprefix("model ")) from None
-    rate = _rate(ctx, f"{f}.rate_deg_s", sat.get("rate_deg_s", DEFAULT_RATE_DEG_S), model)
-    accel = _rate(ctx, f"{f}.accel_deg_s2", sat.get("accel_deg_s2", DEFAULT_ACCEL_DEG_S2), model)
+    rate = _rate(ctx, f"{f}.rate_deg_s", sat.get("rate_deg_s", DEFAULT_RATE_DEG_S), maneuver)
+    accel = _rate(ctx, f"{f}.accel_deg_s2", sat.get("accel_deg_s2", DEFAULT_ACCEL_DEG_S2), maneuver)
     off = field_number(
         ctx,
         f"{f}.off_nadir_max_deg",

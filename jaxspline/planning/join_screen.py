@@ -47,7 +47,7 @@ import numpy as np
 
 from jaxspline.kernels._batch import map_chunked
 from jaxspline.kernels.channel_join import DEFAULT_JOIN_SAMPLES, channel_join_peaks
-from jaxspline.planning.attitude_laws import JERK_STEP_S
+from jaxspline.planning.attitude_laws import JERK_STEP_S, LAW_POINTING, law_modes
 from jaxspline.planning.joins import DIRECT_MAX_S, RETURN_S, SAMPLING_MARGIN, join_limits
 from jaxspline.planning.opportunities import evaluate, state_batched
 
@@ -96,7 +96,7 @@ def channel_states(scene, sats, opp) -> ChannelStates:
     """
     o = opp.options
     sat = np.asarray(o.sat, np.int64)
-    pointing = np.array([s.maneuver.attitude_law == "pointing" for s in sats], bool)[sat]
+    pointing = (law_modes(sats) == LAW_POINTING)[sat]
     keep = np.stack([np.ones_like(pointing)] * 2 + [pointing], -1)
     t0 = np.asarray(o.t_start, np.float64)
 

@@ -25,6 +25,8 @@ from typing import Protocol, runtime_checkable
 
 __all__ = ["ManeuverModel", "maneuver_model", "model_names", "register_model"]
 
+#: Relative safety factor of every model's far gap (rounding of the bound's arithmetic).
+FAR_SAFETY = 1.0 + 1e-9
 #: Attitude laws between observations a model may ask for.
 ATTITUDE_LAWS = ("pointing", "zero_yaw")
 

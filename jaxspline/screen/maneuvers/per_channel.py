@@ -15,12 +15,12 @@ import numpy as np
 
 from jaxspline.kernels._batch import pad_rows, round_up
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.screen.maneuvers.base import FAR_SAFETY
 from jaxspline.screen.pairs import screen_pairs
 
 __all__ = ["PerChannel"]
 
 _PAD = 1 << 12  # batch sizes are padded to multiples of this (few compiled shapes)
-_FAR_SAFETY = 1.0 + 1e-9  # relative safety of the far gap
 
 
 class PerChannel:
@@ -126,7 +126,7 @@ class PerChannel:
         )
         span = angles.max(0) - angles.min(0)
         need = np.maximum(4.0 * b / d, (span + 4.0 * b * b / d) / b)
-        return float(need.max()) * _FAR_SAFETY
+        return float(need.max()) * FAR_SAFETY
 
     def jerk_limit(self, sat) -> float:
         """No eigen-axis jerk bound (the channels carry the limits)."""

@@ -15,11 +15,11 @@ import math
 
 import numpy as np
 
+from jaxspline.screen.maneuvers.base import FAR_SAFETY
 from jaxspline.screen.slew_table import SlewTable, slew_table, table_time
 
 __all__ = ["RestToRest"]
 
-_FAR_SAFETY = 1.0 + 1e-9  # relative safety of the far gap
 _FIXED_POINT_ITERS = 200  # iterations of the far-gap fixed point
 
 
@@ -126,7 +126,7 @@ class RestToRest:
             if abs(g_new - g) < 1e-12:
                 break
             g = g_new
-        return g * _FAR_SAFETY + 1e-9
+        return g * FAR_SAFETY + 1e-9
 
     def jerk_limit(self, sat) -> float:
         """No jerk bound unless the subclass sets one."""
