@@ -9,7 +9,7 @@ BYTES = {"float64": 8, "float32": 4}
 
 
 def _atomic_write(path: Path, text: str) -> None:
-    from jaxspline.planning.files import atomic_write_text
+    from jaxspline.planner.files import atomic_write_text
 
     atomic_write_text(path, text)
 

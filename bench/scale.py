@@ -431,7 +431,7 @@ def scale_table(report: dict) -> list[str]:
 
 def write_scale(report: dict, out: Path) -> None:
     """Write ``scale.json`` and ``SCALE.md`` into ``out`` and print the tables."""
-    from jaxspline.planning.files import atomic_write_text
+    from jaxspline.planner.files import atomic_write_text
 
     text = "\n".join(scale_table(report["scale"])).lstrip("\n")
     print("\n" + text)

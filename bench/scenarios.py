@@ -324,9 +324,9 @@ def screening_stream(n_routes: int, search: str) -> dict:
     """Screen and search in one pass, in a fresh process: time and peak RSS.
 
     ``search="greedy"``: every feasible row of :func:`jaxspline.screen_chunks` streams
-    into :func:`jaxspline.greedy`; ``"beam"``: the ``TOP_K`` feasible successors of
+    into :func:`jaxspline.sequences.greedy`; ``"beam"``: the ``TOP_K`` feasible successors of
     largest value density per option (``top_k_by="density"``) stream into
-    :func:`jaxspline.beam_search` (width ``BEAM_WIDTH``). Compile included.
+    :func:`jaxspline.sequences.beam_search` (width ``BEAM_WIDTH``). Compile included.
     """
     import jax
 
@@ -350,9 +350,9 @@ def screening_stream(n_routes: int, search: str) -> dict:
 
         t0 = time.perf_counter()
         if search == "greedy":
-            plan = js.greedy(opts, chunks())
+            plan = js.sequences.greedy(opts, chunks())
         else:
-            plan = js.beam_search(opts, chunks(), width=BEAM_WIDTH)
+            plan = js.sequences.beam_search(opts, chunks(), width=BEAM_WIDTH)
         dt = time.perf_counter() - t0
     return {
         "routes": n_routes,

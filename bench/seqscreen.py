@@ -59,7 +59,7 @@ def compare(k: int, length: int, routes: int) -> dict:
     """Seconds, sequences/s and transitions/s of the host and the fused path."""
     import importlib
 
-    mod = importlib.import_module("jaxspline.screen.sequences")
+    mod = importlib.import_module("jaxspline.sequences.route_screen")
     opts, limits = synthetic_options(routes)
     seq = plausible_sequences(opts, k, length)
     n_tr = int((seq[:, 1:] >= 0).sum())
@@ -94,7 +94,7 @@ def repeats(k: int, routes: int, lengths=(8, 20, 64, 128)) -> dict:
 
     import jax.numpy as jnp
 
-    mod = importlib.import_module("jaxspline.screen.sequences")
+    mod = importlib.import_module("jaxspline.sequences.route_screen")
     from jaxspline.screen.transitions import device_mesh
 
     opts, limits = synthetic_options(routes)

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import yaml
 
-from jaxspline.planning.files import atomic_write_text
+from jaxspline.planner.files import atomic_write_text
 
 REPO = Path(__file__).resolve().parents[1]
 DEFAULT_CASES = REPO.parent / "shared" / "data" / "aeossp_standard" / "train"

@@ -1,9 +1,9 @@
 """Write a scale-test scenario (TOML + targets CSV) from documented scenario keys only.
 
 The planner's scaling work needs large, reproducible instances. This script
-writes them with nothing but the keys of the scenario schema (``jaxspline/io/scenario.py``
+writes them with nothing but the keys of the scenario schema (``jaxspline/readers/scenario.py``
 docstring, README *Scenario files*) and the documented CSV columns
-(``jaxspline/io/targets_io.py``), so every file it writes loads with
+(``jaxspline/readers/targets.py``), so every file it writes loads with
 :func:`jaxspline.load_scenario`. Rules, all deterministic (the same arguments give the
 same files byte for byte):
 
@@ -25,7 +25,7 @@ same files byte for byte):
   ``--cities`` first the rows of the packaged ``cities.csv`` unchanged; the rest are
   random land targets: positions uniform in area over latitudes ``LAT_RANGE_DEG``
   (uniform ``sin(lat)``), rounded to 1e-5 deg, then kept where
-  :func:`jaxspline.io.land.is_land` (the package's offline GLOBE mask) says land, in
+  :func:`jaxspline.readers.land.is_land` (the package's offline GLOBE mask) says land, in
   rounds of ``max(4 n, 4096)`` draws. Exactly ``round(strip_fraction * n)`` of them,
   chosen at random, are strips (length uniform in ``LENGTH_KM``, azimuth uniform in
   [0, 360) deg); the others points (imaging time 10, 15, ..., 30 s); priorities are
@@ -220,7 +220,7 @@ def satellite_tables(spec: Spec) -> list[dict]:
 
 def _land_positions(rng, n: int) -> tuple[np.ndarray, np.ndarray]:
     """``n`` positions [deg] uniform in area over LAT_RANGE_DEG, rounded, on land."""
-    from jaxspline.io.land import is_land
+    from jaxspline.readers.land import is_land
 
     if n == 0:
         return np.zeros(0), np.zeros(0)
@@ -378,7 +378,7 @@ def build(spec: Spec, csv_name: str, preset: str | None = None, out_name: str = 
 
 def write(spec: Spec, out: Path, preset: str | None = None, force: bool = False) -> dict:
     """Write ``out`` (TOML) and ``<stem>_targets.csv`` beside it; return a summary."""
-    from jaxspline.planning.files import atomic_write_text
+    from jaxspline.planner.files import atomic_write_text
 
     out = Path(out)
     csv_path = out.with_name(out.stem + "_targets.csv")

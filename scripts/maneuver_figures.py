@@ -165,7 +165,7 @@ def maneuver_example():
     return dict(
         maneuver=m,
         check=chk,
-        angle=float(js.attitude_angle(qa, qb)),
+        angle=float(js.kernels.attitude_angle(qa, qb)),
         off_nadir_route2=off_nadir,
         boundary=((qa, wa, ea, ja), (qb, wb, eb, jb)),
         inclination=INC,
@@ -192,7 +192,7 @@ def spline_accuracy(dcm_fn, t0, T, pieces=1, n=801):
     qe, we, _, _ = _states(dcm_fn, (knots[:-1][None, :] + ts[:, None]).ravel())
     qe = qe.reshape(n, pieces, 4)
     we = we.reshape(n, pieces, 3)
-    ang = float(jnp.max(js.attitude_angle(qs, qe)))
+    ang = float(jnp.max(js.kernels.attitude_angle(qs, qe)))
     rate = float(jnp.max(jnp.linalg.norm(ws - we, axis=-1)))
     return ang, rate
 

@@ -4,8 +4,8 @@ The docstrings are Google style and written to be read in the source, with two
 habits that Markdown reads differently:
 
 * Sphinx roles (``:func:`plan```, ``:mod:`jaxspline.screen.pairs```) would show up
-  verbatim. A role whose target is a public name of ``jaxspline`` becomes a link to
-  its entry in the API reference; any other role becomes inline code.
+  verbatim. A role whose target is documented in the API reference becomes a link to
+  its entry in the API reference (docs/api/*.md); any other role becomes inline code.
 * Shapes and units in adjacent brackets (``float [M, 3] [m/s]``) are a Markdown
   reference link (text ``M, 3``, label ``m/s``): the second bracket is escaped.
 * Sections follow each other without a blank line (``Args:`` ... ``Returns:`` ...
@@ -59,25 +59,47 @@ TYPE_DOCS = {
 }
 
 
-def _public() -> dict[str, object]:
-    pkg = importlib.import_module("jaxspline")
-    return {name: getattr(pkg, name) for name in pkg.__all__}
+API_PAGES = pathlib.Path(__file__).resolve().parents[1] / "api"
 
 
-def _target(path: str, public: dict[str, object]) -> str | None:
-    """``jaxspline.<name>`` when ``path`` names that public object, else None."""
-    name = path.rsplit(".", 1)[-1]
-    if name not in public:
-        return None
-    if "." in path:
-        module, _, attr = path.rpartition(".")
+def _resolve(path: str):
+    """The object a dotted ``path`` names (module, then attributes), or None."""
+    parts = path.split(".")
+    for i in range(len(parts), 0, -1):
         try:
-            obj = getattr(importlib.import_module(module), attr)
-        except (ImportError, AttributeError):
+            obj = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        try:
+            for attr in parts[i:]:
+                obj = getattr(obj, attr)
+        except AttributeError:
             return None
-        if obj is not public[name]:
-            return None
-    return f"jaxspline.{name}"
+        return obj
+    return None
+
+
+def _documented() -> dict[object, str]:
+    """Where the API reference documents each object: ``id(obj)`` (functions, classes,
+    modules) or the path itself (constants, whose values may be shared) -> its path."""
+    out: dict[object, str] = {}
+    for page in sorted(API_PAGES.glob("*.md")):
+        for path in re.findall(r"^::: ([\w.]+)", page.read_text(), flags=re.M):
+            obj = _resolve(path)
+            key = id(obj) if callable(obj) or inspect.ismodule(obj) else path
+            out.setdefault(key, path)
+    return out
+
+
+def _target(path: str, documented: dict[object, str]) -> str | None:
+    """The documented path of the object ``path`` names (``plan`` is ``jaxspline.plan``)."""
+    full = path if path.startswith("jaxspline") else f"jaxspline.{path}"
+    if full in documented:
+        return documented[full]
+    obj = _resolve(full)
+    if obj is None or not (callable(obj) or inspect.ismodule(obj)):
+        return None
+    return documented.get(id(obj))
 
 
 def _blank_above_sections(text: str) -> str:
@@ -91,14 +113,14 @@ def _blank_above_sections(text: str) -> str:
     return "\n".join(out)
 
 
-def markdown_text(text: str, public: dict[str, object]) -> str:
+def markdown_text(text: str, documented: dict[object, str]) -> str:
     """The docstring ``text`` with roles resolved, adjacent brackets escaped and a blank
     line above every section title."""
     text = _blank_above_sections(text)
 
     def role(m: re.Match) -> str:
         path = m.group(1).strip()
-        target = _target(path, public)
+        target = _target(path, documented)
         return f"[`{path}`][{target}]" if target else f"`{path}`"
 
     out, last = [], 0
@@ -114,7 +136,7 @@ class MarkdownDocstrings(griffe.Extension):
     """Rewrites every docstring's text once the object tree is complete."""
 
     def __init__(self) -> None:
-        self._public = _public()
+        self._documented = _documented()
 
     def on_object(self, *, obj: griffe.Object, **kwargs) -> None:
         doc = obj.docstring
@@ -123,4 +145,4 @@ class MarkdownDocstrings(griffe.Extension):
         if FIELD_ALIAS.match(doc.value.strip()) or inspect.cleandoc(doc.value) in TYPE_DOCS:
             obj.docstring = None
             return
-        doc.value = markdown_text(doc.value, self._public)
+        doc.value = markdown_text(doc.value, self._documented)

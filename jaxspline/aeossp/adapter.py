@@ -31,7 +31,7 @@ import numpy as np
 
 from jaxspline.aeossp.case import format_time, load_case
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.planning.mission import (
+from jaxspline.readers.mission import (
     POINT,
     Margins,
     PlannerConfig,
@@ -158,7 +158,7 @@ def solve_case(
     Returns:
       ``(solution dict, PlanResult)``.
     """
-    from jaxspline.planning.planner import plan
+    from jaxspline.planner.pipeline import plan
 
     case = load_case(case_dir) if isinstance(case_dir, str | Path) else case_dir
     sc = case_scenario(case, time_limit=time_limit)

@@ -27,8 +27,8 @@ import yaml
 
 from jaxspline.geometry.frames import jd_split, julian_date
 from jaxspline.geometry.orbit import propagate_tle
-from jaxspline.io.fields import read_text
-from jaxspline.planning.files import atomic_write_text, refuse_overwrite
+from jaxspline.planner.files import atomic_write_text, refuse_overwrite
+from jaxspline.readers.fields import read_text
 
 __all__ = [
     "ALTITUDE_RANGE_M",

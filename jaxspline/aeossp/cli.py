@@ -21,7 +21,7 @@ def _write_json(text: str, target: str) -> None:
     if target == "-":
         print(text)
         return
-    from jaxspline.planning.files import atomic_write_text
+    from jaxspline.planner.files import atomic_write_text
 
     atomic_write_text(Path(target), text + "\n")
 

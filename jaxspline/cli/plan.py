@@ -4,19 +4,19 @@ Parses the arguments, loads the scenario (default: the built-in constellation jo
 calls :func:`jaxspline.plan` and writes into the output directory:
 
 * ``plan.json`` - summary, bound and gap, check report (with ``areas``: the covered
-  fraction of every area target, :func:`jaxspline.io.areas.area_coverage`), statistics,
+  fraction of every area target, :func:`jaxspline.readers.areas.area_coverage`), statistics,
   stage timings and every observation; ``plan.csv`` - one row per observation;
 * ``plan.czml`` - satellites, targets, areas, imaging intervals and sensor footprints
   for Cesium;
 * ``plan.html`` (``--no-html`` skips it) - one self-contained page (Bokeh, no network):
-  map, per-satellite timeline and battery, headline figures (:mod:`jaxspline.io.plan_html`;
+  map, per-satellite timeline and battery, headline figures (:mod:`jaxspline.products.plan_html`;
   ``jaxspline view plan.json`` rebuilds it from the ``"view"`` section of ``plan.json``);
 * ``ground_track.png`` (world map with coastlines), ``timeline.png`` (per-satellite
   Gantt chart and battery), ``slack.png`` (maneuver slack per model);
 * by default (``--aem``; ``--no-aem`` skips it) a flyable plan: transitions are
   screened with the degree-7 joins the spacecraft flies and the joins of the plan
   are checked (observations whose join still exceeds a limit are dropped), and
-  ``attitude_<satellite>.aem.xml``, one CCSDS AEM per satellite (:mod:`jaxspline.ops.aem`)
+  ``attitude_<satellite>.aem.xml``, one CCSDS AEM per satellite (:mod:`jaxspline.products.aem`)
   sampled every ``--aem-step`` seconds plus every junction instant, and
   ``attitude.png`` (flown rate / acceleration / jerk against the limits).
 
@@ -31,8 +31,8 @@ import sys
 import time
 from pathlib import Path
 
-from jaxspline.io.plan_html import HTML_FILE
-from jaxspline.planning.files import refuse_overwrite
+from jaxspline.planner.files import refuse_overwrite
+from jaxspline.products.plan_html import HTML_FILE
 from jaxspline.search.clock import catch_signals
 
 __all__ = [
@@ -173,14 +173,14 @@ def run_plan(
       aem: write one CCSDS AEM per satellite (and check the flown joins).
       aem_step: sampling step of the AEM files [s].
     Returns:
-      :class:`jaxspline.planning.result.PlanResult`.
+      :class:`jaxspline.planner.result.PlanResult`.
     Raises:
       FileExistsError: an output exists and ``force`` is false.
       ValueError: a bad scenario file (naming the field).
     """
-    from jaxspline.io.scenario import scenario_from
-    from jaxspline.ops.aem import aem_file_name
-    from jaxspline.planning.planner import plan
+    from jaxspline.planner.pipeline import plan
+    from jaxspline.products.aem import aem_file_name
+    from jaxspline.readers.scenario import scenario_from
 
     out = Path(outdir)
     sc = scenario_from(scenario)
@@ -216,11 +216,11 @@ def run_plan(
 
 
 def _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html):
-    from jaxspline.ops.aem import write_aems
-    from jaxspline.ops.attitude_history import attitude_history
+    from jaxspline.products.aem import write_aems
+    from jaxspline.products.attitude_history import attitude_history
 
     if sc.areas:  # covered fraction per area, into plan.json's report
-        from jaxspline.io.areas import area_coverage
+        from jaxspline.readers.areas import area_coverage
 
         t0 = time.monotonic()
         result.report["areas"] = area_coverage(result)
@@ -230,16 +230,16 @@ def _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html):
         attitude = attitude_history(result, aem_step)
         write_aems(result, attitude, out, force=force)
         result.timings["attitude"] = round(time.monotonic() - t0, 3)
-    from jaxspline.io.plan_view import view_data
+    from jaxspline.products.plan_view import view_data
 
     view = {"view": view_data(result)}  # what plan.html draws: `jaxspline view` rebuilds it
     result.to_json(out / "plan.json", force=force, extra=view)
     result.to_csv(out / "plan.csv", force=force)
-    from jaxspline.io.czml import write_czml
+    from jaxspline.products.czml import write_czml
 
     write_czml(result, out / "plan.czml", force=True)
     if plots:
-        from jaxspline.io.plot_plan import (
+        from jaxspline.products.plot_plan import (
             plot_plan_ground_tracks,
             plot_plan_slack,
             plot_plan_timeline,
@@ -249,12 +249,12 @@ def _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html):
         plot_plan_timeline(result, out / "timeline.png")
         plot_plan_slack(result, out / "slack.png")
         if aem:
-            from jaxspline.io.plot_attitude import plot_attitude_profile
+            from jaxspline.products.plot_attitude import plot_attitude_profile
 
             plot_attitude_profile(result, attitude, out / ATTITUDE_FIGURE)
     page = None
     if html:
-        from jaxspline.io.plan_html import write_plan_html
+        from jaxspline.products.plan_html import write_plan_html
 
         t0 = time.monotonic()
         path = write_plan_html(result.to_dict(extra=view), out / HTML_FILE, force=force)
@@ -263,7 +263,7 @@ def _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html):
 
 
 def _print_summary(r, out: Path, names, page=None) -> None:
-    from jaxspline.planning.repair import dropped_line
+    from jaxspline.planner.repair import dropped_line
 
     s, st = r.summary(), r.stats
     n_imaged = len(set(r.observations.target.tolist()))
@@ -284,7 +284,7 @@ def _print_summary(r, out: Path, names, page=None) -> None:
     if page:
         lines.append(f"page          {HTML_FILE}: {page[0] / 1e6:.2f} MB in {page[1]:.2f} s")
     if r.report.get("areas"):
-        from jaxspline.io.areas import coverage_line
+        from jaxspline.readers.areas import coverage_line
 
         lines.insert(5, f"areas         {coverage_line(r.report['areas'])}")
     j = r.report.get("joins")  # only when the flown joins were checked (--aem)

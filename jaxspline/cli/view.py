@@ -1,8 +1,8 @@
 """``jaxspline view PLAN.json``: rebuild the plan's web page from an existing ``plan.json``.
 
 Reads the plan document that ``jaxspline plan`` wrote (with its ``"view"`` section:
-ground tracks, targets, footprints, areas, battery; :mod:`jaxspline.io.plan_view`) and
-writes the self-contained page (:mod:`jaxspline.io.plan_html`), by default ``plan.html``
+ground tracks, targets, footprints, areas, battery; :mod:`jaxspline.products.plan_view`) and
+writes the self-contained page (:mod:`jaxspline.products.plan_html`), by default ``plan.html``
 next to it. Nothing is re-planned. An existing page is never overwritten unless
 ``--force``; the file is written atomically.
 """
@@ -54,7 +54,7 @@ def run_view(plan, output=None, *, force: bool = False) -> Path:
       FileExistsError: the page exists and ``force`` is false.
       ValueError: the file is not a plan document.
     """
-    from jaxspline.io.plan_html import HTML_FILE, read_plan, write_plan_html
+    from jaxspline.products.plan_html import HTML_FILE, read_plan, write_plan_html
 
     plan = Path(plan)
     out = plan.parent / HTML_FILE if output is None else Path(output)

@@ -48,7 +48,8 @@ __all__ = [
     "sample_aim_states",
 ]
 
-POINT, STRIP = 0, 1
+POINT = 0  # a target imaged from one point
+STRIP = 1  # a target imaged along a strip
 
 
 class RouteSpec(NamedTuple):

@@ -8,7 +8,7 @@ the exact inverse of the Hermite conditions (:mod:`jaxspline.kernels.joins`).
 Its derivatives are polynomials again, so their peaks over [0, T] are read on a
 uniform grid of τ (``n_samples`` points including both ends).
 
-The engine screens candidate transitions with it (:mod:`jaxspline.planning.join_screen`):
+The engine screens candidate transitions with it (:mod:`jaxspline.planner.join_screen`):
 the spatial join the plan finally flies is the same polynomial in the MRP chart of
 the attitude, and in the per-channel angles its peaks are close to these (the
 flown join is checked exactly afterwards).

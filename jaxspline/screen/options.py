@@ -6,7 +6,7 @@ This module holds the table's types (:class:`RouteOptions`, the
 :class:`RouteModel` protocol), its eager checks (:func:`validate_options`) and
 the builder from a :class:`jaxspline.geometry.routes.RouteSet`
 (:func:`build_route_options`; the planner's builder is
-:mod:`jaxspline.planning.opportunities`).
+:mod:`jaxspline.planner.opportunities`).
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ class RouteOptions(NamedTuple):
 
     A transition option i -> option j (same satellite) takes T = t_start[j] -
     t_end[i] seconds; what it must achieve in T depends on the satellite's maneuver
-    model (:mod:`jaxspline.screen.maneuvers`). For the per-channel model every channel goes from
+    model (:mod:`jaxspline.screen.models`). For the per-channel model every channel goes from
     (end_angle[i], end_rate[i]) to (start_angle[j], start_rate[j]) in exactly T.
     """
 

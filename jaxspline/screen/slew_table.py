@@ -1,6 +1,6 @@
 """Slew tables: the rest-to-rest required time as one lookup per pair.
 
-A rest-to-rest model (:mod:`jaxspline.screen.maneuvers`) needs, for a transition
+A rest-to-rest model (:mod:`jaxspline.screen.models`) needs, for a transition
 between two lines of sight, its profile time through the angle between them plus
 settling plus the gap margin (``sat.maneuver.slew_time``); the pair is feasible iff that
 time fits in the gap ``T = t_start[j] - t_end[i]``.

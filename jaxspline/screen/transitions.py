@@ -5,7 +5,7 @@ mesh (:func:`device_mesh`), a screen in progress (:class:`Stream`), the host-sid
 (:func:`top_k_merge`, :func:`best_per_source`) and the collection of chunks into
 preallocated columns (:func:`collect`). The fused path (:mod:`jaxspline.screen.fused`),
 the host path (:mod:`jaxspline.screen.host`), the sequence screen
-(:mod:`jaxspline.screen.sequences`) and the entry points (:mod:`jaxspline.screen.pairs`)
+(:mod:`jaxspline.sequences.route_screen`) and the entry points (:mod:`jaxspline.screen.pairs`)
 build on it; it imports none of them, so the screening modules form no import circle.
 """
 

@@ -75,7 +75,7 @@ class BatteryModel:
 
     Args:
       sunlit: bool [S, n+1], sunlit at grid instants ``k dt``, k = 0..n.
-      powers: list of S :class:`jaxspline.planning.mission.Power` or None (no battery rule).
+      powers: list of S :class:`jaxspline.readers.mission.Power` or None (no battery rule).
       dt: grid step [s].
       margin_wh: the level must stay >= this [Wh].
       guard: shadow guard [steps].
@@ -122,7 +122,9 @@ class BatteryModel:
         """Extra load energy per step [Wh] (imaging + slew) of these observations of ``sat``.
 
         Args:
-          starts, ends: observation intervals [s].
+          sat: satellite index.
+          starts: observation start times [s].
+          ends: observation end times [s].
           maneuver: maneuver durations [s] ending at each start.
         """
         n = self.n
@@ -181,7 +183,8 @@ class BatteryModel:
         """Step windows of observations, as :meth:`loads` charges them.
 
         Args:
-          starts, ends: float [K], observation intervals [s].
+          starts: float [K], observation start times [s].
+          ends: float [K], observation end times [s].
         Returns:
           list of K tuples ``(s0, e0, s1)``: imaging loads the steps ``[s0, e0)``, the
           maneuver into the observation ends before step ``s1``.

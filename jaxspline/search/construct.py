@@ -18,8 +18,8 @@ only what its decisions are, what is admissible and what it costs:
   cost the timeline time they consume plus a small end-time term
   (:meth:`jaxspline.search.timeline.Timeline.insert_choices`). The LNS re-inserts the
   tasks of a destroyed window with the same pass, on noisy costs.
-* :func:`jaxspline.greedy` (one chain over screened transitions,
-  :mod:`jaxspline.planning.sequence`): one decision per position of the chain; the
+* :func:`jaxspline.sequences.greedy` (one chain over screened transitions,
+  :mod:`jaxspline.sequences.sequencer`): one decision per position of the chain; the
   candidates are the feasible successors of the last option (every option at the
   start) whose route is unvisited, in ``(t_start, index)`` order, their cost minus the
   value density value / (t_end - now). The decisions end when one commits nothing.

@@ -2,12 +2,12 @@
 
 Built by :func:`jaxspline.plan` from the screened options. Times are seconds. The
 transition rule between two options i -> j of one satellite is the required time
-``need(i, j)`` (:mod:`jaxspline.screen.maneuvers`): feasible iff ``t_start[j] - t_end[i] >=
+``need(i, j)`` (:mod:`jaxspline.screen.models`): feasible iff ``t_start[j] - t_end[i] >=
 need``. Rest-to-rest satellites evaluate it from the lines of sight through their
 slew table (cheap, any pair); per-channel satellites look it up among the screened
 near pairs (:class:`jaxspline.search.store.NearPairs`, 8 bytes a pair); pairs
 at least ``far[sat]`` apart are always feasible. When the engine
-also screened the flown joins (:mod:`jaxspline.planning.join_screen`), every satellite
+also screened the flown joins (:mod:`jaxspline.planner.join_screen`), every satellite
 looks its near pairs up (``lookup``): a pair the join screen removed is infeasible.
 """
 
@@ -127,7 +127,7 @@ class Problem:
         """Assemble from numpy data.
 
         Args:
-          opp: :class:`jaxspline.planning.opportunities.Opportunities` sorted by (sat, start).
+          opp: :class:`jaxspline.planner.opportunities.Opportunities` sorted by (sat, start).
           sats: the scenario's satellites.
           first: [N] required time before each option as a first observation.
           near_pairs: :class:`NearPairs`, or (src, dst, need) arrays of the feasible

@@ -33,7 +33,7 @@ from jaxspline.geometry.frames import (
 )
 from jaxspline.geometry.orbit import circular_orbit_over, orbit_position
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.planning.mission import (
+from jaxspline.readers.mission import (
     POINT,
     PlannerConfig,
     Power,
@@ -166,7 +166,7 @@ def test_options_complete_against_brute_force(small_case, small_prep):
 def test_battery_profile_against_dense_integration(small_case, guard):
     """BatteryModel.profile == a 1-s re-integration with the same step conventions."""
     from jaxspline.aeossp.check import Ephemeris, sunlit
-    from jaxspline.planning.mission import Power
+    from jaxspline.readers.mission import Power
 
     dt_ = small_case.geometry_step_s
     n = int(3 * 3600 / dt_)  # 3 h: two shadow passes

@@ -21,8 +21,8 @@ import pytest
 
 from jaxspline.cli import main
 from jaxspline.cli.plan import ATTITUDE_FIGURE, OUTPUT_FILES
-from jaxspline.io.plan_html import HTML_FILE
-from jaxspline.ops.aem import aem_file_name
+from jaxspline.products.aem import aem_file_name
+from jaxspline.products.plan_html import HTML_FILE
 
 EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)
 DURATION_S = 1800.0

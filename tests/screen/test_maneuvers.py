@@ -16,11 +16,11 @@ import pytest
 from test_screen_models import _los_options
 
 from jaxspline.geometry.orbit import circular_orbit_over
-from jaxspline.io.scenario import parse_scenario
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.planning.mission import MODELS, Satellite
+from jaxspline.readers.mission import MODELS, Satellite
+from jaxspline.readers.scenario import parse_scenario
 from jaxspline.screen import pairs as screen
-from jaxspline.screen.maneuvers import (
+from jaxspline.screen.models import (
     EigenAxis,
     ManeuverModel,
     RestToRest,

@@ -20,7 +20,7 @@ from jaxspline.screen import fused as screen_fused
 from jaxspline.screen import pairs as screen
 from jaxspline.screen import transitions
 from jaxspline.screen.options import RouteOptions, take_options
-from jaxspline.screen.sequences import screen_sequences
+from jaxspline.sequences.route_screen import screen_sequences
 
 # ----------------------------------------------------------------------------
 # numpy references and synthetic instances

@@ -18,7 +18,7 @@ from jaxspline.geometry.frames import angle_between
 from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.slew import bang_coast_bang_time
-from jaxspline.planning.mission import FlexMode, Satellite
+from jaxspline.readers.mission import FlexMode, Satellite
 from jaxspline.screen import fused as screen_fused
 from jaxspline.screen import pairs as screen
 from jaxspline.screen import slew_table, transitions
@@ -196,7 +196,7 @@ def test_slew_table_value_errors():
 def test_slew_table_screen_sequences_match_a_numpy_composition(model):
     """Whole sequences under a SlewTable: first failure = first of (scan_ok false, route
     repeated, T <= 0 or T below the numpy table lookup of ``pair_requirements``)."""
-    from jaxspline.screen.sequences import screen_sequences
+    from jaxspline.sequences.route_screen import screen_sequences
 
     sat = _sat(model)
     table = slew_table.slew_table(sat, GAP_MARGIN, SIZE)

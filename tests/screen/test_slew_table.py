@@ -22,7 +22,7 @@ import jaxspline
 from jaxspline.geometry.frames import angle_between
 from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.planning.mission import FlexMode, Satellite
+from jaxspline.readers.mission import FlexMode, Satellite
 from jaxspline.screen import pairs as screen
 from jaxspline.screen import slew_table
 from jaxspline.screen.options import RouteOptions

@@ -15,8 +15,8 @@ from pathlib import Path
 
 import pytest
 
-from jaxspline.io.scenario import load_scenario
-from jaxspline.planning.planner import build_problem
+from jaxspline.planner.pipeline import build_problem
+from jaxspline.readers.scenario import load_scenario
 from jaxspline.search import BoundWorker, solve, upper_bound
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))

@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 from jaxspline.aeossp.adapter import AEOSSP_MARGINS
-from jaxspline.planning.mission import Power
+from jaxspline.readers.mission import Power
 from jaxspline.search import BatteryModel, Problem, Timeline
 from jaxspline.search.store import NearPairs
 

@@ -1,0 +1,546 @@
+"""The planning pipeline: one entry point for the CLI, the benchmark and the aeossp adapter.
+
+``plan(scenario) -> PlanResult`` runs, in float64 (inside ``jax.enable_x64``, the
+process-wide setting is left alone):
+
+1. **orbits** - every satellite on common ephemeris knots (SGP4 for TLEs), the Sun
+   and the Earth's shadow at the knots;
+2. **windows** - every visibility window of every target over the horizon
+   (:mod:`jaxspline.geometry.windows`);
+3. **options** - the valid (target, satellite, start) options on the action grid
+   with their boundary states (:mod:`jaxspline.planner.opportunities`);
+4. **screening** - per satellite, every option pair closer than the always-feasible
+   gap through the satellite's maneuver model (:mod:`jaxspline.screen.models`);
+5. **search** - greedy, Lagrangian/DP bound, exact search on tiny instances, LNS
+   (:mod:`jaxspline.search`) until the time limit;
+6. **repair** - start-time refinement, an independent re-check without margins
+   (:mod:`jaxspline.planner.plan_check`), the flown joins and refills as one loop
+   (:mod:`jaxspline.planner.repair`): failing observations are dropped, one per
+   violation, so the returned plan is valid under every check that ran.
+
+Ctrl-C or SIGTERM during stages 5-6 stops the search: the best plan so far goes
+through the repair and is returned with ``report["interrupted"]`` set.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import numbers
+import os
+import resource
+import sys
+import time
+from typing import NamedTuple
+
+import jax
+import numpy as np
+
+from jaxspline.geometry.frames import in_shadow, jd_split, sun_direction
+from jaxspline.geometry.pointing import Scene
+from jaxspline.geometry.windows import visibility_windows_all
+from jaxspline.planner.assemble import assemble_result
+from jaxspline.planner.join_screen import (
+    channel_states,
+    join_far_gap,
+    screen_first_joins,
+    screen_joins,
+)
+from jaxspline.planner.opportunities import build_opportunities, nadir_rate, reference_points
+from jaxspline.planner.repair import dropped_line, repair
+from jaxspline.planner.result import PlanResult
+from jaxspline.readers.mission import Scenario, orbit_scene
+from jaxspline.screen.options import take_options
+from jaxspline.screen.pairs import screen_chunks
+from jaxspline.search import BatteryModel, Problem, mip_bound, solve
+from jaxspline.search import clock as search_clock
+from jaxspline.search.store import PairsBuilder, start_order
+
+__all__ = ["Prepared", "build_problem", "plan"]
+
+_RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
+_RESERVE_MIN = 1.0  # [s]
+_REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
+_REFINE_MAX_S = 10.0  # [s] ... at most (warm: ~1-3 s a round; a cold compile 6-12 s)
+_REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
+_NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
+_WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
+_NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
+_JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
+_REFILL_S = 2.0  # [s] budget of one refill after join rejections
+_REFILL_ITERS = 2000  # LNS iterations of one refill in iteration-capped runs
+_WORKER_MIN_CPUS = 2  # the bound worker runs only with a second CPU
+
+
+def _peak_rss_mb() -> float:
+    """Peak resident set size of this process so far [MB] (Linux: ru_maxrss in KiB)."""
+    return round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, 1)
+
+
+class _Clock:
+    """Stage timings and progress lines on stderr."""
+
+    def __init__(self, name: str, progress: bool):
+        self.t0 = time.monotonic()
+        self.last = self.t0
+        self.name = name
+        self.progress = progress
+        self.timings = {}
+        self.peak_rss_mb = {}  # process peak RSS at the end of each stage [MB]
+        self.bar = None
+        self.bar_t0 = self.t0
+
+    def lap(self, stage: str, msg: str = ""):
+        now = time.monotonic()
+        self.timings[stage] = round(now - self.last, 3)
+        self.peak_rss_mb[stage] = _peak_rss_mb()
+        self.last = now
+        self.say(stage, msg)
+
+    def search_bar(self, seconds: float):
+        """A progress bar over the search budget (None without progress)."""
+        if not self.progress:
+            return None
+        from tqdm import tqdm
+
+        return tqdm(
+            total=round(max(seconds, 0.0), 1),
+            desc=f"[plan {self.name}] search",
+            unit="s",
+            bar_format="{desc} {bar} {n:.0f}/{total:.0f} s {postfix}",
+            file=sys.stderr,
+            leave=False,
+        )
+
+    def say(self, stage: str, msg: str):
+        bar = getattr(self, "bar", None)
+        if bar is not None:
+            bar.n = round(min(time.monotonic() - self.bar_t0, bar.total), 1)
+            bar.set_postfix_str(f"{stage}: {msg}", refresh=True)
+            return
+        if self.progress:
+            print(
+                f"[plan {self.name}] {stage:9s} {msg}  ({time.monotonic() - self.t0:5.1f} s)",
+                file=sys.stderr,
+                flush=True,
+            )
+
+
+def plan(
+    scenario: Scenario,
+    *,
+    time_limit: float | None = None,
+    seed: int = 0,
+    progress: bool = True,
+    max_iters: int | None = None,
+    certify: float = 0.0,
+    flown_joins: bool = False,
+) -> PlanResult:
+    """Plan a scenario: the best observations found within ``time_limit`` seconds.
+
+    Args:
+      scenario: a :class:`jaxspline.readers.mission.Scenario`.
+      time_limit: wall-clock budget [s] for the whole call (default
+        ``scenario.planner.default_time_limit``).
+      seed: random seed of the search (runs are deterministic for a seed and
+        ``max_iters``; a time limit only truncates the search).
+      progress: stage lines on stderr.
+      max_iters: optional cap on search iterations: the search and the refills then
+        run to their caps whatever the clock says, and the plan is identical on every
+        run (``time_limit`` only sizes the reserved shares; Ctrl-C still stops).
+      certify: extra seconds, after the time limit, for a tighter certificate: the
+        candidate model solved as a 0/1 program by HiGHS
+        (:func:`jaxspline.search.mip_bound`, needs scipy); the reported bound is the
+        smaller of its dual bound and the Lagrangian one. 0 (default): skip.
+      flown_joins: also drop observations whose degree-7 joins (SPEC section 3) exceed
+        the limits after re-timing (:func:`jaxspline.planner.flown_joins.reject_unflyable`),
+        so the plan is flyable as :func:`jaxspline.products.attitude_history.attitude_history`
+        exports it; off by default: the satellites' maneuver models alone decide (as the
+        aeossp rules). The transitions are then also screened with the joins
+        (:mod:`jaxspline.planner.join_screen`). The check's time (first call:
+        compilation of the join kernels) is not part of ``time_limit``.
+    Returns:
+      :class:`jaxspline.planner.result.PlanResult`.
+    """
+    if not isinstance(scenario, Scenario):
+        raise ValueError(f"scenario must be a jaxspline Scenario, got {type(scenario).__name__}")
+    limit = scenario.planner.default_time_limit if time_limit is None else time_limit
+    if not (isinstance(limit, int | float) and math.isfinite(limit) and limit > 0):
+        raise ValueError(f"time_limit must be a number > 0, got {time_limit!r}")
+    if not (isinstance(certify, int | float) and math.isfinite(certify) and certify >= 0):
+        raise ValueError(f"certify must be a number of seconds >= 0, got {certify!r}")
+    if max_iters is not None and (
+        isinstance(max_iters, bool) or not isinstance(max_iters, numbers.Integral) or max_iters < 1
+    ):
+        raise ValueError(f"max_iters must be an integer >= 1, got {max_iters!r}")
+    with jax.enable_x64(True):
+        return _plan(
+            scenario, float(limit), int(seed), bool(progress), max_iters, certify, flown_joins
+        )
+
+
+def _orbits(sc: Scenario):
+    pc = sc.planner
+    table, scene = orbit_scene(sc)
+    t = np.asarray(table.orbit.t)
+    knots = (t >= -1e-9) & (t <= sc.duration + pc.geometry_step + 1e-9)
+    jd, fr = jd_split(sc.epoch_jd, t[knots])
+    sun = sun_direction(jd, fr)
+    r = np.asarray(table.orbit.r)[:, knots]
+    n = int(math.ceil(sc.duration / pc.geometry_step - 1e-9)) + 1
+    sunlit = ~in_shadow(r, sun[None])[:, :n]
+    return table, scene, sunlit
+
+
+def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
+    """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need.
+
+    The slack (the shortest observation) lets the DP process a block of starts that
+    wide at once (:func:`jaxspline.search.dp_prepare`). Each satellite's options
+    stream through the fused screen (:func:`jaxspline.screen.pairs.screen_chunks`)
+    with its maneuver model: AxisLimits for ``per_channel`` (need = min(t_min, gap)),
+    its SlewTable for rest-to-rest models (need = t_req). The sub-table gets
+    ``route = arange(n)`` (the screen excludes equal routes; the planner wants pairs of
+    the same target too) and ``scan_ok`` everywhere. The screen's window
+    ``gap <= max_gap`` is widened by ``_WINDOW_GUARD`` and the pairs are then cut with
+    the planner's own test ``t_end[i] > t_start[j] - far - slack`` (strict), so the
+    result does not depend on how either side rounds. ``join_filter(src, dst) -> bool``
+    (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go
+    straight into a :class:`jaxspline.search.store.PairsBuilder`: memory is the
+    compact table plus one satellite's compact rows, whatever the candidate count.
+
+    Returns:
+      (NearPairs, pairs removed by ``join_filter``).
+    """
+    o = opp.options
+    builder = PairsBuilder(len(opp), start_order(o.t_start, o.sat))
+    removed = 0
+    for k, sat in enumerate(sc.satellites):
+        ids = np.flatnonzero(o.sat == k)
+        if ids.size < 2:
+            continue
+        n = ids.size
+        sub = take_options(o, ids)._replace(route=np.arange(n), scan_ok=np.ones(n, bool))
+        pending, held = [], 0
+        for tr in screen_chunks(
+            sub,
+            tables[k],
+            max_gap=far[k] + slack + _WINDOW_GUARD,
+            chunk_size=_NEAR_CHUNK,
+            feasible_only=True,
+            progress=False,
+            process_index=0,  # every pair of these satellites here, also under
+            process_count=1,  # jax.distributed (shards split by satellite, not chunk)
+        ):
+            ii, jj = ids[tr.src], ids[tr.dst]
+            keep = o.t_end[ii] > o.t_start[jj] - far[k] - slack
+            need = sat.maneuver.need(tr.t_min, tr.T)
+            part = (ii[keep], jj[keep], need[keep])
+            if join_filter is None:
+                builder.add(*part)
+                continue
+            pending.append(part)
+            held += part[0].size
+            if held >= _JOIN_BATCH:
+                removed += _filtered(builder, pending, join_filter)
+                pending, held = [], 0
+        if pending:
+            removed += _filtered(builder, pending, join_filter)
+        builder.close()
+    return builder.build(), removed
+
+
+def _filtered(builder, parts, join_filter) -> int:
+    """Add the pairs of ``parts`` that pass ``join_filter``; returns how many failed."""
+    src, dst, need = (np.concatenate(x) for x in zip(*parts, strict=True))
+    keep = join_filter(src, dst)
+    builder.add(src[keep], dst[keep], need[keep])
+    return int((~keep).sum())
+
+
+class Prepared(NamedTuple):
+    """Everything the search needs, from :func:`build_problem`.
+
+    Attributes:
+      problem: :class:`jaxspline.search.Problem`.
+      opportunities: :class:`jaxspline.planner.opportunities.Opportunities` (option ids of the
+        problem index them).
+      windows: :class:`jaxspline.geometry.windows.Windows`.
+      scene: the multi-satellite :class:`jaxspline.geometry.pointing.Scene`.
+      orbits: :class:`jaxspline.geometry.orbit.OrbitTable`.
+      battery: :class:`jaxspline.search.BatteryModel`.
+      far: [S] always-feasible gaps [s].
+    """
+
+    problem: Problem
+    opportunities: object
+    windows: object
+    scene: Scene
+    orbits: object
+    battery: BatteryModel
+    far: np.ndarray
+
+
+def build_problem(
+    scenario: Scenario,
+    *,
+    progress: bool = False,
+    joins: bool = False,
+    reduce_slack=None,
+    _clock=None,
+) -> Prepared:
+    """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
+
+    Args:
+      scenario: Scenario.
+      progress: show progress bars.
+      joins: also screen every transition with the degree-7 join the plan will fly
+        (:mod:`jaxspline.planner.join_screen`): pairs up to the join far gap are
+        screened and kept only when both the model and the join screen pass them,
+        and an option is a first observation only when the join from nadir passes.
+      reduce_slack: optional callable ``local -> global`` on the near-pair slack (the
+        shortest observation [s], the DP's block width): processes that each build
+        a shard of the satellites pass the minimum over all of them, so every shard
+        screens the same window as a single process would.
+      _clock: private; the stage timer of an enclosing :func:`plan` call.
+    Returns:
+      Prepared, the inputs of the search stage.
+    """
+    sc = scenario
+    clock = _clock or _Clock(sc.name, progress)
+    with jax.enable_x64(True):
+        sats = sc.satellites
+        table, scene, sunlit = _orbits(sc)
+        clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
+        windows = _windows(sc, scene, table)
+        n_tg = len(np.unique(windows.target))
+        clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
+        opp = build_opportunities(sc, scene, table.usable, windows)
+        clock.lap("options", f"{len(opp)} options")
+        tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
+        omega = nadir_rate(scene)
+        far, first = _far_and_first(sats, opp, tables, omega)
+        slack = _near_slack(opp, reduce_slack)
+        lookup = join_filter = None
+        if joins and len(opp):
+            far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega)
+            lookup = np.ones(len(sats), bool)
+        near, removed = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK, join_filter)
+        clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
+        battery = _battery(sc, sunlit)
+        pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.targets.value, lookup)
+        pb.near_slack = slack
+    return Prepared(pb, opp, windows, scene, table, battery, far)
+
+
+def _windows(sc: Scenario, scene, table):
+    """Stage 2: every visibility window of every target's reference point on every
+    satellite allowed to image it (sensor type), within the off-nadir limit and the
+    horizon (both minus their margins) and the target's imaging window."""
+    pc = sc.planner
+    tg = sc.targets
+    sensors = np.array([s.sensor for s in sc.satellites])
+    allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
+    limit_k = np.array([s.off_nadir_max for s in sc.satellites]) - pc.margins.off_nadir
+    return visibility_windows_all(
+        scene,
+        table.ok,
+        reference_points(sc),
+        allowed,
+        limit_k,
+        pc.margins.horizon,
+        tg.t_lo,
+        tg.t_hi,
+        sc.duration,
+    )
+
+
+def _far_and_first(sats, opp, tables, omega):
+    """Per satellite, through its maneuver model and screening table: the always-feasible
+    gap ``far`` [S] [s] (``omega`` [S]: nadir turn rates [rad/s]) and, per option, the
+    time ``first`` [N] [s] a first observation needs from rest (inf: never first)."""
+    o = opp.options
+    far = np.zeros(len(sats))
+    first = np.full(len(opp), np.inf)
+    for k, s in enumerate(sats):
+        ids = np.flatnonzero(o.sat == k)
+        far[k] = s.maneuver.far_gap(s, o, ids, float(omega[k]), tables[k])
+        first[ids] = s.maneuver.first_requirements(s, o, ids, tables[k])
+    return far, first
+
+
+def _near_slack(opp, reduce_slack) -> float:
+    """The near-pair slack: the shortest observation [s] (reduced across processes by
+    ``reduce_slack`` when given; 0 when there is none)."""
+    o = opp.options
+    slack = float(np.min(o.t_end - o.t_start)) if len(opp) else math.inf
+    if reduce_slack is not None:
+        slack = float(reduce_slack(slack))
+    return slack if math.isfinite(slack) else 0.0
+
+
+def _join_screens(sats, scene, opp, far, first, omega):
+    """The flown-join screens (:mod:`jaxspline.planner.join_screen`): the far gaps
+    widened to the joins' (``far`` [S] [s], ``omega`` [S] nadir turn rates), the first
+    requirements ``first`` [N] with options whose join from nadir fails set to inf, and
+    the pair filter ``(src, dst) -> bool`` of the near-pair screen. Returns
+    ``(far, first, join_filter)``."""
+    states = channel_states(scene, sats, opp)
+    far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
+    first = first.copy()
+    first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
+    return far, first, functools.partial(screen_joins, sats, opp, states)
+
+
+def _screening_line(near, removed: int, far, joins: bool) -> str:
+    """The progress line of stage 4: near pairs (and those the join screen removed),
+    bytes per pair, the range of the far gaps."""
+    screened = f" ({removed} removed by the join screen)" if joins else ""
+    return (
+        f"{len(near)} feasible near pairs{screened}, {near.nbytes / max(len(near), 1):.1f} "
+        f"B/pair; far gaps {far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s"
+    )
+
+
+def _battery(sc: Scenario, sunlit) -> BatteryModel:
+    """The conservative battery model of the satellites (``sunlit`` [S, n+1] on the
+    geometry knots) with the planner's margins."""
+    pc = sc.planner
+    return BatteryModel(
+        sunlit,
+        [s.power for s in sc.satellites],
+        pc.geometry_step,
+        pc.margins.battery_wh,
+        pc.margins.shadow_guard,
+    )
+
+
+def _cpus() -> int:
+    """CPUs this process may run on."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not on Linux
+        return os.cpu_count() or 1
+
+
+def _search(pb, deadline, seed, max_iters, pc, clock):
+    """Stage 5 with a progress bar over the search budget."""
+    clock.bar = clock.search_bar(deadline - time.monotonic())
+    clock.bar_t0 = time.monotonic()
+    try:
+        return solve(
+            pb,
+            deadline,
+            seed=seed,
+            lagrangian_share=pc.lagrangian_share,
+            exact_max_options=pc.exact_max_options,
+            max_iters=max_iters,
+            bound_worker=pc.bound_worker and _cpus() >= _WORKER_MIN_CPUS,
+            report=clock.say,
+        )
+    finally:
+        if clock.bar is not None:
+            clock.bar.close()
+        clock.bar = None
+
+
+def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
+    """:func:`plan` after its argument checks (inside ``jax.enable_x64``): stages 1-4,
+    then search and repair under the signal guard, the optional HiGHS certificate, and
+    the result."""
+    clock = _Clock(sc.name, progress)
+    budget = _budget(sc, limit, clock.t0)
+    prep = build_problem(sc, joins=flown_joins, _clock=clock)
+    res, rep, interrupted = _search_and_repair(
+        sc, prep, budget, seed, max_iters, flown_joins, clock
+    )
+    clock.lap(
+        "repair",
+        f"{len(rep.chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
+        + (f", {rep.refilled} refilled" if flown_joins else ""),
+    )
+    mip = None
+    if certify > 0:
+        mip = mip_bound(prep.problem, certify)
+        clock.lap("certify", f"HiGHS bound {mip.bound:.6g} ({mip.status})")
+    return assemble_result(
+        sc,
+        prep,
+        res,
+        rep,
+        mip,
+        flown_joins=flown_joins,
+        interrupted=interrupted,
+        timings=clock.timings,
+        peak_rss_mb=clock.peak_rss_mb,
+    )
+
+
+class _Budget(NamedTuple):
+    """The clock of one :func:`plan` call: its ``deadline`` (``time.monotonic`` [s]), the
+    ``reserve`` [s] the search leaves before it (final check and output, and start-time
+    refinement when ``refining``: the scenario has refine steps and a per-channel
+    satellite)."""
+
+    deadline: float
+    reserve: float
+    refining: bool
+
+
+def _budget(sc: Scenario, limit: float, t0: float) -> _Budget:
+    """The budget of a call started at ``t0`` (monotonic [s]) with ``limit`` seconds: a
+    share of the limit (at least ``_RESERVE_MIN``) kept for the check and output, plus
+    one for start-time refinement (at most ``_REFINE_MAX_S``) when it runs."""
+    pc = sc.planner
+    refining = pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sc.satellites)
+    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
+    reserve += refining * min(_REFINE_SHARE * limit, _REFINE_MAX_S)
+    return _Budget(t0 + limit, reserve, refining)
+
+
+def _search_and_repair(sc, prep: Prepared, budget: _Budget, seed, max_iters, flown_joins, clock):
+    """Stages 5-6 under the signal guard: the first Ctrl-C or SIGTERM stops the search
+    and the best plan so far goes through the repair. Returns (search result,
+    :class:`jaxspline.planner.repair.Repaired`, the signal's name or None)."""
+    pc = sc.planner
+    search_clock.clear_stop()
+
+    def stopping(name):
+        search_clock.request_stop()
+        clock.say(
+            "stop",
+            f"{name}: stopping the search; the best plan so far is checked "
+            "and returned (Ctrl-C again to abort)",
+        )
+
+    with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
+        res = _search(prep.problem, budget.deadline - budget.reserve, seed, max_iters, pc, clock)
+        tl = res.timeline
+        clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
+        rep = repair(
+            sc,
+            prep.scene,
+            prep.orbits.usable,
+            prep.opportunities,
+            tl,
+            prep.battery,
+            refine_steps=_refine_steps(pc, budget, max_iters, clock),
+            flown_joins=flown_joins,
+            refill_s=math.inf if max_iters is not None else _REFILL_S,
+            refill_iters=_REFILL_ITERS if max_iters is not None else None,
+            seed=seed,
+            report=clock.say,
+        )
+    search_clock.clear_stop()
+    return res, rep, stop["signal"]
+
+
+def _refine_steps(pc, budget: _Budget, max_iters, clock) -> int:
+    """The start-time refinement steps of the repair: the scenario's when refining, none
+    when a time-limited run has less than ``_REFINE_MIN_S`` left (said on the clock)."""
+    steps = int(pc.refine_steps) if budget.refining else 0
+    left = budget.deadline - time.monotonic()
+    if steps and max_iters is None and left < _REFINE_MIN_S:
+        steps = 0
+        clock.say("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
+    return steps

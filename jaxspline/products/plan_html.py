@@ -1,0 +1,558 @@
+"""The plan as one self-contained web page: map, timeline, battery and headline figures.
+
+:func:`write_plan_html` renders a plan document (the content of ``plan.json``:
+:meth:`jaxspline.planner.result.PlanResult.to_dict` plus the ``"view"`` section of
+:mod:`jaxspline.products.plan_view`) with Bokeh (imported lazily) and its JavaScript inlined, so
+the file opens by double-click with no network. The page (models named for tests and
+scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
+
+* ``header``: scenario, value, bound and gap, validity, join statistics, areas
+  covered, search statistics and stage timings (each number in a cell with a
+  ``data-key`` attribute);
+* ``map`` (equirectangular, pan / zoom): land and coastlines from the package's
+  offline land data (:func:`jaxspline.readers.land.land_fraction`, contoured at land
+  fraction 0.5), area polygons (``areas``), strip centrelines (``strips``), ground
+  tracks (``tracks``), sensor footprints of the observations (``footprints``), targets
+  not imaged (``targets_not_imaged``, grey) and one glyph per observation at its
+  target in the satellite's colour (``targets_imaged``); hovering a target shows its
+  name, priority, satellite, start and end (UTC), off-nadir angle, maneuver time and
+  slack;
+* ``timeline``: per-satellite Gantt chart of imaging (``imaging``) and maneuvers
+  (``maneuvers``), and ``battery`` below (``battery-<satellite>`` lines) on the same
+  time axis (a note when no satellite has a power model);
+* linking: the satellite check boxes (``satellite_filter``) and the time range shown
+  by the timeline (zoom or pan it) filter the map's tracks, footprints and imaged
+  targets (a few lines of ``CustomJS`` set the renderers' ``BooleanFilter``); the
+  battery lines of unchecked satellites are hidden; ``filter_status`` says what is
+  shown; a click on an imaged target zooms the timeline to its observation
+  +- :data:`PASS_PAD_S` (and so the map to that pass).
+
+A ``plan.json`` without the ``"view"`` section (older jaxspline) still gives the
+header and the timeline; the map then has the coastlines only.
+"""
+
+from __future__ import annotations
+
+import html
+import json
+from pathlib import Path
+
+import numpy as np
+
+from jaxspline.planner.files import atomic_write_text, refuse_overwrite
+from jaxspline.planner.result import PlanResult
+from jaxspline.products import plan_html_columns as columns
+
+__all__ = ["HTML_FILE", "plan_document", "plan_page", "read_plan", "write_plan_html"]
+
+HTML_FILE = "plan.html"
+LAND_COLOR = "#efeae0"  # as the PNG map (jaxspline.products.plot_plan)
+COAST_COLOR = "#595959"
+OCEAN_COLOR = "#f4f8fb"
+NOT_IMAGED_COLOR = "#999999"
+STRIP_COLOR = "#555555"
+MANEUVER_COLOR = "#333333"
+AREA_COLOR = "#ffd700"
+MAP_WIDTH = 1200  # [px]; the map is 2:1 (360 x 180 deg)
+CONTROLS_WIDTH = 190  # [px]
+TIMELINE_ROW_PX = 34
+BATTERY_HEIGHT = 230
+IMAGING_HEIGHT = 0.6  # Gantt bar heights (row pitch 1)
+MANEUVER_HEIGHT = 0.25
+
+# CustomJS glue: the satellite check boxes and the timeline's time range filter the map.
+_FILTER_JS = """
+const on = new Set(boxes.active)
+const a = xr.start, b = xr.end
+for (const r of filtered) {
+  const d = r.data_source.data
+  const n = d.sat.length
+  const keep = new Array(n)
+  for (let i = 0; i < n; i++) {
+    keep[i] = on.has(d.sat[i]) && d.t1[i] >= a && d.t0[i] <= b
+  }
+  r.view.filter.booleans = keep
+}
+for (const r of battery) {
+  r.visible = on.has(r.tags[0])
+}
+const iso = (t) => new Date(t).toISOString().slice(0, 19).replace("T", " ")
+const names = boxes.active.map((k) => boxes.labels[k])
+status.text = `map shows ${names.length} of ${boxes.labels.length} satellites ` +
+  `(${names.join(", ") || "none"}), ${iso(a)} to ${iso(b)} UTC`
+"""
+_ALL_JS = "boxes.active = boxes.labels.map((_, k) => k)"
+# a click on an imaged target zooms the timeline (and so the map) to its pass
+_TAP_JS = """
+const i = src.selected.indices[0]
+if (i !== undefined) {
+  const d = src.data
+  const [lo, hi] = xr.bounds
+  xr.setv({start: Math.max(d.t0[i] - pad, lo), end: Math.min(d.t1[i] + pad, hi)})
+}
+"""
+PASS_PAD_S = 600.0  # a click on a target shows its observation +- this in the timeline [s]
+
+
+def read_plan(path) -> dict:
+    """Read a ``plan.json``.
+
+    Args:
+      path: str or Path.
+    Returns:
+      dict, the document.
+    Raises:
+      FileNotFoundError: no such file.
+      ValueError: not a plan document (naming the file and what is missing).
+    """
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"plan file not found: {path}")
+    try:
+        doc = json.loads(path.read_text(encoding="utf-8"))
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not JSON ({exc})") from None
+    missing = [
+        k
+        for k in ("summary", "report", "observations")
+        if not isinstance(doc, dict) or k not in doc
+    ]
+    if missing:
+        raise ValueError(f"{path}: not a jaxspline plan.json (missing {', '.join(missing)})")
+    return doc
+
+
+def plan_document(result) -> dict:
+    """The document of a plan with its ``"view"`` section (what ``plan.json`` holds).
+
+    Args:
+      result: :class:`jaxspline.planner.result.PlanResult`.
+    Returns:
+      dict, JSON-ready.
+    """
+    from jaxspline.products.plan_view import view_data
+
+    return result.to_dict(extra={"view": view_data(result)})
+
+
+def _header(doc) -> str:
+    s, rep, st = doc["summary"], doc["report"], doc.get("stats") or {}
+    tim = doc.get("timings_s") or {}
+
+    def cell(key, value, spec=".6g"):
+        return f'<span class="v" data-key="{key}">{columns.fmt(value, spec)}</span>'
+
+    bound = s.get("bound") or 0.0
+    gap_pct = 100.0 * s["gap"] / bound if bound and s.get("gap") is not None else None
+    total = s.get("total_value") or 0.0
+    view = doc.get("view") or {}
+    when = ""
+    if "epoch_utc" in view:
+        when = (
+            f", {cell('duration_h', view['duration_s'] / 3600.0, '.4g')} h from "
+            f"{html.escape(columns.utc_text(view['epoch_utc'])[:16])} UTC"
+        )
+    valid = bool(s.get("valid"))
+    status = "converged" if s.get("bound_converged") else "-"
+    low = rep.get("min_battery_wh")  # per powered satellite (older files: one number)
+    low = low if isinstance(low, dict) else ({} if low is None else {"all": low})
+    battery = ", ".join(
+        f"{html.escape(k)} {cell('min_battery_wh.' + k, v, '.5g')}" for k, v in low.items()
+    )
+    dropped = ", ".join(f"{n} {html.escape(k)}" for k, n in (rep.get("dropped") or {}).items())
+    lines = [
+        f"<b>scenario</b> {cell('scenario', s['scenario'])}: "
+        f"{cell('satellites', s['satellites'])} satellites, "
+        f"{cell('targets', s['targets'])} targets{when}",
+        f"<b>plan</b> {cell('observations', s['observations'])} observations, value "
+        f"{cell('value', s['value'])} of {cell('total_value', total)}"
+        + (f" ({100.0 * s['value'] / total:.1f} %)" if total else ""),
+        f"<b>bound</b> {cell('bound', s['bound'])} "
+        f"({html.escape(str(st.get('bound_status', status)))}); "
+        f"<b>gap</b> {cell('gap', s['gap'])}"
+        + (
+            f" ({cell('gap_percent', gap_pct, '.3g')} % of the bound)"
+            if gap_pct is not None
+            else ""
+        ),
+        f'<b>check</b> <span class="{"ok" if valid else "bad"}" data-key="valid">'
+        f"{'valid' if valid else 'INVALID'}</span>: {cell('checked', rep.get('checked'))} checked, "
+        f"{cell('violations', len(rep.get('violations') or []))} violations"
+        + (f", dropped {dropped}" if dropped else "")
+        + f"; min slack {cell('min_slack_s', rep.get('min_slack_s'), '.4g')} s"
+        + (f"; min battery {battery} Wh" if battery else ""),
+    ]
+    j = rep.get("joins")
+    if j:
+        lines.append(
+            f"<b>joins</b> {cell('joins', j.get('joins'))} degree-7 joins, "
+            f"{cell('joins_retimed', j.get('retimed'))} re-timed, "
+            f"{cell('joins_rejected', j.get('rejected'))} rejected; peak ratios rate "
+            f"{cell('max_rate_ratio', j.get('max_rate_ratio'), '.3f')}, accel "
+            f"{cell('max_accel_ratio', j.get('max_accel_ratio'), '.3f')}, jerk "
+            f"{cell('max_jerk_ratio', j.get('max_jerk_ratio'), '.3f')}"
+        )
+    else:
+        lines.append("<b>joins</b> not checked (planned with --no-aem)")
+    for a in rep.get("areas") or []:
+        lines.append(
+            f"<b>area</b> {html.escape(str(a.get('area')))}: "
+            f"{a.get('strips_planned')}/{a.get('strips')} strips planned, "
+            f"{columns.fmt(100.0 * (a.get('covered_fraction') or 0.0), '.1f')} % covered"
+        )
+    counts = [
+        (k, st[k])
+        for k in ("windows", "options", "near_pairs", "lagrangian_iterations", "lns_iterations")
+        if isinstance(st.get(k), int | float)
+    ]
+    if counts:
+        lines.append(
+            "<b>search</b> " + ", ".join(f"{k.replace('_', ' ')} {cell(k, v)}" for k, v in counts)
+        )
+    if tim:
+        lines.append(
+            "<b>wall time [s]</b> "
+            + ", ".join(f"{html.escape(k)} {cell('t_' + k, v, '.3g')}" for k, v in tim.items())
+            + f"; total {cell('t_total', sum(v for v in tim.values() if v), '.3g')}"
+        )
+    style = (
+        "<style>.hdr{font:13px/1.5 sans-serif} .hdr .v{font-weight:600}"
+        " .hdr .ok{color:#2ca02c;font-weight:700} .hdr .bad{color:#d62728;font-weight:700}"
+        " .hdr h2{margin:0 0 4px 0;font-size:18px}</style>"
+    )
+    title = f"<h2>jaxspline plan: {html.escape(str(s['scenario']))}</h2>"
+    return style + '<div class="hdr">' + title + "<br>".join(lines) + "</div>"
+
+
+def _map(doc, sats, obs):
+    from bokeh.models import (
+        BooleanFilter,
+        CDSView,
+        ColumnDataSource,
+        HoverTool,
+        Range1d,
+    )
+    from bokeh.plotting import figure
+
+    view = doc.get("view") or {}
+    fig = figure(
+        name="map",
+        width=MAP_WIDTH,
+        height=MAP_WIDTH // 2 + 40,
+        x_range=Range1d(-180.0, 180.0, bounds=(-180.0, 180.0)),
+        y_range=Range1d(-90.0, 90.0, bounds=(-90.0, 90.0)),
+        match_aspect=True,
+        tools="pan,wheel_zoom,box_zoom,reset,save",
+        active_scroll="wheel_zoom",
+        x_axis_label="longitude [deg]",
+        y_axis_label="latitude [deg]",
+        background_fill_color=OCEAN_COLOR,
+        output_backend="canvas",
+    )
+    fig.grid.grid_line_alpha = 0.3
+    land_xs, land_ys, coast_xs, coast_ys = columns.coast()
+    fig.multi_polygons(xs=land_xs, ys=land_ys, fill_color=LAND_COLOR, line_color=None, name="land")
+    fig.multi_line(xs=coast_xs, ys=coast_ys, line_color=COAST_COLOR, line_width=0.6, name="coast")
+
+    def filtered(cols):
+        src = ColumnDataSource(cols)
+        return {"source": src, "view": CDSView(filter=BooleanFilter([True] * len(cols["sat"])))}
+
+    hover_renderers = []
+    areas = columns.area_columns(doc)
+    if areas["name"]:
+        ra = fig.multi_polygons(
+            xs="xs",
+            ys="ys",
+            source=ColumnDataSource(areas),
+            fill_color=AREA_COLOR,
+            fill_alpha=0.25,
+            line_color=AREA_COLOR,
+            line_width=1.5,
+            name="areas",
+        )
+        fig.add_tools(
+            HoverTool(
+                renderers=[ra],
+                tooltips=[("area", "@name"), ("priority", "@priority"), ("covered", "@covered")],
+            )
+        )
+    strips = view.get("strips") or []
+    if strips:
+        fig.multi_line(
+            xs=[np.asarray(s["lon_deg"], np.float64) for s in strips],
+            ys=[np.asarray(s["lat_deg"], np.float64) for s in strips],
+            line_color=STRIP_COLOR,
+            line_width=1.5,
+            line_alpha=0.7,
+            name="strips",
+        )
+    tracks = columns.track_columns(doc, sats)
+    filt = []
+    if tracks["sat"]:
+        rt = fig.multi_line(
+            xs="xs",
+            ys="ys",
+            line_color="color",
+            line_width=1.2,
+            line_alpha=0.8,
+            name="tracks",
+            **filtered(tracks),
+        )
+        filt.append(rt)
+    fp = columns.footprint_columns(doc, obs)
+    if fp["xs"]:
+        rf = fig.patches(
+            xs="xs",
+            ys="ys",
+            fill_color="color",
+            fill_alpha=0.35,
+            line_color="color",
+            line_width=1.0,
+            name="footprints",
+            **filtered(fp),
+        )
+        filt.append(rf)
+    tg = view.get("targets")
+    if tg:
+        imaged = set(obs["target"])
+        free = [i for i, n in enumerate(tg["name"]) if n not in imaged]
+        rn = fig.scatter(
+            x="x",
+            y="y",
+            source=ColumnDataSource(
+                {
+                    "x": np.asarray([tg["lon_deg"][i] for i in free], np.float64),
+                    "y": np.asarray([tg["lat_deg"][i] for i in free], np.float64),
+                    "target": [tg["name"][i] for i in free],
+                    "kind": [tg["kind"][i] for i in free],
+                    "priority": np.asarray([tg["value"][i] for i in free], np.float64),
+                }
+            ),
+            size=4,
+            color=NOT_IMAGED_COLOR,
+            alpha=0.8,
+            name="targets_not_imaged",
+        )
+        hover_renderers.append(rn)
+        fig.add_tools(
+            HoverTool(
+                renderers=[rn],
+                tooltips=[
+                    ("target", "@target (@kind)"),
+                    ("priority", "@priority{0.[000]}"),
+                    ("imaged", "no"),
+                ],
+            )
+        )
+    ri = fig.scatter(
+        x="x",
+        y="y",
+        size=8,
+        fill_color="color",
+        line_color="black",
+        line_width=0.6,
+        name="targets_imaged",
+        **filtered(obs),
+    )
+    filt.append(ri)
+    fig.add_tools(
+        HoverTool(
+            renderers=[ri],
+            tooltips=[
+                ("target", "@target (@kind)"),
+                ("priority", "@priority{0.[000]}"),
+                ("satellite", "@satellite (@model)"),
+                ("start", "@start UTC"),
+                ("end", "@end UTC"),
+                ("off-nadir", "@off_nadir{0.00} deg"),
+                ("maneuver", "@maneuver{0.000} s"),
+                ("slack", "@slack{0.000} s"),
+            ],
+        )
+    )
+    return fig, filt
+
+
+def _timeline(doc, sats, obs):
+    from bokeh.models import ColumnDataSource, Div, FactorRange, HoverTool, Range1d
+    from bokeh.plotting import figure
+
+    view = doc.get("view") or {}
+    epoch = columns.epoch_ms(doc)
+    duration = view.get("duration_s") or max([o["end_s"] for o in doc["observations"]] or [1.0])
+    end = epoch + columns.MS * duration
+    x_range = Range1d(epoch, end, bounds=(epoch, end), min_interval=10.0 * columns.MS)
+    names = [s["name"] for s in sats]
+    gantt = figure(
+        name="timeline",
+        width=MAP_WIDTH + CONTROLS_WIDTH,
+        height=70 + TIMELINE_ROW_PX * max(len(sats), 1),
+        x_range=x_range,
+        y_range=FactorRange(*reversed(names)),
+        x_axis_type="datetime",
+        tools="xpan,xwheel_zoom,xbox_zoom,reset,save",
+        active_scroll="xwheel_zoom",
+        title="timeline (zoom or pan to filter the map by time; UTC)",
+        output_backend="canvas",
+    )
+    gantt.xgrid.grid_line_alpha = 0.3
+    src = ColumnDataSource(obs)
+    rm = gantt.hbar(
+        y="satellite",
+        left="m0",
+        right="t0",
+        height=MANEUVER_HEIGHT,
+        color=MANEUVER_COLOR,
+        source=src,
+        name="maneuvers",
+    )
+    ri = gantt.hbar(
+        y="satellite",
+        left="t0",
+        right="t1",
+        height=IMAGING_HEIGHT,
+        color="color",
+        source=src,
+        name="imaging",
+    )
+    gantt.add_tools(
+        HoverTool(
+            renderers=[ri, rm],
+            tooltips=[
+                ("target", "@target (@kind)"),
+                ("satellite", "@satellite"),
+                ("start", "@start UTC"),
+                ("end", "@end UTC"),
+                ("maneuver", "@maneuver{0.000} s"),
+                ("slack", "@slack{0.000} s"),
+            ],
+        )
+    )
+    bat = view.get("battery") or {}
+    if not bat:
+        note = "<i>battery: no satellite of this plan has a power model</i>"
+        return gantt, Div(text=note, name="battery"), x_range, []
+    index = {n: k for k, n in enumerate(names)}
+    batt = figure(
+        name="battery",
+        width=MAP_WIDTH + CONTROLS_WIDTH,
+        height=BATTERY_HEIGHT,
+        x_range=x_range,
+        x_axis_type="datetime",
+        tools="xpan,xwheel_zoom,xbox_zoom,reset,save",
+        active_scroll="xwheel_zoom",
+        title="battery [Wh]",
+        y_axis_label="Wh",
+        output_backend="canvas",
+    )
+    batt.xgrid.grid_line_alpha = 0.3
+    lines = []
+    for name, b in bat.items():
+        k = index.get(name, 0)
+        t = epoch + columns.MS * np.asarray(b["t_s"], np.float64)
+        lv = np.array([np.nan if v is None else v for v in b["level_wh"]], np.float64)
+        r = batt.line(
+            x=t,
+            y=lv,
+            color=sats[k]["color"] if k < len(sats) else "black",
+            line_width=1.5,
+            legend_label=name,
+            name=f"battery-{name}",
+            tags=[k],
+        )
+        lines.append(r)
+    batt.legend.location = "top_left"
+    batt.legend.click_policy = "hide"
+    batt.add_tools(
+        HoverTool(
+            renderers=lines,
+            tooltips=[("battery", "$name"), ("time", "$x{%F %T} UTC"), ("level", "$y{0.0} Wh")],
+            formatters={"$x": "datetime"},
+            mode="vline",
+        )
+    )
+    return gantt, batt, x_range, lines
+
+
+def plan_page(doc):
+    """The Bokeh layout of a plan document (module docstring).
+
+    Args:
+      doc: dict, the content of ``plan.json`` (:func:`plan_document`).
+    Returns:
+      a Bokeh layout model.
+    """
+    from bokeh.layouts import column, row
+    from bokeh.models import Button, CheckboxGroup, CustomJS, Div, TapTool
+
+    sats = columns.satellites(doc)
+    obs = columns.observation_columns(doc, sats)
+    fmap, filt = _map(doc, sats, obs)
+    gantt, batt, x_range, lines = _timeline(doc, sats, obs)
+    legend = "".join(
+        f'<div><span style="display:inline-block;width:12px;height:12px;background:'
+        f'{html.escape(s["color"])};margin-right:6px"></span>{html.escape(s["name"])}'
+        + (f" <small>({html.escape(s['model'])})</small>" if s.get("model") else "")
+        + "</div>"
+        for s in sats
+    )
+    boxes = CheckboxGroup(
+        labels=[s["name"] for s in sats], active=list(range(len(sats))), name="satellite_filter"
+    )
+    show_all = Button(label="all satellites", width=CONTROLS_WIDTH - 20, name="all_satellites")
+    status = Div(text="", width=MAP_WIDTH + CONTROLS_WIDTH, name="filter_status")
+    imaged = next(r for r in filt if r.name == "targets_imaged")
+    tap = TapTool(renderers=[imaged], behavior="select")
+    fmap.add_tools(tap)
+    tap.callback = CustomJS(
+        args={"src": imaged.data_source, "xr": x_range, "pad": PASS_PAD_S * columns.MS},
+        code=_TAP_JS,
+    )
+    args = {"boxes": boxes, "xr": x_range, "filtered": filt, "battery": lines, "status": status}
+    cb = CustomJS(args=args, code=_FILTER_JS)
+    boxes.js_on_change("active", cb)
+    x_range.js_on_change("start", cb)
+    x_range.js_on_change("end", cb)
+    show_all.js_on_event("button_click", CustomJS(args={"boxes": boxes}, code=_ALL_JS))
+    n_obs, n_tg = len(obs["sat"]), len((doc.get("view") or {}).get("targets", {}).get("name", []))
+    key = Div(
+        text=(
+            "<b>satellites</b> (check to show on the map)"
+            f'<div style="font-size:12px">{legend}</div>'
+            f'<p style="font-size:12px;width:{CONTROLS_WIDTH - 16}px">{n_obs} observations; '
+            f"{max(n_tg - n_obs, 0)} targets not imaged (grey). Hover a target for who "
+            "images it when, click it to zoom the timeline to its pass; wheel / box zoom "
+            "the map; zoom or pan the timeline to filter the map by time.</p>"
+        ),
+        width=CONTROLS_WIDTH,
+    )
+    controls = column(key, boxes, show_all, width=CONTROLS_WIDTH)
+    header = Div(text=_header(doc), width=MAP_WIDTH + CONTROLS_WIDTH, name="header")
+    status.text = (
+        f"map shows all {len(sats)} satellites over the whole horizon "
+        "(zoom the timeline or uncheck satellites to filter)"
+    )
+    return column(header, row(controls, fmap), status, gantt, batt)
+
+
+def write_plan_html(doc, path, *, force: bool = False) -> Path:
+    """Write the page of a plan as one self-contained HTML file (atomic).
+
+    Args:
+      doc: dict, a plan document (:func:`plan_document`, or ``plan.json`` read with
+        :func:`read_plan`); a :class:`PlanResult` is converted with :func:`plan_document`.
+      path: output file.
+      force: overwrite an existing file (otherwise ``FileExistsError``, file untouched).
+    Returns:
+      ``Path(path)``.
+    """
+    from bokeh.embed import file_html
+    from bokeh.resources import INLINE
+
+    refuse_overwrite(path, force)
+    if isinstance(doc, PlanResult):
+        doc = plan_document(doc)
+    title = f"jaxspline plan: {doc['summary'].get('scenario', '')}"
+    text = file_html(plan_page(doc), INLINE, title=title)
+    return atomic_write_text(path, text, force=force)

@@ -1,0 +1,222 @@
+"""What the plan page draws, as JSON: the ``"view"`` section of ``plan.json``.
+
+:func:`view_data` turns a :class:`jaxspline.planner.result.PlanResult` into plain lists
+(degrees, seconds from the epoch, rounded) so that the page (:mod:`jaxspline.products.plan_html`)
+is rebuilt from ``plan.json`` alone, without the scenario or a re-plan
+(``jaxspline view plan.json``):
+
+* ``satellites``: name, maneuver model, colour (:data:`jaxspline.products.czml.SATELLITE_COLORS`)
+  and swath of each satellite;
+* ``tracks``: sub-satellite points every :data:`TRACK_STEP_S` seconds
+  (:func:`jaxspline.products.czml.satellite_tracks`), ``null`` where the orbit table is unusable;
+* ``targets``: name, kind, position and priority of every target;
+* ``strips``: the centreline of every strip target;
+* ``observations``: per planned observation (the order of ``plan.json``'s
+  ``observations``) the off-nadir angle of the line of sight at mid-imaging and the
+  sensor footprint of a strip, its swept ground (:func:`jaxspline.readers.areas.footprint_lonlat`;
+  ``null`` for a point, whose footprint is a disc as wide as the swath, :func:`disc`,
+  as in the CZML export);
+* ``areas``: the GeoJSON geometry and priority of every area target;
+* ``battery``: the planned battery level of every powered satellite.
+
+The off-nadir angle is ``atan2(|d x n|, d . n)`` between the line of sight
+``d = g - r`` (aim point ``g``, satellite ``r``, both Earth-fixed) and the geocentric
+nadir ``n = -r``, the definition of :func:`jaxspline.geometry.pointing.off_nadir`;
+the aim point at mid-imaging is the target itself, or a strip's midpoint (strips are
+scanned at constant ground speed).
+"""
+
+from __future__ import annotations
+
+import math
+
+import jax
+import numpy as np
+
+from jaxspline.geometry.frames import (
+    angle_between,
+    earth_rotation_angle,
+    ecef_to_geodetic,
+    geodetic_to_ecef,
+    gmst,
+    teme_to_ecef,
+)
+from jaxspline.geometry.ground import strip_centerline
+from jaxspline.geometry.orbit import orbit_position, tabulate_orbits
+from jaxspline.products.czml import SATELLITE_COLORS, satellite_tracks
+from jaxspline.readers.areas import FOOTPRINT_STEP_M, footprint_lonlat
+from jaxspline.readers.mission import STRIP
+
+__all__ = ["TRACK_STEP_S", "VIEW_VERSION", "disc", "view_data"]
+
+VIEW_VERSION = 1  # bumped when the layout of the "view" section changes
+TRACK_STEP_S = 30.0  # ground-track sample step [s]
+DISC_SIDES = 24  # polygon sides of a point target's footprint disc
+DEG_DECIMALS = 4  # longitudes / latitudes rounded to ~10 m
+TIME_DECIMALS = 3  # seconds rounded to milliseconds
+VALUE_DECIMALS = 3  # battery levels [Wh], angles [deg]
+_R_MEAN = 6371008.8  # mean Earth radius [m]: angular size of a footprint disc
+
+# one XLA program per table shape (eager dispatch would compile every primitive)
+_orbit_position = jax.jit(orbit_position)
+
+
+def _round(x, decimals: int) -> list:
+    """Rounded floats of an array as a list, non-finite values as None."""
+    a = np.round(np.asarray(x, np.float64), decimals)
+    return [float(v) if math.isfinite(v) else None for v in a.ravel()]
+
+
+def _wrap_deg(lon_deg):
+    """Longitudes [deg] wrapped into [-180, 180)."""
+    return (np.asarray(lon_deg, np.float64) + 180.0) % 360.0 - 180.0
+
+
+def _lonlat(r_ecef):
+    """(lon, lat) [deg] of Earth-fixed points [..., 3], lon in [-180, 180)."""
+    lat, lon, _ = ecef_to_geodetic(np.asarray(r_ecef, np.float64))
+    return _wrap_deg(np.degrees(lon)), np.degrees(lat)
+
+
+def disc(lon_deg: float, lat_deg: float, radius_m: float):
+    """A point target's footprint: the ring at ``radius_m`` around it.
+
+    Spherical destination formula on a sphere of the mean Earth radius, ``b = radius / R``:
+    ``lat2 = asin(sin(lat) cos(b) + cos(lat) sin(b) cos(th))``,
+    ``lon2 = lon + atan2(sin(th) sin(b) cos(lat), cos(b) - sin(lat) sin(lat2))``.
+
+    Args:
+      lon_deg, lat_deg: centre [deg].
+      radius_m: ring radius [m] (half the swath).
+    Returns:
+      (lon [deg], lat [deg]), float [DISC_SIDES + 1] each, the ring closed.
+    """
+    b = radius_m / _R_MEAN
+    th = np.linspace(0.0, 2.0 * math.pi, DISC_SIDES + 1)
+    la, lo = math.radians(lat_deg), math.radians(lon_deg)
+    lat2 = np.arcsin(np.sin(la) * np.cos(b) + np.cos(la) * np.sin(b) * np.cos(th))
+    lon2 = lo + np.arctan2(
+        np.sin(th) * np.sin(b) * np.cos(la), np.cos(b) - np.sin(la) * np.sin(lat2)
+    )
+    return np.degrees(lon2), np.degrees(lat2)
+
+
+def _aim_points(tg, r):
+    """Earth-fixed aim points [K, 3] [m] at mid-imaging of targets r [K] (strips: midpoint)."""
+    g = geodetic_to_ecef(tg.lat[r], tg.lon[r], tg.alt[r])
+    strip = tg.kind[r] == STRIP
+    if strip.any():
+        s = r[strip]
+        u, _, rad = strip_centerline(
+            tg.lat[s], tg.lon[s], tg.azimuth[s], tg.length[s], 3, tg.alt[s]
+        )
+        g[strip] = u[:, 1] * rad[:, None]
+    return g
+
+
+def _off_nadir_deg(sc, obs) -> np.ndarray:
+    """Off-nadir angle [deg] of every observation at mid-imaging (module docstring)."""
+    if len(obs) == 0:
+        return np.zeros(0)
+    mid = 0.5 * (np.asarray(obs.start, np.float64) + np.asarray(obs.end, np.float64))
+    sat = np.asarray(obs.sat, np.int64)
+    with jax.enable_x64(True):  # metre-level positions need float64 (global config untouched)
+        table = tabulate_orbits(
+            [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, sc.planner.geometry_step
+        )
+        r_teme = np.asarray(_orbit_position(table.orbit, mid, sat=sat), np.float64)
+    r = teme_to_ecef(r_teme, earth_rotation_angle(float(gmst(sc.epoch_jd)), mid))
+    g = _aim_points(sc.targets, np.asarray(obs.target, np.int64))
+    return np.degrees(angle_between(g - r, -r))
+
+
+def _tracks(sc) -> dict:
+    t, r, ok = satellite_tracks(sc, TRACK_STEP_S)
+    lon, lat = _lonlat(r)
+    return {
+        "step_s": TRACK_STEP_S,
+        "t_s": _round(t, TIME_DECIMALS),
+        "lon_deg": [_round(np.where(ok[k], lon[k], np.nan), DEG_DECIMALS) for k in range(len(r))],
+        "lat_deg": [_round(np.where(ok[k], lat[k], np.nan), DEG_DECIMALS) for k in range(len(r))],
+    }
+
+
+def _strips(tg) -> list[dict]:
+    out = []
+    for r in np.flatnonzero(tg.kind == STRIP):
+        n = max(2, math.ceil(float(tg.length[r]) / FOOTPRINT_STEP_M) + 1)
+        u, _, rad = strip_centerline(
+            tg.lat[r], tg.lon[r], tg.azimuth[r], tg.length[r], n, tg.alt[r]
+        )
+        lon, lat = _lonlat(u * rad)
+        out.append(
+            {
+                "target": int(r),
+                "lon_deg": _round(lon, DEG_DECIMALS),
+                "lat_deg": _round(lat, DEG_DECIMALS),
+            }
+        )
+    return out
+
+
+def _footprints(sc, obs) -> list[dict | None]:
+    tg = sc.targets
+    out = []
+    for i in range(len(obs)):
+        k, j = int(obs.sat[i]), int(obs.target[i])
+        swath = float(sc.satellites[k].swath)
+        if int(tg.kind[j]) != STRIP:
+            out.append(None)
+            continue
+        lon, lat = footprint_lonlat(tg, j, swath)
+        lon = _wrap_deg(lon)
+        out.append({"lon_deg": _round(lon, DEG_DECIMALS), "lat_deg": _round(lat, DEG_DECIMALS)})
+    return out
+
+
+def view_data(result) -> dict:
+    """The ``"view"`` section of ``plan.json`` (module docstring), JSON-ready.
+
+    Args:
+      result: :class:`jaxspline.planner.result.PlanResult`.
+    Returns:
+      dict of lists, strings and numbers.
+    """
+    sc = result.scenario
+    obs = result.observations
+    tg = sc.targets
+    lon = _wrap_deg(np.degrees(tg.lon))
+    return {
+        "version": VIEW_VERSION,
+        "epoch_utc": sc.epoch.strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
+        "duration_s": float(sc.duration),
+        "satellites": [
+            {
+                "name": s.name,
+                "model": s.model,
+                "color": SATELLITE_COLORS[k % len(SATELLITE_COLORS)],
+                "swath_m": float(s.swath),
+            }
+            for k, s in enumerate(sc.satellites)
+        ],
+        "tracks": _tracks(sc),
+        "targets": {
+            "name": [str(n) for n in tg.name],
+            "kind": ["strip" if int(k) == STRIP else "point" for k in tg.kind],
+            "lon_deg": _round(lon, DEG_DECIMALS),
+            "lat_deg": _round(np.degrees(tg.lat), DEG_DECIMALS),
+            "value": [float(v) for v in tg.value],
+        },
+        "strips": _strips(tg),
+        "observations": {
+            "off_nadir_deg": _round(_off_nadir_deg(sc, obs), VALUE_DECIMALS),
+            "footprint": _footprints(sc, obs),
+        },
+        "areas": [
+            {"name": a.name, "value": float(a.value), "geometry": a.geometry} for a in sc.areas
+        ],
+        "battery": {
+            name: {"t_s": _round(t, TIME_DECIMALS), "level_wh": _round(level, VALUE_DECIMALS)}
+            for name, (t, level) in (result.battery or {}).items()
+        },
+    }

@@ -1,0 +1,48 @@
+"""Readers: scenario files in, validated mission types out.
+
+``mission`` holds the types every later stage reads (:class:`Scenario`,
+:class:`Satellite`, :class:`Targets`, :class:`Area`, ...) and :func:`orbit_scene`;
+``fields`` the checked TOML/CSV field readers; ``land`` the land mask; ``targets`` the
+target tables (CSV and TOML); ``area_files`` the GeoJSON/TOML areas; ``areas`` cuts
+areas into strip targets along the ground tracks and reports their coverage;
+``scenario`` the TOML scenario reader (the full schema is its docstring).
+"""
+
+from jaxspline.readers.area_files import AREA_KEYS as AREA_KEYS
+from jaxspline.readers.area_files import DENSIFY_DEG as DENSIFY_DEG
+from jaxspline.readers.area_files import MAX_AREA_STRIPS as MAX_AREA_STRIPS
+from jaxspline.readers.area_files import MAX_RADIUS_DEG as MAX_RADIUS_DEG
+from jaxspline.readers.area_files import MAX_SWATH_KM as MAX_SWATH_KM
+from jaxspline.readers.area_files import MIN_STRIP_M as MIN_STRIP_M
+from jaxspline.readers.area_files import AreaSpec as AreaSpec
+from jaxspline.readers.area_files import parse_areas as parse_areas
+from jaxspline.readers.area_files import polygon_center as polygon_center
+from jaxspline.readers.area_files import read_geojson as read_geojson
+from jaxspline.readers.areas import FOOTPRINT_STEP_M as FOOTPRINT_STEP_M
+from jaxspline.readers.areas import MERGE_DEG as MERGE_DEG
+from jaxspline.readers.areas import area_coverage as area_coverage
+from jaxspline.readers.areas import coverage_line as coverage_line
+from jaxspline.readers.areas import cut_areas as cut_areas
+from jaxspline.readers.areas import footprint_lonlat as footprint_lonlat
+from jaxspline.readers.mission import DEFAULT_SWATH as DEFAULT_SWATH
+from jaxspline.readers.mission import MODELS as MODELS
+from jaxspline.readers.mission import Area as Area
+from jaxspline.readers.mission import FlexMode as FlexMode
+from jaxspline.readers.mission import Margins as Margins
+from jaxspline.readers.mission import PlannerConfig as PlannerConfig
+from jaxspline.readers.mission import Power as Power
+from jaxspline.readers.mission import Satellite as Satellite
+from jaxspline.readers.mission import Scenario as Scenario
+from jaxspline.readers.mission import Targets as Targets
+from jaxspline.readers.mission import make_targets as make_targets
+from jaxspline.readers.mission import orbit_scene as orbit_scene
+from jaxspline.readers.scenario import DEFAULT_SCENARIO_PATH as DEFAULT_SCENARIO_PATH
+from jaxspline.readers.scenario import default_scenario as default_scenario
+from jaxspline.readers.scenario import load_scenario as load_scenario
+from jaxspline.readers.scenario import parse_scenario as parse_scenario
+from jaxspline.readers.scenario import scenario_from as scenario_from
+from jaxspline.readers.targets import CSV_OPTIONAL as CSV_OPTIONAL
+from jaxspline.readers.targets import CSV_REQUIRED as CSV_REQUIRED
+from jaxspline.readers.targets import TARGET_SECTIONS as TARGET_SECTIONS
+from jaxspline.readers.targets import load_targets_csv as load_targets_csv
+from jaxspline.readers.targets import scenario_targets as scenario_targets

@@ -1,0 +1,347 @@
+"""Area target tables of scenario files: ``[[areas]]``, GeoJSON polygons, named errors.
+
+The schema is documented with the rest of the scenario file in
+:mod:`jaxspline.readers.scenario`; :mod:`jaxspline.readers.areas` cuts the areas read here
+into strip targets. Every error is a ``ValueError`` naming the field (``areas[1].swath_km``), its
+TOML line and the value; GeoJSON content errors name ``areas[i].geojson`` and what is
+wrong with the file. Polygons: GeoJSON Polygon / MultiPolygon, a Feature of one, or a
+FeatureCollection of them (united), or one inline ring ``lonlat_deg`` of ``[lon, lat]``
+pairs [deg]; finite, valid (no self-intersection), with area, within [-180, 180] x
+[-90, 90] deg, less than 180 deg wide in longitude and no vertex farther than
+:data:`MAX_RADIUS_DEG` from the centre.
+
+Areas crossing the antimeridian (the 180 deg meridian) are refused, whether written
+with a jump from +180 to -180, with longitudes beyond 180, or split in two at the
+meridian as RFC 7946 section 3.1.9 asks: the centre of an area is the centroid of its
+longitudes and latitudes (:func:`polygon_center`), which for such an area lies on the
+far side of the Earth, and the output files draw areas in [-180, 180]. Give such an
+area as two ``[[areas]]``, one on each side of the meridian; each is cut on its own.
+
+The strip width ``swath_km`` (at most :data:`MAX_SWATH_KM`) and ``max_length_km`` (at
+least :data:`MIN_STRIP_M`) must not cut an area into more than
+:data:`MAX_AREA_STRIPS` strips per direction (estimated from the area's size).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import shapely
+from shapely.geometry import MultiPolygon, Polygon, shape
+from shapely.validation import explain_validity
+
+from jaxspline.geometry.frames import geodetic_to_ecef
+from jaxspline.geometry.ground import unit_vectors
+from jaxspline.readers.fields import (
+    check_float,
+    field_number,
+    field_pair,
+    field_str,
+    field_table,
+    field_tables,
+    read_text,
+)
+
+__all__ = [
+    "AREA_KEYS",
+    "DENSIFY_DEG",
+    "MAX_AREA_STRIPS",
+    "MAX_RADIUS_DEG",
+    "MAX_SWATH_KM",
+    "MIN_STRIP_M",
+    "AreaSpec",
+    "parse_areas",
+    "polygon_center",
+    "read_geojson",
+]
+
+#: Keys of an ``[[areas]]`` table.
+AREA_KEYS = frozenset(
+    "name geojson lonlat_deg priority swath_km max_length_km sensor window_s".split()
+)
+MAX_RADIUS_DEG = 10.0  # largest central angle from an area's centre to a vertex [deg]
+DENSIFY_DEG = 0.05  # polygon edges are split into pieces at most this long [deg]
+MIN_STRIP_M = 1000.0  # shorter strips are lengthened about their middle to this [m]
+MAX_SWATH_KM = 5000.0  # a wider strip is a unit mistake [km]
+MAX_AREA_STRIPS = 20_000  # most strips one cutting of an area may have (size / swath ...)
+_KM_PER_DEG = 111.195  # great-circle km per degree (mean Earth radius)
+_MERIDIAN = (
+    "; an area across the antimeridian (180 deg) is not supported: give it as two areas, "
+    "one on each side"
+)
+
+
+@dataclasses.dataclass(frozen=True)
+class AreaSpec:
+    """An ``[[areas]]`` table, read and checked (:func:`parse_areas`), not yet cut.
+
+    Attributes:
+      name: label (unique among the areas).
+      polygon: shapely Polygon or MultiPolygon, coordinates (lon, lat) [deg].
+      value: priority of the whole area (> 0).
+      swath: strip width [m] (> 0).
+      max_length: longest strip [m] (inf: no limit).
+      sensor: required sensor type ("" = any).
+      t_lo, t_hi: imaging window of every strip [s from the epoch] (-inf/+inf: free).
+      field: label of the table in error messages (``areas[0]``).
+    """
+
+    name: str
+    polygon: object
+    value: float
+    swath: float
+    max_length: float = math.inf
+    sensor: str = ""
+    t_lo: float = -math.inf
+    t_hi: float = math.inf
+    field: str = "areas[0]"
+
+
+def _polygonal(geom, where: str):
+    if isinstance(geom, Polygon | MultiPolygon):
+        return geom
+    raise ValueError(f"{where}: a {geom.geom_type} is not an area (Polygon or MultiPolygon)")
+
+
+def _feature_geometry(f, where: str):
+    if not isinstance(f, dict) or f.get("type") != "Feature":
+        got = f.get("type") if isinstance(f, dict) else f
+        raise ValueError(f"{where}: must be a GeoJSON Feature, got {got!r}")
+    if f.get("geometry") is None:
+        raise ValueError(f"{where}: the Feature has no geometry (null)")
+    return _polygonal(shape(f["geometry"]), f"{where} geometry")
+
+
+def _geojson_geometry(doc):
+    """The union of the polygons of a GeoJSON document (shapely, lon/lat degrees)."""
+    if not isinstance(doc, dict):
+        raise ValueError(f"must be a GeoJSON object, got {type(doc).__name__}")
+    kind = doc.get("type")
+    try:
+        if kind == "FeatureCollection":
+            feats = doc.get("features")
+            if not isinstance(feats, list) or not feats:
+                raise ValueError("a FeatureCollection needs a non-empty 'features' list")
+            parts = [_feature_geometry(f, f"features[{i}]") for i, f in enumerate(feats)]
+            geom = shapely.union_all(parts)
+        elif kind == "Feature":
+            geom = _feature_geometry(doc, "Feature")
+        else:
+            geom = _polygonal(shape(doc), "geometry")
+    except (AttributeError, TypeError, IndexError, KeyError, shapely.errors.ShapelyError) as exc:
+        raise ValueError(f"not a valid GeoJSON {kind or 'object'}: {exc}") from None
+    return geom
+
+
+def _finite_number(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(f"numbers must be finite, got {text[:24]}{'...' * (len(text) > 24)}")
+    return value
+
+
+def _no_constant(name: str):
+    raise ValueError(f"numbers must be finite, got {name}")
+
+
+def read_geojson(path):
+    """The area of a GeoJSON file: its Polygon / MultiPolygon, Feature or FeatureCollection.
+
+    The polygons of a FeatureCollection are united; other geometry types, members of a
+    FeatureCollection that are not Features, and numbers that are not finite (``NaN``,
+    ``Infinity``, ``1e999``) are errors. UTF-8 text; a byte-order mark is accepted.
+
+    Args:
+      path: str or Path.
+    Returns:
+      shapely Polygon or MultiPolygon, coordinates (lon, lat) [deg], finite.
+    Raises:
+      FileNotFoundError: the file is missing.
+      ValueError: not JSON, or not a polygonal GeoJSON document (naming the file).
+    """
+    path = Path(path)
+    try:
+        text = read_text(path, lambda line: f"{path.name}: line {line}")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"GeoJSON file not found: {path}") from None
+    try:
+        doc = json.loads(
+            text,
+            parse_float=_finite_number,
+            parse_int=_finite_number,  # 400-digit integers too (float() would overflow)
+            parse_constant=_no_constant,
+        )
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path.name}: invalid JSON: {exc}") from None
+    except ValueError as exc:
+        raise ValueError(f"{path.name}: invalid GeoJSON: {exc}") from None
+    try:
+        return _geojson_geometry(doc)
+    except ValueError as exc:
+        raise ValueError(f"{path.name}: {exc}") from None
+
+
+def polygon_center(geom) -> np.ndarray:
+    """Unit vector of the centre of an area: its (lon, lat) centroid on the ellipsoid.
+
+    Args:
+      geom: shapely Polygon or MultiPolygon, coordinates (lon, lat) [deg].
+    Returns:
+      float [3], unit vector, Earth-fixed.
+    """
+    c = geom.centroid
+    return unit_vectors(geodetic_to_ecef(math.radians(c.y), math.radians(c.x), 0.0))
+
+
+def _check_polygon(geom, err) -> float:
+    """Check an area's polygon (module docstring); return its radius [deg] about the centre."""
+    xy = np.asarray(shapely.get_coordinates(geom))
+    if not np.all(np.isfinite(xy)):
+        bad = xy[~np.all(np.isfinite(xy), axis=1)][0]
+        raise err(f"coordinates must be finite, got [{bad[0]!r}, {bad[1]!r}]")
+    if not geom.is_empty and not geom.is_valid:
+        raise err(f"invalid polygon: {explain_validity(geom)}")
+    if geom.is_empty or geom.area <= 0.0:
+        raise err("the polygon is empty (no area)")
+    lon0, lat0, lon1, lat1 = geom.bounds
+    if lat0 < -90.0 or lat1 > 90.0:
+        raise err(f"latitudes must be within [-90, 90] deg, got [{lat0:g}, {lat1:g}]")
+    if lon0 < -180.0 or lon1 > 180.0:
+        raise err(f"longitudes must be within [-180, 180] deg, got [{lon0:g}, {lon1:g}]{_MERIDIAN}")
+    if lon1 - lon0 > 180.0:
+        raise err(
+            f"longitudes span {lon1 - lon0:g} deg (from {lon0:g} to {lon1:g}), more than 180"
+            + _MERIDIAN
+        )
+    c = polygon_center(geom)
+    u = unit_vectors(geodetic_to_ecef(np.radians(xy[:, 1]), np.radians(xy[:, 0]), 0.0))
+    radius = math.degrees(float(np.max(np.arccos(np.clip(u @ c, -1.0, 1.0)))))
+    if radius > MAX_RADIUS_DEG:
+        raise err(
+            f"too large: a vertex is {radius:.3g} deg from the centre (at most {MAX_RADIUS_DEG:g})"
+        )
+    return radius
+
+
+def _ring(ctx, field, value):
+    ok = isinstance(value, list) and len(value) >= 3
+    ok = ok and all(isinstance(p, list) and len(p) == 2 for p in value)
+    if not ok:
+        raise ctx.error(field, f"must be a list of >= 3 [lon, lat] pairs [deg], got {value!r}")
+    pts = []
+    for i, (lon, lat) in enumerate(value):
+
+        def err(m, i=i):
+            return ctx.error(field, f"vertex {i} {value[i]!r}: {m}")
+
+        past = isinstance(lon, int | float) and 180.0 < abs(lon) <= 360.0  # wrapped
+        lon = check_float(
+            lon, lambda m, past=past: err(f"lon {m}" + _MERIDIAN * past), lo=-180.0, hi=180.0
+        )
+        lat = check_float(lat, lambda m: err(f"lat {m}"), lo=-90.0, hi=90.0)
+        pts.append((lon, lat))
+    try:
+        return Polygon(pts)
+    except shapely.errors.ShapelyError as exc:
+        raise ctx.error(field, f"not a polygon: {exc}") from None
+
+
+def _check_strip_count(ctx, f, swath_from: str, radius: float, swath: float, max_len: float):
+    """Refuse a swath / max_length that would cut the area into too many strips."""
+    across = 2.0 * radius * _KM_PER_DEG * 1e3  # the area's size bound [m]
+    bands = max(1.0, across / swath)  # floats: a tiny swath gives inf, not an overflow
+    pieces = max(1.0, across / max_len)
+    if bands * pieces <= MAX_AREA_STRIPS:
+        return
+    size = f"the area, up to {across / 1e3:.4g} km across, would be cut into ~"
+    if bands > MAX_AREA_STRIPS:
+        given = f" (not given: {swath_from}, the narrowest)" if swath_from else ""
+        raise ctx.error(
+            f"{f}.swath_km",
+            f"{swath / 1e3:g} km{given} is too narrow: {size}{bands:.3g} strips "
+            f"(at most {MAX_AREA_STRIPS})",
+        )
+    raise ctx.error(
+        f"{f}.max_length_km",
+        f"{max_len / 1e3:g} km is too short: {size}{bands * pieces:.3g} strips "
+        f"(at most {MAX_AREA_STRIPS})",
+    )
+
+
+def parse_areas(ctx, data: dict, base_dir, satellites) -> list[AreaSpec]:
+    """The ``[[areas]]`` (alias ``[area]``) tables of a parsed scenario file, checked.
+
+    Args:
+      ctx: :class:`jaxspline.readers.fields.FieldContext` of the file.
+      data: dict, the parsed scenario TOML.
+      base_dir: folder that relative GeoJSON paths start from (None: the working directory).
+      satellites: the scenario's :class:`jaxspline.readers.mission.Satellite` tuple (the
+        default swath is the narrowest of those whose sensor the area accepts).
+    Returns:
+      list of :class:`AreaSpec`, in file order.
+    Raises:
+      ValueError: naming the field (``areas[1].swath_km``), its TOML line and the value.
+    """
+    out, names = [], {}
+    for i, (f, a) in enumerate(field_tables(ctx, data, "areas", "area")):
+        a = field_table(ctx, f, a, AREA_KEYS)
+        name = field_str(ctx, f"{f}.name", a.get("name", f"area_{i + 1}"), allow_empty=False)
+        if name in names:
+            raise ctx.error(f"{f}.name", f"duplicate area name {name!r} (also {names[name]})")
+        names[name] = f
+        if ("geojson" in a) == ("lonlat_deg" in a):
+            raise ctx.error(f"{f}.geojson", "give exactly one of geojson (a file) and lonlat_deg")
+        where = ""  # the GeoJSON file, named in errors about its polygon
+        if "geojson" in a:
+            key = f"{f}.geojson"
+            path = Path(field_str(ctx, key, a["geojson"], allow_empty=False))
+            if not path.is_absolute() and base_dir is not None:
+                path = Path(base_dir) / path
+            if not path.is_file():
+                raise ctx.error(key, f"GeoJSON file not found: {path}")
+            try:
+                geom = read_geojson(path)
+            except ValueError as exc:
+                raise ctx.error(key, str(exc)) from None
+            where = f"{path.name}: "
+        else:
+            key = f"{f}.lonlat_deg"
+            geom = _ring(ctx, key, a["lonlat_deg"])
+        radius = _check_polygon(geom, lambda m, key=key, where=where: ctx.error(key, where + m))
+        value = field_number(ctx, f"{f}.priority", a.get("priority", 1.0), positive=True)
+        sensor = field_str(ctx, f"{f}.sensor", a.get("sensor", ""))
+        swath_from = ""  # the satellite whose swath the area takes
+        if "swath_km" in a:
+            swath = 1e3 * field_number(
+                ctx, f"{f}.swath_km", a["swath_km"], positive=True, hi=MAX_SWATH_KM
+            )
+        else:
+            swaths = [(s.swath, k) for k, s in enumerate(satellites) if sensor in ("", s.sensor)]
+            if not swaths:
+                raise ctx.error(
+                    f"{f}.swath_km",
+                    f"missing, and no satellite has sensor {sensor!r} to take it from",
+                )
+            swath, k = min(swaths)
+            swath_from = f"satellites[{k}].swath_km"
+        max_len = math.inf
+        if "max_length_km" in a:
+            max_len = 1e3 * field_number(
+                ctx, f"{f}.max_length_km", a["max_length_km"], positive=True
+            )
+            if max_len < MIN_STRIP_M:
+                raise ctx.error(
+                    f"{f}.max_length_km",
+                    f"must be >= {MIN_STRIP_M / 1e3:g} (the shortest strip), "
+                    f"got {a['max_length_km']!r}",
+                )
+        _check_strip_count(ctx, f, swath_from, radius, swath, max_len)
+        t_lo, t_hi = -math.inf, math.inf
+        if "window_s" in a:
+            t_lo, t_hi = field_pair(ctx, f"{f}.window_s", a["window_s"])
+        out.append(AreaSpec(name, geom, value, swath, max_len, sensor, t_lo, t_hi, f))
+    return out

@@ -1,0 +1,584 @@
+"""What a planning problem is: satellites, targets, planner settings (the planner's data types).
+
+A :class:`Scenario` is everything :func:`jaxspline.plan` needs; the product layer
+builds it from TOML/CSV files (:mod:`jaxspline.readers.scenario`) and the aeossp adapter from a
+benchmark case (:mod:`jaxspline.aeossp.adapter`). All fields are SI units and radians;
+times are seconds from the scenario epoch. Every constructor validates eagerly and
+raises ``ValueError`` naming the field and the value.
+
+Maneuver models (:data:`MODELS` names the built-in ones; each is a
+:class:`~jaxspline.screen.models.ManeuverModel`, ``Satellite.maneuver``), one per
+satellite:
+
+* ``"per_channel"`` - roll, pitch, yaw each under a rate and acceleration bound, the
+  exact-T reachable sets of SPEC section 1; the spacecraft leaves each observation
+  with the scan's rates and must meet the next one's (no rest in between);
+* ``"eigen_axis"`` - rest-to-rest bang-coast-bang slew about the eigen-axis between
+  the two lines of sight, plus a settling time (the aeossp_standard rule);
+* ``"flexible"`` - rest-to-rest slew with the continuous-acceleration profile A/C/D of
+  SPEC section 2 whose jerk ramp tau is chosen from the structural mode
+  (``tau_for_tolerance``), plus a settling time.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import datetime as _dt
+import math
+
+import numpy as np
+
+from jaxspline.geometry.frames import gmst, julian_date
+from jaxspline.geometry.orbit import CircularOrbit, tabulate_orbits
+from jaxspline.geometry.pointing import Scene
+from jaxspline.geometry.routes import POINT, STRIP
+from jaxspline.kernels.limits import AxisLimits
+from jaxspline.screen.models import ManeuverModel, maneuver_model, model_names
+
+__all__ = [
+    "DEFAULT_SWATH",
+    "MODELS",
+    "Area",
+    "FlexMode",
+    "Margins",
+    "PlannerConfig",
+    "Power",
+    "Satellite",
+    "Scenario",
+    "Targets",
+    "make_targets",
+    "orbit_scene",
+]
+
+MODELS = model_names()  # the built-in maneuver models
+DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
+
+
+def _positive(name: str, value, allow_zero: bool = False) -> float:
+    v = float(value)
+    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
+        bound = ">= 0" if allow_zero else "> 0"
+        raise ValueError(f"{name} must be finite and {bound}, got {value!r}")
+    return v
+
+
+@dataclasses.dataclass(frozen=True)
+class Power:
+    """Battery and loads of one satellite (aeossp RULES.md rule 8 semantics).
+
+    Attributes:
+      capacity_wh: battery capacity [Wh].
+      initial_wh: battery level at t = 0 [Wh].
+      idle_w: always-on load [W].
+      imaging_w: extra load while imaging [W].
+      slew_w: extra load while maneuvering [W].
+      charge_w: solar charging while sunlit (cylindrical Earth shadow) [W].
+    """
+
+    capacity_wh: float
+    initial_wh: float
+    idle_w: float = 0.0
+    imaging_w: float = 0.0
+    slew_w: float = 0.0
+    charge_w: float = 0.0
+
+    def __post_init__(self):
+        _positive("power.capacity_wh", self.capacity_wh)
+        for f in ("initial_wh", "idle_w", "imaging_w", "slew_w", "charge_w"):
+            _positive(f"power.{f}", getattr(self, f), allow_zero=True)
+        if self.initial_wh > self.capacity_wh:
+            raise ValueError(
+                f"power.initial_wh={self.initial_wh!r} exceeds capacity_wh={self.capacity_wh!r}"
+            )
+
+
+@dataclasses.dataclass(frozen=True)
+class FlexMode:
+    """One structural mode of a flexible spacecraft (model ``"flexible"``, SPEC section 2).
+
+    Attributes:
+      freq: circular frequency nu [rad/s] (2 Hz = 4 pi rad/s).
+      damping: damping ratio zeta (>= 0).
+      tolerance: admissible residual amplitude A(t_k) [rad] (eq. 7).
+    """
+
+    freq: float
+    damping: float = 0.01
+    tolerance: float = 1e-7
+
+    def __post_init__(self):
+        _positive("flex.freq", self.freq)
+        _positive("flex.damping", self.damping, allow_zero=True)
+        _positive("flex.tolerance", self.tolerance)
+
+
+@dataclasses.dataclass(frozen=True)
+class Satellite:
+    """One satellite: orbit, agility, sensor, optional battery.
+
+    Attributes:
+      name: identifier (unique in a scenario).
+      orbit: a :class:`jaxspline.geometry.orbit.CircularOrbit` or the two TLE lines
+        ``(line1, line2)`` (SGP4, WGS84 constants).
+      model: maneuver model, one of :data:`MODELS`.
+      limits: :class:`AxisLimits`; per_channel: rate [rad/s] and accel [rad/s^2] per
+        channel (roll, pitch, yaw), arrays [3]; eigen_axis / flexible: scalars about
+        the eigen-axis.
+      off_nadir_max: pointing limit [rad] (0 < . < pi/2).
+      sensor: sensor type (free text, e.g. "visible"); targets may require one.
+      settle: settling time after a rest-to-rest slew [s] (eigen_axis, flexible).
+      flex: :class:`FlexMode` (required for ``"flexible"``).
+      power: :class:`Power` or None (no battery constraint).
+      swath: ground width imaged across the scan direction [m] (> 0), taken as
+        independent of the viewing angle; area targets are cut into strips this wide,
+        and the CZML draws footprints of this width.
+    """
+
+    name: str
+    orbit: object
+    model: str = "per_channel"
+    limits: AxisLimits = AxisLimits(np.radians([2.0, 2.0, 2.0]), np.radians([1.0, 1.0, 1.0]))
+    off_nadir_max: float = math.radians(45.0)
+    sensor: str = "visible"
+    settle: float = 0.0
+    flex: FlexMode | None = None
+    power: Power | None = None
+    swath: float = DEFAULT_SWATH
+
+    def __post_init__(self):
+        who = f"satellite {self.name!r}"
+        try:
+            maneuver = maneuver_model(self.model)
+        except ValueError as exc:
+            raise ValueError(f"{who}: {exc}") from None
+        if not isinstance(self.orbit, CircularOrbit):
+            ok = isinstance(self.orbit, tuple | list) and len(self.orbit) == 2
+            if not ok or not all(isinstance(x, str) for x in self.orbit):
+                raise ValueError(
+                    f"{who}: orbit must be a CircularOrbit or (tle_line1, tle_line2), "
+                    f"got {self.orbit!r}"
+                )
+        rate = np.asarray(self.limits.rate, np.float64)
+        accel = np.asarray(self.limits.accel, np.float64)
+        shape = maneuver.limit_shape
+        for name, x in (("rate", rate), ("accel", accel)):
+            if np.shape(x) not in ((), (3,)) or (shape == () and np.ndim(x) != 0):
+                raise ValueError(f"{who}: limits.{name} must be {shape or 'a scalar'}, got {x!r}")
+            if not (np.all(np.isfinite(x)) and np.all(x > 0)):
+                raise ValueError(f"{who}: limits.{name} must be finite and > 0, got {x!r}")
+        object.__setattr__(
+            self,
+            "limits",
+            AxisLimits(np.broadcast_to(rate, shape).copy(), np.broadcast_to(accel, shape).copy()),
+        )
+        if not 0.0 < float(self.off_nadir_max) < math.pi / 2:
+            raise ValueError(
+                f"{who}: off_nadir_max must be in (0, pi/2), got {self.off_nadir_max!r}"
+            )
+        _positive(f"{who}: settle", self.settle, allow_zero=True)
+        _positive(f"{who}: swath", self.swath)
+        maneuver.check(self)
+
+    @property
+    def maneuver(self) -> ManeuverModel:
+        """The :class:`~jaxspline.screen.models.ManeuverModel` that ``model`` names."""
+        return maneuver_model(self.model)
+
+
+@dataclasses.dataclass(frozen=True)
+class Targets:
+    """R imaging targets, struct of numpy arrays (build with :func:`make_targets`).
+
+    Attributes:
+      name: str [R].
+      kind: int [R], POINT (0) or STRIP (1).
+      lat, lon: geodetic start point [rad] (the target itself for a point).
+      alt: height above the WGS84 ellipsoid [m].
+      duration: imaging time of a point [s] (0 for strips).
+      length: strip length [m] (0 for points); azimuth: strip direction at the start,
+        clockwise from north [rad] (0 for points). A strip is scanned at one of the
+        planner's ground speeds, from whichever end the satellite's motion favours.
+      value: priority / weight collected if imaged (> 0).
+      t_lo, t_hi: imaging window [s]: start >= t_lo and end <= t_hi (-inf/+inf: free).
+      sensor: required sensor type [R] ("" = any).
+      mid_lo, mid_hi: window of the imaging midpoint [s]: ``mid_lo <= (start + end) / 2
+        <= mid_hi`` (-inf/+inf: free); a desired time ``d`` with tolerance ``tol`` is
+        ``[d - tol, d + tol]``.
+      min_duration: shortest accepted imaging time ``end - start`` [s] (0: any); a
+        strip's scan speeds whose ``length / speed`` is shorter are not used.
+    """
+
+    name: np.ndarray
+    kind: np.ndarray
+    lat: np.ndarray
+    lon: np.ndarray
+    alt: np.ndarray
+    duration: np.ndarray
+    length: np.ndarray
+    azimuth: np.ndarray
+    value: np.ndarray
+    t_lo: np.ndarray
+    t_hi: np.ndarray
+    sensor: np.ndarray
+    mid_lo: np.ndarray
+    mid_hi: np.ndarray
+    min_duration: np.ndarray
+
+    def __len__(self) -> int:
+        return int(self.kind.shape[0])
+
+    def concat(self, other: Targets) -> Targets:
+        """The targets of ``self`` followed by those of ``other``.
+
+        Args:
+          other: Targets.
+        Returns:
+          Targets of R + R' entries.
+        """
+        return Targets(
+            **{
+                f.name: np.concatenate([getattr(self, f.name), getattr(other, f.name)])
+                for f in dataclasses.fields(self)
+            }
+        )
+
+
+def make_targets(
+    kind,
+    lat,
+    lon,
+    *,
+    alt=0.0,
+    duration=0.0,
+    length=0.0,
+    azimuth=0.0,
+    value=1.0,
+    t_lo=-np.inf,
+    t_hi=np.inf,
+    sensor="",
+    name=None,
+    mid_lo=-np.inf,
+    mid_hi=np.inf,
+    min_duration=0.0,
+) -> Targets:
+    """Validate and broadcast target fields into :class:`Targets`.
+
+    All fields broadcast together to R targets (scalars allowed).
+
+    Args:
+      kind: int [R], POINT (0) or STRIP (1).
+      lat: float [R], geodetic latitude of the start point [rad], in [-pi/2, pi/2].
+      lon: float [R], longitude of the start point [rad].
+      alt: float [R], height above the WGS84 ellipsoid [m].
+      duration: float [R], imaging time of a point [s], > 0 for points (0 kept for strips).
+      length: float [R], strip length [m], > 0 for strips (0 kept for points).
+      azimuth: float [R], strip direction, clockwise from north [rad].
+      value: float [R], priority, > 0.
+      t_lo: float [R], imaging window start [s from the epoch] (-inf: free).
+      t_hi: float [R], imaging window end [s from the epoch] (+inf: free), >= t_lo.
+      sensor: str [R], required sensor type ("" = any).
+      name: str [R]; None gives "t0", "t1", ...
+      mid_lo: float [R], earliest imaging midpoint [s from the epoch] (-inf: free).
+      mid_hi: float [R], latest imaging midpoint [s from the epoch] (+inf: free), >= mid_lo.
+      min_duration: float [R], shortest imaging time [s], >= 0; a point's ``duration``
+        must reach it.
+    Returns:
+      Targets.
+    Raises:
+      ValueError: naming the target and field (``targets[i].field``) or the shapes.
+    """
+    kind = np.atleast_1d(np.asarray(kind, dtype=np.int64))
+    num = {
+        "lat": lat,
+        "lon": lon,
+        "alt": alt,
+        "duration": duration,
+        "length": length,
+        "azimuth": azimuth,
+        "value": value,
+        "t_lo": t_lo,
+        "t_hi": t_hi,
+        "mid_lo": mid_lo,
+        "mid_hi": mid_hi,
+        "min_duration": min_duration,
+    }
+    kind, out = _broadcast_fields(kind, num)
+    _check_target_fields(kind, out)
+    n = kind.size
+    sensor = np.broadcast_to(np.asarray(sensor, dtype=object), (n,)).astype(str)
+    names = _target_names(name, n)
+    out["duration"] = np.where(kind == POINT, out["duration"], 0.0)
+    out["length"] = np.where(kind == STRIP, out["length"], 0.0)
+    out["azimuth"] = np.where(kind == STRIP, out["azimuth"], 0.0)
+    return Targets(name=names, kind=np.array(kind), sensor=sensor, **out)
+
+
+def _broadcast_fields(kind: np.ndarray, num: dict) -> tuple[np.ndarray, dict]:
+    """Broadcast ``kind`` and the numeric fields ``num`` (name -> value) to one shape
+    (ValueError when they do not broadcast). Returns ``(kind, out)``: the broadcast
+    kinds and a dict of the fields as fresh writable float64 arrays, in ``num``'s
+    order."""
+    try:
+        arrs = np.broadcast_arrays(kind, *(np.asarray(v, np.float64) for v in num.values()))
+    except ValueError as exc:
+        raise ValueError(f"target fields are not broadcastable: {exc}") from None
+    return arrs[0], dict(zip(num, (np.array(a) for a in arrs[1:]), strict=True))
+
+
+def _reject_first(field: str, mask: np.ndarray, why: str, values: np.ndarray) -> None:
+    """Raise ValueError naming the first target where ``mask`` holds
+    (``targets[i].field: why, got value``); nothing when ``mask`` is all False."""
+    if mask.any():
+        i = int(np.flatnonzero(mask)[0])
+        raise ValueError(f"targets[{i}].{field}: {why}, got {values[i]!r}")
+
+
+def _check_target_fields(kind: np.ndarray, out: dict) -> None:
+    """The rules of :func:`make_targets` on the broadcast fields, in order: a known
+    kind, finite numbers, latitude within the poles, positive value, a length for
+    strips and a duration for points, ordered windows, and a finite non-negative
+    ``min_duration`` that a point's duration reaches. Raises ValueError at the first
+    target breaking the first rule it breaks."""
+    _reject_first("kind", ~np.isin(kind, (POINT, STRIP)), "must be 0 (point) or 1 (strip)", kind)
+    for f in ("lat", "lon", "alt", "duration", "length", "azimuth", "value"):
+        _reject_first(f, ~np.isfinite(out[f]), "must be finite", out[f])
+    lat, value, length, duration = out["lat"], out["value"], out["length"], out["duration"]
+    _reject_first("lat", np.abs(lat) > np.pi / 2, "must be within [-pi/2, pi/2] rad", lat)
+    _reject_first("value", value <= 0, "must be > 0", value)
+    _reject_first("length", (kind == STRIP) & (length <= 0), "must be > 0 for a strip", length)
+    point = kind == POINT
+    _reject_first("duration", point & (duration <= 0), "must be > 0 for a point", duration)
+    _reject_first("t_hi", ~(out["t_lo"] <= out["t_hi"]), "must be >= t_lo", out["t_hi"])
+    _reject_first("mid_hi", ~(out["mid_lo"] <= out["mid_hi"]), "must be >= mid_lo", out["mid_hi"])
+    min_d = out["min_duration"]
+    ok = np.isfinite(min_d) & (min_d >= 0)
+    _reject_first("min_duration", ~ok, "must be finite and >= 0", min_d)
+    short = point & (duration < min_d)
+    _reject_first("duration", short, "must be >= min_duration for a point", duration)
+
+
+def _target_names(name, n: int) -> np.ndarray:
+    """The targets' names: ``name`` as str [n], or "t0", "t1", ... when None
+    (ValueError when ``name`` has not n entries)."""
+    names = np.array([f"t{i}" for i in range(n)]) if name is None else np.asarray(name, str)
+    if names.shape != (n,):
+        raise ValueError(f"targets.name must have {n} entries, got shape {names.shape}")
+    return names
+
+
+@dataclasses.dataclass(frozen=True)
+class Area:
+    """A polygon area target, cut into strip targets of the scenario (plain data).
+
+    Built by the product layer (:mod:`jaxspline.readers.areas`, which holds the geometry); the
+    engine plans its strips like any other target and never looks at the polygon.
+
+    Attributes:
+      name: label (unique among the scenario's areas).
+      geometry: GeoJSON geometry dict, ``{"type": "Polygon" | "MultiPolygon",
+        "coordinates": ...}``, positions ``[lon, lat]`` in degrees (RFC 7946).
+      value: priority of the whole area (> 0), split over each cutting's strips by
+        their share of the area.
+      swath: strip width [m] (> 0).
+      targets: int [K], indices of the area's strip targets in ``scenario.targets``.
+      share: float [K], fraction of the polygon's area inside each strip's band (sums
+        to 1 over the strips of one cutting).
+      cutting: int [K], the cutting (ground-track direction, 0..C-1) of each strip.
+      azimuth: float [C], strip direction of each cutting at the area's centre,
+        clockwise from north [rad], in [0, pi) (a strip is scanned either way).
+      passes: int [C], satellite passes over the area whose ground track gave each
+        cutting.
+    """
+
+    name: str
+    geometry: dict
+    value: float
+    swath: float
+    targets: np.ndarray
+    share: np.ndarray
+    cutting: np.ndarray
+    azimuth: np.ndarray
+    passes: np.ndarray
+
+    def __post_init__(self):
+        who = f"area {self.name!r}"
+        if not isinstance(self.geometry, dict) or self.geometry.get("type") not in (
+            "Polygon",
+            "MultiPolygon",
+        ):
+            raise ValueError(f"{who}: geometry must be a GeoJSON Polygon or MultiPolygon dict")
+        _positive(f"{who}: value", self.value)
+        _positive(f"{who}: swath", self.swath)
+        k = np.shape(self.targets)
+        for f in ("share", "cutting"):
+            if np.shape(getattr(self, f)) != k:
+                raise ValueError(
+                    f"{who}: {f} must have shape {k}, got {np.shape(getattr(self, f))}"
+                )
+        c = np.shape(self.azimuth)
+        if np.shape(self.passes) != c or len(c) != 1:
+            raise ValueError(
+                f"{who}: azimuth and passes must be [C], got {c}, {np.shape(self.passes)}"
+            )
+        cut = np.asarray(self.cutting)
+        if cut.size and (cut.min() < 0 or cut.max() >= c[0]):
+            raise ValueError(f"{who}: cutting must be in [0, {c[0]}), got {cut.tolist()}")
+
+
+@dataclasses.dataclass(frozen=True)
+class Margins:
+    """Safety margins of the planner (what it keeps back from each limit).
+
+    Attributes:
+      off_nadir: observations keep off-nadir <= limit - this [rad].
+      horizon: sine of the target elevation must exceed this (> 0 is the rule).
+      gap: added to every required rest-to-rest slew time [s] (eigen_axis, flexible).
+      battery_wh: the battery level must stay >= this [Wh].
+      shadow_guard: charging counts only if sunlit this many battery steps around
+        a step (covers shadow-entry timing differences).
+    """
+
+    off_nadir: float = 0.0
+    horizon: float = 0.0
+    gap: float = 0.0
+    battery_wh: float = 0.0
+    shadow_guard: int = 0
+
+
+@dataclasses.dataclass(frozen=True)
+class PlannerConfig:
+    """Static planner settings (one frozen object instead of many keyword arguments).
+
+    Attributes:
+      time_step: action grid [s]: observation starts are multiples of it (aeossp: 5 s).
+      geometry_step: ephemeris knot / visibility grid step [s]; ``time_step`` must be
+        a multiple of it, so that every start is an exact ephemeris knot.
+      scan_speeds: strip ground scan speeds [m/s] (one option per speed).
+      sun_elevation_min: targets must see the Sun at least this high at the start
+        [rad] (None: no daylight rule).
+      margins: :class:`Margins`.
+      exact_max_options: instances with at most this many options are solved exactly
+        (branch and bound over the per-satellite timelines).
+      lagrangian_share: share of the search budget for the Lagrangian / DP phase.
+      bound_worker: on a machine with at least two CPUs, iterate the bound in a
+        second process during the search (:class:`jaxspline.search.BoundWorker`).
+      refine_steps: optax steps of start-time refinement of per-channel satellites'
+        sequences (:mod:`jaxspline.planner.refine_starts`; 0 = off).
+      default_time_limit: search budget [s] when :func:`plan` gets no time limit.
+    """
+
+    time_step: float = 5.0
+    geometry_step: float = 5.0
+    scan_speeds: tuple[float, ...] = (7000.0,)
+    sun_elevation_min: float | None = None
+    margins: Margins = Margins()
+    exact_max_options: int = 60
+    lagrangian_share: float = 0.3
+    bound_worker: bool = True
+    refine_steps: int = 100
+    default_time_limit: float = 30.0
+
+    def __post_init__(self):
+        for f in ("time_step", "geometry_step", "default_time_limit"):
+            _positive(f"planner.{f}", getattr(self, f))
+        ratio = self.time_step / self.geometry_step
+        if abs(ratio - round(ratio)) > 1e-9:
+            raise ValueError(
+                f"planner.time_step={self.time_step!r} must be a multiple of "
+                f"planner.geometry_step={self.geometry_step!r}"
+            )
+        if int(self.refine_steps) < 0:
+            raise ValueError(f"planner.refine_steps must be >= 0, got {self.refine_steps!r}")
+        if int(self.exact_max_options) < 0:
+            raise ValueError(
+                f"planner.exact_max_options must be >= 0, got {self.exact_max_options!r}"
+            )
+        if not self.scan_speeds or any(not s > 0 for s in self.scan_speeds):
+            raise ValueError(f"planner.scan_speeds must be > 0, got {self.scan_speeds!r}")
+        if not 0.0 <= self.lagrangian_share < 1.0:
+            raise ValueError(
+                f"planner.lagrangian_share must be in [0, 1), got {self.lagrangian_share!r}"
+            )
+
+
+@dataclasses.dataclass(frozen=True)
+class Scenario:
+    """A planning problem: who (satellites), what (targets), when (epoch, duration), how.
+
+    Attributes:
+      name: label.
+      epoch: UTC datetime of t = 0.
+      duration: planning horizon [s] (observations lie in [0, duration]).
+      satellites: tuple of :class:`Satellite` (unique names).
+      targets: :class:`Targets`.
+      planner: :class:`PlannerConfig`.
+      areas: tuple of :class:`Area` whose strips are among ``targets`` (unique names).
+    """
+
+    name: str
+    epoch: _dt.datetime
+    duration: float
+    satellites: tuple
+    targets: Targets
+    planner: PlannerConfig = PlannerConfig()
+    areas: tuple = ()
+
+    def __post_init__(self):
+        if not isinstance(self.epoch, _dt.datetime):
+            raise ValueError(f"epoch must be a datetime, got {self.epoch!r}")
+        if self.epoch.tzinfo is None:
+            object.__setattr__(self, "epoch", self.epoch.replace(tzinfo=_dt.UTC))
+        _positive("duration", self.duration)
+        sats = tuple(self.satellites)
+        if not sats:
+            raise ValueError("satellites: a scenario needs at least one satellite")
+        names = [s.name for s in sats]
+        dup = sorted({n for n in names if names.count(n) > 1})
+        if dup:
+            raise ValueError(f"satellites: duplicate name {dup[0]!r}")
+        object.__setattr__(self, "satellites", sats)
+        if not isinstance(self.targets, Targets):
+            raise ValueError(f"targets must be a Targets, got {type(self.targets).__name__}")
+        areas = tuple(self.areas)
+        seen = set()
+        for a in areas:
+            if not isinstance(a, Area):
+                raise ValueError(f"areas: every entry must be an Area, got {type(a).__name__}")
+            if a.name in seen:
+                raise ValueError(f"areas: duplicate name {a.name!r}")
+            seen.add(a.name)
+            idx = np.asarray(a.targets)
+            if idx.size and (idx.min() < 0 or idx.max() >= len(self.targets)):
+                raise ValueError(f"area {a.name!r}: targets must index scenario.targets")
+            if idx.size and np.any(self.targets.kind[idx] != STRIP):
+                raise ValueError(f"area {a.name!r}: targets must be strips")
+        object.__setattr__(self, "areas", areas)
+
+    @property
+    def epoch_jd(self) -> float:
+        """Julian date (UTC) of the epoch."""
+        return julian_date(self.epoch)
+
+    def at(self, seconds: float) -> _dt.datetime:
+        """The UTC instant ``seconds`` after the epoch.
+
+        Args:
+          seconds: float [s].
+        Returns:
+          datetime (UTC).
+        """
+        return self.epoch + _dt.timedelta(seconds=float(seconds))
+
+
+def orbit_scene(sc: Scenario):
+    """Orbit table and :class:`Scene` of a scenario's satellites, as the planner builds them.
+
+    Args:
+      sc: Scenario.
+    Returns:
+      (OrbitTable on the common geometry-step knots, Scene of all satellites).
+    """
+    table = tabulate_orbits(
+        [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, sc.planner.geometry_step
+    )
+    return table, Scene(table.orbit, np.float64(gmst(sc.epoch_jd)))

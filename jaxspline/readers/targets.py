@@ -1,0 +1,467 @@
+"""Targets from scenario files: CSV rows, ``[[targets]]`` tables, ``[random_targets]``.
+
+The TOML schema of the target sections is documented with the rest of the scenario
+file in :mod:`jaxspline.readers.scenario`; this module reads them. Angles are degrees in the
+files and radians in the :class:`jaxspline.readers.mission.Targets` they become; lengths in
+the files are km (strip length) and m (altitude); times are seconds from the scenario
+epoch. Every error is a ``ValueError`` naming the source, the field and the value.
+
+CSV targets (``targets_csv``, ``[targets_file]``, :func:`load_targets_csv`): UTF-8
+text (a byte-order mark and CRLF line ends are accepted), a header row, then one target
+per row, columns in any order; blank rows are skipped and an empty cell takes the
+default. Unknown or repeated columns are errors. Target names are unique over all the
+targets of a scenario (CSV rows, ``[[targets]]`` tables, random targets). The columns:
+
+================  =====  ==================================================================
+column            unit   meaning
+================  =====  ==================================================================
+``name``          -      target name (column and cell required)
+``lat_deg``       deg    geodetic latitude in [-90, 90] (required)
+``lon_deg``       deg    longitude in [-180, 180] (required)
+``priority``      -      value if imaged, > 0 (column required; an empty cell means 1)
+``kind``          -      ``point`` (default) or ``strip``
+``alt_m``         m      height above the WGS84 ellipsoid in [-12000, 12000] (default 0)
+``duration_s``    s      point: imaging time (default 10); must be empty for a strip
+``length_km``     km     strip: length, at most 10000 (required for a strip); must be
+                         empty for a point
+``azimuth_deg``   deg    strip: direction at the start, clockwise from north (default 0);
+                         must be empty for a point
+``window_lo_s``   s      imaging starts at or after this time from the epoch (default: none)
+``window_hi_s``   s      imaging ends at or before this time from the epoch (default: none);
+                         needs ``window_hi_s - window_lo_s >=`` the point's imaging time
+``sensor``        -      required sensor type (empty = any sensor, the default)
+``desired_s``     s      desired time of the imaging midpoint ``(start + end) / 2`` from the
+                         epoch (default: none); needs ``tolerance_s``
+``tolerance_s``   s      the midpoint must lie within ``desired_s +- tolerance_s`` (>= 0;
+                         only with ``desired_s``)
+``min_duration_s`` s     shortest accepted imaging time ``end - start`` (default 0): a strip
+                         is only scanned at speeds with ``length / speed >=`` it; a point's
+                         ``duration_s`` defaults to ``max(10, min_duration_s)`` and must
+                         reach it
+================  =====  ==================================================================
+
+A bad cell raises e.g. ``cities.csv row 17, column 'lat_deg': must be within [-90, 90],
+got '95.2'`` (row = line number in the file, the header is row 1); a missing file
+raises ``FileNotFoundError``.
+
+``[[targets]]`` (alias ``[[routes]]``) tables take the same keys, except that the
+window is one key ``window_s = [lo, hi]``. ``[random_targets]`` draws, with numpy's
+``default_rng(seed)``, positions uniform in latitude and longitude over the box (not
+uniform in area), then kinds, point durations, strip lengths, azimuths and integer
+priorities (``count`` at most :data:`MAX_RANDOM_TARGETS`); with ``land_only`` the
+positions are rejection-sampled against ``global_land_mask`` in batches of
+``max(4 count, 1024)`` draws, at most 200 batches.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+
+import numpy as np
+
+from jaxspline.readers.fields import (
+    check_float,
+    field_bool,
+    field_int,
+    field_number,
+    field_pair,
+    field_str,
+    field_table,
+    field_tables,
+    read_text,
+)
+from jaxspline.readers.mission import POINT, STRIP, Targets, make_targets
+
+__all__ = [
+    "CSV_OPTIONAL",
+    "CSV_REQUIRED",
+    "TARGET_SECTIONS",
+    "load_targets_csv",
+    "scenario_targets",
+]
+
+DEFAULT_POINT_DURATION_S = 10.0
+DEFAULT_STRIP_FRACTION = 0.2
+DEFAULT_RANDOM_DURATION_S = (10.0, 30.0)
+DEFAULT_RANDOM_LENGTH_KM = (20.0, 60.0)
+DEFAULT_RANDOM_PRIORITY = (1, 10)
+LAT_RANGE_DEG = (-90.0, 90.0)
+LON_RANGE_DEG = (-180.0, 180.0)
+ALT_RANGE_M = (-12e3, 12e3)  # ground targets: the deepest trench to above the highest peak
+MAX_STRIP_KM = 10e3  # longest strip [km] (a quarter of a great circle)
+MAX_RANDOM_TARGETS = 1_000_000
+LAND_SAMPLE_ROUNDS = 200  # rejection-sampling batches before giving up on a region
+LAND_BATCH_MIN = 1024
+LAND_PASS_POINTS = 1 << 21  # draws tested against the land mask in one read
+
+#: Top-level keys and sections of a scenario file that this module reads.
+TARGET_SECTIONS = frozenset("targets routes targets_csv targets_file random_targets".split())
+CSV_REQUIRED = ("name", "lat_deg", "lon_deg", "priority")
+CSV_OPTIONAL = tuple(
+    "kind alt_m duration_s length_km azimuth_deg window_lo_s window_hi_s sensor desired_s "
+    "tolerance_s min_duration_s".split()
+)
+_KEYS = {
+    "target": frozenset(
+        "kind name lat_deg lon_deg alt_m duration_s length_km azimuth_deg priority "
+        "window_s sensor desired_s tolerance_s min_duration_s".split()
+    ),
+    "targets_file": frozenset(["path"]),
+    "random_targets": frozenset(
+        "seed count lat_deg lon_deg land_only strip_fraction duration_s "
+        "length_km azimuth_deg priority".split()
+    ),
+}
+_KINDS = {"point": POINT, "strip": STRIP}
+
+
+def scenario_targets(ctx, data: dict, base_dir=None, required: bool = True) -> Targets | None:
+    """All targets of a parsed scenario table ``data``, in the order they are read.
+
+    First the ``[[targets]]`` (or ``[[routes]]``) tables, then the CSV files of
+    ``targets_csv`` and ``[targets_file]``, then ``[random_targets]``.
+
+    Args:
+      ctx: :class:`jaxspline.readers.fields.FieldContext` of the file.
+      data: dict, the parsed scenario TOML.
+      base_dir: folder that relative CSV paths start from (None: the working directory).
+      required: raise when the file gives no targets (else return None).
+    Returns:
+      Targets (angles in radians, lengths in metres, times in seconds from the epoch),
+      or None (no targets and not ``required``).
+    Raises:
+      ValueError: naming the field, also when ``required`` and the file gives no targets.
+    """
+    parts = []  # (Targets, origin of each target: "targets[0]", "t.csv row 5", ...)
+    explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"))
+    if explicit is not None:
+        parts.append(explicit)
+    parts += [_read_csv(p) for p in _csv_paths(ctx, data, base_dir)]
+    if "random_targets" in data:
+        tg = _random_targets(ctx, data["random_targets"])
+        parts.append((tg, ["random_targets"] * len(tg)))
+    if not parts and not required:
+        return None
+    if not parts:
+        raise ctx.error(
+            "targets", "no targets: give [[targets]], targets_csv and/or [random_targets]"
+        )
+    targets, origins = parts[0]
+    for more, where in parts[1:]:
+        targets, origins = targets.concat(more), origins + where
+    _unique_names(targets.name, origins, lambda k, msg: _name_error(ctx, origins[k], msg))
+    return targets
+
+
+def _name_error(ctx, origin: str, msg: str) -> ValueError:
+    """The error of a bad name at ``origin`` (a TOML table label or ``file row N``)."""
+    if " row " in origin:  # a CSV row: named like the CSV reader's errors
+        return ValueError(f"{origin}, column 'name': {msg}")
+    return ctx.error(f"{origin}.name" if origin.startswith(("targets", "routes")) else origin, msg)
+
+
+def _unique_names(names, origins, err) -> None:
+    """Raise ``err(k, msg)`` at the first target ``k`` whose name an earlier one has."""
+    first = {}
+    for k, n in enumerate(names.tolist()):
+        if n in first:
+            raise err(k, f"duplicate target name {n!r} (also {origins[first[n]]})")
+        first[n] = k
+
+
+def _target_row(get, err, default_name, text=False) -> tuple:
+    """One target from ``get(column) -> raw or None``; ``err(column)(msg)`` builds errors.
+
+    Columns as in the CSV format. Returns (name, kind, lat, lon, alt, duration, length,
+    azimuth, priority, t_lo, t_hi, mid_lo, mid_hi, min_duration, sensor) in degrees,
+    metres, seconds.
+    """
+
+    def num(col, **kw):
+        return check_float(get(col), err(col), text=text, **kw)
+
+    def string(col, default):
+        raw = get(col)
+        if raw is None:
+            return default
+        if not isinstance(raw, str):
+            raise err(col)(f"must be a string, got {raw!r}")
+        return raw.strip()
+
+    name = string("name", default_name) or default_name
+    kind = string("kind", "point")
+    if kind not in _KINDS:
+        raise err("kind")(f"must be 'point' or 'strip', got {kind!r}")
+    lat = num("lat_deg", lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
+    lon = num("lon_deg", lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
+    alt = num("alt_m", default=0.0, lo=ALT_RANGE_M[0], hi=ALT_RANGE_M[1])
+    prio = num("priority", default=1.0, positive=True)
+    min_dur = num("min_duration_s", default=0.0, nonneg=True)
+    if kind == "strip":
+        if get("duration_s") is not None:
+            raise err("duration_s")("a strip has no duration_s (it is length / scan speed)")
+        length = 1e3 * num("length_km", positive=True, hi=MAX_STRIP_KM)
+        az = num("azimuth_deg", default=0.0)
+        dur = 0.0
+    else:
+        for col in ("length_km", "azimuth_deg"):
+            if get(col) is not None:
+                raise err(col)("a point has no length_km / azimuth_deg (use kind 'strip')")
+        default_dur = max(DEFAULT_POINT_DURATION_S, min_dur)
+        dur, length, az = num("duration_s", default=default_dur, positive=True), 0, 0
+        if dur < min_dur:
+            raise err("duration_s")(f"must be >= min_duration_s = {min_dur:g}, got {dur:g}")
+    t_lo = num("window_lo_s", default=-np.inf)
+    t_hi = num("window_hi_s", default=np.inf)
+    if t_hi < t_lo:
+        raise err("window_hi_s")(f"window needs lo <= hi, got [{t_lo:g}, {t_hi:g}]")
+    if t_hi < t_lo + dur:
+        raise err("window_hi_s")(
+            f"window [{t_lo:g}, {t_hi:g}] s is shorter than the imaging time {dur:g} s"
+        )
+    mid_lo, mid_hi = -np.inf, np.inf
+    if get("tolerance_s") is not None and get("desired_s") is None:
+        raise err("tolerance_s")("only with desired_s (the desired imaging time)")
+    if get("desired_s") is not None:
+        desired = num("desired_s")
+        if get("tolerance_s") is None:
+            raise err("tolerance_s")("missing (required with desired_s) [s]")
+        tol = num("tolerance_s", nonneg=True)
+        mid_lo, mid_hi = desired - tol, desired + tol
+        if mid_hi < t_lo + dur / 2 or mid_lo > t_hi - dur / 2:
+            raise err("desired_s")(
+                f"desired time {desired:g} +- {tol:g} s misses the window [{t_lo:g}, {t_hi:g}] s"
+            )
+    sensor = string("sensor", "")
+    return (
+        name,
+        _KINDS[kind],
+        lat,
+        lon,
+        alt,
+        dur,
+        length,
+        az,
+        prio,
+        t_lo,
+        t_hi,
+        mid_lo,
+        mid_hi,
+        min_dur,
+        sensor,
+    )
+
+
+def _targets_from_rows(rows) -> Targets:
+    cols = list(zip(*rows, strict=True))
+    num = [np.asarray(c, np.float64) for c in cols[2:14]]
+    lat, lon, alt, dur, length, az, prio, t_lo, t_hi, mid_lo, mid_hi, min_dur = num
+    return make_targets(
+        np.asarray(cols[1], np.int64),
+        np.radians(lat),
+        np.radians(lon),
+        alt=alt,
+        duration=dur,
+        length=length,
+        azimuth=np.radians(az),
+        value=prio,
+        t_lo=t_lo,
+        t_hi=t_hi,
+        sensor=np.asarray(cols[14], dtype=object),
+        name=np.asarray(cols[0], dtype=str),
+        mid_lo=mid_lo,
+        mid_hi=mid_hi,
+        min_duration=min_dur,
+    )
+
+
+def _toml_targets(ctx, items) -> tuple[Targets, list[str]] | None:
+    rows, origins = [], []
+    for i, (f, rt) in enumerate(items):
+        rt = dict(field_table(ctx, f, rt, _KEYS["target"]))
+        if "window_s" in rt:
+            win = rt.pop("window_s")
+            if not isinstance(win, list) or len(win) != 2:
+                raise ctx.error(f"{f}.window_s", f"must be a list [lo, hi], got {win!r}")
+            rt["window_lo_s"], rt["window_hi_s"] = win
+
+        def err(col, f=f):
+            key = "window_s" if col.startswith("window_") else col
+            return lambda m: ctx.error(f"{f}.{key}", m)
+
+        rows.append(_target_row(rt.get, err, f"target_{i + 1}"))
+        origins.append(f)
+    return (_targets_from_rows(rows), origins) if rows else None
+
+
+def load_targets_csv(path) -> Targets:
+    """Targets from a CSV file (columns and units: module docstring; angles in degrees).
+
+    Args:
+      path: str or Path of the CSV file.
+    Returns:
+      Targets (converted to radians).
+    Raises:
+      FileNotFoundError: the file is missing.
+      ValueError: naming the file, the row (line number) and the column for bad content.
+    """
+    return _read_csv(path)[0]
+
+
+def _read_csv(path) -> tuple[Targets, list[str]]:
+    """:func:`load_targets_csv` and the origin (``file row N``) of each target."""
+    path = Path(path)
+    label = path.name
+    try:
+        text = read_text(path, lambda line: f"{label} row {line}")
+    except FileNotFoundError:
+        raise FileNotFoundError(f"targets CSV not found: {path}") from None
+    rows, origins = [], []
+    reader = csv.reader(io.StringIO(text, newline=""))
+    try:
+        header = [h.strip() for h in next(reader, [])]
+        allowed = CSV_REQUIRED + CSV_OPTIONAL
+        for h in header:
+            if h not in allowed:
+                raise ValueError(
+                    f"{label} row 1, column {h!r}: unknown column (allowed: {allowed})"
+                )
+            if header.count(h) > 1:
+                raise ValueError(f"{label} row 1, column {h!r}: appears twice")
+        for h in CSV_REQUIRED:
+            if h not in header:
+                raise ValueError(f"{label} row 1, column {h!r}: missing (required: {CSV_REQUIRED})")
+        for cells in reader:
+            line = reader.line_num
+            if not any(c.strip() for c in cells):
+                continue
+            if len(cells) != len(header):
+                raise ValueError(
+                    f"{label} row {line}: {len(cells)} cells, the header has {len(header)}"
+                )
+            rec = {h: (c.strip() or None) for h, c in zip(header, cells, strict=True)}
+            if rec["name"] is None:
+                raise ValueError(f"{label} row {line}, column 'name': must not be empty")
+
+            def err(col, line=line):
+                return lambda m: ValueError(f"{label} row {line}, column {col!r}: {m}")
+
+            rows.append(_target_row(rec.get, err, f"row_{line}", text=True))
+            origins.append(f"{label} row {line}")
+    except csv.Error as exc:  # an over-long cell (an unbalanced quote), a NUL byte, ...
+        raise ValueError(f"{label} row {reader.line_num}: not readable as CSV: {exc}") from None
+    if not rows:
+        raise ValueError(f"{label}: no target rows (a header row and at least one target)")
+    targets = _targets_from_rows(rows)
+    _unique_names(
+        targets.name, origins, lambda k, msg: ValueError(f"{origins[k]}, column 'name': {msg}")
+    )
+    return targets, origins
+
+
+def _land_positions(ctx, rng, count, lat, lon):
+    """``count`` uniform (lat, lon) [deg] in the box, rejecting sea (:func:`is_land`).
+
+    Rounds of ``batch`` draws (latitudes, then longitudes) until ``count`` land points are
+    found, at most :data:`LAND_SAMPLE_ROUNDS`. The first pass tests one round (usually
+    enough); later passes test many rounds with one read of the mask each (a read costs
+    about a second: 200 single-round reads of a sea box took minutes). The points and the
+    state ``rng`` is left in are those of testing the rounds one at a time.
+    """
+    from jaxspline.readers.land import is_land
+
+    batch = max(4 * count, LAND_BATCH_MIN)
+    per_pass = max(1, LAND_PASS_POINTS // batch)
+    got_lat, got_lon, have, done = [], [], 0, 0
+    while done < LAND_SAMPLE_ROUNDS:
+        rounds = 1 if done == 0 else min(per_pass, LAND_SAMPLE_ROUNDS - done)
+        state = rng.bit_generator.state
+        draws = [(rng.uniform(*lat, batch), rng.uniform(*lon, batch)) for _ in range(rounds)]
+        keep = is_land(np.concatenate([d[0] for d in draws]), np.concatenate([d[1] for d in draws]))
+        kept = keep.reshape(rounds, batch).sum(1)
+        need = np.cumsum(kept) + have >= count
+        used = int(np.argmax(need)) + 1 if need.any() else rounds
+        for (la, lo), k in zip(draws[:used], keep.reshape(rounds, batch)[:used], strict=True):
+            got_lat.append(la[k])
+            got_lon.append(lo[k])
+        have += int(kept[:used].sum())
+        if have >= count:
+            rng.bit_generator.state = state  # as if the rounds after ``used`` were not drawn
+            for _ in range(used):
+                rng.uniform(*lat, batch), rng.uniform(*lon, batch)
+            return np.concatenate(got_lat)[:count], np.concatenate(got_lon)[:count]
+        done += rounds
+    raise ctx.error(
+        "random_targets.land_only",
+        f"found only {have} land points in {LAND_SAMPLE_ROUNDS * batch} draws in "
+        f"lat {list(lat)}, lon {list(lon)} deg; widen the region or set land_only = false",
+    )
+
+
+def _random_targets(ctx, rt) -> Targets:
+    f = "random_targets"
+    rt = field_table(ctx, f, rt, _KEYS[f])
+    seed = field_int(ctx, f"{f}.seed", rt.get("seed", 0))
+    if "count" not in rt:
+        raise ctx.error(f"{f}.count", "missing (how many targets to generate)")
+    count = field_int(ctx, f"{f}.count", rt["count"], 1)
+    if count > MAX_RANDOM_TARGETS:
+        raise ctx.error(f"{f}.count", f"must be <= {MAX_RANDOM_TARGETS}, got {count!r}")
+
+    def pair(key, default, **kw):
+        return field_pair(ctx, f"{f}.{key}", rt.get(key, list(default)), **kw)
+
+    lat = pair("lat_deg", LAT_RANGE_DEG, lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
+    lon = pair("lon_deg", LON_RANGE_DEG, lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
+    land = field_bool(ctx, f"{f}.land_only", rt.get("land_only", False))
+    frac = rt.get("strip_fraction", DEFAULT_STRIP_FRACTION)
+    frac = field_number(ctx, f"{f}.strip_fraction", frac, lo=0.0, hi=1.0)
+    dur = pair("duration_s", DEFAULT_RANDOM_DURATION_S, positive=True)
+    length = pair("length_km", DEFAULT_RANDOM_LENGTH_KM, positive=True, hi=MAX_STRIP_KM)
+    az = pair("azimuth_deg", (0.0, 360.0))
+    prio = rt.get("priority", list(DEFAULT_RANDOM_PRIORITY))
+    if not isinstance(prio, list) or len(prio) != 2:
+        raise ctx.error(f"{f}.priority", f"must be a list [lo, hi] of integers, got {prio!r}")
+    p_lo, p_hi = (field_int(ctx, f"{f}.priority", p, 1) for p in prio)
+    if p_lo > p_hi:
+        raise ctx.error(f"{f}.priority", f"needs lo <= hi, got {prio!r}")
+    rng = np.random.default_rng(seed)
+    if land:
+        la, lo = _land_positions(ctx, rng, count, lat, lon)
+    else:
+        la, lo = rng.uniform(*lat, count), rng.uniform(*lon, count)
+    kind = np.where(rng.random(count) < frac, STRIP, POINT)
+    return make_targets(
+        kind,
+        np.radians(la),
+        np.radians(lo),
+        duration=rng.uniform(*dur, count),
+        length=1e3 * rng.uniform(*length, count),
+        azimuth=np.radians(rng.uniform(*az, count)),
+        value=rng.integers(p_lo, p_hi + 1, count).astype(np.float64),
+        name=np.array([f"random_{i + 1:04d}" for i in range(count)]),
+    )
+
+
+def _csv_paths(ctx, data, base_dir) -> list[Path]:
+    """The target CSV files named by ``targets_csv`` and ``[targets_file]``, resolved."""
+    out = []
+    sources = [("targets_csv", data.get("targets_csv"))]
+    if "targets_file" in data:
+        tf = field_table(ctx, "targets_file", data["targets_file"], _KEYS["targets_file"])
+        sources.append(("targets_file.path", tf.get("path")))
+        if "path" not in tf:
+            raise ctx.error("targets_file.path", "missing (the CSV file)")
+    for field, value in sources:
+        if value is None:
+            continue
+        for p in value if isinstance(value, list) else [value]:
+            p = Path(field_str(ctx, field, p, allow_empty=False))
+            if not p.is_absolute() and base_dir is not None:
+                p = Path(base_dir) / p
+            if not p.is_file():
+                raise ctx.error(field, f"targets CSV not found: {p}")
+            out.append(p)
+    return out

@@ -1,0 +1,46 @@
+"""Maneuver models: what a satellite needs between two observations.
+
+A satellite names its model in ``Satellite.model``; :func:`maneuver_model` returns the
+:class:`ManeuverModel` object, which the whole pipeline asks instead of branching on the
+name (``Satellite.maneuver`` is the same lookup). Built in:
+
+* ``per_channel`` (:class:`PerChannel`) - exact-T per-channel transfers (SPEC section 1);
+* ``eigen_axis`` (:class:`EigenAxis`) - rigid rest-to-rest bang-coast-bang slews;
+* ``flexible`` (:class:`Flexible`) - rest-to-rest slews that keep a flexible mode below
+  its tolerance (SPEC section 2).
+
+A new model is one file: a class with the members of :class:`ManeuverModel` (for a
+rest-to-rest slew, a :class:`RestToRest` subclass with its ``profile_time``), passed to
+:func:`register_model`.
+
+Part of layer 2 (``screen``): ``base`` <- ``per_channel`` (screens pairs with
+:mod:`jaxspline.screen.pairs`), ``rest_to_rest`` (reads
+:mod:`jaxspline.screen.slew_table`) <- ``eigen_axis``, ``flexible``.
+"""
+
+from jaxspline.screen.models.base import (
+    ManeuverModel,
+    maneuver_model,
+    model_names,
+    register_model,
+)
+from jaxspline.screen.models.eigen_axis import EigenAxis
+from jaxspline.screen.models.flexible import Flexible, flex_tau
+from jaxspline.screen.models.per_channel import PerChannel
+from jaxspline.screen.models.rest_to_rest import RestToRest
+
+__all__ = [
+    "EigenAxis",
+    "Flexible",
+    "ManeuverModel",
+    "PerChannel",
+    "RestToRest",
+    "flex_tau",
+    "maneuver_model",
+    "model_names",
+    "register_model",
+]
+
+for _model in (PerChannel(), EigenAxis(), Flexible()):
+    register_model(_model)
+del _model

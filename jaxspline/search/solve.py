@@ -1,0 +1,179 @@
+""":func:`solve` runs the stages on a :class:`Problem` until a deadline:
+
+1. greedy construction (:func:`greedy`; always completed, even past the deadline), by
+   value; when a battery binds, also by value per Wh (:class:`EnergyRank`), the better
+   plan kept;
+2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
+   task prices, repaired plans, and the upper bound (:func:`lagrangian`);
+3. exact branch and bound when the instance is tiny (``exact_max_options``);
+4. large-neighbourhood search until the deadline (:func:`lns`);
+5. earliest-start pass (:func:`earliest_pass`).
+
+With ``bound_worker``, a forked process iterates the bound alone over the whole search
+budget (:class:`BoundWorker`) and the smaller of the two bounds is reported.
+"""
+
+from __future__ import annotations
+
+import math
+import random
+import time
+from dataclasses import dataclass
+from typing import NamedTuple
+
+from jaxspline.search import clock
+from jaxspline.search.bound_worker import BoundWorker
+from jaxspline.search.exact import exact_search
+from jaxspline.search.lagrangian import (
+    lagrangian,
+)
+from jaxspline.search.lns import earliest_pass, greedy, greedy_order, lns
+from jaxspline.search.lns_energy import EnergyRank
+from jaxspline.search.problem import Problem
+from jaxspline.search.timeline import Timeline
+
+__all__ = ["SearchResult", "solve"]
+
+_EARLIEST_SHARE = 0.05  # share of the budget reserved for the earliest-start pass
+_EARLIEST_MAX = 2.0  # ... at most this many seconds
+_EXACT_SHARE = 0.5  # share of the remaining budget the exact search may use
+_EXACT_MAX_S = 60.0  # [s] budget cap of the exact search when the deadline is +inf
+_OPTIMAL_TOL = 1e-9  # relative bound - plan below which the plan is optimal
+_WORKER_ITERS = 3  # the bound worker's iteration cap, in Lagrangian-phase caps
+
+
+@dataclass
+class SearchResult:
+    """Outcome of :func:`solve`.
+
+    Attributes:
+      timeline: the final :class:`Timeline` (the plan).
+      bound: Lagrangian upper bound of the candidate model (battery relaxed).
+      bound_status: "optimal", "converged" or "time" (see :class:`BoundResult`).
+      exact: True when the exact search proved the plan optimal (tiny instances).
+      stats: per-stage values and iteration counts.
+    """
+
+    timeline: Timeline
+    bound: float
+    bound_status: str
+    exact: bool
+    stats: dict
+
+
+def solve(
+    pb: Problem,
+    deadline: float,
+    *,
+    seed: int = 0,
+    lagrangian_share: float = 0.3,
+    exact_max_options: int = 0,
+    max_iters: int | None = None,
+    bound_worker: bool = False,
+    report=None,
+) -> SearchResult:
+    """Run the search stages (module docstring) until ``deadline``.
+
+    Args:
+      pb: Problem.
+      deadline: float, ``time.monotonic()`` value at which to stop [s].
+      seed: int, seed of the randomized stages.
+      lagrangian_share: float in [0, 1], share of the time budget given to the
+        Lagrangian phase.
+      exact_max_options: int, run the exact search when the problem has at most this
+        many options (0: never).
+      max_iters: caps the LNS iterations and (at 1/10) the Lagrangian iterations;
+        the stages then run to their caps and the deadline no longer cuts them (only
+        a stop request does, :mod:`jaxspline.search.clock`), so the plan is a
+        function of the problem, ``seed`` and ``max_iters`` alone. None: the deadline
+        alone.
+      report: callable ``report(stage, message)`` receiving progress lines, or None.
+    Returns:
+      SearchResult.
+    """
+    say = report or (lambda stage, msg: None)
+    if max_iters is not None:  # iteration-bound: reproducible, the clock does not cut
+        deadline = math.inf
+    tl = Timeline(pb)
+    order = greedy_order(tl)
+    now = time.monotonic()
+    tail = min(_EARLIEST_MAX, _EARLIEST_SHARE * max(0.0, deadline - now))
+    greedy(tl, math.inf, order)  # always complete: a plan even when the budget is spent
+    er = EnergyRank(pb)
+    if any(er.binds(tl, k) for k in range(pb.n_sats)):  # energy is scarce: value per Wh
+        tl2 = Timeline(pb)
+        order2 = er.order(order, None)
+        greedy(tl2, deadline - tail, order2)
+        if tl2.score() > tl.score():
+            tl, order = tl2, order2
+    stats = {"greedy_value": tl.W}
+    say("greedy", f"value {tl.W:.6g}")
+    t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())
+    cap = None if max_iters is None else max(10, max_iters // 10)
+    worker = None
+    if bound_worker and pb.n_options:
+        w_cap = None if cap is None else _WORKER_ITERS * cap
+        worker = BoundWorker(pb, tl.W, deadline - tail, w_cap)
+    try:
+        budget = _Budget(deadline, now, tail, t_dp, cap, max_iters)
+        return _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say)
+    finally:
+        if worker is not None:
+            worker.stop()
+
+
+class _Budget(NamedTuple):
+    """Clock and iteration caps of one :func:`solve` call (its docstring)."""
+
+    deadline: float  # end of the whole search [monotonic s]
+    now: float  # start of the search [monotonic s]
+    tail: float  # time kept for the earliest-pass stage [s]
+    t_dp: float  # end of the Lagrangian phase [monotonic s]
+    cap: int | None  # Lagrangian iteration cap
+    max_iters: int | None  # LNS iteration cap
+
+
+def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
+    """Stages 2-5 of :func:`solve` and the bound worker's result."""
+    deadline, now, tail, t_dp, cap, max_iters = budget
+    res = lagrangian(
+        tl,
+        t_dp,
+        order,
+        max_iters=cap,
+        report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
+    )
+    stats.update(lagrangian_value=tl.W, lagrangian_iterations=res.iterations)
+    exact = False
+    if pb.n_options <= exact_max_options:
+        start = list(tl.assigned)
+        tl.restore([])
+        # at most half of what is left: a search that cannot finish still leaves the LNS time
+        left = max(0.0, min(deadline, now + _EXACT_MAX_S) - tail - time.monotonic())
+        t_exact = time.monotonic() + _EXACT_SHARE * left
+        value, exact = exact_search(tl, t_exact)
+        if value < sum(pb.weight[t] for t, c in enumerate(start) if c >= 0):
+            tl.restore(start)
+        stats["exact_proven"] = exact
+    rng = random.Random(seed)
+    its = 0
+    if not (exact or res.status == "optimal"):
+        its = lns(
+            tl,
+            deadline - tail,
+            rng,
+            max_iters,
+            report=lambda it, imp: say("lns", f"it {it}: value {tl.W:.6g} ({imp} improvements)"),
+        )
+    stats.update(lns_iterations=its, lns_value=tl.W)
+    earliest_pass(tl, deadline)
+    bound, status = res.bound, res.status
+    if worker is not None:
+        wr = worker.result(wait=not clock.stop_requested())
+        if wr is not None:
+            stats.update(worker_bound=wr.bound, worker_iterations=wr.iterations)
+            if wr.bound < bound:
+                bound, status = wr.bound, wr.status
+                if bound - tl.W <= _OPTIMAL_TOL * max(1.0, bound):
+                    status = "optimal"
+    return SearchResult(tl, bound, status, exact, stats)

@@ -1,0 +1,428 @@
+"""Fuzzing the file readers: scenario TOML, targets CSV, areas GeoJSON, aeossp case YAML.
+
+Seeded mutations of the packaged valid files (``data/default.toml``, ``cities.csv``,
+``areas_example.toml`` / ``.geojson``) and of an aeossp_standard case, each of which
+must end in one of two ways:
+
+* a ``ValueError`` (that type exactly) whose message names the file and the mutated
+  field (with the TOML line, the CSV row, the YAML list entry where there is one), or
+* the input is accepted and every number that must be finite is finite and in range;
+  mutations that keep the meaning (UTF-8 byte-order mark, CRLF line ends, reordered
+  columns / tables / keys, comments, blank rows) give exactly the baseline's result.
+
+Some mutations are known to be wrong (NaN, inf, text or a boolean where a number
+belongs, a latitude of 95 deg, an unknown key or column, a duplicate name, an empty
+file): those must be rejected. No reader may write anything: an audit hook records
+every ``open`` for writing, rename, removal or directory creation while a reader runs.
+
+Areas across the antimeridian are refused with the remedy in the message (two areas,
+one each side), and that remedy is checked to cut both halves where they are. The
+generators live in ``_fuzz_inputs.py``; ``python tests/readers/test_fuzz_readers.py``
+prints a summary of the failing cases by kind.
+
+The baseline results are parsed once per test; no plan is built. The random targets
+of ``default.toml`` are drawn with ``land_only = false`` in the mutated copies (the land
+mask costs 0.5 s a read), and its CSV path is made absolute.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import os
+import re
+import sys
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+import pytest
+import shapely
+from _fuzz_inputs import (
+    CASE1,
+    GENERATORS,
+    Fuzz,
+    _case_baseline,
+    _csv_baselines,
+    _csv_text,
+    _is_number,
+    _toml_baselines,
+    generated,
+)
+
+from jaxspline.aeossp.case import Case, load_case
+from jaxspline.geometry.orbit import CircularOrbit
+from jaxspline.readers.area_files import read_geojson
+from jaxspline.readers.mission import Scenario, Targets
+from jaxspline.readers.scenario import load_scenario
+from jaxspline.readers.targets import load_targets_csv
+
+# --- no writes: an audit hook, active only while a reader runs ---
+
+_WRITES: list | None = None
+_WRITE_FLAGS = os.O_WRONLY | os.O_RDWR | os.O_CREAT | os.O_APPEND | os.O_TRUNC
+_WRITE_EVENTS = frozenset(
+    "os.rename os.remove os.rmdir os.mkdir os.truncate os.symlink os.link os.chmod "
+    "os.utime shutil.copyfile shutil.rmtree shutil.move".split()
+)
+_HOOKED = False
+
+
+def _audit(event, args):
+    if _WRITES is None:
+        return
+    if event == "open":
+        path, mode, flags = (tuple(args) + (None, None))[:3]
+        by_mode = isinstance(mode, str) and any(c in mode for c in "wax+")
+        if by_mode or (isinstance(flags, int) and flags & _WRITE_FLAGS):
+            _WRITES.append(f"open({path!r}, {mode!r})")
+    elif event in _WRITE_EVENTS:
+        _WRITES.append(f"{event}{tuple(args)!r}")
+
+
+def _call(fn, *args):
+    """(result, exception, writes) of ``fn(*args)``, writes seen by the audit hook."""
+    global _WRITES, _HOOKED
+    if not _HOOKED:
+        sys.addaudithook(_audit)
+        _HOOKED = True
+    _WRITES = []
+    try:
+        return fn(*args), None, _WRITES
+    except Exception as exc:  # noqa: BLE001 - the type is what is checked
+        return None, exc, _WRITES
+    finally:
+        _WRITES = None
+
+
+# --- what an accepted input must satisfy ---
+
+_FINITE_TARGET_FIELDS = (
+    "lat",
+    "lon",
+    "alt",
+    "duration",
+    "length",
+    "azimuth",
+    "value",
+    "min_duration",
+)
+
+
+def _check_targets(tg: Targets) -> list[str]:
+    bad = [f for f in _FINITE_TARGET_FIELDS if not np.all(np.isfinite(getattr(tg, f)))]
+    bad += [f for f in ("t_lo", "t_hi", "mid_lo", "mid_hi") if np.any(np.isnan(getattr(tg, f)))]
+    if len(tg) and not (np.all(np.abs(tg.lat) <= np.pi / 2) and np.all(np.abs(tg.lon) <= np.pi)):
+        bad.append("lat/lon out of range")
+    if len(tg) and not np.all(tg.value > 0):
+        bad.append("value <= 0")
+    if len(set(tg.name.tolist())) != len(tg):
+        bad.append("duplicate target names")
+    return bad
+
+
+def _finite(*xs) -> bool:
+    return all(np.all(np.isfinite(np.asarray(x, np.float64))) for x in xs)
+
+
+def _check_scenario(sc: Scenario) -> list[str]:
+    bad = [] if _finite(sc.duration) and sc.duration > 0 else ["duration"]
+    for s in sc.satellites:
+        nums = [s.limits.rate, s.limits.accel, s.off_nadir_max, s.settle, s.swath]
+        if isinstance(s.orbit, CircularOrbit):
+            nums += list(s.orbit)
+        if s.flex is not None:
+            nums += [s.flex.freq, s.flex.damping, s.flex.tolerance]
+        if s.power is not None:
+            nums += list(dataclasses.astuple(s.power))
+        if not _finite(*nums):
+            bad.append(f"satellite {s.name}")
+    pl = sc.planner
+    m = pl.margins
+    nums = [
+        pl.time_step,
+        pl.geometry_step,
+        pl.scan_speeds,
+        pl.lagrangian_share,
+        pl.default_time_limit,
+        m.off_nadir,
+        m.horizon,
+        m.gap,
+        m.battery_wh,
+    ]
+    if not _finite(*nums) or (
+        pl.sun_elevation_min is not None and not _finite(pl.sun_elevation_min)
+    ):
+        bad.append("planner")
+    bad += _check_targets(sc.targets)
+    for a in sc.areas:
+        xy = shapely.get_coordinates(shapely.geometry.shape(a.geometry))
+        if not _finite(xy, a.share, a.azimuth, a.value, a.swath):
+            bad.append(f"area {a.name}")
+    return bad
+
+
+def _check_geometry(geom) -> list[str]:
+    if geom.geom_type not in ("Polygon", "MultiPolygon"):
+        return [f"a {geom.geom_type}"]
+    return [] if _finite(shapely.get_coordinates(geom)) else ["non-finite coordinates"]
+
+
+def _check_case(case: Case) -> list[str]:
+    bad = []
+    for s in case.satellites:
+        nums = [v for v in dataclasses.astuple(s) if _is_number(v)]
+        if not _finite(*nums):
+            bad.append(f"satellite {s.satellite_id}")
+    for t in case.tasks:
+        if not _finite(
+            t.latitude_deg, t.longitude_deg, t.altitude_m, t.required_duration_s, t.weight
+        ):
+            bad.append(f"task {t.task_id}")
+        elif abs(t.latitude_deg) > 90 or abs(t.longitude_deg) > 180:
+            bad.append(f"task {t.task_id} lat/lon out of range")
+    if not (case.satellites and case.tasks):
+        bad.append("no satellites or no tasks")
+    return bad
+
+
+def _same_targets(a: Targets, b: Targets) -> list[str]:
+    if len(a) != len(b):
+        return [f"{len(a)} targets, baseline {len(b)}"]
+    return [
+        f.name
+        for f in dataclasses.fields(a)
+        if not np.array_equal(getattr(a, f.name), getattr(b, f.name))
+    ]
+
+
+def _same_scenario(a: Scenario, b: Scenario) -> list[str]:
+    diff = (
+        []
+        if (a.name, a.epoch, a.duration, a.planner) == (b.name, b.epoch, b.duration, b.planner)
+        else ["header/planner"]
+    )
+    for s, t in zip(a.satellites, b.satellites, strict=False):
+        if (
+            (s.name, s.model, s.sensor, s.flex, s.power)
+            != (t.name, t.model, t.sensor, t.flex, t.power)
+            or not all(
+                np.array_equal(x, y)
+                for x, y in ((s.limits.rate, t.limits.rate), (s.limits.accel, t.limits.accel))
+            )
+            or ((s.off_nadir_max, s.settle, s.swath) != (t.off_nadir_max, t.settle, t.swath))
+            or (str(s.orbit) != str(t.orbit))
+        ):
+            diff.append(f"satellite {s.name}")
+    if len(a.satellites) != len(b.satellites):
+        diff.append("satellite count")
+    diff += _same_targets(a.targets, b.targets)
+    if [x.name for x in a.areas] != [x.name for x in b.areas] or not all(
+        np.array_equal(x.share, y.share) for x, y in zip(a.areas, b.areas, strict=False)
+    ):
+        diff.append("areas")
+    return diff
+
+
+def _same_geometry(a, b) -> list[str]:
+    return [] if a.equals(b) else ["geometry"]
+
+
+def _same_case(a: Case, b: Case) -> list[str]:
+    return [] if a == b else ["case"]
+
+
+READERS = {
+    "scenario": (load_scenario, _check_scenario, _same_scenario),
+    "csv": (load_targets_csv, _check_targets, _same_targets),
+    "geojson": (read_geojson, _check_geometry, _same_geometry),
+    "case": (load_case, _check_case, _same_case),
+}
+
+
+# --- running ---
+
+
+def _judge(c: Fuzz, result, exc, writes, baselines):
+    """None if the case behaved, else (failure kind, detail)."""
+    if writes:
+        return "wrote to disk", str(writes[:3])
+    if exc is not None:
+        msg = f"{type(exc).__name__}: {exc}"
+        if type(exc) is not ValueError:
+            return f"raised {type(exc).__name__}", msg
+        if c.expect == "same":
+            return "rejected a valid rewrite", msg
+        name = c.file or c.entry
+        if name not in str(exc):
+            return "message without the file name", msg
+        missing = [f for f in c.fields if f not in str(exc)]
+        if missing:
+            return "message without the field", f"wants {missing}: {msg}"
+        if c.line_key and c.expect == "error" and c.reader == "scenario":
+            text = c.files[c.entry].decode("utf-8", "replace").splitlines()
+            line = [int(x) for x in re.findall(r"\(line (\d+)\)", str(exc))]
+            if not line:
+                return "message without the TOML line", msg
+            cited = text[line[0] - 1] if line[0] <= len(text) else ""
+            if c.line_key not in cited and not cited.lstrip().startswith("["):
+                return "message cites a wrong line", f"{cited!r}: {msg}"
+        return None
+    if c.expect == "error":
+        return "accepted invalid input", ""
+    _, check, same = READERS[c.reader]
+    bad = check(result)
+    if bad:
+        return "accepted with bad numbers", str(bad)
+    if c.expect == "same":
+        diff = same(result, baselines[c.base])
+        if diff:
+            return "differs from the baseline", str(diff)
+    return None
+
+
+def _baselines(tmp: Path) -> dict:
+    """Reader results of the unmutated inputs (the references of "same" cases)."""
+    default, areas, geojson = _toml_baselines()
+    (tmp / "area.geojson").write_bytes(geojson)
+    out = {}
+    for name, text in (("default", default), ("areas", areas)):
+        (tmp / f"{name}.toml").write_text(text, encoding="utf-8")
+        out[name] = load_scenario(tmp / f"{name}.toml")  # both files name the scenario
+    for name, rows in _csv_baselines().items():
+        (tmp / f"{name}.csv").write_text(_csv_text(rows), encoding="utf-8")
+        out[name] = load_targets_csv(tmp / f"{name}.csv")
+    out["geojson"] = read_geojson(tmp / "area.geojson")
+    if CASE1.is_dir():
+        (tmp / "case").mkdir()
+        for name, text in _case_baseline().items():
+            (tmp / "case" / name).write_text(text, encoding="utf-8")
+        out["case"] = load_case(tmp / "case")
+    return out
+
+
+def run_cases(tmp: Path, cases: list[Fuzz], baselines: dict):
+    """[(case, (failure kind, detail))] of the cases that broke the contract."""
+    failures = []
+    for i, c in enumerate(cases):
+        folder = tmp / f"c{i:04d}"
+        folder.mkdir()
+        for name, data in c.files.items():
+            (folder / name).write_bytes(data)
+        reader = READERS[c.reader][0]
+        result, exc, writes = _call(reader, folder / c.entry if c.entry else folder)
+        bad = _judge(c, result, exc, writes, baselines)
+        if bad is not None:
+            failures.append((c, bad))
+    return failures
+
+
+def summary(failures) -> str:
+    kinds = Counter(k for _, (k, _) in failures)
+    lines = [f"{len(failures)} failing cases"] + [f"  {n:4d}  {k}" for k, n in kinds.most_common()]
+    seen = set()
+    for c, (k, detail) in failures:
+        if (k, c.kind) not in seen:
+            seen.add((k, c.kind))
+            lines.append(f"  [{k}] {c.kind}: {detail[:300]}")
+    return "\n".join(lines)
+
+
+@pytest.fixture(scope="module")
+def baselines(tmp_path_factory):
+    return _baselines(tmp_path_factory.mktemp("baselines"))
+
+
+def test_enough_cases_and_deterministic():
+    counts = {name: len(generated(name)) for name in GENERATORS}
+    assert sum(counts.values()) >= 300, counts
+    assert [c.files for c in generated("csv")[:20]] == [c.files for c in generated("csv")[:20]]
+    kinds = Counter(c.expect for name in GENERATORS for c in generated(name))
+    assert kinds["error"] >= 100 and kinds["same"] >= 20, kinds
+
+
+@pytest.mark.parametrize("name", list(GENERATORS))
+def test_fuzz_reader(name, baselines, tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # a relative write would land here
+    cases = generated(name)
+    if not cases:
+        pytest.skip("aeossp benchmark data not present")
+    failures = run_cases(tmp_path, cases, baselines)
+    assert not failures, summary(failures)
+    assert sorted(p.name for p in tmp_path.iterdir() if not p.name.startswith("c")) == []
+
+
+def test_the_write_watch_sees_writes(tmp_path):
+    _, _, writes = _call((tmp_path / "x.txt").write_text, "x")
+    assert writes and "x.txt" in writes[0]
+    _, _, writes = _call((tmp_path / "x.txt").read_text)
+    assert writes == []
+
+
+def _area_scenario(tmp_path, areas: str, name="s.toml"):
+    """areas_example.toml without its areas and daylight rule, with ``areas`` instead."""
+    _, text, _ = _toml_baselines()
+    text = text[: text.index("[[areas]]")] + areas + text[text.index("[[targets]]") :]
+    text = text.replace("sun_elevation_min_deg = 10.0\n", "")
+    (tmp_path / name).write_text(text, encoding="utf-8")
+    return tmp_path / name
+
+
+def _ring_toml(name, lon0, lon1, lat0=10.0, lat1=10.8):
+    ring = [[lon0, lat0], [lon1, lat0], [lon1, lat1], [lon0, lat1]]
+    return f'[[areas]]\nname = "{name}"\nlonlat_deg = {ring}\nmax_length_km = 40.0\n'
+
+
+@pytest.mark.parametrize(
+    ("ring", "why"),
+    [
+        ((179.6, -179.6), "span 359.2 deg"),  # a jump across the meridian
+        ((179.6, 180.4), "within [-180, 180]"),  # longitudes past 180
+        ((-180.4, -179.6), "within [-180, 180]"),
+    ],
+)
+def test_antimeridian_areas_are_refused_with_the_remedy(tmp_path, ring, why):
+    with pytest.raises(ValueError) as exc:
+        load_scenario(_area_scenario(tmp_path, _ring_toml("dateline", *ring)))
+    msg = str(exc.value)
+    assert "areas[0].lonlat_deg (line" in msg and why in msg, msg
+    assert "antimeridian" in msg and "two areas" in msg, msg
+
+
+def test_antimeridian_split_geojson_is_refused(tmp_path):
+    # RFC 7946 section 3.1.9: an area across the meridian split in two at it
+    east = [[179.6, 10], [180, 10], [180, 10.8], [179.6, 10.8], [179.6, 10]]
+    west = [[-180, 10], [-179.6, 10], [-179.6, 10.8], [-180, 10.8], [-180, 10]]
+    doc = {"type": "MultiPolygon", "coordinates": [[east], [west]]}
+    (tmp_path / "d.geojson").write_text(json.dumps(doc), encoding="utf-8")
+    assert read_geojson(tmp_path / "d.geojson").geom_type == "MultiPolygon"  # readable
+    with pytest.raises(ValueError, match=r"d\.geojson: longitudes span 360 deg.*two areas"):
+        load_scenario(_area_scenario(tmp_path, '[[areas]]\ngeojson = "d.geojson"\n'))
+
+
+def test_areas_either_side_of_the_antimeridian_are_cut_in_place(tmp_path):
+    """The remedy the error names: one area each side; each is cut about its own centre."""
+    text = _ring_toml("east", 179.6, 180.0) + _ring_toml("west", -180.0, -179.6)
+    sc = load_scenario(_area_scenario(tmp_path, text))
+    assert [a.name for a in sc.areas] == ["east", "west"]
+    assert not _check_scenario(sc)
+    for area, lon0 in zip(sc.areas, (179.6, -180.0), strict=True):
+        idx = np.asarray(area.targets)
+        assert idx.size > 0  # the 12 h horizon has passes over both halves
+        lat, lon = np.degrees(sc.targets.lat[idx]), np.degrees(sc.targets.lon[idx])
+        # strip starts lie by the area (not on the far side of the Earth); |lon| wraps at 180
+        dlon = np.abs((lon - (lon0 + 0.2) + 180.0) % 360.0 - 180.0)
+        assert np.all(dlon < 0.6) and np.all(np.abs(lat - 10.4) < 0.6), (lon, lat)
+
+
+if __name__ == "__main__":  # python tests/readers/test_fuzz_readers.py: the failure summary
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        base = _baselines(Path(tmp))
+        for name in sys.argv[1:] or GENERATORS:
+            cases = generated(name)
+            (Path(tmp) / name).mkdir()
+            fails = run_cases(Path(tmp) / name, cases, base)
+            print(f"== {name}: {len(cases)} cases, {len(fails)} failing")
+            print(summary(fails))
