@@ -1,10 +1,22 @@
-"""jaxspline CPU benchmark: ``python -m bench [--quick] [--out DIR]``.
+"""jaxspline CPU benchmark: ``python -m bench [--section NAME] [--quick] [--out DIR]``.
 
-Measures, in one process and on the same inputs, the batched JAX kernels against
-a numpy-vectorized implementation of the same formula, a pure-Python loop and
-Ruckig per call; reports candidates/s after compilation (compile time apart),
-median and spread of repetitions, as fractions of this machine's measured
-streaming limit. Writes ``report.json``, ``throughput.png`` and ``RESULTS.md``.
+Sections and the files each writes into ``--out`` (default ``bench/results``), every
+markdown generated from the JSON beside it (``--render`` rewrites them without
+measuring):
+
+- ``bandwidth``, ``kernels``, ``threads`` -> ``report.json``, ``RESULTS.md``,
+  ``throughput.png``: the batched JAX kernels against numpy running the same formula, a
+  pure-Python loop and Ruckig per call, on the same inputs in one process; candidates/s
+  after compilation (compile time apart), median and spread of repetitions, as
+  fractions of this machine's measured streaming limit;
+- ``screening`` -> ``screening.json``, ``SCREENING.md``: the screening engine end to end
+  (:mod:`bench.scenarios`);
+- ``scale`` (only when named) -> ``scale.json``, ``SCALE.md``: whole plans of three
+  sizes (:mod:`bench.scale`);
+- ``job`` (only when named) -> ``job.json``, ``JOB.md``: the README's first command on
+  the default scenario, from an empty compilation cache and warm (:mod:`bench.job`).
+
+Without ``--section`` the first four run.
 """
 
 from __future__ import annotations
@@ -35,8 +47,8 @@ def _parse(argv):
     p.add_argument(
         "--section",
         action="append",
-        choices=["bandwidth", "kernels", "threads", "devices", "screening", "scale"],
-        help="run only these sections (repeatable; scale runs only when named)",
+        choices=["bandwidth", "kernels", "threads", "screening", "scale", "job"],
+        help="run only these sections (repeatable; scale and job run only when named)",
     )
     p.add_argument(
         "--only",
@@ -77,6 +89,14 @@ def _parse(argv):
     )
     p.add_argument(
         "--scale-dir", help="scale section: keep scenarios and plans here (default: a temp dir)"
+    )
+    p.add_argument(
+        "--job-runs", type=int, default=2, help="job section: runs, the first cold (default 2)"
+    )
+    p.add_argument(
+        "--render",
+        action="store_true",
+        help="measure nothing: rewrite every markdown of --out from its JSON",
     )
     p.add_argument("--child", help=argparse.SUPPRESS)  # internal: run one measurement, print JSON
     return p.parse_args(argv)
@@ -340,10 +360,36 @@ def _child_or_error(spec: dict, tag: dict) -> dict:
 
 
 # ------------------------------------------------------------------ driver
+#: Sections with files of their own (``scale.json`` / ``SCALE.md``, ...); the others
+#: share ``report.json`` / ``RESULTS.md``.
+OWN_FILES = ("screening", "scale", "job")
+
+
+def _write(report: dict, sections: set, out: Path) -> None:
+    """Write each measured section's files: the common ones and those of its own."""
+    from bench.job import write_job
+    from bench.report import write_outputs, write_screening
+    from bench.scale import write_scale
+
+    common = {k: v for k, v in report.items() if k not in OWN_FILES}
+    meta = {k: report[k] for k in ("machine", "args", "total_s")}
+    writers = {"screening": write_screening, "scale": write_scale, "job": write_job}
+    for name in OWN_FILES:
+        if name in sections:
+            writers[name]({**meta, name: report[name]}, out)
+    if sections - set(OWN_FILES):
+        write_outputs(common, out)
+
+
 def main(argv=None) -> int:
     args = _parse(argv)
     if args.child:
         _child(args.child)
+        return 0
+    if args.render:
+        from bench.render import render_all
+
+        render_all(Path(args.out))
         return 0
     sections = set(args.section or ["bandwidth", "kernels", "threads", "screening"])
     out = Path(args.out)
@@ -383,19 +429,18 @@ def main(argv=None) -> int:
         counts = args.routes or ([300, 1000] if args.quick else SCREEN_ROUTES)
         report["screening"] = bench_screening(counts, max(3, args.reps // 2))
     if "scale" in sections:
-        from bench.scale import bench_scale, write_scale
+        from bench.scale import bench_scale
 
         sizes = [s.strip() for s in args.sizes.split(",") if s.strip()]
         report["scale"] = bench_scale(
             sizes, args.time_limit, args.max_rss_gb, args.max_wall_min, args.scale_dir
         )
-    report["total_s"] = time.perf_counter() - t_all
-    if "scale" in sections:  # its own files: scale.json, SCALE.md
-        write_scale({k: v for k, v in report.items() if k not in sections - {"scale"}}, out)
-    if sections - {"scale"}:
-        from bench.report import write_outputs
+    if "job" in sections:
+        from bench.job import bench_job
 
-        write_outputs({k: v for k, v in report.items() if k != "scale"}, out)
+        report["job"] = bench_job(args.job_runs, args.max_rss_gb, args.max_wall_min)
+    report["total_s"] = time.perf_counter() - t_all
+    _write(report, sections, out)
     return 0
 
 

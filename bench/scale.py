@@ -39,6 +39,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from bench.markdown import cell, header, row, section, write_result
+
 REPO = Path(__file__).resolve().parents[1]
 DAY_TOML = REPO / "jaxspline" / "data" / "constellation_day.toml"
 GENERATOR = REPO / "scripts" / "make_scale_scenario.py"
@@ -47,6 +49,11 @@ POLL_S = 0.1
 MAX_RSS_GB = 8.0  # default guard: a third of the shared 24 GB machine
 MAX_WALL_MIN = 60.0
 TIME_BIN = "/usr/bin/time"
+#: Columns of the summary table of ``SCALE.md``, one run a row.
+RUN_COLUMNS = (
+    "size|sats|targets|limit s|exit|wall s|peak RSS MB|windows|options|near pairs|bytes/pair|"
+    "store MB|Lagr. it.|worker it.|LNS it.|value|bound|bound status|gap %|valid|load"
+).split("|")
 _STAGE_LINE = re.compile(r"\[plan [^\]]*\] (\w+)\s")
 
 
@@ -75,7 +82,7 @@ def resolve_size(token: str, workdir: Path) -> tuple[str, Path | None]:
         path = workdir / "scale_12x12h.toml"
         if not path.exists():
             cmd = [sys.executable, str(GENERATOR), "--preset", "12x12h", "--out", str(path)]
-            subprocess.run(cmd, check=True, capture_output=True, text=True, env=_child_env())
+            subprocess.run(cmd, check=True, capture_output=True, text=True, env=child_env())
         return token, path
     path = Path(token)
     if path.suffix == ".toml" and path.is_file():
@@ -83,7 +90,15 @@ def resolve_size(token: str, workdir: Path) -> tuple[str, Path | None]:
     raise SystemExit(f"--sizes: unknown size {token!r} (use {', '.join(SIZES)} or a .toml file)")
 
 
-def _child_env() -> dict:
+def repo_relative(arg: str) -> str:
+    """``arg`` relative to the repository when it is a path inside it, else unchanged."""
+    path = Path(arg)
+    if path.is_absolute() and path.is_relative_to(REPO):
+        return str(path.relative_to(REPO))
+    return arg
+
+
+def child_env() -> dict:
     """The environment with this checkout first on PYTHONPATH (its jaxspline runs)."""
     env = dict(os.environ)
     env["PYTHONPATH"] = os.pathsep.join(p for p in (str(REPO), env.get("PYTHONPATH")) if p)
@@ -171,7 +186,7 @@ def run_guarded(cmd, log: Path, max_rss_bytes: float, max_wall_s: float, env=Non
     }
 
 
-def _time_v_peak_mb(path: Path) -> float | None:
+def time_v_peak_mb(path: Path) -> float | None:
     """``Maximum resident set size`` [MB] from a ``/usr/bin/time -v -o`` file."""
     try:
         text = path.read_text(errors="replace")
@@ -253,32 +268,42 @@ def parse_plan_json(path: Path) -> dict:
         "worker_iterations": _get(doc, "stats.worker_iterations"),
         "lns_iterations": _get(doc, "stats.lns_iterations"),
         "valid": _get(doc, "summary.valid", "report.valid"),
+        "dropped": _get(doc, "report.dropped", default={}),
+        "repair_rounds": _get(doc, "report.repair_rounds"),
+        "joins": _get(doc, "report.joins", default={}),
         "timings_s": _get(doc, "timings_s", default={}),
         "stage_peak_rss_mb": _get(doc, "stats.peak_rss_mb", default={}),
     }
 
 
-def run_size(label, scenario, time_limit, max_rss_gb, max_wall_min, workdir: Path) -> dict:
-    """Plan one size in a subprocess and collect its figures."""
+def run_plan(label, args: list[str], workdir: Path, guard: tuple[float, float], env=None) -> dict:
+    """``jaxspline plan ARGS -o WORKDIR/plan_LABEL`` in a guarded subprocess; its figures.
+
+    Args:
+      label: names the run's folder, log and ``/usr/bin/time`` file in ``workdir``.
+      args: the command's arguments after ``plan`` (scenario and flags, no ``-o``).
+      workdir: folder of the run's files.
+      guard: (max RSS [GB], max wall [min]) of :func:`run_guarded`.
+      env: the child's environment (default: this checkout first on PYTHONPATH).
+    Returns:
+      dict: the command, load average before, :func:`run_guarded`'s fields, the peak RSS
+      [MB] and its source, the last stage reported, :func:`parse_plan_json`'s fields and
+      ``other_s`` (wall time outside the stages).
+    """
     outdir = workdir / f"plan_{label}"
     if outdir.exists():
         shutil.rmtree(outdir)
-    plan = [sys.executable, "-m", "jaxspline.cli", "plan"]
-    plan += [str(scenario)] if scenario is not None else []
-    plan += ["--no-aem", "--no-plots", "--time-limit", f"{time_limit:g}", "-o", str(outdir)]
+    plan = [sys.executable, "-m", "jaxspline.cli", "plan", *args, "-o", str(outdir)]
     time_file = workdir / f"time_{label}.txt"
     has_time = Path(TIME_BIN).is_file()
     cmd = ([TIME_BIN, "-v", "-o", str(time_file)] if has_time else []) + plan
     log = workdir / f"plan_{label}.log"
     load = os.getloadavg()[0]
-    res = run_guarded(cmd, log, max_rss_gb * 2**30, 60.0 * max_wall_min, env=_child_env())
-    peak = _time_v_peak_mb(time_file) if has_time and not res["killed"] else None
+    max_rss_gb, max_wall_min = guard
+    res = run_guarded(cmd, log, max_rss_gb * 2**30, 60.0 * max_wall_min, env=env or child_env())
+    peak = time_v_peak_mb(time_file) if has_time and not res["killed"] else None
     out = {
-        "size": label,
-        "scenario": str(scenario) if scenario is not None else "(packaged default)",
-        "made_by": made_by(scenario),
-        "command": " ".join(plan),
-        "time_limit_s": time_limit,
+        "command": " ".join(["jaxspline", "plan", *map(repo_relative, args)]),
         "load_avg_before": round(load, 2),
         **res,
         "peak_rss_mb": peak if peak is not None else res["polled_peak_rss_mb"],
@@ -294,6 +319,20 @@ def run_size(label, scenario, time_limit, max_rss_gb, max_wall_min, workdir: Pat
         except OSError:
             pass
     return out
+
+
+def run_size(label, scenario, time_limit, max_rss_gb, max_wall_min, workdir: Path) -> dict:
+    """Plan one size in a subprocess (plots and AEM files off) and collect its figures."""
+    args = [str(scenario)] if scenario is not None else []
+    args += ["--no-aem", "--no-plots", "--time-limit", f"{time_limit:g}"]
+    res = run_plan(label, args, workdir, (max_rss_gb, max_wall_min))
+    return {
+        "size": label,
+        "scenario": repo_relative(str(scenario)) if scenario is not None else "(packaged default)",
+        "made_by": made_by(scenario),
+        "time_limit_s": time_limit,
+        **res,
+    }
 
 
 def bench_scale(
@@ -333,89 +372,82 @@ def bench_scale(
 
 
 # ------------------------------------------------------------------ report
-def _f(x, fmt="{:.3g}") -> str:
-    if x is None or x == {}:
-        return "-"
-    if isinstance(x, bool):
-        return "yes" if x else "NO"
-    try:
-        return fmt.format(x)
-    except (TypeError, ValueError):  # e.g. "{:d}" of a float from a newer plan.json
-        return str(x)
-
-
 def summary_line(r: dict) -> str:
     """One progress line of a finished run."""
     state = f"killed ({r['killed']})" if r.get("killed") else f"exit {r['exit']}"
     return (
-        f"{r['size']}: {state}, wall {_f(r['wall_s'], '{:.1f}')} s, peak RSS "
-        f"{_f(r['peak_rss_mb'], '{:.0f}')} MB, options {_f(r.get('options'), '{:d}')}, "
-        f"pairs {_f(r.get('near_pairs'), '{:d}')}, value {_f(r.get('value'), '{:g}')}, "
-        f"gap {_f(r.get('gap_pct'), '{:.2f}')} %, last stage {_f(r.get('last_stage'))}"
+        f"{r['size']}: {state}, wall {cell(r['wall_s'], '{:.1f}')} s, peak RSS "
+        f"{cell(r['peak_rss_mb'], '{:.0f}')} MB, options {cell(r.get('options'), '{:d}')}, "
+        f"pairs {cell(r.get('near_pairs'), '{:d}')}, value {cell(r.get('value'), '{:g}')}, "
+        f"gap {cell(r.get('gap_pct'), '{:.2f}')} %, last stage {cell(r.get('last_stage'))}"
     )
 
 
-def scale_table(report: dict) -> list[str]:
-    """Markdown: one summary row per size, then per-stage wall time and peak RSS."""
-    runs = report.get("runs", [])
-    lines = [
-        "\nScale runs: `jaxspline plan --no-aem --no-plots --time-limit LIMIT`, one "
-        f"subprocess each, guard {report.get('max_rss_gb', 0):g} GB RSS. *Lagr. it.* are "
-        "the search's own bound iterations, *worker it.* those of the bound worker on the "
-        "second CPU, *LNS it.* the search's.",
-        "\n| size | sats | targets | limit s | exit | wall s | peak RSS MB | windows | options "
-        "| near pairs | bytes/pair | store MB | Lagr. it. | worker it. | LNS it. | value "
-        "| bound | bound status | gap % | valid | load |",
-        "|" + "---|" * 21,
-    ]
-    for r in runs:
-        state = "killed" if r.get("killed") else str(r.get("exit"))
-        store = r.get("store_bytes")
-        lines.append(
-            "| "
-            + " | ".join(
-                [
-                    r["size"],
-                    _f(r.get("satellites"), "{:d}"),
-                    _f(r.get("targets"), "{:d}"),
-                    _f(r.get("time_limit_s", report.get("time_limit_s")), "{:g}"),
-                    state,
-                    _f(r.get("wall_s"), "{:.1f}"),
-                    _f(r.get("peak_rss_mb"), "{:.0f}"),
-                    _f(r.get("windows"), "{:d}"),
-                    _f(r.get("options"), "{:d}"),
-                    _f(r.get("near_pairs"), "{:d}"),
-                    _f(r.get("bytes_per_pair"), "{:.2f}"),
-                    _f(None if store is None else store / 1e6, "{:.1f}"),
-                    _f(r.get("lagrangian_iterations"), "{:d}"),
-                    _f(r.get("worker_iterations"), "{:d}"),
-                    _f(r.get("lns_iterations"), "{:d}"),
-                    _f(r.get("value"), "{:g}"),
-                    _f(r.get("bound"), "{:.6g}"),
-                    _f(r.get("bound_status")),
-                    _f(r.get("gap_pct"), "{:.2f}"),
-                    _f(r.get("valid")),
-                    _f(r.get("load_avg_before"), "{:.2f}"),
-                ]
-            )
-            + " |"
-        )
+def _run_row(r: dict, report: dict) -> str:
+    """The summary table's row of one run."""
+    state = "killed" if r.get("killed") else str(r.get("exit"))
+    store = r.get("store_bytes")
+    return row(
+        [
+            r["size"],
+            cell(r.get("satellites"), "{:d}"),
+            cell(r.get("targets"), "{:d}"),
+            cell(r.get("time_limit_s", report.get("time_limit_s")), "{:g}"),
+            state,
+            cell(r.get("wall_s"), "{:.1f}"),
+            cell(r.get("peak_rss_mb"), "{:.0f}"),
+            cell(r.get("windows"), "{:d}"),
+            cell(r.get("options"), "{:d}"),
+            cell(r.get("near_pairs"), "{:d}"),
+            cell(r.get("bytes_per_pair"), "{:.2f}"),
+            cell(None if store is None else store / 1e6, "{:.1f}"),
+            cell(r.get("lagrangian_iterations"), "{:d}"),
+            cell(r.get("worker_iterations"), "{:d}"),
+            cell(r.get("lns_iterations"), "{:d}"),
+            cell(r.get("value"), "{:g}"),
+            cell(r.get("bound"), "{:.6g}"),
+            cell(r.get("bound_status")),
+            cell(r.get("gap_pct"), "{:.2f}"),
+            cell(r.get("valid")),
+            cell(r.get("load_avg_before"), "{:.2f}"),
+        ]
+    )
+
+
+def stage_table(runs: list[dict], label: str = "size") -> list[str]:
+    """Markdown: per run, wall time / peak RSS at the end of every stage of ``plan.json``."""
     stages = []
     for r in runs:
         for k in list(r.get("timings_s") or {}) + list(r.get("stage_peak_rss_mb") or {}):
             if k not in stages:
                 stages.append(k)
-    lines += [
-        "\nPer stage: wall s / process peak RSS MB at the stage's end (plan.json); "
-        "*other* = wall time outside the stages (start-up, load, compile cache, writing).",
-        "\n| size | " + " | ".join(stages + ["other s", "last stage done"]) + " |",
-        "|" + "---|" * (len(stages) + 3),
-    ]
+    lines = header(label, *stages, "other s", "last stage done")
     for r in runs:
         t, m = r.get("timings_s") or {}, r.get("stage_peak_rss_mb") or {}
-        cells = [f"{_f(t.get(s), '{:.2f}')} / {_f(m.get(s), '{:.0f}')}" for s in stages]
-        cells += [_f(r.get("other_s"), "{:.1f}"), _f(r.get("last_stage"))]
-        lines.append(f"| {r['size']} | " + " | ".join(cells) + " |")
+        cells = [f"{cell(t.get(s), '{:.2f}')} / {cell(m.get(s), '{:.0f}')}" for s in stages]
+        cells += [cell(r.get("other_s"), "{:.1f}"), cell(r.get("last_stage"))]
+        lines.append(row([r[label], *cells]))
+    return lines
+
+
+def scale_table(report: dict) -> list[str]:
+    """Markdown: one summary row per size, then per-stage wall time and peak RSS."""
+    runs = report.get("runs", [])
+    runs_lines = [
+        "\nScale runs: `jaxspline plan --no-aem --no-plots --time-limit LIMIT`, one "
+        f"subprocess each, guard {report.get('max_rss_gb', 0):g} GB RSS. *Lagr. it.* are "
+        "the search's own bound iterations, *worker it.* those of the bound worker on the "
+        "second CPU, *LNS it.* the search's; *load* is the machine's load average when the "
+        "run started.",
+        *header(*RUN_COLUMNS),
+        *(_run_row(r, report) for r in runs),
+    ]
+    stage_lines = [
+        "\nPer stage: wall s / process peak RSS MB at the stage's end (plan.json); "
+        "*other* = wall time outside the stages (start-up, load, compile cache, writing).",
+        *stage_table(runs),
+    ]
+    lines = section("runs", runs_lines) + section("stages", stage_lines)
     lines.append(
         "\nScenarios: "
         + "; ".join(f"{r['size']} = `{r.get('made_by') or r.get('scenario', '-')}`" for r in runs)
@@ -423,7 +455,7 @@ def scale_table(report: dict) -> list[str]:
     for r in runs:
         if r.get("killed"):
             lines.append(
-                f"\n{r['size']}: killed, {r['killed']}, after stage {_f(r.get('last_stage'))} "
+                f"\n{r['size']}: killed, {r['killed']}, after stage {cell(r.get('last_stage'))} "
                 "(the next one was running)."
             )
     return lines
@@ -431,11 +463,4 @@ def scale_table(report: dict) -> list[str]:
 
 def write_scale(report: dict, out: Path) -> None:
     """Write ``scale.json`` and ``SCALE.md`` into ``out`` and print the tables."""
-    from jaxspline.planner.files import atomic_write_text
-
-    text = "\n".join(scale_table(report["scale"])).lstrip("\n")
-    print("\n" + text)
-    out.mkdir(parents=True, exist_ok=True)
-    atomic_write_text(out / "scale.json", json.dumps(report, indent=1, default=str) + "\n")
-    atomic_write_text(out / "SCALE.md", "# Scale runs\n\n" + text + "\n")
-    print(f"\nwrote {out}/scale.json, SCALE.md")
+    write_result(out, "scale", report, "Scale runs", scale_table(report["scale"]))
