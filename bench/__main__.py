@@ -13,8 +13,8 @@ measuring):
   (:mod:`bench.scenarios`);
 - ``scale`` (only when named) -> ``scale.json``, ``SCALE.md``: whole plans of three
   sizes (:mod:`bench.scale`);
-- ``job`` (only when named) -> ``job.json``, ``JOB.md``: the README's first command on
-  the default scenario, from an empty compilation cache and warm (:mod:`bench.job`).
+- ``job`` (only when named) -> ``job.json``, ``JOB.md``: the default job with every
+  output, from an empty compilation cache and warm (:mod:`bench.job`).
 
 Without ``--section`` the first four run.
 """
@@ -92,6 +92,12 @@ def _parse(argv):
     )
     p.add_argument(
         "--job-runs", type=int, default=2, help="job section: runs, the first cold (default 2)"
+    )
+    p.add_argument(
+        "--job-max-iters",
+        type=int,
+        default=200,
+        help="job section: the plan's --max-iters (default 200; 0: the time limit alone)",
     )
     p.add_argument(
         "--render",
@@ -438,7 +444,9 @@ def main(argv=None) -> int:
     if "job" in sections:
         from bench.job import bench_job
 
-        report["job"] = bench_job(args.job_runs, args.max_rss_gb, args.max_wall_min)
+        report["job"] = bench_job(
+            args.job_runs, args.job_max_iters, args.max_rss_gb, args.max_wall_min
+        )
     report["total_s"] = time.perf_counter() - t_all
     _write(report, sections, out)
     return 0
