@@ -21,7 +21,7 @@ import os
 import tempfile
 from pathlib import Path
 
-from bench.markdown import cell, header, row, section, write_result
+from bench.markdown import cell, header, row, run_cells, section, write_result
 from bench.scale import MAX_RSS_GB, MAX_WALL_MIN, child_env, run_plan, stage_table
 
 #: Runs of the section by default: one from an empty cache, one warm.
@@ -80,22 +80,10 @@ def _summary_row(r: dict) -> str:
         [
             r["run"],
             "killed" if r.get("killed") else str(r.get("exit")),
-            cell(r.get("wall_s"), "{:.1f}"),
-            cell(r.get("peak_rss_mb"), "{:.0f}"),
-            cell(r.get("load_avg_before"), "{:.2f}"),
-            cell(r.get("windows"), "{:d}"),
-            cell(r.get("options"), "{:d}"),
-            cell(r.get("near_pairs"), "{:d}"),
-            cell(r.get("observations"), "{:d}"),
-            cell(r.get("value"), "{:g}"),
-            cell(r.get("bound"), "{:.6g}"),
-            cell(r.get("bound_status")),
-            cell(r.get("gap_pct"), "{:.2f}"),
-            cell(r.get("valid")),
+            *run_cells(r, "wall_s peak_rss_mb load_avg_before windows options near_pairs"),
+            *run_cells(r, "observations value bound bound_status gap_pct valid"),
             drops,
-            cell(r.get("repair_rounds"), "{:d}"),
-            cell(r.get("lns_iterations"), "{:d}"),
-            cell(r.get("worker_iterations"), "{:d}"),
+            *run_cells(r, "repair_rounds lns_iterations worker_iterations"),
         ]
     )
 

@@ -28,6 +28,35 @@ def cell(x, fmt: str = "{:.3g}") -> str:
         return str(x)
 
 
+#: Cell formats of the fields of a planning run (``bench.scale.run_plan``), by key.
+RUN_FORMATS = {
+    "satellites": "{:d}",
+    "targets": "{:d}",
+    "wall_s": "{:.1f}",
+    "peak_rss_mb": "{:.0f}",
+    "load_avg_before": "{:.2f}",
+    "windows": "{:d}",
+    "options": "{:d}",
+    "near_pairs": "{:d}",
+    "bytes_per_pair": "{:.2f}",
+    "observations": "{:d}",
+    "lagrangian_iterations": "{:d}",
+    "worker_iterations": "{:d}",
+    "lns_iterations": "{:d}",
+    "repair_rounds": "{:d}",
+    "value": "{:g}",
+    "bound": "{:.6g}",
+    "bound_status": "{}",
+    "gap_pct": "{:.2f}",
+    "valid": "{}",
+}
+
+
+def run_cells(run: dict, keys: str) -> list[str]:
+    """The cells of the space-separated ``keys`` of a planning run, by ``RUN_FORMATS``."""
+    return [cell(run.get(k), RUN_FORMATS[k]) for k in keys.split()]
+
+
 def header(*cols: str) -> list[str]:
     """A markdown table's header and separator lines (after a blank line)."""
     return ["\n| " + " | ".join(cols) + " |", "|" + "---|" * len(cols)]

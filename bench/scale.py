@@ -39,7 +39,7 @@ import tempfile
 import time
 from pathlib import Path
 
-from bench.markdown import cell, header, row, section, write_result
+from bench.markdown import cell, header, row, run_cells, section, write_result
 
 REPO = Path(__file__).resolve().parents[1]
 DAY_TOML = REPO / "jaxspline" / "data" / "constellation_day.toml"
@@ -390,26 +390,13 @@ def _run_row(r: dict, report: dict) -> str:
     return row(
         [
             r["size"],
-            cell(r.get("satellites"), "{:d}"),
-            cell(r.get("targets"), "{:d}"),
+            *run_cells(r, "satellites targets"),
             cell(r.get("time_limit_s", report.get("time_limit_s")), "{:g}"),
             state,
-            cell(r.get("wall_s"), "{:.1f}"),
-            cell(r.get("peak_rss_mb"), "{:.0f}"),
-            cell(r.get("windows"), "{:d}"),
-            cell(r.get("options"), "{:d}"),
-            cell(r.get("near_pairs"), "{:d}"),
-            cell(r.get("bytes_per_pair"), "{:.2f}"),
+            *run_cells(r, "wall_s peak_rss_mb windows options near_pairs bytes_per_pair"),
             cell(None if store is None else store / 1e6, "{:.1f}"),
-            cell(r.get("lagrangian_iterations"), "{:d}"),
-            cell(r.get("worker_iterations"), "{:d}"),
-            cell(r.get("lns_iterations"), "{:d}"),
-            cell(r.get("value"), "{:g}"),
-            cell(r.get("bound"), "{:.6g}"),
-            cell(r.get("bound_status")),
-            cell(r.get("gap_pct"), "{:.2f}"),
-            cell(r.get("valid")),
-            cell(r.get("load_avg_before"), "{:.2f}"),
+            *run_cells(r, "lagrangian_iterations worker_iterations lns_iterations"),
+            *run_cells(r, "value bound bound_status gap_pct valid load_avg_before"),
         ]
     )
 
