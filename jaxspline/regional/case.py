@@ -28,41 +28,24 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
+
+from jaxspline.regional.case_fields import (
+    check_tle,
+    get_field,
+    number_field,
+    read_json,
+    read_yaml,
+    string_field,
+)
 
 MANIFEST = "manifest.json"
 SATELLITES = "satellites.yaml"
 REGIONS = "regions.geojson"
 GRID = "coverage_grid.json"
-#: TLE line length (columns 1-69, column 69 the checksum).
-TLE_LINE_LENGTH = 69
 #: Seconds per day (orbit period = this / mean motion in rev/day).
 SECONDS_PER_DAY = 86400.0
 #: Coordinates closer than this [deg] count as one point when counting polygon vertices.
 DISTINCT_POINT_DEG = 1e-9
-
-_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
-
-class _UniqueKeyLoader(_Loader):
-    """The safe loader, refusing a key repeated in one mapping (YAML keeps the last)."""
-
-    def construct_mapping(self, node, deep=False):
-        if isinstance(node, yaml.MappingNode):
-            seen = set()
-            for key_node, _ in node.value:
-                key = self.construct_object(key_node, deep=deep)
-                try:
-                    again = key in seen
-                except TypeError:
-                    continue
-                if again:
-                    raise yaml.constructor.ConstructorError(
-                        None, None, f"duplicate key {key!r}", key_node.start_mark
-                    )
-                seen.add(key)
-        return super().construct_mapping(node, deep)
-
 
 # ----------------------------------------------------------------------------- time
 
@@ -305,141 +288,21 @@ class Case:
         return {s.id: i for i, s in enumerate(self.satellites)}
 
 
-# ----------------------------------------------------------------------------- readers
-
-
-def _read_text(path: Path) -> str:
-    if not path.is_file():
-        raise ValueError(f"{path}: case file not found")
-    try:
-        return path.read_bytes().decode("utf-8-sig")
-    except UnicodeDecodeError as exc:
-        raise ValueError(f"{path}: not UTF-8 text (offset {exc.start})") from None
-    except OSError as exc:
-        raise ValueError(f"{path}: cannot read: {exc}") from None
-
-
-def _no_dup_pairs(pairs):
-    out = {}
-    for key, value in pairs:
-        if key in out:
-            raise ValueError(f"duplicate key {key!r}")
-        out[key] = value
-    return out
-
-
-def _no_constant(name):
-    raise ValueError(f"{name} is not a number in strict JSON")
-
-
-def read_json(path: str | os.PathLike) -> Any:
-    """Parse a strict JSON file (no NaN / Infinity, no repeated keys).
-
-    Args:
-      path: file path.
-    Returns:
-      the parsed object.
-    Raises:
-      ValueError: missing file or bad JSON, naming the file.
-    """
-    path = Path(path)
-    text = _read_text(path)
-    try:
-        return json.loads(text, object_pairs_hook=_no_dup_pairs, parse_constant=_no_constant)
-    except ValueError as exc:
-        raise ValueError(f"{path}: not valid JSON: {exc}") from None
-
-
-def _read_yaml(path: Path) -> Any:
-    text = _read_text(path)
-    try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)
-    except yaml.YAMLError as exc:
-        raise ValueError(f"{path.name}: not valid YAML: {exc}") from None
-
-
-def _get(mapping: Any, key: str, where: str) -> Any:
-    if not isinstance(mapping, dict):
-        raise ValueError(f"{where}: expected a mapping, got {type(mapping).__name__}")
-    if key not in mapping:
-        raise ValueError(f"{where}.{key}: missing field")
-    return mapping[key]
-
-
-def _num(mapping, key, where, *, lo=None, lo_open=False, hi=None, null=False):
-    """A finite number field in [lo, hi] (lo excluded when ``lo_open``), or None if ``null``."""
-    value = _get(mapping, key, where)
-    if value is None and null:
-        return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{where}.{key}: expected a number, got {value!r}")
-    value = float(value)
-    if not math.isfinite(value):
-        raise ValueError(f"{where}.{key}: must be finite, got {value!r}")
-    if lo is not None and (value <= lo if lo_open else value < lo):
-        raise ValueError(f"{where}.{key}: must be {'>' if lo_open else '>='} {lo:g}, got {value:g}")
-    if hi is not None and value > hi:
-        raise ValueError(f"{where}.{key}: must be <= {hi:g}, got {value:g}")
-    return value
-
-
-def _str(mapping: Any, key: str, where: str) -> str:
-    value = _get(mapping, key, where)
-    if not isinstance(value, str) or not value.strip():
-        raise ValueError(f"{where}.{key}: expected a non-empty string, got {value!r}")
-    return value
-
-
-def tle_checksum(line: str) -> int:
-    """The TLE checksum of a line: digits summed, ``-`` counts 1, modulo 10 (columns 1-68).
-
-    Args:
-      line: TLE line.
-    Returns:
-      int in 0..9.
-    """
-    return sum(int(c) if c.isdigit() else (1 if c == "-" else 0) for c in line[:68]) % 10
-
-
-def _check_tle(l1: str, l2: str, where: str, start: datetime, end: datetime) -> None:
-    from sgp4.api import Satrec, jday
-
-    for num, line in ((1, l1), (2, l2)):
-        w = f"{where}.tle_line{num}"
-        if len(line) != TLE_LINE_LENGTH or not line.startswith(f"{num} "):
-            raise ValueError(f"{w}: not a {TLE_LINE_LENGTH}-column TLE line {num}: {line!r}")
-        if not line[68].isdigit() or int(line[68]) != tle_checksum(line):
-            raise ValueError(
-                f"{w}: bad checksum (column 69 is {line[68]!r}, computed {tle_checksum(line)})"
-            )
-    if l1[2:7] != l2[2:7]:
-        raise ValueError(f"{where}.tle_line2: catalogue number {l2[2:7]!r} != line 1 {l1[2:7]!r}")
-    try:
-        mean_motion = float(l2[52:63])
-        sat = Satrec.twoline2rv(l1, l2)
-    except ValueError as exc:
-        raise ValueError(f"{where}.tle_line1/tle_line2: not a valid TLE: {exc}") from None
-    if not mean_motion > 0:
-        raise ValueError(f"{where}.tle_line2: mean motion must be > 0, got {mean_motion}")
-    for label, t in (("horizon_start", start), ("horizon_end", end)):
-        jd, fr = jday(t.year, t.month, t.day, t.hour, t.minute, t.second + t.microsecond * 1e-6)
-        err = sat.sgp4(jd, fr)[0]
-        if err != 0:
-            raise ValueError(f"{where}.tle_line1/tle_line2: SGP4 error {err} at {label}")
-
-
 def _load_satellite(raw: Any, where: str, start: datetime, end: datetime) -> Satellite:
-    sid = _str(raw, "satellite_id", where)
-    l1, l2 = _str(raw, "tle_line1", where).strip(), _str(raw, "tle_line2", where).strip()
-    _check_tle(l1, l2, where, start, end)
+    sid = string_field(raw, "satellite_id", where)
+    l1, l2 = (
+        string_field(raw, "tle_line1", where).strip(),
+        string_field(raw, "tle_line2", where).strip(),
+    )
+    check_tle(l1, l2, where, start, end)
     ws, wa, wp = f"{where}.sensor", f"{where}.agility", f"{where}.power"
-    sen, agi, pw = (_get(raw, k, where) for k in ("sensor", "agility", "power"))
+    sen, agi, pw = (get_field(raw, k, where) for k in ("sensor", "agility", "power"))
     sensor = Sensor(
-        min_edge_deg=_num(sen, "min_edge_off_nadir_deg", ws, lo=0.0, hi=90.0),
-        max_edge_deg=_num(sen, "max_edge_off_nadir_deg", ws, lo=0.0, hi=90.0),
-        fov_deg=_num(sen, "cross_track_fov_deg", ws, lo=0.0, lo_open=True, hi=90.0),
-        min_duration_s=_num(sen, "min_strip_duration_s", ws, lo=0.0, lo_open=True),
-        max_duration_s=_num(sen, "max_strip_duration_s", ws, lo=0.0, lo_open=True),
+        min_edge_deg=number_field(sen, "min_edge_off_nadir_deg", ws, lo=0.0, hi=90.0),
+        max_edge_deg=number_field(sen, "max_edge_off_nadir_deg", ws, lo=0.0, hi=90.0),
+        fov_deg=number_field(sen, "cross_track_fov_deg", ws, lo=0.0, lo_open=True, hi=90.0),
+        min_duration_s=number_field(sen, "min_strip_duration_s", ws, lo=0.0, lo_open=True),
+        max_duration_s=number_field(sen, "max_strip_duration_s", ws, lo=0.0, lo_open=True),
     )
     if sensor.min_edge_deg > sensor.max_edge_deg:
         raise ValueError(
@@ -452,18 +315,20 @@ def _load_satellite(raw: Any, where: str, start: datetime, end: datetime) -> Sat
             f"max_strip_duration_s {sensor.max_duration_s:g}"
         )
     agility = Agility(
-        rate_deg_s=_num(agi, "max_roll_rate_deg_per_s", wa, lo=0.0, lo_open=True),
-        accel_deg_s2=_num(agi, "max_roll_acceleration_deg_per_s2", wa, lo=0.0, lo_open=True),
-        settling_s=_num(agi, "settling_time_s", wa, lo=0.0),
+        rate_deg_s=number_field(agi, "max_roll_rate_deg_per_s", wa, lo=0.0, lo_open=True),
+        accel_deg_s2=number_field(
+            agi, "max_roll_acceleration_deg_per_s2", wa, lo=0.0, lo_open=True
+        ),
+        settling_s=number_field(agi, "settling_time_s", wa, lo=0.0),
     )
     power = Power(
-        capacity_wh=_num(pw, "battery_capacity_wh", wp, lo=0.0, lo_open=True),
-        initial_wh=_num(pw, "initial_battery_wh", wp, lo=0.0),
-        idle_w=_num(pw, "idle_power_w", wp, lo=0.0),
-        imaging_w=_num(pw, "imaging_power_w", wp, lo=0.0),
-        slew_w=_num(pw, "slew_power_w", wp, lo=0.0),
-        charge_w=_num(pw, "sunlit_charge_power_w", wp, lo=0.0),
-        duty_limit_s=_num(pw, "imaging_duty_limit_s_per_orbit", wp, lo=0.0, null=True),
+        capacity_wh=number_field(pw, "battery_capacity_wh", wp, lo=0.0, lo_open=True),
+        initial_wh=number_field(pw, "initial_battery_wh", wp, lo=0.0),
+        idle_w=number_field(pw, "idle_power_w", wp, lo=0.0),
+        imaging_w=number_field(pw, "imaging_power_w", wp, lo=0.0),
+        slew_w=number_field(pw, "slew_power_w", wp, lo=0.0),
+        charge_w=number_field(pw, "sunlit_charge_power_w", wp, lo=0.0),
+        duty_limit_s=number_field(pw, "imaging_duty_limit_s_per_orbit", wp, lo=0.0, null=True),
     )
     if power.initial_wh > power.capacity_wh:
         raise ValueError(
@@ -474,14 +339,12 @@ def _load_satellite(raw: Any, where: str, start: datetime, end: datetime) -> Sat
 
 
 def _load_satellites(path: Path, start: datetime, end: datetime) -> tuple:
-    raw = _read_yaml(path)
+    raw = read_yaml(path)
     if isinstance(raw, dict) and "satellites" in raw:  # tolerate a wrapped list
         raw = raw["satellites"]
     if not isinstance(raw, list) or not raw:
         raise ValueError(f"{path.name}: expected a non-empty list of satellites")
-    sats = tuple(
-        _load_satellite(r, f"{path.name}: [{i}]", start, end) for i, r in enumerate(raw)
-    )
+    sats = tuple(_load_satellite(r, f"{path.name}: [{i}]", start, end) for i, r in enumerate(raw))
     seen: dict = {}
     for i, s in enumerate(sats):
         if s.id in seen:
@@ -524,25 +387,27 @@ def _ring(coords: Any, where: str) -> np.ndarray:
 
 def _load_regions(path: Path) -> tuple:
     raw = read_json(path)
-    feats = _get(raw, "features", path.name)
+    feats = get_field(raw, "features", path.name)
     if not isinstance(feats, list) or not feats:
         raise ValueError(f"{path.name}: features: expected a non-empty list")
     regions, seen = [], {}
     for i, f in enumerate(feats):
         where = f"{path.name}: features[{i}]"
-        props, geom = _get(f, "properties", where), _get(f, "geometry", where)
-        rid = _str(props, "region_id", f"{where}.properties")
+        props, geom = get_field(f, "properties", where), get_field(f, "geometry", where)
+        rid = string_field(props, "region_id", f"{where}.properties")
         if rid in seen:
             raise ValueError(f"{where}.properties.region_id: duplicate {rid!r}")
         seen[rid] = i
-        if _get(geom, "type", f"{where}.geometry") != "Polygon":
+        if get_field(geom, "type", f"{where}.geometry") != "Polygon":
             raise ValueError(f"{where}.geometry.type: expected 'Polygon', got {geom['type']!r}")
-        ring = _ring(_get(geom, "coordinates", f"{where}.geometry"), f"{where}.geometry.coordinates")
+        ring = _ring(
+            get_field(geom, "coordinates", f"{where}.geometry"), f"{where}.geometry.coordinates"
+        )
         wp = f"{where}.properties"
-        weight = _num(props, "weight", wp, lo=0.0)
+        weight = number_field(props, "weight", wp, lo=0.0)
         mcov = None
         if "min_required_coverage_ratio" in props:
-            mcov = _num(props, "min_required_coverage_ratio", wp, lo=0.0, hi=1.0, null=True)
+            mcov = number_field(props, "min_required_coverage_ratio", wp, lo=0.0, hi=1.0, null=True)
         regions.append(Region(rid, weight, mcov, ring))
     if not sum(r.weight for r in regions) > 0:
         raise ValueError(f"{path.name}: features[*].properties.weight: all weights are 0")
@@ -551,8 +416,8 @@ def _load_regions(path: Path) -> tuple:
 
 def _grid_region(raw: Any, where: str) -> tuple:
     """(region_id, lon, lat, weight, ids, total) of one ``coverage_grid.json`` region."""
-    rid = _str(raw, "region_id", where)
-    samples = _get(raw, "samples", where)
+    rid = string_field(raw, "region_id", where)
+    samples = get_field(raw, "samples", where)
     if not isinstance(samples, list) or not samples:
         raise ValueError(f"{where}.samples: region {rid!r} has no samples")
     n = len(samples)
@@ -560,17 +425,17 @@ def _grid_region(raw: Any, where: str) -> tuple:
     ids = []
     for j, s in enumerate(samples):
         ws = f"{where}.samples[{j}]"
-        ids.append(_str(s, "sample_id", ws))
-        lon[j] = _num(s, "longitude_deg", ws, lo=-180.0, hi=180.0)
-        lat[j] = _num(s, "latitude_deg", ws, lo=-90.0, hi=90.0)
-        wgt[j] = _num(s, "weight_m2", ws, lo=0.0)
-    total = _num(raw, "total_weight_m2", where, lo=0.0, lo_open=True)
+        ids.append(string_field(s, "sample_id", ws))
+        lon[j] = number_field(s, "longitude_deg", ws, lo=-180.0, hi=180.0)
+        lat[j] = number_field(s, "latitude_deg", ws, lo=-90.0, hi=90.0)
+        wgt[j] = number_field(s, "weight_m2", ws, lo=0.0)
+    total = number_field(raw, "total_weight_m2", where, lo=0.0, lo_open=True)
     return rid, lon, lat, wgt, ids, total
 
 
 def _load_grid(path: Path, regions: tuple) -> Grid:
     raw = read_json(path)
-    items = _get(raw, "regions", path.name)
+    items = get_field(raw, "regions", path.name)
     if not isinstance(items, list):
         raise ValueError(f"{path.name}: regions: expected a list")
     by_id: dict = {}
@@ -606,19 +471,23 @@ def _load_grid(path: Path, regions: tuple) -> Grid:
 def _load_manifest(path: Path) -> dict:
     raw = read_json(path)
     w = path.name
-    start = parse_time(_get(raw, "horizon_start", w), where=f"{w}: horizon_start")
-    end = parse_time(_get(raw, "horizon_end", w), where=f"{w}: horizon_end")
+    start = parse_time(get_field(raw, "horizon_start", w), where=f"{w}: horizon_start")
+    end = parse_time(get_field(raw, "horizon_end", w), where=f"{w}: horizon_end")
     if not end > start:
         raise ValueError(f"{w}: horizon_end: must be after horizon_start")
-    step = _num(raw, "time_step_s", w, lo=0.0, lo_open=True)
-    sample = _num(raw, "coverage_sample_step_s", w, lo=0.0, lo_open=True)
-    scoring = _get(raw, "scoring", w)
-    cap = _get(scoring, "max_actions_total", f"{w}: scoring")
+    step = number_field(raw, "time_step_s", w, lo=0.0, lo_open=True)
+    sample = number_field(raw, "coverage_sample_step_s", w, lo=0.0, lo_open=True)
+    scoring = get_field(raw, "scoring", w)
+    cap = get_field(scoring, "max_actions_total", f"{w}: scoring")
     if isinstance(cap, bool) or not isinstance(cap, int) or cap < 0:
         raise ValueError(f"{w}: scoring.max_actions_total: expected an integer >= 0, got {cap!r}")
     case_id = raw.get("case_id", path.parent.name)
     return dict(
-        case_id=str(case_id), start=start, end=end, time_step_s=step, sample_step_s=sample,
+        case_id=str(case_id),
+        start=start,
+        end=end,
+        time_step_s=step,
+        sample_step_s=sample,
         max_actions=cap,
     )
 
