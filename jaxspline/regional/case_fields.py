@@ -54,7 +54,7 @@ def read_text(path: Path) -> str:
       ValueError: missing, unreadable or not UTF-8, naming the file.
     """
     if not path.is_file():
-        raise ValueError(f"{path}: case file not found")
+        raise ValueError(f"{path}: file not found")
     try:
         return path.read_bytes().decode("utf-8-sig")
     except UnicodeDecodeError as exc:
