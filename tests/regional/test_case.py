@@ -142,7 +142,8 @@ BAD = {
         *_set0("power", "idle_power_w", True),
         "[0].power.idle_power_w: expected a number, got True"),
     "nan": (
-        *_set0("power", "imaging_power_w", float("nan")), "[0].power.imaging_power_w: must be finite"),
+        *_set0("power", "imaging_power_w", float("nan")),
+        "[0].power.imaging_power_w: must be finite"),
     "inf": (
         *_set0("power", "slew_power_w", float("inf")), "[0].power.slew_power_w: must be finite"),
     "negative_idle": (
