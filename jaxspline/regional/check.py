@@ -113,6 +113,7 @@ class CheckReport:
       min_battery_wh: lowest battery level over all satellites [Wh].
       covered_weight_m2: unique covered sample weight [m²].
       action_covered_m2: per action, the sample weight it covers alone or not [m²].
+      covered: bool [N], the covered grid samples (not in :meth:`to_dict`).
     """
 
     valid: bool
@@ -124,6 +125,7 @@ class CheckReport:
     min_battery_wh: float
     covered_weight_m2: float = 0.0
     action_covered_m2: list = field(default_factory=list)
+    covered: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool), repr=False)
 
     def to_dict(self) -> dict:
         """The report as JSON-ready data (violations as dicts).
@@ -132,6 +134,7 @@ class CheckReport:
           dict.
         """
         data = asdict(self)
+        data.pop("covered")
         data["violations"] = [asdict(v) for v in self.violations]
         return data
 
@@ -483,6 +486,7 @@ def check_solution(case: Case, solution) -> CheckReport:
         min_battery_wh=min_battery,
         covered_weight_m2=cov_w,
         action_covered_m2=action_cov,
+        covered=covered,
     )
 
 

@@ -274,11 +274,12 @@ def points_in_quad(quad: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray
         cross = dx * (y - y1) - dy * (x - x1)
         seg2 = dx * dx + dy * dy
         scale = max(1.0, abs(x1), abs(y1), abs(x2), abs(y2))
-        on_line = np.abs(cross) <= BORDER_REL_TOL * scale * math.sqrt(seg2) + 1e-300
-        dot = (x - x1) * dx + (y - y1) * dy
-        border |= on_line & (dot >= -1e-300) & (dot <= seg2)
-        if seg2 == 0.0:
+        if seg2 == 0.0:  # repeated vertex: only the point itself
             border |= (x == x1) & (y == y1)
+        else:
+            on_line = np.abs(cross) <= BORDER_REL_TOL * scale * math.sqrt(seg2)
+            dot = (x - x1) * dx + (y - y1) * dy
+            border |= on_line & (dot >= 0.0) & (dot <= seg2)
         crosses = (y1 > y) != (y2 > y)
         with np.errstate(divide="ignore", invalid="ignore"):
             x_at = x1 + (y - y1) * dx / (dy if dy != 0.0 else 1.0)
