@@ -89,9 +89,7 @@ def covered_baseline(inner, outer, lon, lat) -> np.ndarray:
     py = np.asarray(lat, np.float64)
     xs = np.concatenate([ix, ox])
     ys = np.concatenate([iy, oy])
-    near = np.flatnonzero(
-        (px >= xs.min()) & (px <= xs.max()) & (py >= ys.min()) & (py <= ys.max())
-    )
+    near = np.flatnonzero((px >= xs.min()) & (px <= xs.max()) & (py >= ys.min()) & (py <= ys.max()))
     if near.size == 0:
         return near.astype(np.int64)
     ring = np.stack(

@@ -65,6 +65,7 @@ __all__ = [
 ]
 
 EDGE_CHUNK = 1 << 15  # samples per edge-point call (fixed shape, padded)
+MIN_STRIP_BUCKET = 16  # direct sweeps pad a strip to a power of two >= this (few compiles)
 
 
 class Candidates(NamedTuple):
@@ -196,11 +197,13 @@ def covered_samples(inner, outer, lon_deg, lat_deg) -> np.ndarray:
     if inner.ndim != 2 or inner.shape[0] < 2:
         raise ValueError(f"inner: expected shape [n >= 2, 2], got {inner.shape}")
     pts = np.stack([np.asarray(lon_deg, np.float64), np.asarray(lat_deg, np.float64)], -1)
+    n = inner.shape[0]
+    pad = np.minimum(np.arange(max(MIN_STRIP_BUCKET, 1 << (n - 1).bit_length())), n - 1)
     with jax.enable_x64(True):
         _, _, count = _ranges_batch(
-            jnp.asarray(inner),
-            jnp.asarray(outer, jnp.float64),
-            inner.shape[0] - 1,
+            jnp.asarray(inner[pad]),
+            jnp.asarray(np.asarray(outer, np.float64)[pad]),
+            n - 1,
             inner[0, 0],
             jnp.asarray(pts),
         )
@@ -218,7 +221,9 @@ def _check_inputs(pos, vel, fov_deg, cands: Candidates, lon, lat, region):
         if getattr(cands, name).shape != (c,):
             raise ValueError(f"candidates.{name}: expected shape [{c}]")
     if c and (cands.sat.min() < 0 or cands.sat.max() >= s):
-        raise ValueError(f"candidates.sat: must lie in [0, {s}), got [{cands.sat.min()}, {cands.sat.max()}]")
+        raise ValueError(
+            f"candidates.sat: must lie in [0, {s}), got [{cands.sat.min()}, {cands.sat.max()}]"
+        )
     if c and cands.n.min() < 2:
         raise ValueError(f"candidates.n: must be >= 2 samples, got {cands.n.min()}")
     if c and (cands.k0.min() < 0 or (cands.k0.astype(np.int64) + cands.n - 1).max() >= k):
@@ -226,7 +231,10 @@ def _check_inputs(pos, vel, fov_deg, cands: Candidates, lon, lat, region):
     if not np.all(np.isfinite(cands.roll_deg)):
         raise ValueError("candidates.roll_deg: must be finite")
     if not (lon.shape == lat.shape == region.shape and lon.ndim == 1):
-        raise ValueError(f"lon_deg, lat_deg, region: expected equal shapes [N], got {lon.shape}, {lat.shape}, {region.shape}")
+        raise ValueError(
+            "lon_deg, lat_deg, region: expected equal shapes [N], got "
+            f"{lon.shape}, {lat.shape}, {region.shape}"
+        )
 
 
 def _as_candidates(c: Candidates) -> Candidates:
@@ -238,16 +246,26 @@ def _as_candidates(c: Candidates) -> Candidates:
     )
 
 
+def _groups(cands: Candidates):
+    """Group id per candidate (by satellite and exact roll) and each group's (sat, roll)."""
+    rolls, r_inv = np.unique(cands.roll_deg, return_inverse=True)
+    keys, gid = np.unique(
+        cands.sat.astype(np.int64) * rolls.size + r_inv.ravel(), return_inverse=True
+    )
+    return gid.ravel().astype(np.int64), keys // rolls.size, rolls[keys % rolls.size]
+
+
 def _union_samples(gid, k0, n, n_samples):
     """Per group, the union of candidate sample ranges, flattened and sorted by (gid, k)."""
-    order = np.lexsort((k0, gid))
-    g, a, b = gid[order].astype(np.int64), k0[order].astype(np.int64), (k0 + n - 1)[order].astype(np.int64)
-    key_a, key_b = g * n_samples + a, g * n_samples + b
+    key_a = gid * n_samples + k0
+    order = np.argsort(key_a, kind="stable")
+    key_a = key_a[order]
+    key_b = key_a + (n[order].astype(np.int64) - 1)
     reach = np.maximum.accumulate(key_b)
-    new = np.ones(a.size, bool)
+    new = np.ones(key_a.size, bool)
     new[1:] = key_a[1:] > reach[:-1] + 1  # starts after everything so far (+ adjacency)
     start = key_a[new]
-    end = np.maximum.reduceat(key_b, np.flatnonzero(new)) if a.size else start
+    end = np.maximum.reduceat(key_b, np.flatnonzero(new)) if key_a.size else start
     length = end - start + 1
     offset = np.repeat(np.cumsum(length) - length, length)
     u_key = np.repeat(start, length) + (np.arange(int(length.sum())) - offset)
@@ -308,16 +326,12 @@ def coverage_slices(pos, vel, fov_deg, candidates: Candidates, lon_deg, lat_deg,
     region = np.asarray(region).ravel()
     _check_inputs(pos, vel, fov, cands, lon, lat, region)
     k_all = pos.shape[1]
-    keys, gid = np.unique(
-        np.stack([cands.sat.astype(np.float64), cands.roll_deg], -1), axis=0, return_inverse=True
-    )
-    gid = gid.ravel().astype(np.int64)
-    g_sat, g_roll = keys[:, 0].astype(np.int64), keys[:, 1]
+    gid, g_sat, g_roll = _groups(cands)
     u_key = _union_samples(gid, cands.k0, cands.n, k_all)
     with jax.enable_x64(True):
         inner, outer, hit = _edges(pos, vel, fov, g_sat, g_roll, u_key, k_all)
         valid, u0 = _validity(hit, u_key, gid, cands.k0, cands.n, k_all)
-        g_maxq = np.zeros(len(keys), np.int64)
+        g_maxq = np.zeros(g_sat.size, np.int64)
         np.maximum.at(g_maxq, gid, cands.n.astype(np.int64) - 1)
         runs = group_runs(inner, outer, hit, u_key, k_all, g_maxq, lon, lat, region)
         tiles = point_tiles(lon, lat)
@@ -326,7 +340,7 @@ def coverage_slices(pos, vel, fov_deg, candidates: Candidates, lon_deg, lat_deg,
     lo, hi, pool, fb = _slices(res, runs, gid, cands, k_all, valid, u0, inner, outer, lon, lat)
     stats = {
         "candidates": int(cands.sat.size),
-        "groups": len(keys),
+        "groups": int(g_sat.size),
         "union_samples": int(u_key.size),
         **runs.stats,
         **res.stats,
@@ -343,7 +357,11 @@ def _run_of(runs, gid, qa, qb, n_samples):
     r_end = runs.run_gid * n_samples + runs.run_end
     r = np.searchsorted(r_end, gid * n_samples + qa, side="left")
     rc = np.minimum(r, max(r_end.size - 1, 0))
-    ok = (r < r_end.size) & (runs.run_gid[rc] == gid) & (runs.run_start[rc] <= qb) if r_end.size else np.zeros(gid.size, bool)
+    ok = (
+        (r < r_end.size) & (runs.run_gid[rc] == gid) & (runs.run_start[rc] <= qb)
+        if r_end.size
+        else np.zeros(gid.size, bool)
+    )
     return np.where(ok, r, -1)
 
 

@@ -158,9 +158,11 @@ def quad_range(inner, outer, n_quads, ref_lon, point):
     s = orient(ix, iy, ox, oy, px, py)
     o = orient(ox[:-1], oy[:-1], ox[1:], oy[1:], px, py)
     i = orient(ix[1:], iy[1:], ix[:-1], iy[:-1], px, py)
-    e = jnp.stack([s[:-1], o, -s[1:], i])
+    a, c = s[:-1], -s[1:]
+    pos = (a >= 0.0) & (o >= 0.0) & (c >= 0.0) & (i >= 0.0)
+    neg = (a <= 0.0) & (o <= 0.0) & (c <= 0.0) & (i <= 0.0)
     j = jnp.arange(g, dtype=jnp.int32)
-    inside = (jnp.all(e >= 0.0, axis=0) | jnp.all(e <= 0.0, axis=0)) & (j < n_quads)
+    inside = (pos | neg) & (j < n_quads)
     first = jnp.min(jnp.where(inside, j, g)).astype(jnp.int32)
     last = jnp.max(jnp.where(inside, j, -1)).astype(jnp.int32)
     return first, last, jnp.sum(inside).astype(jnp.int32)

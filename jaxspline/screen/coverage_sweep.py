@@ -12,7 +12,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.screen.coverage_kernels import quad_range, unwrap_lon
@@ -164,10 +163,22 @@ def group_runs(inner, outer, hit, u_key, n_samples, g_maxq, lon, lat, region) ->
     starts = np.flatnonzero(new_piece)
     nq = np.diff(np.append(starts, aq.size))
     run_last = np.append(np.flatnonzero(new_run)[1:], aq.size) - 1
-    stats = {"quads": int(u.size), "active_quads": int(aq.size), "runs": int(new_run.sum()),
-             "pieces": int(starts.size)}
-    return Runs(aq[starts], nq, a_k[starts], run_id[starts], a_gid[new_run], a_k[new_run],
-                a_k[run_last], stats)
+    stats = {
+        "quads": int(u.size),
+        "active_quads": int(aq.size),
+        "runs": int(new_run.sum()),
+        "pieces": int(starts.size),
+    }
+    return Runs(
+        aq[starts],
+        nq,
+        a_k[starts],
+        run_id[starts],
+        a_gid[new_run],
+        a_k[new_run],
+        a_k[run_last],
+        stats,
+    )
 
 
 def point_tiles(lon, lat) -> Tiles:
@@ -184,7 +195,7 @@ def point_tiles(lon, lat) -> Tiles:
     b = band[order]
     first_in_band = np.searchsorted(b, b, side="left")
     pos = np.arange(b.size) - first_in_band
-    new_tile = (pos % TILE_SIZE == 0)
+    new_tile = pos % TILE_SIZE == 0
     tile = np.cumsum(new_tile) - 1
     slot = pos % TILE_SIZE
     n_t = int(new_tile.sum())
@@ -192,8 +203,15 @@ def point_tiles(lon, lat) -> Tiles:
     idx = np.full((n_t, TILE_SIZE), -1, np.int32)
     pts[tile, slot, 0], pts[tile, slot, 1] = lon[order], lat[order]
     idx[tile, slot] = order
-    box = np.stack([np.nanmin(pts[..., 0], 1), np.nanmax(pts[..., 0], 1),
-                    np.nanmin(pts[..., 1], 1), np.nanmax(pts[..., 1], 1)], -1)
+    box = np.stack(
+        [
+            np.nanmin(pts[..., 0], 1),
+            np.nanmax(pts[..., 0], 1),
+            np.nanmin(pts[..., 1], 1),
+            np.nanmax(pts[..., 1], 1),
+        ],
+        -1,
+    )
     return Tiles(pts, idx, box)
 
 
@@ -215,7 +233,11 @@ def _pairs(runs: Runs, tiles: Tiles, inner, outer, vidx):
         a, b = np.nonzero(m)
         pp.append(a + p0)
         tt.append(b)
-    return np.concatenate(pp or [np.zeros(0, np.int64)]), np.concatenate(tt or [np.zeros(0, np.int64)]), ref
+    return (
+        np.concatenate(pp or [np.zeros(0, np.int64)]),
+        np.concatenate(tt or [np.zeros(0, np.int64)]),
+        ref,
+    )
 
 
 _pair_kernel = jax.jit(
@@ -226,19 +248,17 @@ _pair_kernel = jax.jit(
 def _run_pairs(pp, tt, vidx, nq, ref, tiles: Tiles, inner, outer):
     """Kernel over pairs in fixed chunks -> hit rows (pair index, slot, first, last, count)."""
     out = []
-    ij, oj, ptsj = jnp.asarray(inner), jnp.asarray(outer), jnp.asarray(tiles.pts)
     for c0 in range(0, pp.size, PAIR_CHUNK):
         m = min(PAIR_CHUNK, pp.size - c0)
         sel = np.zeros(PAIR_CHUNK, np.int64)
         sel[:m] = np.arange(c0, c0 + m)
-        p, t = pp[sel], tt[sel]
-        v = jnp.asarray(vidx[p])
-        first, last, count = _pair_kernel(
-            ij[v], oj[v], jnp.asarray(nq[p]), jnp.asarray(ref[p]), ptsj[jnp.asarray(t)]
-        )
+        p, v = pp[sel], vidx[pp[sel]]
+        first, last, count = _pair_kernel(inner[v], outer[v], nq[p], ref[p], tiles.pts[tt[sel]])
         count = np.asarray(count)[:m]
         b, slot = np.nonzero(count > 0)
-        out.append((b + c0, slot, np.asarray(first)[b, slot], np.asarray(last)[b, slot], count[b, slot]))
+        out.append(
+            (b + c0, slot, np.asarray(first)[b, slot], np.asarray(last)[b, slot], count[b, slot])
+        )
     return out
 
 
@@ -256,7 +276,9 @@ def sweep_pairs(runs: Runs, tiles: Tiles, inner, outer) -> SweepHits:
     vidx = _piece_vertices(runs)
     pp, tt, ref = _pairs(runs, tiles, inner, outer, vidx)
     rows = _run_pairs(pp, tt, vidx, runs.piece_nq, ref, tiles, inner, outer)
-    cat = [np.concatenate([r[i] for r in rows]) if rows else np.zeros(0, np.int64) for i in range(5)]
+    cat = [
+        np.concatenate([r[i] for r in rows]) if rows else np.zeros(0, np.int64) for i in range(5)
+    ]
     pair, slot, first, last, count = cat
     piece = pp[pair]
     run = runs.piece_run[piece]
@@ -264,7 +286,13 @@ def sweep_pairs(runs: Runs, tiles: Tiles, inner, outer) -> SweepHits:
     first = runs.piece_k0[piece] + first
     last = runs.piece_k0[piece] + last
     order = np.lexsort((sample, run))
-    run, sample, first, last, count = run[order], sample[order], first[order], last[order], count[order]
+    run, sample, first, last, count = (
+        run[order],
+        sample[order],
+        first[order],
+        last[order],
+        count[order],
+    )
     new = np.ones(run.size, bool)
     new[1:] = (run[1:] != run[:-1]) | (sample[1:] != sample[:-1])
     at = np.flatnonzero(new)
@@ -277,7 +305,12 @@ def sweep_pairs(runs: Runs, tiles: Tiles, inner, outer) -> SweepHits:
     bad = (last - first > 1) | (count != last - first + 1)
     np.logical_or.at(irregular, run, bad)
     order = np.lexsort((last, first, run))
-    stats = {"pairs": int(pp.size), "point_quad_tests": int(pp.size) * TILE_SIZE * PIECE_QUADS,
-             "run_sample_entries": int(run.size), "irregular_runs": int(irregular.sum())}
-    return SweepHits(run[order], sample[order].astype(np.int32), first[order], last[order],
-                     irregular, stats)
+    stats = {
+        "pairs": int(pp.size),
+        "point_quad_tests": int(pp.size) * TILE_SIZE * PIECE_QUADS,
+        "run_sample_entries": int(run.size),
+        "irregular_runs": int(irregular.sum()),
+    }
+    return SweepHits(
+        run[order], sample[order].astype(np.int32), first[order], last[order], irregular, stats
+    )
