@@ -35,8 +35,8 @@ def _parse(argv):
     p.add_argument(
         "--section",
         action="append",
-        choices=["bandwidth", "kernels", "threads", "devices", "screening", "scale"],
-        help="run only these sections (repeatable; scale runs only when named)",
+        choices=["bandwidth", "kernels", "threads", "devices", "screening", "scale", "coverage"],
+        help="run only these sections (repeatable; scale and coverage run only when named)",
     )
     p.add_argument(
         "--only",
@@ -389,13 +389,19 @@ def main(argv=None) -> int:
         report["scale"] = bench_scale(
             sizes, args.time_limit, args.max_rss_gb, args.max_wall_min, args.scale_dir
         )
+    if "coverage" in sections:  # its own files: coverage.json, COVERAGE.md
+        from bench.coverage import bench_coverage, write_coverage
+
+        report["coverage"] = bench_coverage(reps=max(1, args.reps // 2))
     report["total_s"] = time.perf_counter() - t_all
+    if "coverage" in sections:
+        write_coverage({k: v for k, v in report.items() if k not in sections - {"coverage"}}, out)
     if "scale" in sections:  # its own files: scale.json, SCALE.md
         write_scale({k: v for k, v in report.items() if k not in sections - {"scale"}}, out)
-    if sections - {"scale"}:
+    if sections - {"scale", "coverage"}:
         from bench.report import write_outputs
 
-        write_outputs({k: v for k, v in report.items() if k != "scale"}, out)
+        write_outputs({k: v for k, v in report.items() if k not in ("scale", "coverage")}, out)
     return 0
 
 

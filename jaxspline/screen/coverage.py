@@ -49,6 +49,7 @@ import numpy as np
 from jaxspline.screen.coverage_kernels import edge_points, quad_range
 from jaxspline.screen.coverage_sweep import (
     PIECE_QUADS,
+    chunk_size,
     group_runs,
     point_tiles,
     sweep_pairs,
@@ -64,7 +65,8 @@ __all__ = [
     "coverage_table",
 ]
 
-EDGE_CHUNK = 1 << 15  # samples per edge-point call (fixed shape, padded)
+EDGE_CHUNK = 1 << 15  # samples per edge-point call (at most; fixed shapes, padded)
+MIN_EDGE_CHUNK = 1 << 10  # smallest padded edge-point chunk
 MIN_STRIP_BUCKET = 16  # direct sweeps pad a strip to a power of two >= this (few compiles)
 
 
@@ -281,7 +283,7 @@ def _edges(pos, vel, fov, g_sat, g_roll, u_key, n_samples):
     for c0 in range(0, u, EDGE_CHUNK):
         sl = slice(c0, min(c0 + EDGE_CHUNK, u))
         m = sl.stop - sl.start
-        idx = np.zeros(EDGE_CHUNK, np.int64)
+        idx = np.zeros(chunk_size(m, MIN_EDGE_CHUNK, EDGE_CHUNK), np.int64)
         idx[:m] = np.arange(sl.start, sl.stop)
         p = jnp.asarray(pos[sat[idx], u_k[idx]])
         v = jnp.asarray(vel[sat[idx], u_k[idx]])

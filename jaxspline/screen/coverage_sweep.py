@@ -23,6 +23,7 @@ __all__ = [
     "Tiles",
     "SweepHits",
     "boxes_meet",
+    "chunk_size",
     "group_runs",
     "point_tiles",
     "sweep_pairs",
@@ -31,7 +32,8 @@ __all__ = [
 PIECE_QUADS = 8  # quads per kernel piece (G)
 TILE_SIZE = 64  # grid points per tile
 TILE_BAND_DEG = 0.4  # latitude band height of the tiles [deg] (~9 rows of 5 km samples)
-PAIR_CHUNK = 2048  # (piece, tile) pairs per kernel call
+PAIR_CHUNK = 2048  # (piece, tile) pairs per kernel call (at most)
+MIN_PAIR_CHUNK = 128  # smallest padded pair chunk (small calls pad to a power of two)
 PIECE_BLOCK = 4096  # pieces per bounding-box pairing block (bounds host memory)
 SHIFTS_DEG = (-360.0, 0.0, 360.0)  # whole-turn shifts tried when boxes are compared
 
@@ -93,6 +95,21 @@ class SweepHits(NamedTuple):
     last: np.ndarray
     irregular: np.ndarray
     stats: dict
+
+
+def chunk_size(remaining: int, smallest: int, largest: int) -> int:
+    """Padded size of the next fixed-shape chunk: a power of two in [smallest, largest].
+
+    Few distinct shapes (few compilations), little padding on small calls.
+
+    Args:
+      remaining: items left (> 0).
+      smallest: smallest chunk (a power of two).
+      largest: largest chunk (a power of two).
+    Returns:
+      int, ``min(largest, max(smallest, next power of two >= remaining))``.
+    """
+    return min(largest, max(smallest, 1 << max(remaining - 1, 0).bit_length()))
 
 
 def boxes_meet(a, b) -> np.ndarray:
@@ -250,7 +267,7 @@ def _run_pairs(pp, tt, vidx, nq, ref, tiles: Tiles, inner, outer):
     out = []
     for c0 in range(0, pp.size, PAIR_CHUNK):
         m = min(PAIR_CHUNK, pp.size - c0)
-        sel = np.zeros(PAIR_CHUNK, np.int64)
+        sel = np.zeros(chunk_size(m, MIN_PAIR_CHUNK, PAIR_CHUNK), np.int64)
         sel[:m] = np.arange(c0, c0 + m)
         p, v = pp[sel], vidx[pp[sel]]
         first, last, count = _pair_kernel(inner[v], outer[v], nq[p], ref[p], tiles.pts[tt[sel]])
