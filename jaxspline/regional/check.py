@@ -148,7 +148,17 @@ class CheckReport:
 
 
 @dataclass
-class _Act:
+class ParsedAction:
+    """One readable action, in seconds from the horizon start.
+
+    Attributes:
+      index: position in the solution's actions.
+      sat: satellite index in ``Case.satellites``.
+      start: start [s].
+      end: end [s].
+      roll: roll [deg].
+    """
+
     index: int
     sat: int
     start: float
@@ -188,7 +198,7 @@ def _start_seconds(case: Case, raw: dict, where: str, out: list) -> float | None
     return case.seconds(value)
 
 
-def _parse(case: Case, actions: list, out: list) -> list[_Act]:
+def _parse(case: Case, actions: list, out: list) -> list[ParsedAction]:
     """Structure and satellite ids; returns the actions that could be read."""
     sat_index = case.satellite_index()
     acts = []
@@ -210,7 +220,7 @@ def _parse(case: Case, actions: list, out: list) -> list[_Act]:
         roll = _number(raw, "roll_deg", where, errs)
         out.extend(Violation(v.rule, i, v.message) for v in errs)
         if not errs:
-            acts.append(_Act(i, sat_index[sid], start, start + dur, roll))
+            acts.append(ParsedAction(i, sat_index[sid], start, start + dur, roll))
     return acts
 
 
@@ -219,7 +229,7 @@ def _aligned(value: float, step: float) -> bool:
     return abs(q - round(q)) <= ALIGN_TOL
 
 
-def _own_rules(case: Case, act: _Act) -> list[Violation]:
+def _own_rules(case: Case, act: ParsedAction) -> list[Violation]:
     """Rules 2-3 of one action (horizon, grid, duration, band)."""
     sat = case.satellites[act.sat]
     sen, dur, i = sat.sensor, act.end - act.start, act.index
@@ -248,7 +258,7 @@ def _own_rules(case: Case, act: _Act) -> list[Violation]:
     return out
 
 
-def _coverage(case: Case, act: _Act, track: Track, out: list) -> np.ndarray | None:
+def _coverage(case: Case, act: ParsedAction, track: Track, out: list) -> np.ndarray | None:
     """Rays, quads and the covered sample mask of one action (None if its rays fail)."""
     sen = case.satellites[act.sat].sensor
     offsets = sample_offsets(act.end - act.start, case.sample_step_s)
@@ -269,14 +279,16 @@ def _coverage(case: Case, act: _Act, track: Track, out: list) -> np.ndarray | No
     return covered_by_quads(quads, case.grid.lon_deg, case.grid.lat_deg)
 
 
-def slew_angle(case: Case, prev: _Act, nxt: _Act, track: Track) -> float:
+def slew_angle(track: Track, prev: ParsedAction, nxt: ParsedAction) -> float:
     """Slew angle between two actions of one satellite: max(|Δroll|, boresight angle).
 
+    The boresight angle is the angle between the Earth-fixed center-roll look directions
+    at ``prev``'s end and ``nxt``'s start (the official verifier's angle).
+
     Args:
-      case: Case.
-      prev: the earlier action (its end).
-      nxt: the later action (its start).
       track: the satellite's Track.
+      prev: the earlier action (its end and roll).
+      nxt: the later action (its start and roll).
     Returns:
       float [deg].
     """
@@ -302,7 +314,7 @@ def _schedule(case: Case, acts: list, tracks: list, out: list) -> dict:
                     )
                 )
                 continue
-            d = slew_angle(case, prev, nxt, tracks[k])
+            d = slew_angle(tracks[k], prev, nxt)
             need = bang_coast_bang_time(d, ag.rate_deg_s, ag.accel_deg_s2) + ag.settling_s
             gap = nxt.start - prev.end
             if gap + GAP_TOL_S < need:
@@ -365,7 +377,7 @@ def battery_trace(case: Case, k: int, acts: list, windows: list, track: Track):
     Args:
       case: Case.
       k: satellite index.
-      acts: that satellite's scheduled actions.
+      acts: that satellite's scheduled actions (ParsedAction).
       windows: its maneuver windows [(start, end)] [s].
       track: its Track.
     Returns:

@@ -419,3 +419,45 @@ def test_cli_exit_codes(tmp_path, case1, valid12, capsys):
     assert main(["regional", "check", case_dir, str(tmp_path / "broken.json")]) == 2
     assert main(["regional", "check", str(tmp_path / "nocase"), str(good)]) == 2
     assert "not found" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- layout
+
+CHECKER = ("check", "check_geometry")
+ALLOWED = {
+    "jaxspline.regional.case",
+    "jaxspline.regional.check_geometry",
+    "jaxspline.aeossp.check_frames",
+}
+
+
+@pytest.mark.parametrize("name", CHECKER)
+def test_checker_is_independent(name):
+    """The checker imports nothing of the package but the case reader, its own geometry
+    and the other benchmark's independent frame models: no solver code."""
+    import ast
+
+    import jaxspline.regional as pkg
+
+    path = Path(pkg.__file__).parent / f"{name}.py"
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and (node.module or "").startswith("jaxspline"):
+            found.add(node.module)
+        elif isinstance(node, ast.Import):
+            found.update(a.name for a in node.names if a.name.startswith("jaxspline"))
+    assert found <= ALLOWED, found - ALLOWED
+
+
+@pytest.mark.parametrize("name", ("case", "case_fields", "check", "check_geometry", "cli"))
+def test_public_names_documented(name):
+    import importlib
+    import inspect
+
+    mod = importlib.import_module(f"jaxspline.regional.{name}")
+    assert mod.__doc__
+    for attr, obj in vars(mod).items():
+        if attr.startswith("_") or getattr(obj, "__module__", None) != mod.__name__:
+            continue
+        if inspect.isfunction(obj) or inspect.isclass(obj):
+            assert obj.__doc__, f"{name}.{attr} has no docstring"
