@@ -39,7 +39,13 @@ TLE + GCRF/ITRF") and how this checker follows it:
   duration, band) is left out of everything else; one whose rays miss keeps its place
   in the schedule (slew, duty, battery) but covers nothing. Deviation: an action whose
   ``type`` is not ``"strip_observation"`` is a violation here (the official verifier
-  skips it, though it counts toward the action cap).
+  skips it, though it counts toward the action cap); a ``start_time`` without a zone
+  is refused by both.
+
+Agreement with a replica of the official metric path written on brahe 1.8.0 + shapely
+(not part of the package): on 64-action valid solutions of case_0001 and case_0004 the
+covered sample sets are identical (coverage_ratio equal to the last digit) and the
+lowest battery level agrees to 5e-12 Wh.
 """
 
 from __future__ import annotations
