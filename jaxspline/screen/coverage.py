@@ -379,16 +379,38 @@ def _fallback(cand, u0, n, run, hits, inner, outer, lon, lat):
     return rows
 
 
+def _bound_tables(hits, runs, n_samples):
+    """Per run r and quad q of its span: pool bounds of the samples whose range meets q.
+
+    ``lo_t`` is the first sample with (first, last) >= (q - 1, q), ``hi_t`` one past the
+    last with first <= q (for regular runs, where last - first <= 1). Indexed by
+    ``off[r] + q - run_start[r]``.
+    """
+    span = runs.run_end - runs.run_start + 1
+    off = np.zeros(span.size + 1, np.int64)
+    np.cumsum(span, out=off[1:])
+    r = np.repeat(np.arange(span.size), span)
+    q = runs.run_start[r] + (np.arange(off[-1]) - off[r])
+    big = 2 * n_samples + 4
+    gkey = hits.run * big + 2 * hits.first + (hits.last - hits.first)
+    lo_t = np.searchsorted(gkey, r * big + 2 * q - 1, side="left")
+    hi_t = np.searchsorted(gkey, r * big + 2 * q + 1, side="right")
+    return off, lo_t, hi_t
+
+
 def _slices(hits, runs, gid, cands, n_samples, valid, u0, inner, outer, lon, lat):
-    """lo, hi into the pool per candidate (two binary searches each), the pool, #fallbacks."""
+    """lo, hi into the pool per candidate (two table look-ups each), the pool, #fallbacks."""
     qa = cands.k0.astype(np.int64)
     qb = qa + cands.n - 2
     run = _run_of(runs, gid, qa, qb, n_samples)
-    big = 2 * n_samples + 4
-    gkey = hits.run * big + 2 * hits.first + (hits.last - hits.first)
     rr = np.maximum(run, 0)
-    lo = np.searchsorted(gkey, rr * big + 2 * qa - 1, side="left")
-    hi = np.searchsorted(gkey, rr * big + 2 * qb + 1, side="right")
+    if runs.run_start.size:
+        off, lo_t, hi_t = _bound_tables(hits, runs, n_samples)
+        rs, re = runs.run_start[rr], runs.run_end[rr]
+        lo = lo_t[off[rr] + np.clip(qa, rs, re) - rs]
+        hi = hi_t[off[rr] + np.clip(qb, rs, re) - rs]
+    else:
+        lo = hi = np.zeros(qa.size, np.int64)
     use = (run >= 0) & valid
     irregular = use & hits.irregular[rr] if hits.irregular.size else np.zeros(use.size, bool)
     use &= ~irregular

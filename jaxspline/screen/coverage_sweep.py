@@ -302,14 +302,9 @@ def sweep_pairs(runs: Runs, tiles: Tiles, inner, outer) -> SweepHits:
     sample = tiles.idx[tt[pair], slot].astype(np.int64)
     first = runs.piece_k0[piece] + first
     last = runs.piece_k0[piece] + last
-    order = np.lexsort((sample, run))
-    run, sample, first, last, count = (
-        run[order],
-        sample[order],
-        first[order],
-        last[order],
-        count[order],
-    )
+    n_pts = int(tiles.idx.max()) + 1 if tiles.idx.size else 1
+    order = np.argsort(run * n_pts + sample, kind="stable")
+    run, sample, first, last, count = (x[order] for x in (run, sample, first, last, count))
     new = np.ones(run.size, bool)
     new[1:] = (run[1:] != run[:-1]) | (sample[1:] != sample[:-1])
     at = np.flatnonzero(new)
@@ -319,9 +314,9 @@ def sweep_pairs(runs: Runs, tiles: Tiles, inner, outer) -> SweepHits:
         count = np.add.reduceat(count, at)
         run, sample = run[at], sample[at]
     irregular = np.zeros(runs.run_gid.size, bool)
-    bad = (last - first > 1) | (count != last - first + 1)
-    np.logical_or.at(irregular, run, bad)
-    order = np.lexsort((last, first, run))
+    irregular[np.unique(run[(last - first > 1) | (count != last - first + 1)])] = True
+    span = int(runs.run_end.max()) + 2 if runs.run_end.size else 1
+    order = np.argsort((run * span + first) * span + last, kind="stable")
     stats = {
         "pairs": int(pp.size),
         "point_quad_tests": int(pp.size) * TILE_SIZE * PIECE_QUADS,
