@@ -23,6 +23,15 @@ Public API (float64 inside; array arguments are numpy):
   batched helpers here: ``strip_quads`` (edge points of one strip) and
   ``covered_samples`` (direct sweep of one strip, the reference for the engine).
 
+Semantics: RULES.md's geometry (see :mod:`jaxspline.screen.coverage_kernels`), a sample
+inside or on the border of any quad. Longitudes are unwrapped across the antimeridian (the
+true geometry); the official verifier (per R1's reading, ``jaxspline.regional.check``) builds
+quads from raw longitudes, so a quad crossing +-180 deg spans the long way round there. No
+region of the benchmark's library lies within 44 deg of +-180 deg, so a strip that covers a
+region sample never crosses it and both agree; strips crossing it are scored differently
+(this engine never claims the verifier's long-way "phantom" coverage). Per action, the
+covered sets equal those of R1's independent checker (tested).
+
 How (the sweep structure). Candidates are grouped by (satellite, roll). Per group the
 edge points are computed once on the union of the candidates' sample ranges; quads whose
 bounding box misses every region's bounding box are dropped (the coarse filter); the
@@ -92,15 +101,17 @@ class CoverageTable(NamedTuple):
     Attributes:
       indptr: int64 [C+1]; row c is ``indices[indptr[c]:indptr[c+1]]``.
       indices: int32 [nnz], grid sample indices (unsorted within a row, no repeats).
+      valid: bool [C], every ray of the strip meets the Earth (else the row is empty).
     """
 
     indptr: np.ndarray
     indices: np.ndarray
+    valid: np.ndarray
 
     @property
     def nbytes(self) -> int:
-        """Bytes of the two arrays."""
-        return int(self.indptr.nbytes + self.indices.nbytes)
+        """Bytes of the arrays."""
+        return int(self.indptr.nbytes + self.indices.nbytes + self.valid.nbytes)
 
 
 class CoverageSlices(NamedTuple):
@@ -144,7 +155,7 @@ class CoverageSlices(NamedTuple):
         np.cumsum(cnt, out=indptr[1:])
         starts = np.repeat(lo - indptr[:-1], cnt)
         idx = self.pool[starts + np.arange(indptr[-1], dtype=np.int64)]
-        return CoverageTable(indptr, idx)
+        return CoverageTable(indptr, idx, self.valid[c0:c1])
 
     def gains(self, weight: np.ndarray) -> np.ndarray:
         """``sum(weight[covered])`` per candidate.
@@ -433,7 +444,6 @@ def coverage_table(pos, vel, fov_deg, candidates: Candidates, lon_deg, lat_deg, 
       pos, vel, fov_deg, candidates, lon_deg, lat_deg, region: as for
         :func:`coverage_slices`.
     Returns:
-      (CoverageTable, valid bool [C]).
+      CoverageTable (all C rows; 8 bytes per candidate + 4 per covered sample).
     """
-    sl = coverage_slices(pos, vel, fov_deg, candidates, lon_deg, lat_deg, region)
-    return sl.csr(), sl.valid
+    return coverage_slices(pos, vel, fov_deg, candidates, lon_deg, lat_deg, region).csr()

@@ -97,6 +97,7 @@ def test_engine_equals_shapely_baseline_on_random_candidates():
     assert nonempty >= 25  # the comparison is not vacuous
     assert np.all(cov.counts() >= 0)
     tab = cov.csr(10, 60)
+    np.testing.assert_array_equal(tab.valid, cov.valid[10:60])
     for i, c in enumerate(range(10, 60)):
         np.testing.assert_array_equal(
             np.sort(tab.indices[tab.indptr[i] : tab.indptr[i + 1]]), _row(cov, c)
