@@ -76,6 +76,7 @@ __all__ = [
 
 EDGE_CHUNK = 1 << 15  # samples per edge-point call (at most; fixed shapes, padded)
 MIN_EDGE_CHUNK = 1 << 10  # smallest padded edge-point chunk
+CAND_CHUNK = 1 << 20  # candidates per host step (bounds the per-candidate temporaries)
 MIN_STRIP_BUCKET = 16  # direct sweeps pad a strip to a power of two >= this (few compiles)
 
 
@@ -306,11 +307,15 @@ def _edges(pos, vel, fov, g_sat, g_roll, u_key, n_samples):
 
 
 def _validity(hit, u_key, gid, k0, n, n_samples):
-    """valid[c]: every sample of candidate c hits; and the U index of its first sample."""
-    u0 = np.searchsorted(u_key, gid.astype(np.int64) * n_samples + k0)
+    """valid[c]: every sample of candidate c hits (candidate chunks bound the temporaries)."""
     miss = np.zeros(hit.size + 1, np.int64)
     np.cumsum(~hit, out=miss[1:])
-    return miss[u0 + n] == miss[u0], u0
+    valid = np.empty(gid.size, bool)
+    for c0 in range(0, gid.size, CAND_CHUNK):
+        sl = slice(c0, c0 + CAND_CHUNK)
+        u0 = np.searchsorted(u_key, gid[sl] * n_samples + k0[sl])
+        valid[sl] = miss[u0 + n[sl]] == miss[u0]
+    return valid
 
 
 def coverage_slices(pos, vel, fov_deg, candidates: Candidates, lon_deg, lat_deg, region):
@@ -343,14 +348,15 @@ def coverage_slices(pos, vel, fov_deg, candidates: Candidates, lon_deg, lat_deg,
     u_key = _union_samples(gid, cands.k0, cands.n, k_all)
     with jax.enable_x64(True):
         inner, outer, hit = _edges(pos, vel, fov, g_sat, g_roll, u_key, k_all)
-        valid, u0 = _validity(hit, u_key, gid, cands.k0, cands.n, k_all)
+        valid = _validity(hit, u_key, gid, cands.k0, cands.n, k_all)
         g_maxq = np.zeros(g_sat.size, np.int64)
         np.maximum.at(g_maxq, gid, cands.n.astype(np.int64) - 1)
         runs = group_runs(inner, outer, hit, u_key, k_all, g_maxq, lon, lat, region)
         tiles = point_tiles(lon, lat)
         res = sweep_pairs(runs, tiles, inner, outer)
     t1 = time.perf_counter()
-    lo, hi, pool, fb = _slices(res, runs, gid, cands, k_all, valid, u0, inner, outer, lon, lat)
+    geo = (u_key, inner, outer, lon, lat)
+    lo, hi, pool, fb = _slices(res, runs, gid, cands, k_all, valid, geo)
     stats = {
         "candidates": int(cands.sat.size),
         "groups": int(g_sat.size),
@@ -378,13 +384,17 @@ def _run_of(runs, gid, qa, qb, n_samples):
     return np.where(ok, r, -1)
 
 
-def _fallback(cand, u0, n, run, hits, inner, outer, lon, lat):
+def _fallback(cand, hits, runs, gid, cands, n_samples, geo):
     """Direct sweeps of candidates whose run is irregular, against the run's samples."""
+    u_key, inner, outer, lon, lat = geo
+    k0, n = cands.k0[cand].astype(np.int64), cands.n[cand].astype(np.int64)
+    run = _run_of(runs, gid[cand], k0, k0 + n - 2, n_samples)
+    u0 = np.searchsorted(u_key, gid[cand] * n_samples + k0)
     ptr = np.searchsorted(hits.run, np.arange(hits.irregular.size + 1))
     rows = []
-    for c in cand:
-        pts = hits.sample[ptr[run[c]] : ptr[run[c] + 1]]
-        sl = slice(u0[c], u0[c] + n[c])
+    for i in range(cand.size):
+        pts = hits.sample[ptr[run[i]] : ptr[run[i] + 1]]
+        sl = slice(u0[i], u0[i] + n[i])
         got = covered_samples(inner[sl], outer[sl], lon[pts], lat[pts])
         rows.append(pts[got].astype(np.int32))
     return rows
@@ -409,32 +419,45 @@ def _bound_tables(hits, runs, n_samples):
     return off, lo_t, hi_t
 
 
-def _slices(hits, runs, gid, cands, n_samples, valid, u0, inner, outer, lon, lat):
-    """lo, hi into the pool per candidate (two table look-ups each), the pool, #fallbacks."""
-    qa = cands.k0.astype(np.int64)
-    qb = qa + cands.n - 2
+def _slice_chunk(hits, runs, tables, gid, qa, qb, n_samples):
+    """(lo, hi, run) of a chunk of candidates with quads [qa, qb] (table look-ups)."""
     run = _run_of(runs, gid, qa, qb, n_samples)
     rr = np.maximum(run, 0)
-    if runs.run_start.size:
-        off, lo_t, hi_t = _bound_tables(hits, runs, n_samples)
-        rs, re = runs.run_start[rr], runs.run_end[rr]
-        lo = lo_t[off[rr] + np.clip(qa, rs, re) - rs]
-        hi = hi_t[off[rr] + np.clip(qb, rs, re) - rs]
-    else:
-        lo = hi = np.zeros(qa.size, np.int64)
-    use = (run >= 0) & valid
-    irregular = use & hits.irregular[rr] if hits.irregular.size else np.zeros(use.size, bool)
-    use &= ~irregular
-    lo, hi = np.where(use, lo, 0), np.where(use, hi, 0)
+    if tables is None:
+        return np.zeros(qa.size, np.int64), np.zeros(qa.size, np.int64), run
+    off, lo_t, hi_t = tables
+    rs, re = runs.run_start[rr], runs.run_end[rr]
+    lo = lo_t[off[rr] + np.clip(qa, rs, re) - rs]
+    hi = hi_t[off[rr] + np.clip(qb, rs, re) - rs]
+    return lo, hi, run
+
+
+def _slices(hits, runs, gid, cands, n_samples, valid, geo):
+    """lo, hi into the pool per candidate (in candidate chunks), the pool, #fallbacks."""
+    c = gid.size
+    tables = _bound_tables(hits, runs, n_samples) if runs.run_start.size else None
+    lo, hi = np.zeros(c, np.int64), np.zeros(c, np.int64)
+    irregular = np.zeros(c, bool)
+    for c0 in range(0, c, CAND_CHUNK):
+        sl = slice(c0, c0 + CAND_CHUNK)
+        qa = cands.k0[sl].astype(np.int64)
+        lo_c, hi_c, run = _slice_chunk(
+            hits, runs, tables, gid[sl], qa, qa + cands.n[sl] - 2, n_samples
+        )
+        use = (run >= 0) & valid[sl]
+        if hits.irregular.size:
+            irregular[sl] = use & hits.irregular[np.maximum(run, 0)]
+        use &= ~irregular[sl]
+        lo[sl], hi[sl] = np.where(use, lo_c, 0), np.where(use, hi_c, 0)
     pool = hits.sample
     fb = np.flatnonzero(irregular)
     if fb.size:
-        rows = _fallback(fb, u0, cands.n, run, hits, inner, outer, lon, lat)
+        rows = _fallback(fb, hits, runs, gid, cands, n_samples, geo)
         sizes = np.array([r.size for r in rows], np.int64)
         lo[fb] = pool.size + np.cumsum(sizes) - sizes
         hi[fb] = lo[fb] + sizes
         pool = np.concatenate([pool, *rows])
-    return lo.astype(np.int64), hi.astype(np.int64), pool, fb.size
+    return lo, hi, pool, fb.size
 
 
 def coverage_table(pos, vel, fov_deg, candidates: Candidates, lon_deg, lat_deg, region):
