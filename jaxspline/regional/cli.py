@@ -7,6 +7,12 @@ writes the JSON report to OUT (``-`` = stdout). Exit code 0 if the solution is v
 1 if not, 2 on unreadable input files (the ``jaxspline`` entry point maps ``ValueError``
 to 2).
 
+``jaxspline regional solve CASE_DIR -o solution.json [--time-limit S] [--seed N] [--force]
+[--json OUT]`` plans the case (:func:`jaxspline.regional.solve.solve_case`) within S seconds
+counted from the command's start, writes the solution atomically (an existing file only
+with ``--force``), prints coverage, actions, bound and gap, then checks the solution as
+``check`` does (same exit codes).
+
 Each sub-command is one ``_cmd_*`` function plus a few lines in :func:`register`; a new
 one (e.g. ``solve``) adds its parser there and may reuse :func:`check_and_print`.
 """
@@ -71,13 +77,38 @@ def _cmd_check(args) -> int:
     return check_and_print(case, solution, args.json)
 
 
+def _cmd_solve(args) -> int:
+    import json
+
+    from jaxspline.regional.case import load_case
+    from jaxspline.regional.solve import solve_case
+
+    t0 = time.perf_counter()
+    if not args.time_limit > 0:
+        raise ValueError(f"--time-limit: must be > 0, got {args.time_limit}")
+    out = Path(args.output)
+    if out.exists() and not args.force:
+        raise ValueError(f"{out}: exists (use --force to overwrite)")
+    case = load_case(args.case_dir)
+    solution, st = solve_case(case, time_limit=args.time_limit, seed=args.seed, t_start=t0)
+    write_text_atomic(str(out), json.dumps(solution, indent=1) + "\n")
+    print(
+        f"wrote {out}: coverage_ratio {st['coverage_ratio']:.5f}, weighted "
+        f"{st['weighted_coverage_ratio']:.5f}, {st['actions']} actions, bound {st['bound']:.5f}, "
+        f"gap {st['gap']:.5f} ({time.perf_counter() - t0:.1f} s)"
+    )
+    return check_and_print(case, solution, args.json)
+
+
 def register(sub) -> None:
     """Register ``regional check`` on the ``jaxspline`` sub-parsers.
 
     Args:
       sub: the ``argparse`` sub-parsers object of the ``jaxspline`` command.
     """
-    p = sub.add_parser("regional", help="regional_coverage benchmark: check a solution")
+    p = sub.add_parser(
+        "regional", help="regional_coverage benchmark: solve a case or check a solution"
+    )
     rsub = p.add_subparsers(dest="regional_command", required=True)
     c = rsub.add_parser(
         "check", help="check a solution against RULES.md (exit 0 valid, 1 invalid, 2 bad input)"
@@ -86,3 +117,11 @@ def register(sub) -> None:
     c.add_argument("solution", help="solution JSON file")
     c.add_argument("--json", metavar="OUT", help="write the JSON report to OUT ('-' = stdout)")
     c.set_defaults(func=_cmd_check)
+    s = rsub.add_parser("solve", help="plan a case, write the solution, check it (exit 0 if valid)")
+    s.add_argument("case_dir", help="case directory")
+    s.add_argument("-o", "--output", required=True, help="solution JSON to write")
+    s.add_argument("--time-limit", type=float, default=120.0, help="wall-clock budget [s]")
+    s.add_argument("--seed", type=int, default=0, help="random seed of the search")
+    s.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    s.add_argument("--json", metavar="OUT", help="write the check report to OUT ('-' = stdout)")
+    s.set_defaults(func=_cmd_solve)
