@@ -47,8 +47,8 @@ def _parse(argv):
     p.add_argument(
         "--section",
         action="append",
-        choices=["bandwidth", "kernels", "threads", "screening", "scale", "job"],
-        help="run only these sections (repeatable; scale and job run only when named)",
+        choices=["bandwidth", "kernels", "threads", "screening", "scale", "job", "coverage"],
+        help="run only these sections (repeatable; scale, job and coverage run only when named)",
     )
     p.add_argument(
         "--only",
@@ -368,18 +368,24 @@ def _child_or_error(spec: dict, tag: dict) -> dict:
 # ------------------------------------------------------------------ driver
 #: Sections with files of their own (``scale.json`` / ``SCALE.md``, ...); the others
 #: share ``report.json`` / ``RESULTS.md``.
-OWN_FILES = ("screening", "scale", "job")
+OWN_FILES = ("screening", "scale", "job", "coverage")
 
 
 def _write(report: dict, sections: set, out: Path) -> None:
     """Write each measured section's files: the common ones and those of its own."""
+    from bench.coverage import write_coverage
     from bench.job import write_job
     from bench.report import write_outputs, write_screening
     from bench.scale import write_scale
 
     common = {k: v for k, v in report.items() if k not in OWN_FILES}
     meta = {k: report[k] for k in ("machine", "args", "total_s")}
-    writers = {"screening": write_screening, "scale": write_scale, "job": write_job}
+    writers = {
+        "screening": write_screening,
+        "scale": write_scale,
+        "job": write_job,
+        "coverage": write_coverage,
+    }
     for name in OWN_FILES:
         if name in sections:
             writers[name]({**meta, name: report[name]}, out)
@@ -447,6 +453,10 @@ def main(argv=None) -> int:
         report["job"] = bench_job(
             args.job_runs, args.job_max_iters, args.max_rss_gb, args.max_wall_min
         )
+    if "coverage" in sections:
+        from bench.coverage import bench_coverage
+
+        report["coverage"] = bench_coverage(reps=max(1, args.reps // 2))
     report["total_s"] = time.perf_counter() - t_all
     _write(report, sections, out)
     return 0

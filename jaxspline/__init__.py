@@ -20,7 +20,8 @@ then the path a plan's data takes:
 - :mod:`jaxspline.products` - plan files, CZML, attitude history and AEM, figures, the
   web page;
 - :mod:`jaxspline.cli` - the ``jaxspline`` command (parse and print);
-- :mod:`jaxspline.aeossp` - the aeossp_standard benchmark adapter.
+- :mod:`jaxspline.aeossp` - the aeossp_standard benchmark adapter;
+- :mod:`jaxspline.regional` - the regional_coverage benchmark adapter (area coverage).
 
 This namespace holds the entry points and the headline types and kernels; everything
 else lives in the folders' namespaces (``jaxspline.geometry.gmst``). The library never

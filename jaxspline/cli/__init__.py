@@ -69,6 +69,7 @@ _SUBCOMMAND_MODULES = (
     "jaxspline.cli.bound",
     "jaxspline.cli.view",
     "jaxspline.aeossp.cli",
+    "jaxspline.regional.cli",
 )
 
 

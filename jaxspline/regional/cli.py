@@ -1,0 +1,127 @@
+"""``jaxspline regional ...``: the regional_coverage benchmark adapter's commands.
+
+``jaxspline regional check CASE_DIR SOLUTION.json [--json OUT]`` checks a solution with
+the independent checker (:mod:`jaxspline.regional.check`), prints coverage_ratio,
+weighted_coverage_ratio, num_actions, the lowest battery level and the violations, and
+writes the JSON report to OUT (``-`` = stdout). Exit code 0 if the solution is valid,
+1 if not, 2 on unreadable input files (the ``jaxspline`` entry point maps ``ValueError``
+to 2).
+
+``jaxspline regional solve CASE_DIR -o solution.json [--time-limit S] [--seed N] [--force]
+[--json OUT]`` plans the case (:func:`jaxspline.regional.solve.solve_case`) within S seconds
+counted from the command's start, writes the solution atomically (an existing file only
+with ``--force``), prints coverage, actions, bound and gap, then checks the solution as
+``check`` does (same exit codes).
+
+Each sub-command is one ``_cmd_*`` function plus a few lines in :func:`register`; a new
+one (e.g. ``solve``) adds its parser there and may reuse :func:`check_and_print`.
+"""
+
+from __future__ import annotations
+
+import os
+import tempfile
+import time
+from pathlib import Path
+
+
+def write_text_atomic(target: str, text: str) -> None:
+    """Write ``text`` to ``target`` through a temporary file and ``os.replace``.
+
+    Args:
+      target: path, or ``-`` for stdout.
+      text: the content.
+    """
+    if target == "-":
+        print(text)
+        return
+    path = Path(target)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            fh.write(text)
+        os.chmod(tmp, 0o644)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def check_and_print(case, solution, json_out: str | None) -> int:
+    """Check ``solution``, print the readable report, write the JSON one if asked.
+
+    Args:
+      case: the loaded Case.
+      solution: the solution dict (``{"actions": [...]}``).
+      json_out: path for the JSON report (``-`` = stdout), or None.
+    Returns:
+      int, exit code: 0 valid, 1 invalid.
+    """
+    from jaxspline.regional.check import check_solution, format_report
+
+    t0 = time.perf_counter()
+    report = check_solution(case, solution)
+    print(format_report(report))
+    print(f"checked in {time.perf_counter() - t0:.1f} s")
+    if json_out:
+        write_text_atomic(json_out, report.to_json() + "\n")
+    return 0 if report.valid else 1
+
+
+def _cmd_check(args) -> int:
+    from jaxspline.regional.case import load_case, load_solution
+
+    case = load_case(args.case_dir)
+    solution = load_solution(args.solution)
+    return check_and_print(case, solution, args.json)
+
+
+def _cmd_solve(args) -> int:
+    import json
+
+    from jaxspline.regional.case import load_case
+    from jaxspline.regional.solve import solve_case
+
+    t0 = time.perf_counter()
+    if not args.time_limit > 0:
+        raise ValueError(f"--time-limit: must be > 0, got {args.time_limit}")
+    out = Path(args.output)
+    if out.exists() and not args.force:
+        raise ValueError(f"{out}: exists (use --force to overwrite)")
+    case = load_case(args.case_dir)
+    solution, st = solve_case(case, time_limit=args.time_limit, seed=args.seed, t_start=t0)
+    write_text_atomic(str(out), json.dumps(solution, indent=1) + "\n")
+    print(
+        f"wrote {out}: coverage_ratio {st['coverage_ratio']:.5f}, weighted "
+        f"{st['weighted_coverage_ratio']:.5f}, {st['actions']} actions, bound {st['bound']:.5f}, "
+        f"gap {st['gap']:.5f} ({time.perf_counter() - t0:.1f} s)"
+    )
+    return check_and_print(case, solution, args.json)
+
+
+def register(sub) -> None:
+    """Register ``regional check`` on the ``jaxspline`` sub-parsers.
+
+    Args:
+      sub: the ``argparse`` sub-parsers object of the ``jaxspline`` command.
+    """
+    p = sub.add_parser(
+        "regional", help="regional_coverage benchmark: solve a case or check a solution"
+    )
+    rsub = p.add_subparsers(dest="regional_command", required=True)
+    c = rsub.add_parser(
+        "check", help="check a solution against RULES.md (exit 0 valid, 1 invalid, 2 bad input)"
+    )
+    c.add_argument("case_dir", help="case directory (manifest.json, satellites.yaml, ...)")
+    c.add_argument("solution", help="solution JSON file")
+    c.add_argument("--json", metavar="OUT", help="write the JSON report to OUT ('-' = stdout)")
+    c.set_defaults(func=_cmd_check)
+    s = rsub.add_parser("solve", help="plan a case, write the solution, check it (exit 0 if valid)")
+    s.add_argument("case_dir", help="case directory")
+    s.add_argument("-o", "--output", required=True, help="solution JSON to write")
+    s.add_argument("--time-limit", type=float, default=120.0, help="wall-clock budget [s]")
+    s.add_argument("--seed", type=int, default=0, help="random seed of the search")
+    s.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    s.add_argument("--json", metavar="OUT", help="write the check report to OUT ('-' = stdout)")
+    s.set_defaults(func=_cmd_solve)

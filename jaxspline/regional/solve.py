@@ -1,0 +1,183 @@
+"""``solve_case``: a regional_coverage case -> a solution, under one wall-clock budget.
+
+Stages, each checking the clock (one budget from the call, or from ``t_start``):
+
+1. candidates (:func:`jaxspline.regional.candidates.build_problem`): SGP4 tracks, passes,
+   roll grid, 10 s slices and their covered samples (JAX coverage engine, compile
+   included);
+2. lazy greedy, then LNS until the search deadline
+   (:mod:`jaxspline.regional.search`);
+3. a final check of every satellite's timeline with the exact refined battery model
+   (:func:`jaxspline.regional.constraints.battery_levels`), dropping a strip if a rule
+   would fail (never expected: the search keeps margins);
+4. the Lagrangian upper bound (:mod:`jaxspline.regional.bound`) in the time left, capped
+   by the coverage of all candidates together.
+
+The budget keeps ``reserve`` seconds back for writing and checking the solution.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["SolveConfig", "solution_actions", "solve_case"]
+
+
+@dataclass(frozen=True)
+class SolveConfig:
+    """Budget shares and knobs of :func:`solve_case`.
+
+    Attributes:
+      reserve_frac, reserve_min_s: time kept back for writing and checking the solution
+        (the larger of ``reserve_frac * time_limit`` and ``reserve_min_s``) [s].
+      bound_frac, bound_min_s: time for the bound (the larger of the two) [s].
+      roll_step_deg: roll grid step [deg].
+    """
+
+    reserve_frac: float = 0.12
+    reserve_min_s: float = 6.0
+    bound_frac: float = 0.08
+    bound_min_s: float = 3.0
+    roll_step_deg: float = 0.25
+
+
+def solution_actions(case, prob, state) -> list[dict]:
+    """The benchmark's action list of a plan, in time order.
+
+    Args:
+      case: Case; prob: CoverProblem; state: PlanState.
+    Returns:
+      list of ``strip_observation`` dicts (satellite_id, start_time, duration_s, roll_deg).
+    """
+    from jaxspline.regional.case import format_time
+
+    out = []
+    for g, a, b in sorted(state.strips.values(), key=lambda x: (x[1], int(prob.group_sat[x[0]]))):
+        dur = (b - a) * prob.slot_s
+        out.append(
+            {
+                "type": "strip_observation",
+                "satellite_id": case.satellites[int(prob.group_sat[g])].id,
+                "start_time": format_time(case.time_at(a * prob.slot_s)),
+                "duration_s": int(dur) if float(dur).is_integer() else dur,
+                "roll_deg": float(prob.group_roll[g]),
+            }
+        )
+    return out
+
+
+def final_check(state) -> int:
+    """Drop strips until every satellite passes the exact rules with margins; returns drops.
+
+    Args:
+      state: PlanState, modified in place.
+    Returns:
+      number of strips removed.
+    """
+    from jaxspline.regional.constraints import battery_levels, duty_ok, gaps_ok
+
+    prob = state.prob
+    dropped = 0
+    for sat in range(len(prob.rules)):
+        while state.by_sat[sat]:
+            s, e, r = state.timeline(sat)
+            rules = prob.rules[sat]
+            ok = gaps_ok(rules, s, e, r, prob.margins) and duty_ok(rules, s, e, prob.margins)
+            if ok:
+                lvl = battery_levels(
+                    rules, prob.mesh_s, prob.sunlit_iv[sat], s, e, r, prob.margins
+                )[1]
+                ok = float(lvl.min()) >= prob.margins.battery_wh
+            if ok:
+                break
+            worst = min(state.by_sat[sat], key=state.loss)
+            state.remove(worst)
+            dropped += 1
+    return dropped
+
+
+def solve_case(
+    case,
+    time_limit: float = 120.0,
+    seed: int = 0,
+    progress: bool = True,
+    t_start: float | None = None,
+    config: SolveConfig = SolveConfig(),
+):
+    """Plan a case within ``time_limit`` seconds.
+
+    Args:
+      case: Case (:func:`jaxspline.regional.case.load_case`).
+      time_limit: wall-clock budget [s], counted from ``t_start`` (default: now).
+      seed: random seed of the search.
+      progress: print progress lines to stderr.
+      t_start: ``time.perf_counter()`` instant the budget started (e.g. process start).
+      config: SolveConfig.
+    Returns:
+      (solution, stats): ``{"actions": [...]}`` and a dict with coverage_ratio,
+      weighted_coverage_ratio, actions, bound, gap, min_battery_wh, timings and counts.
+    """
+    import jax
+
+    from jaxspline.regional.bound import lagrangian_bound
+    from jaxspline.regional.candidates import build_problem
+    from jaxspline.regional.search import SearchConfig, candidate_windows, greedy_fill, lns
+    from jaxspline.regional.state import PlanState
+
+    if not time_limit > 0:
+        raise ValueError(f"time_limit: must be > 0, got {time_limit!r}")
+    t0 = time.perf_counter() if t_start is None else t_start
+    end = t0 + time_limit - max(config.reserve_frac * time_limit, config.reserve_min_s)
+    bound_s = max(config.bound_frac * time_limit, config.bound_min_s)
+
+    def log(msg):
+        if progress:
+            print(f"[{time.perf_counter() - t0:6.1f} s] {msg}", file=sys.stderr, flush=True)
+
+    times = {}
+    with jax.enable_x64(True):
+        prob, info = build_problem(case, step_deg=config.roll_step_deg, log=log)
+    times["candidates_s"] = time.perf_counter() - t0
+    state = PlanState(prob)
+    win = candidate_windows(prob)
+    greedy_fill(state, win, end - bound_s)
+    times["greedy_s"] = time.perf_counter() - t0 - times["candidates_s"]
+    log(f"greedy: coverage {state.value:.5f} with {state.n_actions()} strips")
+    best, lstats = lns(state, win, end - bound_s, SearchConfig(seed=seed), log=log)
+    dropped = final_check(best)
+    log(
+        f"search: coverage {best.value:.5f} with {best.n_actions()} strips "
+        f"({lstats['iterations']} LNS iterations, {dropped} dropped at the final check)"
+    )
+    t_b = time.perf_counter()
+    res = lagrangian_bound(prob, best.value, max(end, t_b + 0.5))
+    bound = min(res.bound, info.union_ratio)
+    times["bound_s"] = time.perf_counter() - t_b
+    actions = solution_actions(case, prob, best)
+    wm2 = case.grid.weight_m2
+    covered = best.cnt > 0
+    stats = {
+        "coverage_ratio": best.value,
+        "weighted_coverage_ratio": float(wm2[covered].sum() / case.grid.region_total_m2.sum()),
+        "region_coverage": best.region_cov.tolist(),
+        "actions": len(actions),
+        "bound": bound,
+        "gap": bound - best.value,
+        "bound_iterations": res.iterations,
+        "min_battery_wh": float(np.min(best.low_wh)) if best.low_wh.size else None,
+        "union_ratio": info.union_ratio,
+        "passes": info.n_passes,
+        "groups": info.n_groups,
+        "rows": info.n_rows,
+        "nnz": info.nnz,
+        "dropped": dropped,
+        **lstats,
+        **times,
+        "total_s": time.perf_counter() - t0,
+    }
+    log(f"bound {bound:.5f} (gap {bound - best.value:.5f}, {res.iterations} iterations)")
+    return {"actions": actions}, stats
