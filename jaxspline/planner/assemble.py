@@ -15,6 +15,7 @@ import math
 import numpy as np
 
 from jaxspline.planner.result import Observations, PlanResult
+from jaxspline.search import BoundStatus
 
 __all__ = ["assemble_result"]
 
@@ -82,7 +83,7 @@ def _search_bound(tg, opp, res):
     converged)."""
     reachable = float(np.sum(np.asarray(tg.value)[np.unique(np.asarray(opp.options.route))]))
     bound = min(float(res.bound), reachable)
-    return bound, res.bound_status in ("optimal", "converged")
+    return bound, res.bound_status in (BoundStatus.OPTIMAL, BoundStatus.CONVERGED)
 
 
 def _with_certificate(mip, bound: float, converged: bool):
@@ -92,7 +93,7 @@ def _with_certificate(mip, bound: float, converged: bool):
     found = mip.value if math.isfinite(mip.value) else None
     stats = {"bound": mip.bound, "plan_value": found, "status": mip.status, "seconds": mip.seconds}
     if mip.bound < bound:
-        bound, converged = mip.bound, mip.status == "optimal"
+        bound, converged = mip.bound, mip.status == BoundStatus.OPTIMAL
     return stats, bound, converged
 
 

@@ -43,7 +43,7 @@ from jaxspline.planner.sharded import (
     sharded_upper_bound,
 )
 from jaxspline.readers.scenario import scenario_from
-from jaxspline.search import Timeline, greedy
+from jaxspline.search import BoundStatus, Timeline, greedy
 
 __all__ = ["SEARCH_TIME_S", "BoundRun", "run_bound"]
 
@@ -56,7 +56,7 @@ class BoundRun(NamedTuple):
     Attributes:
       scenario: the scenario's name.
       bound: the upper bound (the same in every process).
-      status: the bound's status (``"converged"``, ``"time"``, ``"iterations"``, ...).
+      status: the bound's :class:`jaxspline.search.BoundStatus`.
       iterations: Lagrangian iterations run.
       target: the step-size target used.
       processes: number of processes; process: this one's index.
@@ -69,7 +69,7 @@ class BoundRun(NamedTuple):
 
     scenario: str
     bound: float
-    status: str
+    status: BoundStatus
     iterations: int
     target: float
     processes: int

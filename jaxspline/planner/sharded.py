@@ -53,6 +53,7 @@ import numpy as np
 from jaxspline.search import Timeline, clock, greedy, lns, solve
 from jaxspline.search.lagrangian import BoundResult, Prices, dp_paths
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 from jaxspline.search.store import NearPairs
 
 __all__ = [
@@ -143,13 +144,13 @@ def _iterate(pb, sat_ids, n_sats, target, deadline, max_iters, allgather):
     if len(sat_ids) != pb.n_sats:
         raise ValueError(f"sat_ids has {len(sat_ids)} entries for {pb.n_sats} satellites")
     pr = _ShardPrices(pb, sat_ids, n_sats, allgather)
-    status = "time"
+    status = BoundStatus.TIME
     while max_iters is None or pr.it < max_iters:
         pr.solve_dp(want_stop=not clock.now() < deadline)
         if pr.stop:
             break
         if not pr.step(target):
-            status = "converged"
+            status = BoundStatus.CONVERGED
             break
     ub = pr.ub if pr.it else math.inf
     return pr, BoundResult([], ub, pr.it, status)
@@ -179,7 +180,7 @@ def sharded_upper_bound(
       allgather: callable ``x [L] -> [P, L]`` over the processes (default: through
         ``jax.distributed``); a single process passes ``lambda x: x[None]``.
     Returns:
-      BoundResult (``best`` empty), status "converged" or "time".
+      BoundResult (``best`` empty), status ``CONVERGED`` or ``TIME``.
     """
     return _iterate(pb, sat_ids, n_sats, target, deadline, max_iters, allgather)[1]
 

@@ -27,6 +27,7 @@ import warnings
 
 from jaxspline.search.lagrangian import BoundResult, upper_bound
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 
 __all__ = ["BoundWorker"]
 
@@ -39,7 +40,7 @@ def _run(conn, pb: Problem, target: float, deadline: float, max_iters):
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     res = upper_bound(pb, target, deadline, max_iters, energy=False)
-    conn.send((float(res.bound), int(res.iterations), str(res.status)))
+    conn.send((float(res.bound), int(res.iterations), res.status.value))
     conn.close()
 
 
@@ -85,7 +86,7 @@ class BoundWorker:
         try:
             if self._conn.poll(timeout):
                 bound, its, status = self._conn.recv()
-                out = BoundResult([], bound, its, status)
+                out = BoundResult([], bound, its, BoundStatus(status))
         except (EOFError, OSError):  # the child died: no bound from it
             out = None
         self.stop()

@@ -35,6 +35,7 @@ from jaxspline.search import clock
 from jaxspline.search.energy import EnergyBudgets
 from jaxspline.search.lns import greedy
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["BoundResult", "DPData", "dp_paths", "dp_prepare", "lagrangian", "upper_bound"]
@@ -203,14 +204,15 @@ class BoundResult:
       best: task -> option assignment of the best repaired plan.
       bound: the smallest upper bound seen (``inf`` if no iteration ran).
       iterations: subgradient iterations.
-      status: "optimal" (bound met by a plan), "converged" (zero subgradient or the
-        step fell below its floor) or "time" (stopped by the deadline / cap).
+      status: :class:`BoundStatus`: ``OPTIMAL`` (bound met by a plan), ``CONVERGED``
+        (zero subgradient or the step fell below its floor) or ``TIME`` (stopped by
+        the deadline / cap).
     """
 
     best: list
     bound: float
     iterations: int
-    status: str
+    status: BoundStatus
 
 
 class Prices:
@@ -320,9 +322,9 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     best = list(tl.assigned)
     best_w = tl.W
     if pb.n_options == 0:
-        return BoundResult(best, 0.0, 0, "optimal")
+        return BoundResult(best, 0.0, 0, BoundStatus.OPTIMAL)
     pr = Prices(pb, energy=True)
-    status = "time"
+    status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
         if (pr.it - 1) % _REPAIR_EVERY == 0:
@@ -330,10 +332,10 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
             if tl.W > best_w:
                 best_w, best = tl.W, list(tl.assigned)
         if pr.ub - best_w <= _GAP_TOL * max(1.0, pr.ub):
-            status = "optimal"
+            status = BoundStatus.OPTIMAL
             break
         if not pr.step(best_w):
-            status = "converged"
+            status = BoundStatus.CONVERGED
             break
         if report is not None:
             report(pr.it, pr.ub, best_w)
@@ -357,15 +359,15 @@ def upper_bound(
       energy: price the battery budgets of :mod:`jaxspline.search.energy` too
         (off: the battery is dropped).
     Returns:
-      BoundResult with status "converged" or "time" (cap / deadline reached).
+      BoundResult with status ``CONVERGED`` or ``TIME`` (cap / deadline reached).
     """
     if pb.n_options == 0:
-        return BoundResult([], 0.0, 0, "optimal")
+        return BoundResult([], 0.0, 0, BoundStatus.OPTIMAL)
     pr = Prices(pb, energy=energy)
-    status = "time"
+    status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         pr.solve_dp()
         if not pr.step(target):
-            status = "converged"
+            status = BoundStatus.CONVERGED
             break
     return BoundResult([], pr.ub, pr.it, status)

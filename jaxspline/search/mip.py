@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 
 __all__ = ["MipBound", "mip_bound"]
 
@@ -44,13 +45,14 @@ class MipBound:
     Attributes:
       bound: HiGHS's dual bound (an upper bound of every plan of the model).
       value: value of HiGHS's best plan (``nan`` if it found none).
-      status: "optimal" (bound met) or "time" (stopped by the time limit).
+      status: :class:`BoundStatus`, ``OPTIMAL`` (bound met) or ``TIME`` (stopped by
+        the time limit).
       seconds: solver wall time [s].
     """
 
     bound: float
     value: float
-    status: str
+    status: BoundStatus
     seconds: float
 
 
@@ -144,5 +146,5 @@ def mip_bound(pb: Problem, time_limit: float, rel_gap: float = 1e-4) -> MipBound
         bound = value if res.status == 0 else float(np.sum(pb.weight))
     else:
         bound = -float(bound)
-    status = "optimal" if res.status == 0 else "time"
+    status = BoundStatus.OPTIMAL if res.status == 0 else BoundStatus.TIME
     return MipBound(bound, value, status, time.monotonic() - t0)

@@ -30,6 +30,7 @@ from jaxspline.search.lagrangian import (
 from jaxspline.search.lns import earliest_pass, greedy, greedy_order, lns
 from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["SearchResult", "solve"]
@@ -49,14 +50,14 @@ class SearchResult:
     Attributes:
       timeline: the final :class:`Timeline` (the plan).
       bound: Lagrangian upper bound of the candidate model (battery relaxed).
-      bound_status: "optimal", "converged" or "time" (see :class:`BoundResult`).
+      bound_status: :class:`BoundStatus` of the bound (see :class:`BoundResult`).
       exact: True when the exact search proved the plan optimal (tiny instances).
       stats: per-stage values and iteration counts.
     """
 
     timeline: Timeline
     bound: float
-    bound_status: str
+    bound_status: BoundStatus
     exact: bool
     stats: dict
 
@@ -157,7 +158,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
         stats["exact_proven"] = exact
     rng = random.Random(seed)
     its = 0
-    if not (exact or res.status == "optimal"):
+    if not (exact or res.status == BoundStatus.OPTIMAL):
         its = lns(
             tl,
             deadline - tail,
@@ -175,5 +176,5 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
             if wr.bound < bound:
                 bound, status = wr.bound, wr.status
                 if bound - tl.W <= _OPTIMAL_TOL * max(1.0, bound):
-                    status = "optimal"
+                    status = BoundStatus.OPTIMAL
     return SearchResult(tl, bound, status, exact, stats)

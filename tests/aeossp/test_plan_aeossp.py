@@ -41,7 +41,7 @@ from jaxspline.readers.mission import (
     Scenario,
     make_targets,
 )
-from jaxspline.search import BatteryModel, dp_paths, dp_prepare, mip_bound, upper_bound
+from jaxspline.search import BatteryModel, BoundStatus, dp_paths, dp_prepare, mip_bound, upper_bound
 
 DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="aeossp training data not available")
@@ -491,7 +491,7 @@ def test_mip_bound_is_the_optimum_with_repeats(make, seed):
     pb = build_problem(make(seed)).problem
     with_rep, _ = _enumerate_plans(pb)
     res = mip_bound(pb, time_limit=60.0, rel_gap=0.0)
-    assert res.status == "optimal"
+    assert res.status == BoundStatus.OPTIMAL
     assert res.value == pytest.approx(with_rep, abs=1e-9)
     assert res.bound == pytest.approx(with_rep, abs=1e-6)
 

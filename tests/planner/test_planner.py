@@ -39,6 +39,7 @@ from jaxspline.readers.mission import (
     Scenario,
     make_targets,
 )
+from jaxspline.search import BoundStatus
 
 EPOCH = dt.datetime(2026, 6, 21, 10, 0, tzinfo=dt.UTC)
 G0 = float(gmst(julian_date(EPOCH)))
@@ -329,7 +330,7 @@ def test_certify_tightens_the_bound_to_the_optimum():
     sc, optimum, res = _solved(0, **LNS_CASE)
     cert = plan(sc, time_limit=20.0, progress=False, max_iters=5000, certify=30.0)
     mip = cert.stats["mip"]
-    assert mip["status"] == "optimal"
+    assert mip["status"] == BoundStatus.OPTIMAL
     assert cert.bound_converged
     assert optimum - 1e-6 <= cert.bound <= res.bound + 1e-9
     assert cert.bound == pytest.approx(max(mip["bound"], cert.value), abs=1e-6)
