@@ -149,7 +149,7 @@ def plan(
         run to their caps whatever the clock says, and the plan is identical on every
         run (``time_limit`` only sizes the reserved shares; Ctrl-C still stops).
       certify: extra seconds, after the time limit, for a tighter certificate: the
-        candidate model solved as a 0/1 program by HiGHS
+        option model solved as a 0/1 program by HiGHS
         (:func:`jaxspline.search.mip_bound`, needs scipy); the reported bound is the
         smaller of its dual bound and the Lagrangian one. 0 (default): skip.
       flown_joins: also drop observations whose degree-7 joins (SPEC section 3) exceed
@@ -516,7 +516,7 @@ def _search_and_repair(sc, prep: Prepared, budget: _Budget, seed, max_iters, flo
     with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
         res = _search(prep.problem, budget.deadline - budget.reserve, seed, max_iters, pc, clock)
         tl = res.timeline
-        clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
+        clock.lap("search", f"value {tl.value:.6g}, bound {res.bound:.6g} ({res.bound_status})")
         rep = repair(
             sc,
             prep.scene,

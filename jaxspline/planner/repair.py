@@ -144,9 +144,9 @@ def _refill(tl, chosen, seconds, iters, seed):
 
     Returns (option ids of the plan, observations added).
     """
-    assigned = [-1] * len(tl.pb.weight)
+    assigned = [-1] * tl.pb.n_targets
     for c in chosen:
-        assigned[tl.pb.c_task[c]] = c
+        assigned[tl.pb.option_target[c]] = c
     tl.restore(assigned)
     deadline = time.monotonic() + seconds
     greedy(tl, deadline)
@@ -159,7 +159,7 @@ def _refill(tl, chosen, seconds, iters, seed):
 def _withdraw(pb, rejected):
     """Take rejected options out of their tasks' candidates, so no refill brings them back."""
     for c in rejected:
-        cands = pb.task_cands[pb.c_task[c]]
+        cands = pb.target_options[pb.option_target[c]]
         if c in cands:
             cands.remove(c)
 

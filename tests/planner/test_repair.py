@@ -42,7 +42,7 @@ def test_check_blames_only_the_later_observation_of_a_failing_transition():
     opp = prep.opportunities
     o = opp.options
     k = next(i for i, s in enumerate(sc.satellites) if s.model == "per_channel")
-    line = list(tl.tl[k])
+    line = list(tl.lines[k])
     assert len(line) >= 4
     chosen = [c for c in tl.assigned if c >= 0]
     assert _check(sc, prep, opp, chosen)[0] == []  # the search's plan is valid
@@ -67,12 +67,12 @@ def _force_infeasible(tl, rng, count):
     """Insert up to ``count`` options the search's insertion test refuses (bypassing it)."""
     pb = tl.pb
     forced = []
-    cands = [c for c in range(pb.n_options) if tl.assigned[pb.c_task[c]] < 0]
-    rng.shuffle(cands)
-    for c in cands:
+    free = [c for c in range(pb.n_options) if tl.assigned[pb.option_target[c]] < 0]
+    rng.shuffle(free)
+    for c in free:
         if len(forced) == count:
             break
-        if tl.assigned[pb.c_task[c]] < 0 and tl.check(c) is None:
+        if tl.assigned[pb.option_target[c]] < 0 and tl.check(c) is None:
             tl.insert(c)
             forced.append(c)
     tl.commit()
