@@ -191,8 +191,8 @@ def _run(sc, procs: _Processes, time_limit, max_iters, target, search):
     owned = owned_satellites(len(sc.satellites), procs.index, procs.count)
     shard = dataclasses.replace(sc, satellites=tuple(sc.satellites[k] for k in owned))
     allgather = procs.allgather
-    prep = build_problem(shard, reduce_slack=lambda s: float(allgather(np.array([s])).min()))
-    pb = prep.problem
+    ctx = build_problem(shard, reduce_slack=lambda s: float(allgather(np.array([s])).min()))
+    pb = ctx.problem
     if target is None:
         tl = Timeline(pb)
         greedy(tl, math.inf)
@@ -203,7 +203,7 @@ def _run(sc, procs: _Processes, time_limit, max_iters, target, search):
     if search is None:
         res = sharded_upper_bound(pb, owned, n_sats, target, deadline, max_iters, allgather)
     else:
-        merged = _sharded_plan(sc, shard, prep, owned, procs, target, deadline, max_iters, search)
+        merged = _sharded_plan(sc, ctx, owned, procs, target, deadline, max_iters, search)
         res = merged.bound
     run = BoundRun(
         scenario=sc.name,
@@ -225,15 +225,16 @@ def _run(sc, procs: _Processes, time_limit, max_iters, target, search):
     return run, doc
 
 
-def _sharded_plan(sc, shard, prep, owned, procs, target, deadline, max_iters, search):
+def _sharded_plan(sc, ctx, owned, procs, target, deadline, max_iters, search):
+    """This process's part of the sharded plan (``ctx``: its shard of the scenario ``sc``),
+    each part checked independently (:func:`jaxspline.planner.repair.drop_failing`)."""
     search_time, search_iters, seed = search
 
     def check(ids):
-        scene, usable, opp = prep.scene, prep.orbits.usable, prep.opportunities
-        return drop_failing(shard, scene, usable, opp, ids, prep.battery)[0]
+        return drop_failing(ctx, ids)[0]
 
     return sharded_plan(
-        prep.problem,
+        ctx.problem,
         owned,
         len(sc.satellites),
         procs.index,

@@ -44,20 +44,21 @@ _TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
 
 
 def greedy_order(tl: Timeline):
-    """Targets with options, heaviest first, fewest satellites / options first among equals.
+    """Targets with options on offer, heaviest first, fewest satellites / options first
+    among equals.
 
     Args:
       tl: Timeline.
     Returns:
       list of target indices.
     """
-    pb = tl.pb
+    pb, options = tl.pb, tl.target_options
     return sorted(
-        (t for t in range(pb.n_targets) if pb.target_options[t]),
+        (t for t in range(pb.n_targets) if options[t]),
         key=lambda t: (
             -pb.target_value[t],
-            len({pb.option_sat[c] for c in pb.target_options[t]}),
-            len(pb.target_options[t]),
+            len({pb.option_sat[c] for c in options[t]}),
+            len(options[t]),
             t,
         ),
     )
@@ -109,7 +110,7 @@ class _Walk:
     """
 
     def __init__(self, tl: Timeline, has):
-        self.has, self.er = has, EnergyRank(tl.pb)
+        self.has, self.er = has, EnergyRank(tl.pb, tl.target_options)
         self.best_key = (tl.value, tl.n_observations)
         self.best = list(tl.assigned)
         self.improved = 0
@@ -134,7 +135,7 @@ def _window(tl: Timeline, w: _Walk, rng):
         t = rng.choices(w.un, cum_weights=w.cw, k=1)[0]
         if tl.assigned[t] >= 0:
             return None
-        c = rng.choice(pb.target_options[t])
+        c = rng.choice(tl.target_options[t])
         rad = rng.choice(_RAD_TARGET)
         return pb.option_sat[c], pb.option_start[c] - rad, pb.option_end[c] + rad, c
     k = rng.randrange(pb.n_sats)
@@ -230,7 +231,7 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
     """
     pb = tl.pb
     t_start = time.monotonic()
-    has = [t for t in range(pb.n_targets) if pb.target_options[t]]
+    has = [t for t in range(pb.n_targets) if tl.target_options[t]]
     if not has:
         return 0
     w = _Walk(tl, has)
@@ -278,7 +279,7 @@ def earliest_pass(tl: Timeline, deadline: float):
             tl.undo_to(mark)
             continue
         best = -1
-        for c2 in sorted(pb.target_options[t], key=lambda x: pb.option_end[x]):
+        for c2 in sorted(tl.target_options[t], key=lambda x: pb.option_end[x]):
             if pb.option_end[c2] >= pb.option_end[c]:
                 break
             if tl.check(c2) is not None:

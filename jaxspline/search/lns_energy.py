@@ -45,17 +45,20 @@ class EnergyRank:
 
     Args:
       pb: :class:`jaxspline.search.Problem`.
+      target_options: per target its options on offer (a timeline's
+        ``target_options``); None: ``pb.target_options``.
     """
 
-    def __init__(self, pb):
+    def __init__(self, pb, target_options=None):
         self.pb = pb
+        self.target_options = pb.target_options if target_options is None else target_options
         bat = pb.battery
         self.tight_wh = [
             (p.imaging_w + p.slew_w) * _TIGHT_S * _WH if p is not None else math.inf
             for p in bat.powers
         ]
         self.target_wh = []
-        for options in pb.target_options:
+        for options in self.target_options:
             wh = [self.option_wh(c, _SLEW_REF_S) for c in options if bat.has(pb.option_sat[c])]
             self.target_wh.append(min(wh) if len(wh) == len(options) and wh else 0.0)
 
@@ -150,7 +153,7 @@ class EnergyRank:
         out = []
         for t in targets:
             w = pb.target_value[t]
-            if dens[t] > 0.0 and all(bound[pb.option_sat[c]] for c in pb.target_options[t]):
+            if dens[t] > 0.0 and all(bound[pb.option_sat[c]] for c in self.target_options[t]):
                 w *= dens[t] / mean
             out.append(w)
         return out

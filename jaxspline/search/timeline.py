@@ -4,7 +4,9 @@ A :class:`Timeline` holds, per satellite, its chosen options in start order and,
 target, the option that images it (each target at most once). :meth:`Timeline.check`
 tests one insertion: no overlap, the transition from the predecessor (or the first
 maneuver) and to the successor fit their gaps, and the battery stays above its margin.
-Every change is logged so a search step can be undone.
+Every change is logged so a search step can be undone. A timeline may withdraw options
+of its problem (``withdrawn``): they are no longer offered for any target, while the
+:class:`Problem` itself stays as built.
 
 Battery bookkeeping, cheapest test first:
 
@@ -24,6 +26,8 @@ from __future__ import annotations
 
 import bisect
 
+import numpy as np
+
 from jaxspline.search.construct import first_least
 from jaxspline.search.problem import Problem
 
@@ -37,8 +41,15 @@ _INSERT_NOISE = 0.3  # relative noise of randomized insertion costs
 class Timeline:
     """Per-satellite timelines over a :class:`Problem` (see module docstring).
 
+    Args:
+      pb: the Problem (read only).
+      withdrawn: optional bool [N], options never to offer (e.g. rejected by a check
+        after the search); None: every option.
+
     Attributes:
       pb: the Problem.
+      target_options: per target, its option ids on offer (``pb.target_options``
+        without the withdrawn ones).
       lines: per satellite, its option ids in start order.
       line_starts: per satellite, their start times [s].
       assigned: per target, the option that images it (-1: none).
@@ -55,8 +66,17 @@ class Timeline:
       saved: battery bounds saved for :meth:`undo_to`.
     """
 
-    def __init__(self, pb: Problem):
+    def __init__(self, pb: Problem, withdrawn=None):
         self.pb = pb
+        self.target_options = pb.target_options
+        if withdrawn is not None:
+            out = np.asarray(withdrawn, bool)
+            if out.shape != (pb.n_options,):
+                raise ValueError(
+                    f"withdrawn has shape {out.shape}, expected one flag an option "
+                    f"({pb.n_options},)"
+                )
+            self.target_options = [[c for c in opts if not out[c]] for opts in pb.target_options]
         n_s = pb.n_sats
         self.lines = [[] for _ in range(n_s)]  # option ids by start
         self.line_starts = [[] for _ in range(n_s)]  # their starts
@@ -367,7 +387,7 @@ class Timeline:
         options, costs = [], []
         if self.assigned[t] >= 0:
             return options, costs
-        for c in pb.target_options[t]:
+        for c in self.target_options[t]:
             if sat is not None and option_sat[c] != sat:
                 continue
             cost = self.check(c)

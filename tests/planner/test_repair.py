@@ -32,7 +32,8 @@ def _searched(seed):
 
 
 def _check(sc, prep, opp, chosen):
-    return check_plan(sc, prep.scene, prep.orbits.usable, opp, chosen, prep.battery)
+    assert prep.scenario is sc
+    return check_plan(prep, chosen, opp)
 
 
 def test_check_blames_only_the_later_observation_of_a_failing_transition():
@@ -91,15 +92,7 @@ def test_repair_drops_at_most_one_observation_per_violation(seed):
     opp = prep.opportunities
     plan_in = [c for c in tl.assigned if c >= 0]
     assert _check(sc, prep, opp, plan_in)[0]  # the forced plan does fail the check
-    rep = repair(
-        sc,
-        scene=prep.scene,
-        table_ok=prep.orbits.usable,
-        opp0=opp,
-        tl=tl,
-        battery=prep.battery,
-        refine_steps=sc.planner.refine_steps if seed == 0 else 0,
-    )
+    rep = repair(prep, plan_in, refine_steps=sc.planner.refine_steps if seed == 0 else 0)
     assert set(rep.dropped) == set(DROP_REASONS)
     n_dropped = sum(rep.dropped.values())
     assert 1 <= n_dropped <= rep.violations

@@ -55,7 +55,8 @@ def scenario_file(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def built(scenario_file):
-    """The whole scenario's Prepared and one (satellites, shard scenario, Prepared) a process."""
+    """The whole scenario's PlanContext and one (satellites, shard scenario, PlanContext) a
+    process."""
     sc = load_scenario(scenario_file)
     full = build_problem(sc)
     count = len(sc.satellites)
@@ -174,12 +175,11 @@ def thread_plans(built):
     pc = sc.planner
 
     def run(i, allgather):
-        owned, shard, prep = shards[i]
+        owned, _, prep = shards[i]
 
         def check(ids):
             with jax.enable_x64(True):  # the context is per thread
-                args = (prep.scene, prep.orbits.usable, prep.opportunities)
-                return drop_failing(shard, *args, ids, prep.battery)[0]
+                return drop_failing(prep, ids)[0]
 
         return sharded_plan(
             prep.problem,
@@ -227,9 +227,7 @@ def test_threads_sharded_plan_is_valid_on_the_whole_scenario(built, thread_plans
     assert len({pb.option_target[c] for c in ids}) == len(ids)  # each target at most once
     assert a.value == sum(pb.target_value[pb.option_target[c]] for c in ids)
     with jax.enable_x64(True):
-        bad, det = check_plan(
-            sc, full.scene, full.orbits.usable, full.opportunities, ids, full.battery
-        )
+        bad, det = check_plan(full, ids)
     assert bad == [] and det["violations"] == []
     # the bound is the single process's; the plan within MIN_RATIO of its plan
     ref = upper_bound(pb, PLAN_VALUE, math.inf, max_iters=ITERS, energy=False)

@@ -19,7 +19,7 @@ import pytest
 
 from jaxspline.aeossp.adapter import AEOSSP_MARGINS
 from jaxspline.readers.mission import Power
-from jaxspline.search import BatteryModel, Problem, Timeline
+from jaxspline.search import BatteryModel, Problem, Timeline, greedy, lns
 from jaxspline.search.store import NearPairs
 
 DT = 5.0  # [s] battery step
@@ -243,6 +243,28 @@ def test_timeline_check_matches_brute_force(seed):
         if py.random() < 0.5:
             tl.commit()
     assert compared > 1000 and battery_cut > 50
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_withdrawn_options_are_never_offered(seed):
+    """A timeline that withdraws options never images them and leaves the Problem as
+    built; its greedy and LNS equal those on a problem built without those options."""
+    rng = np.random.default_rng(200 + seed)
+    pb, _ = _problem(rng, 200)
+    before = [list(x) for x in pb.target_options]
+    out = np.zeros(pb.n_options, bool)
+    out[rng.choice(pb.n_options, pb.n_options // 3, replace=False)] = True
+    without = [[c for c in x if not out[c]] for x in before]
+    plans = []
+    for tl in (Timeline(pb, out), Timeline(dataclasses.replace(pb, target_options=without))):
+        greedy(tl, math.inf)
+        lns(tl, math.inf, random.Random(seed), 300)
+        plans.append(list(tl.assigned))
+    assert plans[0] == plans[1] and any(c >= 0 for c in plans[0])
+    assert not any(out[c] for c in plans[0] if c >= 0)
+    assert pb.target_options == before
+    with pytest.raises(ValueError, match="withdrawn"):
+        Timeline(pb, out[:-1])
 
 
 DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
