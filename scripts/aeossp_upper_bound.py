@@ -50,10 +50,10 @@ def upper_bound(case_dir: str, iterations: int, achieved: float, mip: float = 0.
     case = load_case(case_dir)
     sc = case_scenario(case, margins=LOOSE)
     pb = build_problem(sc).problem
-    w = np.asarray(pb.weight, float)
+    w = np.asarray(pb.target_value, float)
     total = w.sum()
     has = np.zeros(w.size, bool)
-    has[np.asarray(pb.c_task, np.int64)] = True
+    has[np.asarray(pb.option_target, np.int64)] = True
     trivial = w[has].sum()  # tasks without any option can never be completed
     res = lagrangian_bound(pb, achieved * total, math.inf, max_iters=iterations)
     out = {}

@@ -1,7 +1,7 @@
 """``jaxspline bound [SCENARIO.toml]``: the Lagrangian upper bound, on one or many processes.
 
 Screens the scenario like ``jaxspline plan`` and iterates the Lagrangian bound of the
-candidate model (per-satellite longest paths under task prices, battery relaxed),
+option model (per-satellite longest paths under target prices, battery relaxed),
 without searching for a plan. With ``--coordinator HOST:PORT --num-processes N
 --process-id I`` (one command per process, on one or several hosts, the same scenario
 file everywhere) the satellites are sharded over the processes through
@@ -11,16 +11,16 @@ would. Process 0 prints the result and writes ``--json``.
 
 With ``--plan PLAN.json`` the processes also search a plan, sharded the same way
 (:func:`jaxspline.planner.sharded.sharded_plan`): after the bound phase every
-task gets one owner process (merge rule: the process whose satellites' DP paths at
+target gets one owner process (merge rule: the process whose satellites' DP paths at
 the best prices take it most often, then the one with most of its options, then the
-lowest index; a task its owner leaves out goes to the next process by the same rule
-for a short second round); each process searches its tasks on its satellites, drops
+lowest index; a target its owner leaves out goes to the next process by the same rule
+for a short second round); each process searches its targets on its satellites, drops
 what the independent check (:func:`jaxspline.planner.repair.drop_failing`) rejects, and
 the disjoint parts are merged. Process 0 writes the merged plan (observations with
 satellite, target, start, end, value), its value, the bound and the gap. Left out,
 unlike ``jaxspline plan``: start-time refinement, flown-join screening and AEM files,
 figures and the web page, the HiGHS certificate, and a search across the shards (a
-task is only ever tried on the satellites of its owner, then of the next process).
+target is only ever tried on the satellites of its owner, then of the next process).
 """
 
 from __future__ import annotations

@@ -4,9 +4,10 @@
 The stages, in the order a plan's data passes them: ``opportunities`` (visibility
 windows to options) -> ``attitude_laws`` (the attitude along an option) ->
 ``flown_joins`` (the degree-7 joins a plan flies) -> ``join_screen`` (screening with
-those joins) -> ``pipeline`` (:func:`build_problem`, then search) -> ``repair`` (withdraw
-what fails, re-search) -> ``refine_starts`` -> ``plan_check`` (the independent re-check)
--> ``assemble`` / ``result`` (the :class:`PlanResult`). ``sharded`` runs the plan over
+those joins) -> ``context`` (:class:`PlanContext`, what the stages share) -> ``pipeline``
+(:func:`build_problem`, then search) -> ``repair`` (withdraw what fails, re-search) ->
+``refine_starts`` -> ``plan_check`` (the independent re-check) -> ``assemble`` /
+``result`` (the :class:`PlanResult`). ``sharded`` runs the plan over
 several hosts; ``bound`` the bound alone; ``files`` the atomic file writes every writer
 uses.
 """
@@ -14,6 +15,7 @@ uses.
 from jaxspline.planner.bound import SEARCH_TIME_S as SEARCH_TIME_S
 from jaxspline.planner.bound import BoundRun as BoundRun
 from jaxspline.planner.bound import run_bound as run_bound
+from jaxspline.planner.context import PlanContext as PlanContext
 from jaxspline.planner.flown_joins import DIRECT_MAX_S as DIRECT_MAX_S
 from jaxspline.planner.flown_joins import JOIN_SAMPLES as JOIN_SAMPLES
 from jaxspline.planner.flown_joins import RETURN_S as RETURN_S
@@ -22,7 +24,6 @@ from jaxspline.planner.flown_joins import join_limits as join_limits
 from jaxspline.planner.flown_joins import join_summary as join_summary
 from jaxspline.planner.flown_joins import plan_joins as plan_joins
 from jaxspline.planner.flown_joins import reject_unflyable as reject_unflyable
-from jaxspline.planner.pipeline import Prepared as Prepared
 from jaxspline.planner.pipeline import build_problem as build_problem
 from jaxspline.planner.pipeline import plan as plan
 from jaxspline.planner.result import Observations as Observations

@@ -14,19 +14,21 @@ import math
 
 import numpy as np
 
+from jaxspline.planner.context import PlanContext
 from jaxspline.planner.result import Observations, PlanResult
+from jaxspline.search import BoundStatus
 
 __all__ = ["assemble_result"]
 
 
 def assemble_result(
-    sc, prep, res, rep, mip, *, flown_joins: bool, interrupted, timings, peak_rss_mb
+    ctx: PlanContext, res, rep, mip, *, flown_joins: bool, interrupted, timings, peak_rss_mb
 ) -> PlanResult:
     """The result of a planner run from its stages' outputs.
 
     Args:
-      sc: the planned Scenario.
-      prep: :class:`jaxspline.planner.pipeline.Prepared`, stages 1-4.
+      ctx: :class:`jaxspline.planner.context.PlanContext`, stages 1-4 (with the planned
+        scenario).
       res: :class:`jaxspline.search.SearchResult`, stage 5.
       rep: :class:`jaxspline.planner.repair.Repaired`, stage 6 (its ``details`` are the
         final re-check's).
@@ -38,6 +40,7 @@ def assemble_result(
     Returns:
       PlanResult.
     """
+    sc = ctx.scenario
     det = rep.details
     obs = _observations(sc.targets, rep.opp, det)
     value = float(np.sum(obs.value))
@@ -53,9 +56,9 @@ def assemble_result(
         gap=max(bound, value) - value,
         bound_converged=converged,
         report=_report(rep, obs, flown_joins, interrupted),
-        stats=_stats(prep, rep, res, mip_stats, peak_rss_mb),
+        stats=_stats(ctx, rep, res, mip_stats, peak_rss_mb),
         timings=timings,
-        battery=_battery_profiles(sc.satellites, prep.battery, det),
+        battery=_battery_profiles(sc.satellites, ctx.battery, det),
     )
 
 
@@ -82,7 +85,7 @@ def _search_bound(tg, opp, res):
     converged)."""
     reachable = float(np.sum(np.asarray(tg.value)[np.unique(np.asarray(opp.options.route))]))
     bound = min(float(res.bound), reachable)
-    return bound, res.bound_status in ("optimal", "converged")
+    return bound, res.bound_status in (BoundStatus.OPTIMAL, BoundStatus.CONVERGED)
 
 
 def _with_certificate(mip, bound: float, converged: bool):
@@ -92,7 +95,7 @@ def _with_certificate(mip, bound: float, converged: bool):
     found = mip.value if math.isfinite(mip.value) else None
     stats = {"bound": mip.bound, "plan_value": found, "status": mip.status, "seconds": mip.seconds}
     if mip.bound < bound:
-        bound, converged = mip.bound, mip.status == "optimal"
+        bound, converged = mip.bound, mip.status == BoundStatus.OPTIMAL
     return stats, bound, converged
 
 
@@ -132,16 +135,16 @@ def _report(rep, obs: Observations, flown_joins: bool, interrupted) -> dict:
     return report
 
 
-def _stats(prep, rep, res, mip_stats, peak_rss_mb) -> dict:
+def _stats(ctx: PlanContext, rep, res, mip_stats, peak_rss_mb) -> dict:
     """The run's statistics: problem sizes, pair store, far gaps, peak memory, the
     bound's status, refinement, exact search and certificate, and the search's own."""
-    pb = prep.problem
+    pb = ctx.problem
     return {
-        "windows": len(prep.windows),
+        "windows": len(ctx.windows),
         "options": len(rep.opp),
         "near_pairs": len(pb.pairs),
         "pair_store_bytes": pb.pairs.nbytes,
-        "far_gap_s": prep.far.tolist(),
+        "far_gap_s": ctx.far.tolist(),
         "pair_bytes": round(pb.pairs.nbytes / max(len(pb.pairs), 1), 2),
         "peak_rss_mb": peak_rss_mb,
         "bound_status": res.bound_status,

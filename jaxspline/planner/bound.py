@@ -1,7 +1,7 @@
 """The Lagrangian upper bound of a scenario, alone or with a sharded plan, on 1..N processes.
 
 :func:`run_bound` screens the scenario like :func:`jaxspline.plan` and iterates the
-Lagrangian bound of the candidate model (per-satellite longest paths under task prices,
+Lagrangian bound of the option model (per-satellite longest paths under target prices,
 battery relaxed), without searching for a plan. With a ``coordinator`` (one call per
 process, on one or several hosts, the same scenario everywhere) the satellites are
 sharded over the processes through ``jax.distributed`` (:mod:`jaxspline.planner.sharded`):
@@ -9,16 +9,16 @@ each process screens, stores and solves only its satellites, and all report the 
 single process would.
 
 With ``plan_path`` the processes also search a plan, sharded the same way
-(:func:`jaxspline.planner.sharded.sharded_plan`): after the bound phase every task gets
+(:func:`jaxspline.planner.sharded.sharded_plan`): after the bound phase every target gets
 one owner process (the process whose satellites' DP paths at the best prices take it
-most often, then the one with most of its options, then the lowest index; a task its
+most often, then the one with most of its options, then the lowest index; a target its
 owner leaves out goes to the next process by the same rule for a short second round);
-each process searches its tasks on its satellites, drops what the independent check
+each process searches its targets on its satellites, drops what the independent check
 (:func:`jaxspline.planner.repair.drop_failing`) rejects, and the disjoint parts are
 merged. Process 0 writes the merged plan (observations with satellite, target, start,
 end, value), its value, the bound and the gap. Left out, unlike :func:`jaxspline.plan`:
 start-time refinement, flown-join screening, the HiGHS certificate, and a search across
-the shards (a task is only ever tried on the satellites of its owner, then of the next
+the shards (a target is only ever tried on the satellites of its owner, then of the next
 process).
 """
 
@@ -43,7 +43,7 @@ from jaxspline.planner.sharded import (
     sharded_upper_bound,
 )
 from jaxspline.readers.scenario import scenario_from
-from jaxspline.search import Timeline, greedy
+from jaxspline.search import BoundStatus, Timeline, greedy
 
 __all__ = ["SEARCH_TIME_S", "BoundRun", "run_bound"]
 
@@ -56,7 +56,7 @@ class BoundRun(NamedTuple):
     Attributes:
       scenario: the scenario's name.
       bound: the upper bound (the same in every process).
-      status: the bound's status (``"converged"``, ``"time"``, ``"iterations"``, ...).
+      status: the bound's :class:`jaxspline.search.BoundStatus`.
       iterations: Lagrangian iterations run.
       target: the step-size target used.
       processes: number of processes; process: this one's index.
@@ -69,7 +69,7 @@ class BoundRun(NamedTuple):
 
     scenario: str
     bound: float
-    status: str
+    status: BoundStatus
     iterations: int
     target: float
     processes: int
@@ -191,19 +191,19 @@ def _run(sc, procs: _Processes, time_limit, max_iters, target, search):
     owned = owned_satellites(len(sc.satellites), procs.index, procs.count)
     shard = dataclasses.replace(sc, satellites=tuple(sc.satellites[k] for k in owned))
     allgather = procs.allgather
-    prep = build_problem(shard, reduce_slack=lambda s: float(allgather(np.array([s])).min()))
-    pb = prep.problem
+    ctx = build_problem(shard, reduce_slack=lambda s: float(allgather(np.array([s])).min()))
+    pb = ctx.problem
     if target is None:
         tl = Timeline(pb)
         greedy(tl, math.inf)
-        target = float(allgather(np.array([tl.W])).sum())
+        target = float(allgather(np.array([tl.value])).sum())
     deadline = time.monotonic() + time_limit
     n_sats = len(sc.satellites)
     merged = doc = None
     if search is None:
         res = sharded_upper_bound(pb, owned, n_sats, target, deadline, max_iters, allgather)
     else:
-        merged = _sharded_plan(sc, shard, prep, owned, procs, target, deadline, max_iters, search)
+        merged = _sharded_plan(sc, ctx, owned, procs, target, deadline, max_iters, search)
         res = merged.bound
     run = BoundRun(
         scenario=sc.name,
@@ -225,15 +225,16 @@ def _run(sc, procs: _Processes, time_limit, max_iters, target, search):
     return run, doc
 
 
-def _sharded_plan(sc, shard, prep, owned, procs, target, deadline, max_iters, search):
+def _sharded_plan(sc, ctx, owned, procs, target, deadline, max_iters, search):
+    """This process's part of the sharded plan (``ctx``: its shard of the scenario ``sc``),
+    each part checked independently (:func:`jaxspline.planner.repair.drop_failing`)."""
     search_time, search_iters, seed = search
 
     def check(ids):
-        scene, usable, opp = prep.scene, prep.orbits.usable, prep.opportunities
-        return drop_failing(shard, scene, usable, opp, ids, prep.battery)[0]
+        return drop_failing(ctx, ids)[0]
 
     return sharded_plan(
-        prep.problem,
+        ctx.problem,
         owned,
         len(sc.satellites),
         procs.index,
@@ -253,8 +254,8 @@ def _sharded_plan(sc, shard, prep, owned, procs, target, deadline, max_iters, se
 def _plan_doc(sc, mp, count: int) -> dict:
     """The ``--plan`` JSON of a :class:`jaxspline.planner.sharded.ShardedPlan`."""
     tg = sc.targets
-    tasks = np.flatnonzero(mp.sat >= 0)
-    tasks = tasks[np.lexsort((mp.start[tasks], mp.sat[tasks]))]  # by satellite, then start
+    imaged = np.flatnonzero(mp.sat >= 0)
+    imaged = imaged[np.lexsort((mp.start[imaged], mp.sat[imaged]))]  # by satellite, then start
     bound = float(mp.bound.bound)
     per_process = [
         {"satellites": [s.name for s in sc.satellites[p::count]], **st}
@@ -279,6 +280,6 @@ def _plan_doc(sc, mp, count: int) -> dict:
                 "option": int(mp.option[t]),
                 "process": int(mp.owner[t]),
             }
-            for t in tasks
+            for t in imaged
         ],
     }

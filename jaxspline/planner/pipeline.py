@@ -37,9 +37,9 @@ import jax
 import numpy as np
 
 from jaxspline.geometry.frames import in_shadow, jd_split, sun_direction
-from jaxspline.geometry.pointing import Scene
 from jaxspline.geometry.windows import visibility_windows_all
 from jaxspline.planner.assemble import assemble_result
+from jaxspline.planner.context import PlanContext
 from jaxspline.planner.join_screen import (
     channel_states,
     join_far_gap,
@@ -56,7 +56,7 @@ from jaxspline.search import BatteryModel, Problem, mip_bound, solve
 from jaxspline.search import clock as search_clock
 from jaxspline.search.store import PairsBuilder, start_order
 
-__all__ = ["Prepared", "build_problem", "plan"]
+__all__ = ["build_problem", "plan"]
 
 _RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
 _RESERVE_MIN = 1.0  # [s]
@@ -149,7 +149,7 @@ def plan(
         run to their caps whatever the clock says, and the plan is identical on every
         run (``time_limit`` only sizes the reserved shares; Ctrl-C still stops).
       certify: extra seconds, after the time limit, for a tighter certificate: the
-        candidate model solved as a 0/1 program by HiGHS
+        option model solved as a 0/1 program by HiGHS
         (:func:`jaxspline.search.mip_bound`, needs scipy); the reported bound is the
         smaller of its dual bound and the Lagrangian one. 0 (default): skip.
       flown_joins: also drop observations whose degree-7 joins (SPEC section 3) exceed
@@ -258,29 +258,6 @@ def _filtered(builder, parts, join_filter) -> int:
     return int((~keep).sum())
 
 
-class Prepared(NamedTuple):
-    """Everything the search needs, from :func:`build_problem`.
-
-    Attributes:
-      problem: :class:`jaxspline.search.Problem`.
-      opportunities: :class:`jaxspline.planner.opportunities.Opportunities` (option ids of the
-        problem index them).
-      windows: :class:`jaxspline.geometry.windows.Windows`.
-      scene: the multi-satellite :class:`jaxspline.geometry.pointing.Scene`.
-      orbits: :class:`jaxspline.geometry.orbit.OrbitTable`.
-      battery: :class:`jaxspline.search.BatteryModel`.
-      far: [S] always-feasible gaps [s].
-    """
-
-    problem: Problem
-    opportunities: object
-    windows: object
-    scene: Scene
-    orbits: object
-    battery: BatteryModel
-    far: np.ndarray
-
-
 def build_problem(
     scenario: Scenario,
     *,
@@ -288,7 +265,7 @@ def build_problem(
     joins: bool = False,
     reduce_slack=None,
     _clock=None,
-) -> Prepared:
+) -> PlanContext:
     """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
 
     Args:
@@ -304,7 +281,8 @@ def build_problem(
         screens the same window as a single process would.
       _clock: private; the stage timer of an enclosing :func:`plan` call.
     Returns:
-      Prepared, the inputs of the search stage.
+      :class:`jaxspline.planner.context.PlanContext`: the search's problem and what the
+      later stages share.
     """
     sc = scenario
     clock = _clock or _Clock(sc.name, progress)
@@ -330,7 +308,7 @@ def build_problem(
         battery = _battery(sc, sunlit)
         pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.targets.value, lookup)
         pb.near_slack = slack
-    return Prepared(pb, opp, windows, scene, table, battery, far)
+    return PlanContext(sc, pb, opp, windows, scene, table, battery, far)
 
 
 def _windows(sc: Scenario, scene, table):
@@ -450,10 +428,8 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     the result."""
     clock = _Clock(sc.name, progress)
     budget = _budget(sc, limit, clock.t0)
-    prep = build_problem(sc, joins=flown_joins, _clock=clock)
-    res, rep, interrupted = _search_and_repair(
-        sc, prep, budget, seed, max_iters, flown_joins, clock
-    )
+    ctx = build_problem(sc, joins=flown_joins, _clock=clock)
+    res, rep, interrupted = _search_and_repair(ctx, budget, seed, max_iters, flown_joins, clock)
     clock.lap(
         "repair",
         f"{len(rep.chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
@@ -461,11 +437,10 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     )
     mip = None
     if certify > 0:
-        mip = mip_bound(prep.problem, certify)
+        mip = mip_bound(ctx.problem, certify)
         clock.lap("certify", f"HiGHS bound {mip.bound:.6g} ({mip.status})")
     return assemble_result(
-        sc,
-        prep,
+        ctx,
         res,
         rep,
         mip,
@@ -498,11 +473,11 @@ def _budget(sc: Scenario, limit: float, t0: float) -> _Budget:
     return _Budget(t0 + limit, reserve, refining)
 
 
-def _search_and_repair(sc, prep: Prepared, budget: _Budget, seed, max_iters, flown_joins, clock):
+def _search_and_repair(ctx: PlanContext, budget: _Budget, seed, max_iters, flown_joins, clock):
     """Stages 5-6 under the signal guard: the first Ctrl-C or SIGTERM stops the search
     and the best plan so far goes through the repair. Returns (search result,
     :class:`jaxspline.planner.repair.Repaired`, the signal's name or None)."""
-    pc = sc.planner
+    pc = ctx.scenario.planner
     search_clock.clear_stop()
 
     def stopping(name):
@@ -514,16 +489,12 @@ def _search_and_repair(sc, prep: Prepared, budget: _Budget, seed, max_iters, flo
         )
 
     with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
-        res = _search(prep.problem, budget.deadline - budget.reserve, seed, max_iters, pc, clock)
+        res = _search(ctx.problem, budget.deadline - budget.reserve, seed, max_iters, pc, clock)
         tl = res.timeline
-        clock.lap("search", f"value {tl.W:.6g}, bound {res.bound:.6g} ({res.bound_status})")
+        clock.lap("search", f"value {tl.value:.6g}, bound {res.bound:.6g} ({res.bound_status})")
         rep = repair(
-            sc,
-            prep.scene,
-            prep.orbits.usable,
-            prep.opportunities,
-            tl,
-            prep.battery,
+            ctx,
+            [c for c in tl.assigned if c >= 0],
             refine_steps=_refine_steps(pc, budget, max_iters, clock),
             flown_joins=flown_joins,
             refill_s=math.inf if max_iters is not None else _REFILL_S,

@@ -33,8 +33,8 @@ import numpy as np
 from jaxspline.geometry.frames import angle_between
 from jaxspline.kernels._batch import pad_rows, round_up
 from jaxspline.kernels.reach_durations import min_transfer_time
+from jaxspline.planner.context import PlanContext
 from jaxspline.planner.opportunities import evaluate, geometry_batched, observation_samples
-from jaxspline.readers.mission import Scenario
 from jaxspline.screen.options import RouteOptions, take_options
 from jaxspline.sequences.steps_check import check_steps
 
@@ -45,17 +45,15 @@ _TIME_TOL = 1e-6  # [s] slack of the midpoint-window and minimum-duration tests
 _PAD = 1 << 10  # kernel batches are padded to multiples of this (few compiled shapes)
 
 
-def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
+def check_plan(ctx: PlanContext, chosen, opp=None):
     """Re-check the options ``chosen`` (ids into ``opp``) from scratch.
 
     Args:
-      sc: Scenario.
-      scene: Scene of the scenario's satellites.
-      table_ok: callable (sat int [M], t float [M] [s]) -> bool [M], the orbit table is
-        usable there.
-      opp: Opportunities.
+      ctx: PlanContext: the scenario (its rules, without margins), the scene, the
+        usable orbit table and the battery model.
       chosen: int [K], option ids of the plan.
-      battery: BatteryModel of the scenario.
+      opp: the Opportunities ``chosen`` indexes (default: ``ctx.opportunities``; the
+        repair passes a refined table).
     Returns:
       (bad, details): the sorted option ids that fail, and a dict with the
       per-observation required maneuver time and slack [s] (exact kernels), the
@@ -63,6 +61,8 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
       the human-readable violations, the checked order and ``reasons`` (option id ->
       "geometry", "timing", "repeat", "maneuver" or "battery", the first rule it broke).
     """
+    sc, battery = ctx.scenario, ctx.battery
+    opp = ctx.opportunities if opp is None else opp
     o = opp.options
     chosen = np.asarray(sorted(chosen, key=lambda c: (o.sat[c], o.t_start[c])), np.int64)
     n = chosen.size
@@ -73,7 +73,7 @@ def check_plan(sc: Scenario, scene, table_ok, opp, chosen, battery):
         return [], {**empty, "battery_min": {}, "battery": {}, "order": chosen}
     pl = _plan_rows(o, chosen)
     found = [
-        _geometry_findings(sc, scene, table_ok, opp, pl),
+        _geometry_findings(ctx, opp, pl),
         _timing_findings(sc, pl),
         _repeat_findings(sc, pl),
     ]
@@ -151,19 +151,20 @@ def _merged(found):
     return viol, bad
 
 
-def _geometry_findings(sc, scene, table_ok, opp, pl: _PlanRows) -> _Findings:
+def _geometry_findings(ctx: PlanContext, opp, pl: _PlanRows) -> _Findings:
     """Observations that break the geometry at any sample (start, knots inside, end: the
     off-nadir limit, the aim point above its horizon, the orbit table usable) or their
     window (the target's imaging window, the horizon [0, duration], the sensor type):
     reason "geometry"."""
+    sc = ctx.scenario
     tg = sc.targets
     sat, tgt, t0, t1 = pl.sat, pl.tgt, pl.t0, pl.t1
     owner, ts = observation_samples(t0, t1, sc.planner.geometry_step, tol=0.0)
     offn, elev, _, _ = evaluate(
-        geometry_batched, scene, sat[owner], opp.params[pl.chosen][owner], t0[owner], ts
+        geometry_batched, ctx.scene, sat[owner], opp.params[pl.chosen][owner], t0[owner], ts
     )
     lim = np.array([s.off_nadir_max for s in sc.satellites])
-    ok_s = (offn <= lim[sat[owner]]) & (elev > 0.0) & table_ok(sat[owner], ts)
+    ok_s = (offn <= lim[sat[owner]]) & (elev > 0.0) & ctx.usable(sat[owner], ts)
     geo_ok = np.ones(pl.chosen.size, bool)
     np.logical_and.at(geo_ok, owner, ok_s)
     sensors = np.array([s.sensor for s in sc.satellites])

@@ -22,6 +22,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+from jaxspline.planner.context import PlanContext
 from jaxspline.planner.opportunities import Opportunities, option_states
 from jaxspline.screen.options import take_options
 from jaxspline.sequences.refine import refine_plan
@@ -58,11 +59,14 @@ class _QuadraticStarts(NamedTuple):
         return self.value[route]
 
 
-def _exact(sc, scene, o, opp, ids, t0, per_ch):
+def _exact(ctx: PlanContext, ids, t0, per_ch):
+    """Exact boundary states of the search's options ``ids`` started at ``t0`` [s]."""
+    opp = ctx.opportunities
+    o = opp.options
     dur = np.asarray(o.t_end)[ids] - np.asarray(o.t_start)[ids]
     return option_states(
-        sc,
-        scene,
+        ctx.scenario,
+        ctx.scene,
         np.asarray(o.sat)[ids],
         np.asarray(o.route)[ids],
         t0,
@@ -72,20 +76,20 @@ def _exact(sc, scene, o, opp, ids, t0, per_ch):
     )
 
 
-def refine_starts(sc, scene, opp: Opportunities, chosen, steps: int):
-    """Refined copy of ``opp`` for the ``chosen`` option ids (those rows replaced).
+def refine_starts(ctx: PlanContext, chosen, steps: int):
+    """Refined copy of the search's option table for the ``chosen`` option ids (those
+    rows replaced).
 
     Args:
-      sc: Scenario.
-      scene: Scene of the scenario's satellites.
-      opp: Opportunities.
+      ctx: PlanContext (its scenario, scene and option table ``opportunities``).
       chosen: int [K], option ids of the plan.
       steps: int, refinement iterations.
     Returns:
       ``(opp2, stats)``: ``stats`` maps each refined satellite's name to the smallest
       transition margin [rad] before and after (model states) and whether the refined
-      plan validates; ``opp2 is opp`` when nothing moved.
+      plan validates; ``opp2 is ctx.opportunities`` when nothing moved.
     """
+    sc, opp = ctx.scenario, ctx.opportunities
     o = opp.options
     chosen = np.asarray(chosen, np.int64)
     per_ch = np.array([not s.maneuver.rest_to_rest for s in sc.satellites])
@@ -99,13 +103,13 @@ def refine_starts(sc, scene, opp: Opportunities, chosen, steps: int):
         ids = ids[np.argsort(np.asarray(o.t_start)[ids])]
         if ids.size < 2:
             continue
-        t_refined, stats[s.name] = _refine_satellite(sc, scene, opp, grid, ids, s, steps, per_ch)
+        t_refined, stats[s.name] = _refine_satellite(ctx, grid, ids, s, steps, per_ch)
         if t_refined is not None:
             t_new[ids] = t_refined
     moved = np.flatnonzero(t_new != np.asarray(o.t_start))
     if moved.size == 0:
         return opp, stats
-    return _moved(sc, scene, opp, moved, t_new[moved], per_ch), stats
+    return _moved(ctx, moved, t_new[moved], per_ch), stats
 
 
 class _Grid(NamedTuple):
@@ -146,18 +150,19 @@ def _grid_of(opp: Opportunities, step: float) -> _Grid:
     return _Grid(key, known)
 
 
-def _refine_satellite(sc, scene, opp: Opportunities, grid: _Grid, ids, s, steps: int, per_ch):
+def _refine_satellite(ctx: PlanContext, grid: _Grid, ids, s, steps: int, per_ch):
     """Refine the starts of one per-channel satellite ``s``'s options ``ids`` (in start
     order, at least two) through their quadratic model, padded to a shared bucket size.
     Returns (the refined starts [K] [s], or None when the refined plan does not validate
     or its smallest transition margin shrank; the satellite's stats entry)."""
-    o = opp.options
+    sc = ctx.scenario
+    o = ctx.opportunities.options
     n = ids.size
     t0 = np.asarray(o.t_start)[ids]
     dur = np.asarray(o.t_end)[ids] - t0
     h = 0.5 * sc.planner.time_step
-    coef = _quadratic_coef(sc, scene, opp, ids, t0, h, per_ch)
-    lo, hi = _start_windows(sc, opp, grid, ids, t0, dur, h)
+    coef = _quadratic_coef(ctx, ids, t0, h, per_ch)
+    lo, hi = _start_windows(sc, ctx.opportunities, grid, ids, t0, dur, h)
     model, local = _padded_model(o, ids, t0, dur, coef, lo, hi)
     size = local.route.size
     res = refine_plan(
@@ -175,13 +180,13 @@ def _refine_satellite(sc, scene, opp: Opportunities, grid: _Grid, ids, s, steps:
     return (res.t0[:n] if res.ok and after >= before else None), stat
 
 
-def _quadratic_coef(sc, scene, opp: Opportunities, ids, t0, h: float, per_ch) -> np.ndarray:
+def _quadratic_coef(ctx: PlanContext, ids, t0, h: float, per_ch) -> np.ndarray:
     """[3, K, 4, C] coefficients (c0, c1, c2) in the start shift of the quadratic through
     the exact boundary states (start angle, start rate, end angle, end rate) of the
     options ``ids`` started at ``t0 - h``, ``t0`` and ``t0 + h``."""
     samples = []
     for shift in (-h, 0.0, h):
-        st = _exact(sc, scene, opp.options, opp, ids, t0 + shift, per_ch)
+        st = _exact(ctx, ids, t0 + shift, per_ch)
         samples.append(np.stack([st.start_angle, st.start_rate, st.end_angle, st.end_rate], 1))
     m, z, p = samples
     return np.stack([z, (p - m) / (2 * h), (p - 2 * z + m) / (2 * h * h)])
@@ -226,11 +231,12 @@ def _padded_model(o, ids, t0, dur, coef, lo, hi):
     return model, local
 
 
-def _moved(sc, scene, opp: Opportunities, moved, t_moved, per_ch) -> Opportunities:
-    """A copy of ``opp`` whose options ``moved`` start at ``t_moved`` [s], every field of
-    theirs recomputed exactly (the others unchanged)."""
+def _moved(ctx: PlanContext, moved, t_moved, per_ch) -> Opportunities:
+    """A copy of the search's option table whose options ``moved`` start at ``t_moved``
+    [s], every field of theirs recomputed exactly (the others unchanged)."""
+    opp = ctx.opportunities
     o = opp.options
-    new = _exact(sc, scene, o, opp, moved, t_moved, per_ch)
+    new = _exact(ctx, moved, t_moved, per_ch)
     fields = {f: np.array(getattr(o, f)) for f in o._fields if getattr(o, f) is not None}
     for f in fields:
         fields[f][moved] = np.asarray(getattr(new, f))

@@ -13,15 +13,17 @@ degree-7 join check (:func:`jaxspline.planner.flown_joins.reject_unflyable`). On
    one of a failing transition, see :mod:`jaxspline.planner.plan_check`), which is
    dropped, until the check passes;
 3. **joins** (``flown_joins``): observations whose joins exceed a limit are dropped and
-   withdrawn from the search for good; in the first ``_REFILL_ROUNDS`` rounds the
-   search's timeline then fills the freed time (greedy; in the first refill also a
-   short LNS) and a new round starts.
+   their options withdrawn from the search for good (a mask, :attr:`Repaired.withdrawn`;
+   the search's :class:`jaxspline.search.Problem` is never changed); in the first
+   ``_REFILL_ROUNDS`` rounds a re-search then fills the freed time (a timeline of the
+   current set without the withdrawn options: greedy; in the first refill also a short
+   LNS) and a new round starts.
 
 Invariants:
 
-* the timeline ``tl`` of the search holds the plan in the search's table whenever the
-  refill runs (it is restored from the current set), so every insertion test sees the
-  data the search screened; refined times never enter it;
+* the refill's timeline holds the plan in the search's table (it is restored from the
+  current set), so every insertion test sees the data the search screened; refined
+  times never enter it;
 * refinement is a function of the current set: it re-runs after a refill added
   observations, so refined and refilled observations are never mixed unchecked;
 * every round ends with a plan that passes the check in the table in force; the
@@ -39,10 +41,13 @@ import random
 import time
 from typing import NamedTuple
 
+import numpy as np
+
+from jaxspline.planner.context import PlanContext
 from jaxspline.planner.flown_joins import reject_unflyable
 from jaxspline.planner.plan_check import check_plan
 from jaxspline.planner.refine_starts import refine_starts
-from jaxspline.search import clock, greedy, lns
+from jaxspline.search import Timeline, clock, greedy, lns
 
 __all__ = ["DROP_REASONS", "Repaired", "drop_failing", "dropped_line", "repair"]
 
@@ -65,6 +70,9 @@ class Repaired(NamedTuple):
       joins: join summary of the final plan ({} without ``flown_joins``).
       refilled: observations the refills added (net of the rejected ones).
       rounds: repair rounds run.
+      withdrawn: bool [N], the options withdrawn from the search for good (their joins
+        failed); a later re-search of the problem passes it to
+        :class:`jaxspline.search.Timeline`.
     """
 
     chosen: list
@@ -76,6 +84,7 @@ class Repaired(NamedTuple):
     joins: dict
     refilled: int
     rounds: int
+    withdrawn: np.ndarray
 
 
 def dropped_line(dropped: dict) -> str:
@@ -89,24 +98,24 @@ def dropped_line(dropped: dict) -> str:
     return ", ".join(f"{n} {reason}" for reason, n in dropped.items())
 
 
-def _refine(sc, scene, table_ok, opp0, chosen, battery, steps):
-    """Refined table if the whole plan passes the check in it, else ``opp0``; and stats."""
-    opp_r, refined = refine_starts(sc, scene, opp0, chosen, steps)
+def _refine(ctx: PlanContext, chosen, steps):
+    """Refined table if the whole plan passes the check in it, else the search's; and stats."""
+    opp_r, refined = refine_starts(ctx, chosen, steps)
     kept, det = False, None
-    if opp_r is not opp0:
-        bad, det = check_plan(sc, scene, table_ok, opp_r, chosen, battery)
+    if opp_r is not ctx.opportunities:
+        bad, det = check_plan(ctx, chosen, opp_r)
         kept = not bad
     for v in refined.values():
         v["kept"] = kept
-    return (opp_r, det) if kept else (opp0, None), refined
+    return (opp_r, det) if kept else (ctx.opportunities, None), refined
 
 
-def _drop_until_clean(sc, scene, table_ok, opp, chosen, battery, det, dropped):
+def _drop_until_clean(ctx: PlanContext, opp, chosen, det, dropped):
     """Check, drop one observation per violation, repeat; returns (chosen, details, found)."""
     found = 0
     while True:
         if det is None:
-            bad, det = check_plan(sc, scene, table_ok, opp, chosen, battery)
+            bad, det = check_plan(ctx, chosen, opp)
         else:
             bad = sorted(det["reasons"])
         if not bad:
@@ -119,34 +128,34 @@ def _drop_until_clean(sc, scene, table_ok, opp, chosen, battery, det, dropped):
         det = None
 
 
-def drop_failing(sc, scene, table_ok, opp, chosen, battery):
+def drop_failing(ctx: PlanContext, chosen, opp=None):
     """Step 2 of the repair alone: check ``chosen``, drop one observation per violation, repeat.
 
     Args:
-      sc: Scenario.
-      scene: Scene of the scenario's satellites.
-      table_ok: callable (sat [M], t [M]) -> bool [M], the orbit table is usable there.
-      opp: Opportunities (``chosen`` indexes them).
+      ctx: PlanContext of the planned scenario.
       chosen: option ids of the plan.
-      battery: BatteryModel of the scenario.
+      opp: the Opportunities ``chosen`` indexes (default: ``ctx.opportunities``).
     Returns:
       (kept option ids, which pass :func:`check_plan`; dropped per reason, keys
       :data:`DROP_REASONS`).
     """
     dropped = dict.fromkeys(DROP_REASONS, 0)
-    kept, _, _ = _drop_until_clean(sc, scene, table_ok, opp, list(chosen), battery, None, dropped)
+    opp = ctx.opportunities if opp is None else opp
+    kept, _, _ = _drop_until_clean(ctx, opp, list(chosen), None, dropped)
     return kept, dropped
 
 
-def _refill(tl, chosen, seconds, iters, seed):
-    """Fill the freed time of ``chosen`` in the search's timeline: a greedy pass, then
-    a short LNS (``iters`` iterations or until ``seconds`` have passed).
+def _refill(pb, chosen, withdrawn, seconds, iters, seed):
+    """Re-search of the problem ``pb`` from the plan ``chosen`` without the ``withdrawn``
+    options: a greedy pass fills the freed time, then a short LNS (``iters`` iterations
+    or until ``seconds`` have passed).
 
     Returns (option ids of the plan, observations added).
     """
-    assigned = [-1] * len(tl.pb.weight)
+    tl = Timeline(pb, withdrawn)
+    assigned = [-1] * pb.n_targets
     for c in chosen:
-        assigned[tl.pb.c_task[c]] = c
+        assigned[pb.option_target[c]] = c
     tl.restore(assigned)
     deadline = time.monotonic() + seconds
     greedy(tl, deadline)
@@ -156,21 +165,9 @@ def _refill(tl, chosen, seconds, iters, seed):
     return new, len(new) - len(chosen)
 
 
-def _withdraw(pb, rejected):
-    """Take rejected options out of their tasks' candidates, so no refill brings them back."""
-    for c in rejected:
-        cands = pb.task_cands[pb.c_task[c]]
-        if c in cands:
-            cands.remove(c)
-
-
 def repair(
-    sc,
-    scene,
-    table_ok,
-    opp0,
-    tl,
-    battery,
+    ctx: PlanContext,
+    chosen,
     *,
     refine_steps: int = 0,
     flown_joins: bool = False,
@@ -179,15 +176,11 @@ def repair(
     seed: int = 0,
     report=None,
 ) -> Repaired:
-    """Run the repair loop (module docstring) on the search's final timeline.
+    """Run the repair loop (module docstring) on the search's plan.
 
     Args:
-      sc: Scenario.
-      scene: Scene of the scenario's satellites.
-      table_ok: callable (sat [M], t [M]) -> bool [M], the orbit table is usable there.
-      opp0: the search's Opportunities (the timeline's option ids index it).
-      tl: the search's :class:`jaxspline.search.Timeline` (modified by refills).
-      battery: BatteryModel of the scenario.
+      ctx: PlanContext of the planned scenario (read only).
+      chosen: option ids of the search's plan (ids of ``ctx.opportunities``).
       refine_steps: Adam steps of the start-time refinement (0: no refinement).
       flown_joins: also check the degree-7 joins and refill after rejections.
       refill_s: budget of one refill [s] (greedy pass, then LNS).
@@ -199,31 +192,30 @@ def repair(
       Repaired.
     """
     say = report or (lambda stage, msg: None)
-    chosen = [c for c in tl.assigned if c >= 0]
+    chosen = list(chosen)
+    withdrawn = np.zeros(ctx.problem.n_options, bool)
     dropped = dict.fromkeys(DROP_REASONS, 0)
     found = refilled = rounds = 0
-    opp, det, refined, joins = opp0, None, {}, {}
+    opp, det, refined, joins = ctx.opportunities, None, {}, {}
     refine = refine_steps > 0
     refills_left = _REFILL_ROUNDS
     while True:
         rounds += 1
         if refine and not clock.stop_requested():
-            (opp, det), refined = _refine(
-                sc, scene, table_ok, opp0, chosen, battery, int(refine_steps)
-            )
-            kept = opp is not opp0
+            (opp, det), refined = _refine(ctx, chosen, int(refine_steps))
+            kept = opp is not ctx.opportunities
             say("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
         refine = False
-        chosen, det, n = _drop_until_clean(sc, scene, table_ok, opp, chosen, battery, det, dropped)
+        chosen, det, n = _drop_until_clean(ctx, opp, chosen, det, dropped)
         found += n
         if not flown_joins:
             break
-        bad, joins = reject_unflyable(sc, scene, opp, chosen)
+        bad, joins = reject_unflyable(ctx.scenario, ctx.scene, opp, chosen)
         if not bad:
             break
         found += len(bad)
         dropped["joins"] += len(bad)
-        _withdraw(tl.pb, bad)
+        withdrawn[bad] = True
         gone = set(bad)
         chosen = [c for c in chosen if c not in gone]
         det = None
@@ -232,7 +224,7 @@ def repair(
             # LNS in the first refill only: a later one would pack new joins that the
             # last round can only drop
             iters = refill_iters if refills_left == _REFILL_ROUNDS - 1 else 0
-            chosen, gain = _refill(tl, chosen, refill_s, iters, seed + rounds)
+            chosen, gain = _refill(ctx.problem, chosen, withdrawn, refill_s, iters, seed + rounds)
             refilled += gain
             refine = refine_steps > 0 and gain > 0  # refined times follow the new set
-    return Repaired(chosen, opp, det, dropped, found, refined, joins, refilled, rounds)
+    return Repaired(chosen, opp, det, dropped, found, refined, joins, refilled, rounds, withdrawn)

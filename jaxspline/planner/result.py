@@ -60,7 +60,7 @@ class PlanResult:
       value: total value of the plan (each target counted once).
       bound: an upper bound of the best plan's value (Lagrangian / exact DP; the
         battery is relaxed), so ``gap = bound - value`` certifies how far the plan can
-        be from the optimum of the candidate model.
+        be from the optimum of the option model.
       gap: ``bound - value`` (>= 0).
       bound_converged: True when the bound's subgradient iteration stopped by
         convergence (not by the time limit).

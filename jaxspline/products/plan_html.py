@@ -42,6 +42,7 @@ import numpy as np
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 from jaxspline.planner.result import PlanResult
 from jaxspline.products import plan_html_columns as columns
+from jaxspline.search import BoundStatus
 
 __all__ = ["HTML_FILE", "plan_document", "plan_page", "read_plan", "write_plan_html"]
 
@@ -153,7 +154,7 @@ def _header(doc) -> str:
             f"{html.escape(columns.utc_text(view['epoch_utc'])[:16])} UTC"
         )
     valid = bool(s.get("valid"))
-    status = "converged" if s.get("bound_converged") else "-"
+    status = BoundStatus.CONVERGED if s.get("bound_converged") else "-"
     low = rep.get("min_battery_wh")  # per powered satellite (older files: one number)
     low = low if isinstance(low, dict) else ({} if low is None else {"all": low})
     battery = ", ".join(

@@ -6,8 +6,9 @@ it imports nothing of the package outside this folder. Inside, imports point one
 ``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` -> ``bound_worker`` -> ``solve``
 (:func:`solve`, the stages run until a deadline). ``clock`` is the search's one time
 source; ``construct`` is the one greedy strategy (``greedy_pass``), used by ``timeline``,
-``lns`` and :mod:`jaxspline.sequences.sequencer`. The search speaks of *targets* (what
-may be imaged once) and *options* (one way to image a target: satellite, start).
+``lns`` and :mod:`jaxspline.sequences.sequencer`; ``status`` (:class:`BoundStatus`) is how
+every bound ended. The search speaks of *targets* (what may be imaged once) and
+*options* (one way to image a target: satellite, start).
 """
 
 from jaxspline.search import clock as clock
@@ -32,4 +33,5 @@ from jaxspline.search.mip import mip_bound as mip_bound
 from jaxspline.search.problem import Problem as Problem
 from jaxspline.search.solve import SearchResult as SearchResult
 from jaxspline.search.solve import solve as solve
+from jaxspline.search.status import BoundStatus as BoundStatus
 from jaxspline.search.timeline import Timeline as Timeline

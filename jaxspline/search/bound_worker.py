@@ -27,19 +27,20 @@ import warnings
 
 from jaxspline.search.lagrangian import BoundResult, upper_bound
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 
 __all__ = ["BoundWorker"]
 
 _GRACE_S = 30.0  # [s] the parent waits this long past the deadline for the last iteration
 
 
-def _run(conn, pb: Problem, target: float, deadline: float, max_iters):
+def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters):
     """Child: iterate the bound, send (bound, iterations, status)."""
     gc.disable()  # never finalize the parent's (JAX) objects in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    res = upper_bound(pb, target, deadline, max_iters, energy=False)
-    conn.send((float(res.bound), int(res.iterations), str(res.status)))
+    res = upper_bound(pb, plan_value, deadline, max_iters, energy=False)
+    conn.send((float(res.bound), int(res.iterations), res.status.value))
     conn.close()
 
 
@@ -48,16 +49,17 @@ class BoundWorker:
 
     Args:
       pb: Problem (shared with the child copy-on-write).
-      target: float, a plan value (sets the step size only; see :func:`upper_bound`).
+      plan_value: float, a value some plan reaches (sets the step size only; see
+        :func:`upper_bound`).
       deadline: float, ``time.monotonic()`` value at which the child stops [s].
       max_iters: cap on its iterations (None: the deadline alone).
     """
 
-    def __init__(self, pb: Problem, target: float, deadline: float, max_iters=None):
+    def __init__(self, pb: Problem, plan_value: float, deadline: float, max_iters=None):
         ctx = mp.get_context("fork")
         self._conn, child = ctx.Pipe(duplex=False)
         self._proc = ctx.Process(
-            target=_run, args=(child, pb, target, deadline, max_iters), daemon=True
+            target=_run, args=(child, pb, plan_value, deadline, max_iters), daemon=True
         )
         with warnings.catch_warnings():  # JAX warns of any fork; the child runs no JAX
             warnings.filterwarnings("ignore", message=r"os\.fork\(\) was called")
@@ -85,7 +87,7 @@ class BoundWorker:
         try:
             if self._conn.poll(timeout):
                 bound, its, status = self._conn.recv()
-                out = BoundResult([], bound, its, status)
+                out = BoundResult([], bound, its, BoundStatus(status))
         except (EOFError, OSError):  # the child died: no bound from it
             out = None
         self.stop()

@@ -12,12 +12,12 @@ it (a generator that reads the problem's state is fine).
 Every greedy of the package is this strategy, :func:`greedy_pass`; a problem supplies
 only what its decisions are, what is admissible and what it costs:
 
-* :func:`jaxspline.search.greedy` (multi-satellite timelines): one decision per task,
+* :func:`jaxspline.search.greedy` (multi-satellite timelines): one decision per target,
   heaviest first (:func:`jaxspline.search.lns.greedy_order`); the candidates are the
-  task's options that fit (:meth:`jaxspline.search.timeline.Timeline.check`), their
+  target's options that fit (:meth:`jaxspline.search.timeline.Timeline.check`), their
   cost the timeline time they consume plus a small end-time term
   (:meth:`jaxspline.search.timeline.Timeline.insert_choices`). The LNS re-inserts the
-  tasks of a destroyed window with the same pass, on noisy costs.
+  targets of a destroyed window with the same pass, on noisy costs.
 * :func:`jaxspline.sequences.greedy` (one chain over screened transitions,
   :mod:`jaxspline.sequences.sequencer`): one decision per position of the chain; the
   candidates are the feasible successors of the last option (every option at the
@@ -47,7 +47,7 @@ def first_least(costs) -> int:
       int, the position of the least cost (the earliest one on ties), -1 when
       ``costs`` is empty.
     """
-    if type(costs) is list:  # the hot path: one task's few options
+    if type(costs) is list:  # the hot path: one target's few options
         return costs.index(min(costs)) if costs else -1
     return int(np.argmin(costs)) if np.size(costs) else -1
 

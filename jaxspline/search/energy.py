@@ -12,7 +12,7 @@ inside I obeys
 
 Imaging counts ``imaging_w`` times the exact duration and a near maneuver ``slew_w``
 times its required time less :data:`_SLEW_TOL` (always-feasible "far" transitions and
-the first slew count zero), so every plan of the candidate model meets these
+the first slew count zero), so every plan of the option model meets these
 constraints: they relax its battery rule. Intervals start at 0 or a shadow entry and
 end at a shadow exit or the horizon end. A constraint is dropped when no plan can
 violate it: all options and near pairs inside fit in ``B_I``, or the interval is too
@@ -57,8 +57,8 @@ class EnergyBudgets:
 
     def __init__(self, pb: Problem):
         bat = pb.battery
-        s = np.asarray(pb.c_start, np.float64)
-        e = np.asarray(pb.c_end, np.float64)
+        s = np.asarray(pb.option_start, np.float64)
+        e = np.asarray(pb.option_end, np.float64)
         far = np.asarray(pb.far, np.float64)
         pairs = pb.pairs
         self.n_options, self.n_near = pb.n_options, len(pairs)

@@ -1,6 +1,6 @@
-"""Per-satellite exact DP coordinated by Lagrangian task prices: plans and an upper bound.
+"""Per-satellite exact DP coordinated by Lagrangian target prices: plans and an upper bound.
 
-Relaxing "each task is imaged at most once" with prices ``lam_t`` splits the problem
+Relaxing "each target is imaged at most once" with prices ``lam_t`` splits the problem
 into one longest-path problem per satellite over its options in start order
 (:func:`dp_paths`): ``best[j] = w_j - lam_t(j) + max(base_j, far predecessors, near
 compatible predecessors)``, far ones (gap >= ``far[sat]``, always compatible) through
@@ -10,18 +10,18 @@ a running maximum, near ones through the screened feasible pairs. In
 bound gains ``sum nu``); otherwise it is dropped.
 ``UB(lam) = sum_k DP_k(lam) + sum_t lam_t (+ sum_I nu_I)``.
 
-Weak duality with repeats. The rules let a plan image a task more than once (it
+Weak duality with repeats. The rules let a plan image a target more than once (it
 counts once), and dropping a repeat is not always possible (an observation can be
-the bridge that makes a long maneuver feasible). Let a plan image task t ``n_t`` times.
+the bridge that makes a long maneuver feasible). Let a plan image target t ``n_t`` times.
 Its satellites' sequences are feasible paths, so ``sum_k DP_k >= sum_t n_t (w_t -
 lam_t)`` and ``UB >= sum_t [n_t w_t - (n_t - 1) lam_t]``. For ``0 <= lam_t <= w_t``
 each term is ``>= w_t`` if ``n_t >= 1`` and ``>= 0`` otherwise: UB >= the plan's value.
 Prices are therefore kept in ``[0, w_t]`` (projected subgradient), which makes UB an
-upper bound of every plan of the candidate model, repeats included.
+upper bound of every plan of the option model, repeats included.
 
 Every :data:`_REPAIR_EVERY`-th iteration also repairs the DP paths into a feasible
-plan (each task once, heaviest first, re-checked insertion incl. battery, then greedy
-fill); its value is the step target.
+plan (each target once, heaviest first, re-checked insertion incl. battery, then greedy
+fill); its value sets the step size.
 """
 
 from __future__ import annotations
@@ -35,6 +35,7 @@ from jaxspline.search import clock
 from jaxspline.search.energy import EnergyBudgets
 from jaxspline.search.lns import greedy
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["BoundResult", "DPData", "dp_paths", "dp_prepare", "lagrangian", "upper_bound"]
@@ -88,9 +89,9 @@ def dp_prepare(pb: Problem) -> DPData:
       DPData.
     """
     n = pb.n_options
-    s = np.asarray(pb.c_start)
-    e = np.asarray(pb.c_end)
-    sat = np.asarray(pb.c_sat, np.int64)
+    s = np.asarray(pb.option_start)
+    e = np.asarray(pb.option_end)
+    sat = np.asarray(pb.option_sat, np.int64)
     far = np.asarray(pb.far)
     order = pb.pairs.rows  # start order (Problem keeps the pair rows so)
     so = s[order]
@@ -103,7 +104,7 @@ def dp_prepare(pb: Problem) -> DPData:
     groups = list(zip(bounds[:-1], bounds[1:], strict=True))
     rt = e + far[sat] if n else np.zeros(0)
     ab = np.argsort(rt, kind="stable")
-    first_ok = np.asarray(pb.c_first) <= s
+    first_ok = np.asarray(pb.option_first) <= s
     return DPData(order, sat, s, groups, first_ok, ab, rt[ab])
 
 
@@ -145,7 +146,7 @@ def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
             has = ptr[ga + 1 : gb + 1] > ptr[ga:gb]
             v[has] = np.maximum(v[has], np.maximum.reduceat(pv, at[has]))
         best[J] = w[J] + v
-    ends = np.asarray(pb.c_end)
+    ends = np.asarray(pb.option_end)
     far = np.asarray(pb.far)
     paths, values = [], []
     for k in range(n_s):
@@ -159,20 +160,20 @@ def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
         path = [j]
         ids = np.arange(lo, hi)
         while True:
-            target = best[j] - w[j]
-            if d.first_ok[j] and target <= _PATH_TOL:
+            rest = best[j] - w[j]  # the value the predecessor (or the start) provides
+            if d.first_ok[j] and rest <= _PATH_TOL:
                 break
             row = pairs.row(j)
             q0, q1 = row.start, row.stop
-            cand = src[q0:q1]
-            cv = best[cand] if arc is None else best[cand] - arc[q0:q1]
-            ok = np.flatnonzero(cv >= target - _PATH_TOL)
-            hit = cand[ok]
+            preds = src[q0:q1]
+            cv = best[preds] if arc is None else best[preds] - arc[q0:q1]
+            ok = np.flatnonzero(cv >= rest - _PATH_TOL)
+            hit = preds[ok]
             if hit.size and used is not None:
                 used.append(q0 + int(ok[0]))
             if hit.size == 0:
                 fp = ids[ends[ids] + far[k] <= d.start[j]]
-                hit = fp[best[fp] >= target - _PATH_TOL]
+                hit = fp[best[fp] >= rest - _PATH_TOL]
             if hit.size == 0:  # cannot happen; stop defensively
                 break
             j = int(hit[0])
@@ -182,15 +183,16 @@ def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
 
 
 def _plan_from_paths(tl: Timeline, paths, order_fill, deadline: float):
-    """Feasible plan from DP paths: each task once (heaviest first, earliest option),
+    """Feasible plan from DP paths: each target once (heaviest first, earliest option),
     every insertion re-checked (maneuvers, battery); then a greedy fill."""
     pb = tl.pb
     tl.restore([])
     chosen = sorted(
-        (c for p in paths for c in p), key=lambda c: (-pb.weight[pb.c_task[c]], pb.c_start[c])
+        (c for p in paths for c in p),
+        key=lambda c: (-pb.target_value[pb.option_target[c]], pb.option_start[c]),
     )
     for c in chosen:
-        if tl.assigned[pb.c_task[c]] < 0 and tl.check(c) is not None:
+        if tl.assigned[pb.option_target[c]] < 0 and tl.check(c) is not None:
             tl.insert(c)
     greedy(tl, deadline, order_fill)
 
@@ -200,25 +202,26 @@ class BoundResult:
     """Outcome of :func:`lagrangian`.
 
     Attributes:
-      best: task -> option assignment of the best repaired plan.
+      best: target -> option assignment of the best repaired plan.
       bound: the smallest upper bound seen (``inf`` if no iteration ran).
       iterations: subgradient iterations.
-      status: "optimal" (bound met by a plan), "converged" (zero subgradient or the
-        step fell below its floor) or "time" (stopped by the deadline / cap).
+      status: :class:`BoundStatus`: ``OPTIMAL`` (bound met by a plan), ``CONVERGED``
+        (zero subgradient or the step fell below its floor) or ``TIME`` (stopped by
+        the deadline / cap).
     """
 
     best: list
     bound: float
     iterations: int
-    status: str
+    status: BoundStatus
 
 
 class Prices:
     """Projected Polyak subgradient iteration on the prices (shared by both users).
 
-    ``lam`` holds the task prices, then (``energy``) the prices of the energy budgets
+    ``lam`` holds the target prices, then (``energy``) the prices of the energy budgets
     the unpriced DP optimum overdraws (:mod:`jaxspline.search.energy`).
-    ``lam += mu (UB - target) / |g|^2 g`` with ``g = takers - 1`` (tasks) and
+    ``lam += mu (UB - plan_value) / |g|^2 g`` with ``g = takers - 1`` (targets) and
     ``g = scaled usage - 1`` (budgets), projected on ``[0, w]`` / ``[0, inf)``; after
     :data:`_STALL_ITERS` iterations without a better bound ``mu`` halves and the prices
     restart from the best ones seen.
@@ -227,20 +230,22 @@ class Prices:
     def __init__(self, pb: Problem, energy: bool = False):
         self.pb = pb
         self.d = dp_prepare(pb)
-        self.W = np.asarray(pb.weight, np.float64)
-        self.ctask = np.asarray(pb.c_task, np.int64)
+        self.target_value = np.asarray(pb.target_value, np.float64)
+        self.option_target = np.asarray(pb.option_target, np.int64)
         self.en = EnergyBudgets(pb) if energy else None
         if self.en is not None:
             if self.en.m:
                 # price only the budgets the unpriced optimum overdraws (any subset is
                 # valid; the others rarely bind and would slow every iteration)
-                paths, _ = dp_paths(pb, self.d, self.W[self.ctask], None, used := [])
+                paths, _ = dp_paths(
+                    pb, self.d, self.target_value[self.option_target], None, used := []
+                )
                 self.en.restrict(self._energy_usage(paths, used) > 1.0)
             if not self.en.m:
                 self.en = None
         m = self.en.m if self.en is not None else 0
-        # prices: tasks (in [0, w]) then energy budgets (>= 0, see search.energy)
-        self.hi = np.r_[self.W, np.full(m, np.inf)]
+        # prices: targets (in [0, w]) then energy budgets (>= 0, see search.energy)
+        self.hi = np.r_[self.target_value, np.full(m, np.inf)]
         self.lam = np.zeros(self.hi.size)
         self.best_lam = self.lam.copy()
         self.ub, self.mu, self.stall, self.it = math.inf, 1.0, 0, 0
@@ -248,11 +253,11 @@ class Prices:
     def solve_dp(self):
         """DP paths at the current prices; updates the bound. Returns the paths."""
         self.it += 1
-        n_t = self.W.size
-        w = self.W[self.ctask] - self.lam[self.ctask]
+        n_tg = self.target_value.size
+        w = self.target_value[self.option_target] - self.lam[self.option_target]
         arc, self.used = None, None
         if self.en is not None:
-            node_pen, arc_pen = self.en.penalties(self.lam[n_t:])
+            node_pen, arc_pen = self.en.penalties(self.lam[n_tg:])
             w, arc, self.used = w - node_pen, arc_pen, []
         paths, vals = dp_paths(self.pb, self.d, w, arc, self.used)
         self._record(vals, paths)
@@ -268,10 +273,10 @@ class Prices:
         self.paths = paths
 
     def _takers(self, paths) -> np.ndarray:
-        """Number of paths taking each task (float [T])."""
-        cnt = np.zeros(self.W.size)
+        """Number of paths taking each target (float [T])."""
+        cnt = np.zeros(self.target_value.size)
         for p in paths:
-            np.add.at(cnt, self.ctask[p], 1.0)
+            np.add.at(cnt, self.option_target[p], 1.0)
         return cnt
 
     def _subgradient(self) -> np.ndarray:
@@ -287,8 +292,9 @@ class Prices:
         arcs[used] = True
         return self.en.usage(nodes, arcs)
 
-    def step(self, target: float) -> bool:
-        """Move the prices toward ``target``; False when the iteration has converged."""
+    def step(self, plan_value: float) -> bool:
+        """Move the prices toward ``plan_value``, a value some plan reaches; False when the
+        iteration has converged."""
         if self.stall >= _STALL_ITERS:
             self.mu, self.stall, self.lam = self.mu * 0.5, 0, self.best_lam.copy()
             return self.mu >= _MU_MIN
@@ -298,7 +304,7 @@ class Prices:
         gn = float(np.dot(g, g))
         if gn == 0.0 or self.mu < _MU_MIN:
             return False
-        self.lam = np.clip(lam + self.mu * max(self.ub - target, 1e-3) / gn * g, 0.0, hi)
+        self.lam = np.clip(lam + self.mu * max(self.ub - plan_value, 1e-3) / gn * g, 0.0, hi)
         return True
 
 
@@ -310,7 +316,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     Args:
       tl: Timeline over the problem (its plan is replaced).
       deadline: float, ``time.monotonic()`` value at which to stop [s].
-      order_fill: task order used to fill each repaired plan greedily.
+      order_fill: target order used to fill each repaired plan greedily.
       max_iters: cap on the subgradient iterations (None: the deadline alone).
       report: callable ``report(iteration, bound, best_value)`` or None.
     Returns:
@@ -318,22 +324,22 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     """
     pb = tl.pb
     best = list(tl.assigned)
-    best_w = tl.W
+    best_w = tl.value
     if pb.n_options == 0:
-        return BoundResult(best, 0.0, 0, "optimal")
+        return BoundResult(best, 0.0, 0, BoundStatus.OPTIMAL)
     pr = Prices(pb, energy=True)
-    status = "time"
+    status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
         if (pr.it - 1) % _REPAIR_EVERY == 0:
             _plan_from_paths(tl, paths, order_fill, deadline)
-            if tl.W > best_w:
-                best_w, best = tl.W, list(tl.assigned)
+            if tl.value > best_w:
+                best_w, best = tl.value, list(tl.assigned)
         if pr.ub - best_w <= _GAP_TOL * max(1.0, pr.ub):
-            status = "optimal"
+            status = BoundStatus.OPTIMAL
             break
         if not pr.step(best_w):
-            status = "converged"
+            status = BoundStatus.CONVERGED
             break
         if report is not None:
             report(pr.it, pr.ub, best_w)
@@ -342,7 +348,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
 
 
 def upper_bound(
-    pb: Problem, target: float, deadline: float, max_iters=None, energy: bool = False
+    pb: Problem, plan_value: float, deadline: float, max_iters=None, energy: bool = False
 ) -> BoundResult:
     """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
 
@@ -350,22 +356,22 @@ def upper_bound(
 
     Args:
       pb: Problem.
-      target: float, a value some plan reaches (it sets the step size only; any value
+      plan_value: float, a value some plan reaches (it sets the step size only; any value
         gives a valid bound).
       deadline: float, ``time.monotonic()`` value at which to stop [s].
       max_iters: cap on the iterations (None: the deadline alone).
       energy: price the battery budgets of :mod:`jaxspline.search.energy` too
         (off: the battery is dropped).
     Returns:
-      BoundResult with status "converged" or "time" (cap / deadline reached).
+      BoundResult with status ``CONVERGED`` or ``TIME`` (cap / deadline reached).
     """
     if pb.n_options == 0:
-        return BoundResult([], 0.0, 0, "optimal")
+        return BoundResult([], 0.0, 0, BoundStatus.OPTIMAL)
     pr = Prices(pb, energy=energy)
-    status = "time"
+    status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         pr.solve_dp()
-        if not pr.step(target):
-            status = "converged"
+        if not pr.step(plan_value):
+            status = BoundStatus.CONVERGED
             break
     return BoundResult([], pr.ub, pr.it, status)

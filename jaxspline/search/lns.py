@@ -1,14 +1,14 @@
 """Greedy construction, large-neighbourhood search and the earliest-start pass.
 
-* Greedy (the strategy of :mod:`jaxspline.search.construct`, one decision per task):
-  tasks by value (heaviest first; fewest satellites, then fewest options first among
+* Greedy (the strategy of :mod:`jaxspline.search.construct`, one decision per target):
+  targets by value (heaviest first; fewest satellites, then fewest options first among
   equals) are inserted at the feasible option that consumes the least timeline time
   (maneuver in + imaging + maneuver out minus the maneuver it replaces), earlier end
   as tie-break.
 * LNS until the deadline: destroy a window of one satellite's timeline (80 %: around
-  an option of an unscheduled task picked with probability proportional to its
+  an option of an unscheduled target picked with probability proportional to its
   value, that option then forced in; 20 %: around a random scheduled observation),
-  then re-insert the removed tasks anywhere together with the unscheduled tasks that
+  then re-insert the removed targets anywhere together with the unscheduled targets that
   have options in the window, heaviest first with 20 % noise (the same greedy pass,
   on insertion costs with 30 % noise); threshold acceptance
   (a step may lose up to ``temp * U(0, 1)`` value early on, nothing at the end); the
@@ -17,7 +17,7 @@
   the destroy around the cheapest of a few observations, re-insertion by value per Wh,
   and a forced option that fails on the battery alone gets room by removing the
   observations of least value per Wh that can reach it.
-* Earliest pass: each observation moves to the earliest feasible option of its task.
+* Earliest pass: each observation moves to the earliest feasible option of its target.
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from jaxspline.search.timeline import Timeline
 
 __all__ = ["earliest_pass", "greedy", "greedy_order", "lns"]
 
-_RAD_TARGET = (30.0, 60.0, 90.0, 150.0)  # destroy half-widths [s] around an unscheduled task
+_RAD_TARGET = (30.0, 60.0, 90.0, 150.0)  # destroy half-widths [s] around an unscheduled target
 _RAD_RANDOM = (60.0, 120.0, 240.0)  # ... around a random scheduled observation
 _P_TARGETED = 0.8  # share of targeted destroy moves
 _POOL_LOOKBACK = 400.0  # [s] options starting this long before a window are re-offered
@@ -44,49 +44,50 @@ _TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
 
 
 def greedy_order(tl: Timeline):
-    """Tasks with options, heaviest first, fewest satellites / options first among equals.
+    """Targets with options on offer, heaviest first, fewest satellites / options first
+    among equals.
 
     Args:
       tl: Timeline.
     Returns:
-      list of task indices.
+      list of target indices.
     """
-    pb = tl.pb
+    pb, options = tl.pb, tl.target_options
     return sorted(
-        (t for t in range(len(pb.weight)) if pb.task_cands[t]),
+        (t for t in range(pb.n_targets) if options[t]),
         key=lambda t: (
-            -pb.weight[t],
-            len({pb.c_sat[c] for c in pb.task_cands[t]}),
-            len(pb.task_cands[t]),
+            -pb.target_value[t],
+            len({pb.option_sat[c] for c in options[t]}),
+            len(options[t]),
             t,
         ),
     )
 
 
 def greedy(tl: Timeline, deadline: float, order=None):
-    """Insert the tasks greedily (see module docstring) until done or the deadline.
+    """Insert the targets greedily (see module docstring) until done or the deadline.
 
     The greedy strategy of :func:`jaxspline.search.construct.greedy_pass`: one decision
-    per task of ``order``, the task's options that fit as candidates, their
+    per target of ``order``, the target's options that fit as candidates, their
     :meth:`Timeline.insert_choices` costs.
 
     Args:
-      tl: Timeline (tasks already assigned stay).
+      tl: Timeline (targets already assigned stay).
       deadline: float, ``time.monotonic()`` value at which to stop [s].
-      order: task order; None uses :func:`greedy_order`.
+      order: target order; None uses :func:`greedy_order`.
     """
-    tasks = order if order is not None else greedy_order(tl)
-    greedy_pass(tasks, tl.insert_choices, tl.insert, deadline)
+    targets = order if order is not None else greedy_order(tl)
+    greedy_pass(targets, tl.insert_choices, tl.insert, deadline)
     tl.commit()
 
 
 def _destroy(tl: Timeline, k: int, lo: float, hi: float):
     """Remove satellite k's observations touching [lo, hi]; None if that is infeasible."""
     pb = tl.pb
-    line = tl.tl[k]
-    b = bisect.bisect_right(tl.tl_s[k], hi)
+    line = tl.lines[k]
+    b = bisect.bisect_right(tl.line_starts[k], hi)
     a = b
-    while a > 0 and pb.c_end[line[a - 1]] >= lo:
+    while a > 0 and pb.option_end[line[a - 1]] >= lo:
         a -= 1
     removed = line[a:b]
     for c in removed:
@@ -98,26 +99,26 @@ class _Walk:
     """The LNS's state between iterations: the unscheduled targets and the best plan.
 
     Attributes:
-      has: the tasks with options.
+      has: the targets with options.
       er: :class:`EnergyRank` of the problem.
-      un: the unscheduled tasks (refreshed every :data:`_REFRESH_EVERY` iterations).
-      cw: cumulative target weights of ``un``.
+      un: the unscheduled targets (refreshed every :data:`_REFRESH_EVERY` iterations).
+      cw: cumulative picking odds of ``un`` (:meth:`EnergyRank.target_weights`).
       dirty: whether the plan changed since ``un`` was refreshed.
       best_key: (value, count) of the best plan.
-      best: its task -> option assignment.
+      best: its target -> option assignment.
       improved: number of improvements of the best plan.
     """
 
     def __init__(self, tl: Timeline, has):
-        self.has, self.er = has, EnergyRank(tl.pb)
-        self.best_key = (tl.W, tl.N)
+        self.has, self.er = has, EnergyRank(tl.pb, tl.target_options)
+        self.best_key = (tl.value, tl.n_observations)
         self.best = list(tl.assigned)
         self.improved = 0
         self.dirty = False
         self.refresh(tl)
 
     def refresh(self, tl: Timeline):
-        """Recompute the unscheduled tasks and their cumulative target weights."""
+        """Recompute the unscheduled targets and their cumulative picking odds."""
         self.un = [t for t in self.has if tl.assigned[t] < 0]
         self.cw = list(itertools.accumulate(self.er.target_weights(tl, self.un)))
 
@@ -125,7 +126,7 @@ class _Walk:
 def _window(tl: Timeline, w: _Walk, rng):
     """The destroy window ``(k, lo, hi, forced)`` of one move, None to skip the move.
 
-    80 %: around an option of an unscheduled task (value-weighted), that option then
+    80 %: around an option of an unscheduled target (value-weighted), that option then
     ``forced`` in; else around a scheduled observation of a random satellite
     (``forced`` -1).
     """
@@ -134,15 +135,15 @@ def _window(tl: Timeline, w: _Walk, rng):
         t = rng.choices(w.un, cum_weights=w.cw, k=1)[0]
         if tl.assigned[t] >= 0:
             return None
-        c = rng.choice(pb.task_cands[t])
+        c = rng.choice(tl.target_options[t])
         rad = rng.choice(_RAD_TARGET)
-        return pb.c_sat[c], pb.c_start[c] - rad, pb.c_end[c] + rad, c
+        return pb.option_sat[c], pb.option_start[c] - rad, pb.option_end[c] + rad, c
     k = rng.randrange(pb.n_sats)
-    if not tl.tl[k]:
+    if not tl.lines[k]:
         return None
-    c0 = er.cheap_pick(tl, k, rng) if er.binds(tl, k) else rng.choice(tl.tl[k])
+    c0 = er.cheap_pick(tl, k, rng) if er.binds(tl, k) else rng.choice(tl.lines[k])
     rad = rng.choice(_RAD_RANDOM)
-    return k, pb.c_start[c0] - rad, pb.c_end[c0] + rad, -1
+    return k, pb.option_start[c0] - rad, pb.option_end[c0] + rad, -1
 
 
 def _force(tl: Timeline, forced: int, removed, er: EnergyRank, rng):
@@ -162,21 +163,23 @@ def _force(tl: Timeline, forced: int, removed, er: EnergyRank, rng):
 
 
 def _reinsert(tl: Timeline, er: EnergyRank, k: int, lo: float, hi: float, removed, rng):
-    """Re-insert the removed tasks anywhere and the waiting tasks with options of
+    """Re-insert the removed targets anywhere and the waiting targets with options of
     satellite k in the window on k, heaviest (or most value per Wh) first, noisy."""
     pb = tl.pb
-    moved = {pb.c_task[c] for c in removed}
+    moved = {pb.option_target[c] for c in removed}
     pool = set(moved)
     a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
     b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
     for c in range(a, b):
-        if tl.assigned[pb.c_task[c]] < 0:
-            pool.add(pb.c_task[c])
+        if tl.assigned[pb.option_target[c]] < 0:
+            pool.add(pb.option_target[c])
     if er.binds(tl, k):
         pool = er.order(pool, rng)
     else:
-        pool = sorted(pool, key=lambda t: (-pb.weight[t] * (1 + _ORDER_NOISE * rng.random()), t))
-    # the greedy on noisy costs; only satellite k has new room for a task that was waiting
+        pool = sorted(
+            pool, key=lambda t: (-pb.target_value[t] * (1 + _ORDER_NOISE * rng.random()), t)
+        )
+    # the greedy on noisy costs; only satellite k has new room for a target that was waiting
     greedy_pass(pool, lambda t: tl.insert_choices(t, rng, None if t in moved else k), tl.insert)
 
 
@@ -199,16 +202,16 @@ def _move(tl: Timeline, w: _Walk, mark: int, rng) -> bool:
 def _accept(tl: Timeline, w: _Walk, base, mark: int, thr: float, it: int, rng):
     """Threshold acceptance of a move (loses at most ``thr * U(0, 1)``) and the
     bookkeeping of the best plan and of the unscheduled list."""
-    if tl.W < base[0] - thr * rng.random() - 1e-9:
+    if tl.value < base[0] - thr * rng.random() - 1e-9:
         tl.undo_to(mark)
         return
     w.dirty |= tl.score() != base
     if w.dirty and it % _REFRESH_EVERY == 0:
         w.refresh(tl)
         w.dirty = False
-    if (tl.W, tl.N) > w.best_key:
+    if (tl.value, tl.n_observations) > w.best_key:
         w.improved += 1
-        w.best_key = (tl.W, tl.N)
+        w.best_key = (tl.value, tl.n_observations)
         w.best = list(tl.assigned)
     tl.commit()
 
@@ -228,7 +231,7 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
     """
     pb = tl.pb
     t_start = time.monotonic()
-    has = [t for t in range(len(pb.weight)) if pb.task_cands[t]]
+    has = [t for t in range(pb.n_targets) if tl.target_options[t]]
     if not has:
         return 0
     w = _Walk(tl, has)
@@ -248,20 +251,20 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
         if report is not None and time.monotonic() - last > _REPORT_EVERY:
             last = time.monotonic()
             report(it, w.improved)
-    if (tl.W, tl.N) < w.best_key:
+    if (tl.value, tl.n_observations) < w.best_key:
         tl.restore(w.best)
     return it
 
 
 def earliest_pass(tl: Timeline, deadline: float):
-    """Move each observation to the earliest feasible option of its task (value unchanged).
+    """Move each observation to the earliest feasible option of its target (value unchanged).
 
     Args:
       tl: Timeline, modified in place.
       deadline: float, ``time.monotonic()`` value at which to stop [s].
     """
     pb = tl.pb
-    for t in range(len(pb.weight)):
+    for t in range(pb.n_targets):
         if clock.now() > deadline:
             return
         c = tl.assigned[t]
@@ -269,15 +272,15 @@ def earliest_pass(tl: Timeline, deadline: float):
             continue
         mark = len(tl.log)
         base = tl.score()
-        k = pb.c_sat[c]
-        pos0 = tl.tl[k].index(c)
+        k = pb.option_sat[c]
+        pos0 = tl.lines[k].index(c)
         tl.remove(c)
         if not tl.removal_ok(k, pos0):
             tl.undo_to(mark)
             continue
         best = -1
-        for c2 in sorted(pb.task_cands[t], key=lambda x: pb.c_end[x]):
-            if pb.c_end[c2] >= pb.c_end[c]:
+        for c2 in sorted(tl.target_options[t], key=lambda x: pb.option_end[x]):
+            if pb.option_end[c2] >= pb.option_end[c]:
                 break
             if tl.check(c2) is not None:
                 best = c2

@@ -6,7 +6,7 @@ the scarce resource on it:
 
 * destroy around a scheduled observation: the one of least value per Wh among
   :data:`_TOURNAMENT` random ones of the satellite;
-* re-insertion order: tasks by value per Wh (:meth:`EnergyRank.order`) instead of
+* re-insertion order: targets by value per Wh (:meth:`EnergyRank.order`) instead of
   value, so that the energy goes to the observations that pay most for it;
 * making room (:func:`make_room`): an option that fails on the battery alone gets
   energy by removing the satellite's observations of least value per Wh among those
@@ -17,7 +17,7 @@ the scarce resource on it:
 
 The energy of a scheduled observation is what its removal frees: imaging plus the
 maneuvers into and out of it less the one that replaces them
-(:meth:`EnergyRank.removal_wh`); an unscheduled task is ranked by its cheapest option
+(:meth:`EnergyRank.removal_wh`); an unscheduled target is ranked by its cheapest option
 with a maneuver of :data:`_SLEW_REF_S` seconds.
 """
 
@@ -32,7 +32,7 @@ from jaxspline.search.timeline import Timeline
 __all__ = ["EnergyRank", "make_room"]
 
 _TIGHT_S = 60.0  # [s] imaging + slewing whose energy above the margin marks a binding battery
-_SLEW_REF_S = 30.0  # [s] maneuver per observation when ranking tasks by value per Wh
+_SLEW_REF_S = 30.0  # [s] maneuver per observation when ranking targets by value per Wh
 _RANK_NOISE = 0.2  # relative noise of the value-per-Wh ranks
 _FULL_TOL = 1e-9  # [Wh] a level this close to capacity counts as full
 _WH = 1.0 / 3600.0  # [Wh / J]
@@ -41,23 +41,26 @@ _MIN_WH = 1e-9  # [Wh] floor of an energy in a value-per-Wh ratio
 
 
 class EnergyRank:
-    """Value per Wh of tasks and options; which satellites' batteries bind.
+    """Value per Wh of targets and options; which satellites' batteries bind.
 
     Args:
       pb: :class:`jaxspline.search.Problem`.
+      target_options: per target its options on offer (a timeline's
+        ``target_options``); None: ``pb.target_options``.
     """
 
-    def __init__(self, pb):
+    def __init__(self, pb, target_options=None):
         self.pb = pb
+        self.target_options = pb.target_options if target_options is None else target_options
         bat = pb.battery
         self.tight_wh = [
             (p.imaging_w + p.slew_w) * _TIGHT_S * _WH if p is not None else math.inf
             for p in bat.powers
         ]
-        self.task_wh = []
-        for cands in pb.task_cands:
-            wh = [self.option_wh(c, _SLEW_REF_S) for c in cands if bat.has(pb.c_sat[c])]
-            self.task_wh.append(min(wh) if len(wh) == len(cands) and wh else 0.0)
+        self.target_wh = []
+        for options in self.target_options:
+            wh = [self.option_wh(c, _SLEW_REF_S) for c in options if bat.has(pb.option_sat[c])]
+            self.target_wh.append(min(wh) if len(wh) == len(options) and wh else 0.0)
 
     def option_wh(self, c: int, maneuver: float) -> float:
         """Imaging plus slew energy of option c after a maneuver of ``maneuver`` s.
@@ -69,10 +72,10 @@ class EnergyRank:
           float [Wh] (0 for a satellite without a power model).
         """
         pb = self.pb
-        p = pb.battery.powers[pb.c_sat[c]]
+        p = pb.battery.powers[pb.option_sat[c]]
         if p is None:
             return 0.0
-        return (p.imaging_w * (pb.c_end[c] - pb.c_start[c]) + p.slew_w * maneuver) * _WH
+        return (p.imaging_w * (pb.option_end[c] - pb.option_start[c]) + p.slew_w * maneuver) * _WH
 
     def removal_wh(self, tl: Timeline, k: int, i: int) -> float:
         """Energy freed by removing position i of satellite k's timeline.
@@ -88,11 +91,11 @@ class EnergyRank:
           float [Wh], at least the imaging energy.
         """
         pb = self.pb
-        line = tl.tl[k]
+        line = tl.lines[k]
         man = tl.maneuver_into(k, i)
         if i + 1 < len(line):
             q = line[i + 1]
-            new = pb.c_first[q] if i == 0 else tl.need(line[i - 1], q)
+            new = pb.option_first[q] if i == 0 else tl.need(line[i - 1], q)
             man += tl.maneuver_into(k, i + 1) - new
         return self.option_wh(line[i], max(man, 0.0))
 
@@ -106,12 +109,15 @@ class EnergyRank:
         Returns:
           int, option id.
         """
-        line = tl.tl[k]
+        line = tl.lines[k]
         pick = [rng.randrange(len(line)) for _ in range(_TOURNAMENT)]
-        w = self.pb.weight
-        c_task = self.pb.c_task
+        w = self.pb.target_value
+        option_target = self.pb.option_target
         return line[
-            min(pick, key=lambda i: w[c_task[line[i]]] / max(self.removal_wh(tl, k, i), _MIN_WH))
+            min(
+                pick,
+                key=lambda i: w[option_target[line[i]]] / max(self.removal_wh(tl, k, i), _MIN_WH),
+            )
         ]
 
     def binds(self, tl: Timeline, k: int) -> bool:
@@ -126,58 +132,58 @@ class EnergyRank:
         low = tl.battery_low(k)
         return low is not None and low < tl.pb.battery.margin_wh + self.tight_wh[k]
 
-    def target_weights(self, tl: Timeline, tasks):
-        """Odds of picking each task as a target of the LNS.
+    def target_weights(self, tl: Timeline, targets):
+        """Odds of picking each target as the aim of a targeted LNS move.
 
-        Its value, times its value per Wh relative to the mean over all tasks when
+        Its value, times its value per Wh relative to the mean over all targets when
         every satellite that can image it binds.
 
         Args:
           tl: Timeline.
-          tasks: list of task indices.
+          targets: list of target indices.
         Returns:
           list of floats.
         """
         pb = self.pb
         bound = [self.binds(tl, k) for k in range(pb.n_sats)]
         if not any(bound):
-            return [pb.weight[t] for t in tasks]
-        dens = [pb.weight[t] / wh if wh > 0.0 else 0.0 for t, wh in enumerate(self.task_wh)]
+            return [pb.target_value[t] for t in targets]
+        dens = [pb.target_value[t] / wh if wh > 0.0 else 0.0 for t, wh in enumerate(self.target_wh)]
         mean = sum(dens) / max(1, sum(d > 0.0 for d in dens))
         out = []
-        for t in tasks:
-            w = pb.weight[t]
-            if dens[t] > 0.0 and all(bound[pb.c_sat[c]] for c in pb.task_cands[t]):
+        for t in targets:
+            w = pb.target_value[t]
+            if dens[t] > 0.0 and all(bound[pb.option_sat[c]] for c in self.target_options[t]):
                 w *= dens[t] / mean
             out.append(w)
         return out
 
-    def order(self, tasks, rng):
-        """Tasks by value per Wh, best first, with relative noise (ties: task id).
+    def order(self, targets, rng):
+        """Targets by value per Wh, best first, with relative noise (ties: target id).
 
         Args:
-          tasks: iterable of task indices.
+          targets: iterable of target indices.
           rng: ``random.Random``, or None for no noise.
         Returns:
-          list of task indices.
+          list of target indices.
         """
-        w, wh = self.pb.weight, self.task_wh
+        w, wh = self.pb.target_value, self.target_wh
 
         def key(t):
             dens = w[t] / wh[t] if wh[t] > 0.0 else math.inf
             return (-dens * (1.0 + (0.0 if rng is None else _RANK_NOISE * rng.random())), t)
 
-        return sorted(tasks, key=key)
+        return sorted(targets, key=key)
 
 
 def _reach(tl: Timeline, c: int, need_wh: float):
     """Time span [s] whose observations' energy can reach option c (module docstring)."""
     pb = tl.pb
-    k = pb.c_sat[c]
+    k = pb.option_sat[c]
     bat = pb.battery
     lev = tl.battery_level(k)
     cap = bat.powers[k].capacity_wh
-    i = min(bat.step_index(pb.c_start[c]), bat.n)
+    i = min(bat.step_index(pb.option_start[c]), bat.n)
     full = np.flatnonzero(lev[: i + 1] >= cap - _FULL_TOL)
     lo = int(full[-1]) if full.size else 0
     low = np.flatnonzero(lev[i:] < bat.margin_wh + need_wh)
@@ -200,22 +206,22 @@ def make_room(tl: Timeline, c: int, er: EnergyRank, rng):
       list of removed option ids when c now fits, else None.
     """
     pb = tl.pb
-    k = pb.c_sat[c]
+    k = pb.option_sat[c]
     pos = tl.insert_position(c)
-    man = pb.c_first[c] if pos == 0 else tl.need(tl.tl[k][pos - 1], c)
+    man = pb.option_first[c] if pos == 0 else tl.need(tl.lines[k][pos - 1], c)
     lo, hi = _reach(tl, c, er.option_wh(c, man))
-    line = tl.tl[k]
-    cands = []
+    line = tl.lines[k]
+    removable = []
     for i, x in enumerate(line):
-        if lo <= pb.c_start[x] < hi:
+        if lo <= pb.option_start[x] < hi:
             wh = er.removal_wh(tl, k, i)
-            dens = pb.weight[pb.c_task[x]] / wh if wh > 0.0 else math.inf
-            cands.append((dens * (1.0 + _RANK_NOISE * rng.random()), x))
-    cands.sort()
-    budget = pb.weight[pb.c_task[c]]
+            dens = pb.target_value[pb.option_target[x]] / wh if wh > 0.0 else math.inf
+            removable.append((dens * (1.0 + _RANK_NOISE * rng.random()), x))
+    removable.sort()
+    budget = pb.target_value[pb.option_target[c]]
     removed = []
-    for _, x in cands:
-        w = pb.weight[pb.c_task[x]]
+    for _, x in removable:
+        w = pb.target_value[pb.option_target[x]]
         if w >= budget:
             continue
         mark = len(tl.log)

@@ -1,4 +1,4 @@
-"""A tighter, slower certificate: the candidate model as a 0/1 program solved by HiGHS.
+"""A tighter, slower certificate: the option model as a 0/1 program solved by HiGHS.
 
 The Lagrangian bound of :mod:`jaxspline.search.lagrangian` equals the linear
 relaxation of the path model below (each satellite's subproblem is a longest path, an
@@ -19,8 +19,8 @@ The model, per satellite a unit flow in a DAG of its options (start order):
   everywhere (a path may end anywhere);
 * ``z_t <= 1`` and ``z_t <= sum_{j of t} y_j``; maximize ``sum_t w_t z_t``.
 
-Repeats of a task are allowed and count once (as in the rules), and the battery is
-dropped: the optimum of this model bounds every plan of the candidate model. Only the
+Repeats of a target are allowed and count once (as in the rules), and the battery is
+dropped: the optimum of this model bounds every plan of the option model. Only the
 ``y`` are integer: with at most one unit of flow per satellite, every node with
 ``y_j = 1`` carries the whole unit, so the chosen options lie on one path.
 """
@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 
 __all__ = ["MipBound", "mip_bound"]
 
@@ -44,13 +45,14 @@ class MipBound:
     Attributes:
       bound: HiGHS's dual bound (an upper bound of every plan of the model).
       value: value of HiGHS's best plan (``nan`` if it found none).
-      status: "optimal" (bound met) or "time" (stopped by the time limit).
+      status: :class:`BoundStatus`, ``OPTIMAL`` (bound met) or ``TIME`` (stopped by
+        the time limit).
       seconds: solver wall time [s].
     """
 
     bound: float
     value: float
-    status: str
+    status: BoundStatus
     seconds: float
 
 
@@ -72,7 +74,7 @@ def _chain(start, end, sat, far, n_sats):
 
 
 def mip_bound(pb: Problem, time_limit: float, rel_gap: float = 1e-4) -> MipBound:
-    """Dual bound of the candidate model's 0/1 program (module docstring) via HiGHS.
+    """Dual bound of the option model's 0/1 program (module docstring) via HiGHS.
 
     Args:
       pb: the search problem (e.g. ``build_problem(scenario).problem``).
@@ -88,20 +90,22 @@ def mip_bound(pb: Problem, time_limit: float, rel_gap: float = 1e-4) -> MipBound
     except ImportError as exc:  # pragma: no cover - depends on the environment
         raise ImportError("mip_bound needs scipy >= 1.11: pip install scipy") from exc
 
-    n, n_t, n_s = pb.n_options, len(pb.weight), pb.n_sats
-    start = np.asarray(pb.c_start, np.float64)
-    sat = np.asarray(pb.c_sat, np.int64)
-    task = np.asarray(pb.c_task, np.int64)
-    pos, feed, link = _chain(start, np.asarray(pb.c_end, np.float64), sat, np.asarray(pb.far), n_s)
+    n, n_tg, n_s = pb.n_options, pb.n_targets, pb.n_sats
+    start = np.asarray(pb.option_start, np.float64)
+    sat = np.asarray(pb.option_sat, np.int64)
+    target = np.asarray(pb.option_target, np.int64)
+    pos, feed, link = _chain(
+        start, np.asarray(pb.option_end, np.float64), sat, np.asarray(pb.far), n_s
+    )
     src, dst = np.asarray(pb.near_src, np.int64), np.asarray(pb.near_dst, np.int64)
     fed = np.flatnonzero(feed >= 0)
-    first = np.flatnonzero(np.asarray(pb.c_first) <= start)
+    first = np.flatnonzero(np.asarray(pb.option_first) <= start)
     # variable blocks: y, z, near arcs, option -> chain, chain -> option, chain links, source
-    sizes = [n, n_t, len(src), n, len(fed), len(link), len(first)]
+    sizes = [n, n_tg, len(src), n, len(fed), len(link), len(first)]
     oy, oz, ox, of, og, oh, os_ = np.cumsum([0, *sizes[:-1]])
     nv = sum(sizes)
-    # row blocks: inflow (= 0), outflow (<= 0), chain (>= 0), tasks (<= 0), sources (<= 1)
-    ri, ro, rc, rt, rs = 0, n, 2 * n, 3 * n, 3 * n + n_t
+    # row blocks: inflow (= 0), outflow (<= 0), chain (>= 0), targets (<= 0), sources (<= 1)
+    ri, ro, rc, rt, rs = 0, n, 2 * n, 3 * n, 3 * n + n_tg
     ar = np.arange
     entries = [
         (ri + ar(n), oy + ar(n), -1.0),
@@ -116,18 +120,18 @@ def mip_bound(pb: Problem, time_limit: float, rel_gap: float = 1e-4) -> MipBound
         (rc + link + 1, oh + ar(len(link)), 1.0),
         (ri + first, os_ + ar(len(first)), 1.0),
         (rs + sat[first], os_ + ar(len(first)), 1.0),
-        (rt + ar(n_t), oz + ar(n_t), 1.0),
-        (rt + task, oy + ar(n), -1.0),
+        (rt + ar(n_tg), oz + ar(n_tg), 1.0),
+        (rt + target, oy + ar(n), -1.0),
     ]
     rows = np.concatenate([e[0] for e in entries])
     cols = np.concatenate([e[1] for e in entries])
     vals = np.concatenate([np.full(len(e[0]), e[2]) for e in entries])
     m = rs + n_s
     a_mat = sps.csr_array((vals, (rows, cols)), shape=(m, nv))
-    lo = np.r_[np.zeros(n), np.full(n, -np.inf), np.zeros(n), np.full(n_t + n_s, -np.inf)]
-    hi = np.r_[np.zeros(2 * n), np.full(n, np.inf), np.zeros(n_t), np.ones(n_s)]
+    lo = np.r_[np.zeros(n), np.full(n, -np.inf), np.zeros(n), np.full(n_tg + n_s, -np.inf)]
+    hi = np.r_[np.zeros(2 * n), np.full(n, np.inf), np.zeros(n_tg), np.ones(n_s)]
     cost = np.zeros(nv)
-    cost[oz : oz + n_t] = -np.asarray(pb.weight, np.float64)
+    cost[oz : oz + n_tg] = -np.asarray(pb.target_value, np.float64)
     integ = np.zeros(nv)
     integ[:n] = 1.0
     t0 = time.monotonic()
@@ -141,8 +145,8 @@ def mip_bound(pb: Problem, time_limit: float, rel_gap: float = 1e-4) -> MipBound
     bound = getattr(res, "mip_dual_bound", None)
     value = -float(res.fun) if res.x is not None else float("nan")
     if bound is None or not np.isfinite(bound):
-        bound = value if res.status == 0 else float(np.sum(pb.weight))
+        bound = value if res.status == 0 else float(np.sum(pb.target_value))
     else:
         bound = -float(bound)
-    status = "optimal" if res.status == 0 else "time"
+    status = BoundStatus.OPTIMAL if res.status == 0 else BoundStatus.TIME
     return MipBound(bound, value, status, time.monotonic() - t0)

@@ -26,21 +26,22 @@ __all__ = ["Problem"]
 
 @dataclass
 class Problem:
-    """Options, tasks and transition data for the search (see module docstring).
+    """Targets, options and transition data for the search (see module docstring).
 
     Attributes:
       n_sats: number of satellites.
-      weight: per task (target) value.
-      c_task, c_sat: per option target / satellite index.
-      c_start, c_end: per option imaging interval [s].
-      c_first: per option required time before it as its satellite's first
-        observation (inf: not allowed first).
-      c_ls, c_le: per option unit lines of sight (tuples) at start / end.
+      target_value: per target its value (collected once if imaged).
+      option_target, option_sat: per option its target / satellite index.
+      option_start, option_end: per option its imaging interval [s].
+      option_first: per option the time it needs before it as its satellite's first
+        observation [s] (inf: not allowed first).
+      option_start_los, option_end_los: per option its unit lines of sight (tuples) at
+        start / end.
       tables: per satellite a :class:`jaxspline.screen.slew_table.SlewTable` (rest-to-rest) or None.
       pairs: :class:`NearPairs`, every feasible near pair (every model) by destination.
       far: per satellite the always-feasible gap [s].
       battery: :class:`BatteryModel`.
-      task_cands: per task its option ids.
+      target_options: per target its option ids.
       sat_lo, sat_hi: option id range per satellite (options sorted by sat, start).
       sat_starts: per satellite the sorted starts of its options.
       near_slack: the near pairs include every feasible pair with gap < far + this [s]
@@ -51,19 +52,19 @@ class Problem:
     """
 
     n_sats: int
-    weight: list
-    c_task: list
-    c_sat: list
-    c_start: list
-    c_end: list
-    c_first: list
-    c_ls: list
-    c_le: list
+    target_value: list
+    option_target: list
+    option_sat: list
+    option_start: list
+    option_end: list
+    option_first: list
+    option_start_los: list
+    option_end_los: list
     tables: list
     pairs: NearPairs
     far: list
     battery: BatteryModel
-    task_cands: list
+    target_options: list
     sat_lo: list
     sat_hi: list
     sat_starts: list
@@ -75,7 +76,7 @@ class Problem:
             self.lookup = [t is None for t in self.tables]
         # the hot path of need(): tables of satellites whose near pairs are not looked up
         self._free = [None if look else t for t, look in zip(self.tables, self.lookup, strict=True)]
-        rows = start_order(self.c_start, self.c_sat)
+        rows = start_order(self.option_start, self.option_sat)
         if not np.array_equal(self.pairs.rows, rows):  # the DP walks rows in start order
             p = self.pairs
             self.pairs = NearPairs.from_arrays(self.n_options, p.src, p.dst(), p.need, rows)
@@ -93,7 +94,12 @@ class Problem:
     @property
     def n_options(self) -> int:
         """Number of options."""
-        return len(self.c_task)
+        return len(self.option_target)
+
+    @property
+    def n_targets(self) -> int:
+        """Number of targets (with options or not)."""
+        return len(self.target_value)
 
     def need(self, i: int, j: int) -> float:
         """Required time between the end of option i and the start of option j (same satellite).
@@ -104,16 +110,16 @@ class Problem:
         Returns:
           float [s]; inf when (i, j) is not a feasible near pair of a per-channel satellite.
         """
-        k = self.c_sat[j]
+        k = self.option_sat[j]
         table = self._free[k]
         if table is None:
-            gap = self.c_start[j] - self.c_end[i]
+            gap = self.option_start[j] - self.option_end[i]
             if gap < self.far[k]:
                 return self.pairs.lookup(i, j)
             table = self.tables[k]
             if table is None:
                 return self.far[k]
-        a, b = self.c_le[i], self.c_ls[j]
+        a, b = self.option_end_los[i], self.option_start_los[j]
         cx = a[1] * b[2] - a[2] * b[1]
         cy = a[2] * b[0] - a[0] * b[2]
         cz = a[0] * b[1] - a[1] * b[0]
@@ -123,7 +129,7 @@ class Problem:
         return table.scalar(th)
 
     @classmethod
-    def build(cls, opp, sats, first, near_pairs, far, tables, battery, weights, lookup=None):
+    def build(cls, opp, sats, first, near_pairs, far, tables, battery, target_values, lookup=None):
         """Assemble from numpy data.
 
         Args:
@@ -136,7 +142,7 @@ class Problem:
           tables: per satellite its model's screen model (``sat.maneuver.screen_model``);
             kept for rest-to-rest satellites (their SlewTable), None for the others.
           battery: :class:`BatteryModel`.
-          weights: per target value.
+          target_values: per target its value.
           lookup: [S] bool, satellites whose near pairs are authoritative (default:
             the per-channel ones).
         """
@@ -144,11 +150,10 @@ class Problem:
         sat = np.asarray(o.sat, np.int64)
         n = sat.size
         n_s = len(sats)
-        task = np.asarray(o.route, np.int64)
-        n_t = len(weights)
-        task_cands = [[] for _ in range(n_t)]
-        for ci, t in enumerate(task.tolist()):
-            task_cands[t].append(ci)
+        target = np.asarray(o.route, np.int64)
+        target_options = [[] for _ in range(len(target_values))]
+        for c, t in enumerate(target.tolist()):
+            target_options[t].append(c)
         lo = np.searchsorted(sat, np.arange(n_s), side="left").tolist()
         hi = np.searchsorted(sat, np.arange(n_s), side="right").tolist()
         starts = np.asarray(o.t_start, np.float64).tolist()
@@ -158,21 +163,21 @@ class Problem:
         look = pc if lookup is None else np.asarray(lookup, bool) | pc
         return cls(
             n_sats=n_s,
-            weight=[float(w) for w in weights],
-            c_task=task.tolist(),
-            c_sat=sat.tolist(),
-            c_start=starts,
-            c_end=np.asarray(o.t_end, np.float64).tolist(),
-            c_first=np.asarray(first, np.float64).tolist(),
-            c_ls=[tuple(v) for v in np.asarray(o.start_los).tolist()],
-            c_le=[tuple(v) for v in np.asarray(o.end_los).tolist()],
+            target_value=[float(v) for v in target_values],
+            option_target=target.tolist(),
+            option_sat=sat.tolist(),
+            option_start=starts,
+            option_end=np.asarray(o.t_end, np.float64).tolist(),
+            option_first=np.asarray(first, np.float64).tolist(),
+            option_start_los=[tuple(v) for v in np.asarray(o.start_los).tolist()],
+            option_end_los=[tuple(v) for v in np.asarray(o.end_los).tolist()],
             tables=[
                 t if s.maneuver.rest_to_rest else None for s, t in zip(sats, tables, strict=True)
             ],
             pairs=near_pairs,
             far=[float(f) for f in far],
             battery=battery,
-            task_cands=task_cands,
+            target_options=target_options,
             sat_lo=lo,
             sat_hi=hi,
             sat_starts=[starts[a:b] for a, b in zip(lo, hi, strict=True)],

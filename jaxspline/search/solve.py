@@ -4,7 +4,7 @@
    value; when a battery binds, also by value per Wh (:class:`EnergyRank`), the better
    plan kept;
 2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
-   task prices, repaired plans, and the upper bound (:func:`lagrangian`);
+   target prices, repaired plans, and the upper bound (:func:`lagrangian`);
 3. exact branch and bound when the instance is tiny (``exact_max_options``);
 4. large-neighbourhood search until the deadline (:func:`lns`);
 5. earliest-start pass (:func:`earliest_pass`).
@@ -30,6 +30,7 @@ from jaxspline.search.lagrangian import (
 from jaxspline.search.lns import earliest_pass, greedy, greedy_order, lns
 from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.problem import Problem
+from jaxspline.search.status import BoundStatus
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["SearchResult", "solve"]
@@ -48,15 +49,15 @@ class SearchResult:
 
     Attributes:
       timeline: the final :class:`Timeline` (the plan).
-      bound: Lagrangian upper bound of the candidate model (battery relaxed).
-      bound_status: "optimal", "converged" or "time" (see :class:`BoundResult`).
+      bound: Lagrangian upper bound of the option model (battery relaxed).
+      bound_status: :class:`BoundStatus` of the bound (see :class:`BoundResult`).
       exact: True when the exact search proved the plan optimal (tiny instances).
       stats: per-stage values and iteration counts.
     """
 
     timeline: Timeline
     bound: float
-    bound_status: str
+    bound_status: BoundStatus
     exact: bool
     stats: dict
 
@@ -106,14 +107,14 @@ def solve(
         greedy(tl2, deadline - tail, order2)
         if tl2.score() > tl.score():
             tl, order = tl2, order2
-    stats = {"greedy_value": tl.W}
-    say("greedy", f"value {tl.W:.6g}")
+    stats = {"greedy_value": tl.value}
+    say("greedy", f"value {tl.value:.6g}")
     t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())
     cap = None if max_iters is None else max(10, max_iters // 10)
     worker = None
     if bound_worker and pb.n_options:
         w_cap = None if cap is None else _WORKER_ITERS * cap
-        worker = BoundWorker(pb, tl.W, deadline - tail, w_cap)
+        worker = BoundWorker(pb, tl.value, deadline - tail, w_cap)
     try:
         budget = _Budget(deadline, now, tail, t_dp, cap, max_iters)
         return _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say)
@@ -143,7 +144,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
         max_iters=cap,
         report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
     )
-    stats.update(lagrangian_value=tl.W, lagrangian_iterations=res.iterations)
+    stats.update(lagrangian_value=tl.value, lagrangian_iterations=res.iterations)
     exact = False
     if pb.n_options <= exact_max_options:
         start = list(tl.assigned)
@@ -152,20 +153,22 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
         left = max(0.0, min(deadline, now + _EXACT_MAX_S) - tail - time.monotonic())
         t_exact = time.monotonic() + _EXACT_SHARE * left
         value, exact = exact_search(tl, t_exact)
-        if value < sum(pb.weight[t] for t, c in enumerate(start) if c >= 0):
+        if value < sum(pb.target_value[t] for t, c in enumerate(start) if c >= 0):
             tl.restore(start)
         stats["exact_proven"] = exact
     rng = random.Random(seed)
     its = 0
-    if not (exact or res.status == "optimal"):
+    if not (exact or res.status == BoundStatus.OPTIMAL):
         its = lns(
             tl,
             deadline - tail,
             rng,
             max_iters,
-            report=lambda it, imp: say("lns", f"it {it}: value {tl.W:.6g} ({imp} improvements)"),
+            report=lambda it, imp: say(
+                "lns", f"it {it}: value {tl.value:.6g} ({imp} improvements)"
+            ),
         )
-    stats.update(lns_iterations=its, lns_value=tl.W)
+    stats.update(lns_iterations=its, lns_value=tl.value)
     earliest_pass(tl, deadline)
     bound, status = res.bound, res.status
     if worker is not None:
@@ -174,6 +177,6 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
             stats.update(worker_bound=wr.bound, worker_iterations=wr.iterations)
             if wr.bound < bound:
                 bound, status = wr.bound, wr.status
-                if bound - tl.W <= _OPTIMAL_TOL * max(1.0, bound):
-                    status = "optimal"
+                if bound - tl.value <= _OPTIMAL_TOL * max(1.0, bound):
+                    status = BoundStatus.OPTIMAL
     return SearchResult(tl, bound, status, exact, stats)

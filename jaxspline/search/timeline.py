@@ -1,10 +1,12 @@
 """Mutable per-satellite timelines with feasibility checks, battery bounds and an undo log.
 
 A :class:`Timeline` holds, per satellite, its chosen options in start order and, per
-task, the option that images it (each task at most once). :meth:`Timeline.check`
+target, the option that images it (each target at most once). :meth:`Timeline.check`
 tests one insertion: no overlap, the transition from the predecessor (or the first
 maneuver) and to the successor fit their gaps, and the battery stays above its margin.
-Every change is logged so a search step can be undone.
+Every change is logged so a search step can be undone. A timeline may withdraw options
+of its problem (``withdrawn``): they are no longer offered for any target, while the
+:class:`Problem` itself stays as built.
 
 Battery bookkeeping, cheapest test first:
 
@@ -24,6 +26,8 @@ from __future__ import annotations
 
 import bisect
 
+import numpy as np
+
 from jaxspline.search.construct import first_least
 from jaxspline.search.problem import Problem
 
@@ -37,37 +41,53 @@ _INSERT_NOISE = 0.3  # relative noise of randomized insertion costs
 class Timeline:
     """Per-satellite timelines over a :class:`Problem` (see module docstring).
 
+    Args:
+      pb: the Problem (read only).
+      withdrawn: optional bool [N], options never to offer (e.g. rejected by a check
+        after the search); None: every option.
+
     Attributes:
       pb: the Problem.
-      tl: per satellite, its option ids in start order.
-      tl_s: per satellite, their start times [s].
-      assigned: per task, the option that images it (-1: none).
+      target_options: per target, its option ids on offer (``pb.target_options``
+        without the withdrawn ones).
+      lines: per satellite, its option ids in start order.
+      line_starts: per satellite, their start times [s].
+      assigned: per target, the option that images it (-1: none).
       levels: per satellite, the battery :class:`Levels` of a past state (None: not
         computed).
       debt: per satellite, an upper bound of the load energy added since [Wh].
       stale: per satellite, whether its timeline changed since ``levels``.
       battery_failed: whether the last :meth:`check` failed on the battery alone.
-      W: total value of the plan.
-      N: number of observations.
+      value: total value of the plan.
+      n_observations: number of observations.
       tat: sum of the observations' end times [s] (tie-break).
       log: undo log of the changes since the last :meth:`commit`.
       cache: memoized transition times.
       saved: battery bounds saved for :meth:`undo_to`.
     """
 
-    def __init__(self, pb: Problem):
+    def __init__(self, pb: Problem, withdrawn=None):
         self.pb = pb
+        self.target_options = pb.target_options
+        if withdrawn is not None:
+            out = np.asarray(withdrawn, bool)
+            if out.shape != (pb.n_options,):
+                raise ValueError(
+                    f"withdrawn has shape {out.shape}, expected one flag an option "
+                    f"({pb.n_options},)"
+                )
+            self.target_options = [[c for c in opts if not out[c]] for opts in pb.target_options]
         n_s = pb.n_sats
-        self.tl = [[] for _ in range(n_s)]  # option ids by start
-        self.tl_s = [[] for _ in range(n_s)]  # their starts
-        self.assigned = [-1] * len(pb.weight)
+        self.lines = [[] for _ in range(n_s)]  # option ids by start
+        self.line_starts = [[] for _ in range(n_s)]  # their starts
+        self.assigned = [-1] * pb.n_targets
         self.levels = [None] * n_s
         self.debt = [0.0] * n_s
         self.stale = [True] * n_s
         self.battery_failed = False
-        self._win = pb.battery.steps_of(pb.c_start, pb.c_end)  # per option (s0, e0, s1)
-        self.W = 0.0
-        self.N = 0
+        self._win = pb.battery.steps_of(pb.option_start, pb.option_end)  # per option (s0, e0, s1)
+        self.value = 0.0
+        self.n_observations = 0
         self.tat = 0.0
         self.log = []
         self.cache = {}
@@ -102,8 +122,8 @@ class Timeline:
         Returns:
           float [s].
         """
-        tl = self.tl[k]
-        return self.pb.c_first[tl[pos]] if pos == 0 else self.need(tl[pos - 1], tl[pos])
+        line = self.lines[k]
+        return self.pb.option_first[line[pos]] if pos == 0 else self.need(line[pos - 1], line[pos])
 
     def insert_position(self, c: int) -> int:
         """Position option c would take in its satellite's timeline.
@@ -113,7 +133,7 @@ class Timeline:
         Returns:
           int.
         """
-        return bisect.bisect_left(self.tl_s[self.pb.c_sat[c]], self.pb.c_start[c])
+        return bisect.bisect_left(self.line_starts[self.pb.option_sat[c]], self.pb.option_start[c])
 
     def score(self):
         """Comparable quality: (value, count, -sum of end times).
@@ -121,20 +141,20 @@ class Timeline:
         Returns:
           tuple, larger is better.
         """
-        return (round(self.W, 9), self.N, -round(self.tat, 6))
+        return (round(self.value, 9), self.n_observations, -round(self.tat, 6))
 
     # ------------------------------------------------------------ battery
     def _timeline_loads(self, k, extra=None):
         """(starts, ends, maneuvers) of satellite k's timeline, with option ``extra``."""
         pb = self.pb
-        tl = list(self.tl[k])
+        line = list(self.lines[k])
         if extra is not None:
-            tl.insert(bisect.bisect_left(self.tl_s[k], pb.c_start[extra]), extra)
+            line.insert(bisect.bisect_left(self.line_starts[k], pb.option_start[extra]), extra)
         man, prev = [], -1
-        for c in tl:
-            man.append(pb.c_first[c] if prev < 0 else self.need(prev, c))
+        for c in line:
+            man.append(pb.option_first[c] if prev < 0 else self.need(prev, c))
             prev = c
-        return [pb.c_start[c] for c in tl], [pb.c_end[c] for c in tl], man
+        return [pb.option_start[c] for c in line], [pb.option_end[c] for c in line], man
 
     def _levels(self, k):
         """Satellite k's current battery Levels (recomputed when stale)."""
@@ -174,7 +194,7 @@ class Timeline:
         bat = pb.battery
         lv = self.levels[k]
         if lv is not None:
-            k0 = bat.slew_step(pb.c_start[c], n_in)
+            k0 = bat.slew_step(pb.option_start[c], n_in)
             de = self._energy(k, c, n_in, n_out)
             if lv.tail_min[k0] - self.debt[k] - de >= bat.margin_wh:
                 return True
@@ -189,10 +209,10 @@ class Timeline:
         bat = pb.battery
         p = bat.powers[k]
         s0, e0, s1 = self._win[c]
-        out = [(s0, e0, p.imaging_w), (bat.slew_step(pb.c_start[c], n_in), s1, p.slew_w)]
+        out = [(s0, e0, p.imaging_w), (bat.slew_step(pb.option_start[c], n_in), s1, p.slew_w)]
         if q >= 0:
-            a_new = bat.slew_step(pb.c_start[q], n_out)
-            a_old = bat.slew_step(pb.c_start[q], n_old)
+            a_new = bat.slew_step(pb.option_start[q], n_out)
+            a_old = bat.slew_step(pb.option_start[q], n_old)
             if a_new < a_old:
                 out.append((a_new, a_old, p.slew_w))
             elif a_old < a_new:
@@ -203,7 +223,7 @@ class Timeline:
         pb = self.pb
         if not pb.battery.has(k):
             return 0.0
-        return pb.battery.extra_energy(k, pb.c_end[c] - pb.c_start[c], n_in + n_out)
+        return pb.battery.extra_energy(k, pb.option_end[c] - pb.option_start[c], n_in + n_out)
 
     # ------------------------------------------------------------ moves
     def check(self, c: int):
@@ -215,33 +235,33 @@ class Timeline:
           float, the time it consumes [s], or None when infeasible.
         """
         pb = self.pb
-        k = pb.c_sat[c]
+        k = pb.option_sat[c]
         self.battery_failed = False
-        if self.assigned[pb.c_task[c]] >= 0:
+        if self.assigned[pb.option_target[c]] >= 0:
             return None
-        s, e = pb.c_start[c], pb.c_end[c]
-        pos = bisect.bisect_left(self.tl_s[k], s)
-        tl = self.tl[k]
+        s, e = pb.option_start[c], pb.option_end[c]
+        pos = bisect.bisect_left(self.line_starts[k], s)
+        line = self.lines[k]
         if pos > 0:
-            p = tl[pos - 1]
-            if pb.c_end[p] > s:
+            p = line[pos - 1]
+            if pb.option_end[p] > s:
                 return None
             n_in = self.need(p, c)
-            if s - pb.c_end[p] < n_in:
+            if s - pb.option_end[p] < n_in:
                 return None
         else:
             p = -1
-            n_in = pb.c_first[c]
+            n_in = pb.option_first[c]
             if s < n_in:
                 return None
-        if pos < len(tl):
-            q = tl[pos]
-            if e > pb.c_start[q]:
+        if pos < len(line):
+            q = line[pos]
+            if e > pb.option_start[q]:
                 return None
             n_out = self.need(c, q)
-            if pb.c_start[q] - e < n_out:
+            if pb.option_start[q] - e < n_out:
                 return None
-            n_old = pb.c_first[q] if p < 0 else self.need(p, q)
+            n_old = pb.option_first[q] if p < 0 else self.need(p, q)
         else:
             q = -1
             n_out = n_old = 0.0
@@ -257,21 +277,21 @@ class Timeline:
           c: int, option id.
         """
         pb = self.pb
-        k, t = pb.c_sat[c], pb.c_task[c]
-        pos = bisect.bisect_left(self.tl_s[k], pb.c_start[c])
-        tl = self.tl[k]
+        k, t = pb.option_sat[c], pb.option_target[c]
+        pos = bisect.bisect_left(self.line_starts[k], pb.option_start[c])
+        line = self.lines[k]
         if k not in self.saved:
             self.saved[k] = (self.levels[k], self.debt[k], self.stale[k])
         self.stale[k] = True
-        n_in = pb.c_first[c] if pos == 0 else self.need(tl[pos - 1], c)
-        n_out = self.need(c, tl[pos]) if pos < len(tl) else 0.0
+        n_in = pb.option_first[c] if pos == 0 else self.need(line[pos - 1], c)
+        n_out = self.need(c, line[pos]) if pos < len(line) else 0.0
         self.debt[k] += self._energy(k, c, n_in, n_out)
-        tl.insert(pos, c)
-        self.tl_s[k].insert(pos, pb.c_start[c])
+        line.insert(pos, c)
+        self.line_starts[k].insert(pos, pb.option_start[c])
         self.assigned[t] = c
-        self.W += pb.weight[t]
-        self.N += 1
-        self.tat += pb.c_end[c]
+        self.value += pb.target_value[t]
+        self.n_observations += 1
+        self.tat += pb.option_end[c]
         self.log.append(("i", c))
 
     def remove(self, c: int):
@@ -281,26 +301,26 @@ class Timeline:
           c: int, option id.
         """
         pb = self.pb
-        k, t = pb.c_sat[c], pb.c_task[c]
-        tl = self.tl[k]
+        k, t = pb.option_sat[c], pb.option_target[c]
+        line = self.lines[k]
         if k not in self.saved:
             self.saved[k] = (self.levels[k], self.debt[k], self.stale[k])
         self.stale[k] = True
-        pos = tl.index(c)
-        del tl[pos]
-        del self.tl_s[k][pos]
-        if pos < len(tl) and pb.battery.has(k):  # the successor's maneuver may get longer
+        pos = line.index(c)
+        del line[pos]
+        del self.line_starts[k][pos]
+        if pos < len(line) and pb.battery.has(k):  # the successor's maneuver may get longer
             self.debt[k] += pb.battery.extra_energy(k, 0.0, self.maneuver_into(k, pos))
         self.assigned[t] = -1
-        self.W -= pb.weight[t]
-        self.N -= 1
-        self.tat -= pb.c_end[c]
+        self.value -= pb.target_value[t]
+        self.n_observations -= 1
+        self.tat -= pb.option_end[c]
         self.log.append(("r", c))
 
     def removal_ok(self, k: int, pos: int) -> bool:
         """Whether a removal at index ``pos`` of satellite k keeps the plan feasible.
 
-        After removing a block at ``pos``: the new transition into ``tl[pos]`` and the
+        After removing a block at ``pos``: the new transition into ``line[pos]`` and the
         battery still hold.
 
         Args:
@@ -310,11 +330,11 @@ class Timeline:
           bool.
         """
         pb = self.pb
-        tl = self.tl[k]
-        if pos < len(tl):
-            q = tl[pos]
-            prev_end = 0.0 if pos == 0 else pb.c_end[tl[pos - 1]]
-            if pb.c_start[q] - prev_end < self.maneuver_into(k, pos):
+        line = self.lines[k]
+        if pos < len(line):
+            q = line[pos]
+            prev_end = 0.0 if pos == 0 else pb.option_end[line[pos - 1]]
+            if pb.option_start[q] - prev_end < self.maneuver_into(k, pos):
                 return False
         if not pb.battery.has(k):
             return True
@@ -348,66 +368,66 @@ class Timeline:
             self.saved.clear()
 
     def insert_choices(self, t: int, rng=None, sat: int | None = None):
-        """Task t's options that fit now and their insertion costs (one greedy decision).
+        """Target t's options that fit now and their insertion costs (one greedy decision).
 
         The cost of an option is the timeline time it consumes (:meth:`check`) plus
         :data:`_TURNAROUND_WEIGHT` times its end, times ``1 + U(0, 0.3)`` with ``rng``
-        (one draw per option that fits, in ``task_cands`` order).
+        (one draw per option that fits, in ``target_options`` order).
 
         Args:
-          t: int, task index.
+          t: int, target index.
           rng: ``random.Random`` for randomized costs, or None.
           sat: only options of this satellite (None: every satellite).
         Returns:
-          (options, costs), two lists in ``task_cands`` order; empty when the task is
-          already imaged.
+          (options, costs), two lists in ``target_options`` order; empty when the target
+          is already imaged.
         """
         pb = self.pb
-        c_sat = pb.c_sat
-        cands, costs = [], []
+        option_sat = pb.option_sat
+        options, costs = [], []
         if self.assigned[t] >= 0:
-            return cands, costs
-        for c in pb.task_cands[t]:
-            if sat is not None and c_sat[c] != sat:
+            return options, costs
+        for c in self.target_options[t]:
+            if sat is not None and option_sat[c] != sat:
                 continue
             cost = self.check(c)
             if cost is None:
                 continue
-            cost += _TURNAROUND_WEIGHT * pb.c_end[c]
+            cost += _TURNAROUND_WEIGHT * pb.option_end[c]
             if rng is not None:
                 cost *= 1.0 + _INSERT_NOISE * rng.random()
-            cands.append(c)
+            options.append(c)
             costs.append(cost)
-        return cands, costs
+        return options, costs
 
     def best_insert(self, t: int, rng=None, sat: int | None = None) -> bool:
-        """Insert task t at its cheapest feasible option (:meth:`insert_choices`).
+        """Insert target t at its cheapest feasible option (:meth:`insert_choices`).
 
         Args:
-          t: int, task index.
+          t: int, target index.
           rng: ``random.Random`` for randomized costs, or None.
           sat: only options of this satellite (None: every satellite).
         Returns:
-          bool, whether the task was inserted.
+          bool, whether the target was inserted.
         """
-        cands, costs = self.insert_choices(t, rng, sat)
+        options, costs = self.insert_choices(t, rng, sat)
         k = first_least(costs)
         if k >= 0:
-            self.insert(cands[k])
+            self.insert(options[k])
         return k >= 0
 
     def restore(self, assigned):
-        """Reset to the given task -> option assignment (-1: unassigned).
+        """Reset to the given target -> option assignment (-1: unassigned).
 
         Args:
-          assigned: list of option ids per task.
+          assigned: list of option ids per target.
         """
         pb = self.pb
         for k in range(pb.n_sats):
-            self.tl[k], self.tl_s[k] = [], []
+            self.lines[k], self.line_starts[k] = [], []
             self.levels[k], self.debt[k], self.stale[k] = None, 0.0, True
-        self.assigned = [-1] * len(pb.weight)
-        self.W, self.N, self.tat = 0.0, 0, 0.0
-        for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.c_start[c]):
+        self.assigned = [-1] * pb.n_targets
+        self.value, self.n_observations, self.tat = 0.0, 0, 0.0
+        for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.option_start[c]):
             self.insert(c)
         self.commit()

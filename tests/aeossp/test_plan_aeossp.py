@@ -41,7 +41,7 @@ from jaxspline.readers.mission import (
     Scenario,
     make_targets,
 )
-from jaxspline.search import BatteryModel, dp_paths, dp_prepare, mip_bound, upper_bound
+from jaxspline.search import BatteryModel, BoundStatus, dp_paths, dp_prepare, mip_bound, upper_bound
 
 DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="aeossp training data not available")
@@ -290,7 +290,7 @@ def test_dp_paths_exact_against_brute_force(small_prep):
     rng = np.random.default_rng(1)
     k = int(np.argmax(np.subtract(pb.sat_hi, pb.sat_lo)))
     lo, hi = pb.sat_lo[k], pb.sat_hi[k]
-    starts = np.asarray(pb.c_start)
+    starts = np.asarray(pb.option_start)
     longest = 0
     for trial in range(4):
         # a cluster within 15 min (near pairs, overlaps, infeasible pairs) plus 3 anywhere
@@ -306,11 +306,12 @@ def test_dp_paths_exact_against_brute_force(small_prep):
         best, best_len = 0.0, 0
         for mask in range(1, 1 << len(pick)):
             seq = sorted(
-                (pick[i] for i in range(len(pick)) if mask >> i & 1), key=lambda c: pb.c_start[c]
+                (pick[i] for i in range(len(pick)) if mask >> i & 1),
+                key=lambda c: pb.option_start[c],
             )
-            ok = pb.c_first[seq[0]] <= pb.c_start[seq[0]]
+            ok = pb.option_first[seq[0]] <= pb.option_start[seq[0]]
             for p, q in zip(seq[:-1], seq[1:], strict=True):
-                gap = pb.c_start[q] - pb.c_end[p]
+                gap = pb.option_start[q] - pb.option_end[p]
                 if not (ok and gap >= 0.0 and pb.need(p, q) <= gap):
                     ok = False
                     break
@@ -321,9 +322,9 @@ def test_dp_paths_exact_against_brute_force(small_prep):
         assert sum(vals) == pytest.approx(best, abs=1e-9)
         path = paths[k]
         assert float(w[path].sum()) == pytest.approx(best, abs=1e-9)
-        assert pb.c_first[path[0]] <= pb.c_start[path[0]]
+        assert pb.option_first[path[0]] <= pb.option_start[path[0]]
         for p, q in zip(path[:-1], path[1:], strict=True):
-            assert pb.c_start[q] - pb.c_end[p] >= pb.need(p, q)
+            assert pb.option_start[q] - pb.option_end[p] >= pb.need(p, q)
     assert longest >= 3  # the optimum chained several options at least once
 
 
@@ -427,23 +428,23 @@ def _random_scenario(seed):
 
 
 def _enumerate_plans(pb):
-    """Best plan value (repeats allowed, each task counted once) and best without repeats.
+    """Best plan value (repeats allowed, each target counted once) and best without repeats.
 
-    Per satellite, the task sets of all feasible sequences of its options (dynamic
-    programming over (last option, task set); transitions by ``pb.need``, first by
-    ``pb.c_first``; no battery); then every combination of one set per satellite.
+    Per satellite, the target sets of all feasible sequences of its options (dynamic
+    programming over (last option, target set); transitions by ``pb.need``, first by
+    ``pb.option_first``; no battery); then every combination of one set per satellite.
     """
     best = {}
     for repeats in (True, False):
         per_sat = []
         for k in range(pb.n_sats):
-            ids = sorted(range(pb.sat_lo[k], pb.sat_hi[k]), key=lambda c: pb.c_start[c])
+            ids = sorted(range(pb.sat_lo[k], pb.sat_hi[k]), key=lambda c: pb.option_start[c])
             sets = {}
             for j in ids:
-                bit = 1 << pb.c_task[j]
-                s = {bit} if pb.c_first[j] <= pb.c_start[j] else set()
+                bit = 1 << pb.option_target[j]
+                s = {bit} if pb.option_first[j] <= pb.option_start[j] else set()
                 for i in ids:
-                    gap = pb.c_start[j] - pb.c_end[i]
+                    gap = pb.option_start[j] - pb.option_end[i]
                     if i != j and gap >= 0.0 and pb.need(i, j) <= gap:
                         s |= {m | bit for m in sets.get(i, ()) if repeats or not m & bit}
                 sets[j] = s
@@ -456,7 +457,7 @@ def _enumerate_plans(pb):
                     break
                 union |= m
             else:
-                top = max(top, sum(w for t, w in enumerate(pb.weight) if union >> t & 1))
+                top = max(top, sum(w for t, w in enumerate(pb.target_value) if union >> t & 1))
         best[repeats] = top
     return best[True], best[False]
 
@@ -466,7 +467,7 @@ def _enumerate_plans(pb):
     [(_bridge_scenario, s) for s in range(3)] + [(_random_scenario, s) for s in range(4)],
 )
 def test_bound_covers_plans_with_repeats(make, seed):
-    """plan().bound >= the best plan imaging tasks repeatedly; value == best without."""
+    """plan().bound >= the best plan imaging targets repeatedly; value == best without."""
     sc = make(seed)
     pb = build_problem(sc).problem
     assert 0 < pb.n_options <= sc.planner.exact_max_options
@@ -491,7 +492,7 @@ def test_mip_bound_is_the_optimum_with_repeats(make, seed):
     pb = build_problem(make(seed)).problem
     with_rep, _ = _enumerate_plans(pb)
     res = mip_bound(pb, time_limit=60.0, rel_gap=0.0)
-    assert res.status == "optimal"
+    assert res.status == BoundStatus.OPTIMAL
     assert res.value == pytest.approx(with_rep, abs=1e-9)
     assert res.bound == pytest.approx(with_rep, abs=1e-6)
 
@@ -516,7 +517,7 @@ def test_energy_priced_bound_covers_the_battery_optimum():
         res = plan(sc, time_limit=20.0, progress=False)
         assert res.stats["exact"] and res.report["valid"]
         pb = build_problem(sc).problem
-        kw = dict(target=res.value, deadline=math.inf, max_iters=300)
+        kw = dict(plan_value=res.value, deadline=math.inf, max_iters=300)
         with_energy = upper_bound(pb, energy=True, **kw).bound
         without = upper_bound(pb, energy=False, **kw).bound
         assert with_energy >= res.value - 1e-9

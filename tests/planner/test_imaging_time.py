@@ -76,7 +76,7 @@ def _scenario(mid=True, min_dur=True) -> Scenario:
 
 @pytest.fixture(scope="module")
 def free():
-    """The scenario without the constraints: (scenario, Prepared)."""
+    """The scenario without the constraints: (scenario, PlanContext)."""
     sc = _scenario(mid=False, min_dur=False)
     return sc, build_problem(sc)
 
@@ -130,7 +130,8 @@ def test_plan_images_only_inside_the_tolerance():
 
 
 def _check(sc, prep, chosen):
-    return check_plan(sc, prep.scene, prep.orbits.usable, prep.opportunities, chosen, prep.battery)
+    """The check of ``chosen`` (options of ``prep``) under the rules of ``sc``."""
+    return check_plan(dataclasses.replace(prep, scenario=sc), chosen)
 
 
 def test_checker_flags_forged_observations(free):

@@ -2,7 +2,7 @@
 
 References are independent of the planner's search: an exact mixed-integer program
 over the planner's own options and transition model (one path per satellite through
-the feasible transitions, each task at most once; HiGHS via scipy), and, for
+the feasible transitions, each target at most once; HiGHS via scipy), and, for
 eigen-axis satellites, slews recomputed from the analytic orbits, the targets (strip
 ends included) and the bang-coast-bang formula.
 """
@@ -39,6 +39,7 @@ from jaxspline.readers.mission import (
     Scenario,
     make_targets,
 )
+from jaxspline.search import BoundStatus
 
 EPOCH = dt.datetime(2026, 6, 21, 10, 0, tzinfo=dt.UTC)
 G0 = float(gmst(julian_date(EPOCH)))
@@ -122,9 +123,9 @@ def _exact_optimum(pb) -> float:
 
     A 0/1 program: per option y_j (taken), per feasible transition i -> j of one
     satellite x_ij (``0 <= start_j - end_i``, ``pb.need(i, j) <= gap``), per option that
-    may come first s_j (``pb.c_first[j] <= start_j``). Inflow ``s_j + sum_i x_ij = y_j``,
+    may come first s_j (``pb.option_first[j] <= start_j``). Inflow ``s_j + sum_i x_ij = y_j``,
     outflow ``sum_k x_jk <= y_j``, at most one first option per satellite (a DAG: one
-    path each), each task at most once. Maximize ``sum_j w_task(j) y_j``.
+    path each), each target at most once. Maximize ``sum_j w_target(j) y_j``.
     """
     pytest.importorskip("scipy.optimize")  # the test extra
     import scipy.sparse as sps
@@ -137,10 +138,10 @@ def _exact_optimum(pb) -> float:
         for i in range(pb.sat_lo[k], pb.sat_hi[k])
         for j in range(pb.sat_lo[k], pb.sat_hi[k])
         if i != j
-        and pb.c_start[j] - pb.c_end[i] >= 0.0
-        and pb.need(i, j) <= pb.c_start[j] - pb.c_end[i]
+        and pb.option_start[j] - pb.option_end[i] >= 0.0
+        and pb.need(i, j) <= pb.option_start[j] - pb.option_end[i]
     ]
-    first = [j for j in range(n) if pb.c_first[j] <= pb.c_start[j]]
+    first = [j for j in range(n) if pb.option_first[j] <= pb.option_start[j]]
     na = len(arcs)
     rows, cols, vals = [], [], []
 
@@ -157,17 +158,17 @@ def _exact_optimum(pb) -> float:
         put(n + i, n + a, 1.0)
     for f, j in enumerate(first):
         put(j, n + na + f, 1.0)
-        put(2 * n + pb.c_sat[j], n + na + f, 1.0)
-    for t, cands in enumerate(pb.task_cands):
-        for j in cands:
+        put(2 * n + pb.option_sat[j], n + na + f, 1.0)
+    for t, opts in enumerate(pb.target_options):
+        for j in opts:
             put(2 * n + pb.n_sats + t, j, 1.0)
-    m = 2 * n + pb.n_sats + len(pb.weight)
+    m = 2 * n + pb.n_sats + pb.n_targets
     lo = np.r_[np.zeros(n), np.full(n, -np.inf), np.zeros(m - 2 * n)]
     hi = np.r_[np.zeros(2 * n), np.ones(m - 2 * n)]
     nv = n + na + len(first)
     a_mat = sps.csr_array((vals, (rows, cols)), shape=(m, nv))
     cost = np.zeros(nv)
-    cost[:n] = -np.asarray(pb.weight)[np.asarray(pb.c_task)]
+    cost[:n] = -np.asarray(pb.target_value)[np.asarray(pb.option_target)]
     res = milp(
         cost,
         constraints=LinearConstraint(a_mat, lo, hi),
@@ -329,7 +330,7 @@ def test_certify_tightens_the_bound_to_the_optimum():
     sc, optimum, res = _solved(0, **LNS_CASE)
     cert = plan(sc, time_limit=20.0, progress=False, max_iters=5000, certify=30.0)
     mip = cert.stats["mip"]
-    assert mip["status"] == "optimal"
+    assert mip["status"] == BoundStatus.OPTIMAL
     assert cert.bound_converged
     assert optimum - 1e-6 <= cert.bound <= res.bound + 1e-9
     assert cert.bound == pytest.approx(max(mip["bound"], cert.value), abs=1e-6)

@@ -32,7 +32,8 @@ def _searched(seed):
 
 
 def _check(sc, prep, opp, chosen):
-    return check_plan(sc, prep.scene, prep.orbits.usable, opp, chosen, prep.battery)
+    assert prep.scenario is sc
+    return check_plan(prep, chosen, opp)
 
 
 def test_check_blames_only_the_later_observation_of_a_failing_transition():
@@ -42,7 +43,7 @@ def test_check_blames_only_the_later_observation_of_a_failing_transition():
     opp = prep.opportunities
     o = opp.options
     k = next(i for i, s in enumerate(sc.satellites) if s.model == "per_channel")
-    line = list(tl.tl[k])
+    line = list(tl.lines[k])
     assert len(line) >= 4
     chosen = [c for c in tl.assigned if c >= 0]
     assert _check(sc, prep, opp, chosen)[0] == []  # the search's plan is valid
@@ -67,12 +68,12 @@ def _force_infeasible(tl, rng, count):
     """Insert up to ``count`` options the search's insertion test refuses (bypassing it)."""
     pb = tl.pb
     forced = []
-    cands = [c for c in range(pb.n_options) if tl.assigned[pb.c_task[c]] < 0]
-    rng.shuffle(cands)
-    for c in cands:
+    free = [c for c in range(pb.n_options) if tl.assigned[pb.option_target[c]] < 0]
+    rng.shuffle(free)
+    for c in free:
         if len(forced) == count:
             break
-        if tl.assigned[pb.c_task[c]] < 0 and tl.check(c) is None:
+        if tl.assigned[pb.option_target[c]] < 0 and tl.check(c) is None:
             tl.insert(c)
             forced.append(c)
     tl.commit()
@@ -91,15 +92,7 @@ def test_repair_drops_at_most_one_observation_per_violation(seed):
     opp = prep.opportunities
     plan_in = [c for c in tl.assigned if c >= 0]
     assert _check(sc, prep, opp, plan_in)[0]  # the forced plan does fail the check
-    rep = repair(
-        sc,
-        scene=prep.scene,
-        table_ok=prep.orbits.usable,
-        opp0=opp,
-        tl=tl,
-        battery=prep.battery,
-        refine_steps=sc.planner.refine_steps if seed == 0 else 0,
-    )
+    rep = repair(prep, plan_in, refine_steps=sc.planner.refine_steps if seed == 0 else 0)
     assert set(rep.dropped) == set(DROP_REASONS)
     n_dropped = sum(rep.dropped.values())
     assert 1 <= n_dropped <= rep.violations

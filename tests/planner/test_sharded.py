@@ -29,10 +29,10 @@ from jaxspline.planner.plan_check import check_plan
 from jaxspline.planner.repair import drop_failing
 from jaxspline.planner.sharded import (
     owned_satellites,
-    restrict_tasks,
+    restrict_targets,
     sharded_plan,
     sharded_upper_bound,
-    task_owners,
+    target_owners,
 )
 from jaxspline.readers.scenario import load_scenario
 from jaxspline.search import solve, upper_bound
@@ -40,7 +40,7 @@ from jaxspline.search import solve, upper_bound
 sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from test_cli_plan import SMALL  # noqa: E402
 
-TARGET = 100.0
+PLAN_VALUE = 100.0
 ITERS = 40  # bound iterations
 SEARCH_ITERS = 300  # LNS iterations of each search
 MIN_RATIO = 0.9  # merged plan value / one process's, at least
@@ -55,7 +55,8 @@ def scenario_file(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def built(scenario_file):
-    """The whole scenario's Prepared and one (satellites, shard scenario, Prepared) a process."""
+    """The whole scenario's PlanContext and one (satellites, shard scenario, PlanContext) a
+    process."""
     sc = load_scenario(scenario_file)
     full = build_problem(sc)
     count = len(sc.satellites)
@@ -111,14 +112,14 @@ def _in_threads(count, run):
 
 def test_threads_sharded_bound_equals_one_process(built):
     sc, full, shards = built
-    ref = upper_bound(full.problem, TARGET, math.inf, max_iters=ITERS, energy=False)
+    ref = upper_bound(full.problem, PLAN_VALUE, math.inf, max_iters=ITERS, energy=False)
     count = len(shards)
     assert sum(len(prep.problem.pairs) for _, _, prep in shards) == len(full.problem.pairs)
 
     def run(i, allgather):
         owned, _, prep = shards[i]
         return sharded_upper_bound(
-            prep.problem, owned, count, TARGET, math.inf, ITERS, allgather=allgather
+            prep.problem, owned, count, PLAN_VALUE, math.inf, ITERS, allgather=allgather
         )
 
     for r in _in_threads(count, run):
@@ -129,34 +130,42 @@ def test_threads_sharded_bound_equals_one_process(built):
 def test_task_owners_hand_table():
     takes = [[1, 0, 0, 1, 0], [0, 1, 0, 1, 0], [0, 1, 0, 0, 0]]
     options = [[1, 5, 2, 3, 0], [9, 2, 7, 4, 0], [0, 3, 7, 9, 0]]
-    # task 0: the only taker; 1: two takers, more options; 2: nobody takes it, most
+    # target 0: the only taker; 1: two takers, more options; 2: nobody takes it, most
     # options tie (1, 2): lowest index; 3: two takers, more options; 4: no option: 0
-    assert task_owners(takes, options).tolist() == [0, 2, 1, 1, 0]
+    assert target_owners(takes, options).tolist() == [0, 2, 1, 1, 0]
     with pytest.raises(ValueError, match="takes"):
-        task_owners([[1, 0]], [[1, 0, 0]])
+        target_owners([[1, 0]], [[1, 0, 0]])
 
 
 def test_restrict_tasks_keeps_options_pairs_and_plans(built):
     sc, full, _ = built
     pb = full.problem
-    n_t = len(pb.weight)
+    n_t = pb.n_targets
     caps = dict(max_iters=SEARCH_ITERS, exact_max_options=sc.planner.exact_max_options)
     ref = solve(pb, math.inf, **caps)
-    every, ids = restrict_tasks(pb, np.ones(n_t, bool))
+    every, ids = restrict_targets(pb, np.ones(n_t, bool))
     assert ids.tolist() == list(range(pb.n_options))
     assert solve(every, math.inf, **caps).timeline.assigned == ref.timeline.assigned
     keep = np.arange(n_t) % 2 == 0
-    sub, ids = restrict_tasks(pb, keep)
-    assert sub.n_options == sum(len(pb.task_cands[t]) for t in np.flatnonzero(keep))
-    for name in ("c_task", "c_sat", "c_start", "c_end", "c_first", "c_ls", "c_le"):
+    sub, ids = restrict_targets(pb, keep)
+    assert sub.n_options == sum(len(pb.target_options[t]) for t in np.flatnonzero(keep))
+    for name in (
+        "option_target",
+        "option_sat",
+        "option_start",
+        "option_end",
+        "option_first",
+        "option_start_los",
+        "option_end_los",
+    ):
         assert getattr(sub, name) == [getattr(pb, name)[c] for c in ids], name
-    same = np.equal.outer(sub.c_sat, sub.c_sat)
+    same = np.equal.outer(sub.option_sat, sub.option_sat)
     for i, j in zip(*np.nonzero(same), strict=True):  # brute force over the kept pairs
         assert sub.pairs.lookup(i, j) == pb.pairs.lookup(ids[i], ids[j])
     plan = solve(sub, math.inf, **caps).timeline
-    assert plan.W > 0 and all(keep[t] for t, c in enumerate(plan.assigned) if c >= 0)
+    assert plan.value > 0 and all(keep[t] for t, c in enumerate(plan.assigned) if c >= 0)
     with pytest.raises(ValueError, match="keep"):
-        restrict_tasks(pb, keep[:-1])
+        restrict_targets(pb, keep[:-1])
 
 
 @pytest.fixture(scope="module")
@@ -166,19 +175,18 @@ def thread_plans(built):
     pc = sc.planner
 
     def run(i, allgather):
-        owned, shard, prep = shards[i]
+        owned, _, prep = shards[i]
 
         def check(ids):
             with jax.enable_x64(True):  # the context is per thread
-                args = (prep.scene, prep.orbits.usable, prep.opportunities)
-                return drop_failing(shard, *args, ids, prep.battery)[0]
+                return drop_failing(prep, ids)[0]
 
         return sharded_plan(
             prep.problem,
             owned,
             len(sc.satellites),
             i,
-            TARGET,
+            PLAN_VALUE,
             math.inf,
             math.inf,
             bound_iters=ITERS,
@@ -210,17 +218,19 @@ def test_threads_sharded_plan_is_valid_on_the_whole_scenario(built, thread_plans
     ids = []
     for t in np.flatnonzero(a.sat >= 0):
         c = pb.sat_lo[a.sat[t]] + int(a.option[t])
-        assert (pb.c_task[c], pb.c_start[c], pb.c_end[c]) == (t, a.start[t], a.end[t])
-        ids.append(c)
-    assert len({pb.c_task[c] for c in ids}) == len(ids)  # each task at most once
-    assert a.value == sum(pb.weight[pb.c_task[c]] for c in ids)
-    with jax.enable_x64(True):
-        bad, det = check_plan(
-            sc, full.scene, full.orbits.usable, full.opportunities, ids, full.battery
+        assert (pb.option_target[c], pb.option_start[c], pb.option_end[c]) == (
+            t,
+            a.start[t],
+            a.end[t],
         )
+        ids.append(c)
+    assert len({pb.option_target[c] for c in ids}) == len(ids)  # each target at most once
+    assert a.value == sum(pb.target_value[pb.option_target[c]] for c in ids)
+    with jax.enable_x64(True):
+        bad, det = check_plan(full, ids)
     assert bad == [] and det["violations"] == []
     # the bound is the single process's; the plan within MIN_RATIO of its plan
-    ref = upper_bound(pb, TARGET, math.inf, max_iters=ITERS, energy=False)
+    ref = upper_bound(pb, PLAN_VALUE, math.inf, max_iters=ITERS, energy=False)
     assert a.bound.bound == ref.bound and a.bound.iterations == ITERS
     one = solve(
         pb,
@@ -228,7 +238,7 @@ def test_threads_sharded_plan_is_valid_on_the_whole_scenario(built, thread_plans
         max_iters=SEARCH_ITERS,
         lagrangian_share=sc.planner.lagrangian_share,
         exact_max_options=sc.planner.exact_max_options,
-    ).timeline.W
+    ).timeline.value
     assert MIN_RATIO * one <= a.value <= ref.bound
 
 
@@ -248,7 +258,7 @@ def _bound_cmd(scen, out, plan, *extra):
         "--max-iters",
         str(ITERS),
         "--target",
-        str(TARGET),
+        str(PLAN_VALUE),
         "--json",
         str(out),
         "--plan",
@@ -319,5 +329,5 @@ def test_two_processes_under_jax_distributed_equal_one(
         max_iters=SEARCH_ITERS,
         lagrangian_share=sc.planner.lagrangian_share,
         exact_max_options=sc.planner.exact_max_options,
-    ).timeline.W
+    ).timeline.value
     assert p1["value"] == one_value

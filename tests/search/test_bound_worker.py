@@ -22,7 +22,7 @@ from jaxspline.search import BoundWorker, solve, upper_bound
 sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from test_cli_plan import SMALL  # noqa: E402
 
-TARGET = 100.0
+PLAN_VALUE = 100.0
 CAP = 60  # worker iterations
 SEARCH_ITERS = 400
 
@@ -35,8 +35,8 @@ def problem(tmp_path_factory):
 
 
 def test_worker_bound_equals_in_process_bound(problem):
-    ref = upper_bound(problem, TARGET, math.inf, CAP, energy=False)
-    got = BoundWorker(problem, TARGET, math.inf, CAP).result()
+    ref = upper_bound(problem, PLAN_VALUE, math.inf, CAP, energy=False)
+    got = BoundWorker(problem, PLAN_VALUE, math.inf, CAP).result()
     assert got is not None
     assert got.bound == ref.bound  # bit for bit across the fork
     assert got.iterations == ref.iterations
@@ -50,11 +50,11 @@ def test_solve_with_worker_keeps_the_plan_and_tightens_the_bound(problem):
     assert "worker_bound" in with_w.stats
     assert with_w.bound <= base.bound
     assert with_w.bound == min(base.bound, with_w.stats["worker_bound"])
-    assert with_w.bound >= with_w.timeline.W - 1e-9
+    assert with_w.bound >= with_w.timeline.value - 1e-9
 
 
 def test_result_without_waiting_ends_the_process(problem):
-    w = BoundWorker(problem, TARGET, time.monotonic() + 600.0, None)
+    w = BoundWorker(problem, PLAN_VALUE, time.monotonic() + 600.0, None)
     t0 = time.monotonic()
     out = w.result(wait=False)
     assert time.monotonic() - t0 < 10.0

@@ -19,7 +19,7 @@ import pytest
 
 from jaxspline.aeossp.adapter import AEOSSP_MARGINS
 from jaxspline.readers.mission import Power
-from jaxspline.search import BatteryModel, Problem, Timeline
+from jaxspline.search import BatteryModel, Problem, Timeline, greedy, lns
 from jaxspline.search.store import NearPairs
 
 DT = 5.0  # [s] battery step
@@ -130,12 +130,12 @@ def test_change_ok_matches_resimulation():
     assert decided > 3500 and spilled > 1000 and 500 < low < 3500
 
 
-def _problem(rng, n_steps, n_sats=2, n_tasks=60, far=40.0):
+def _problem(rng, n_steps, n_sats=2, n_targets=60, far=40.0):
     """A per-channel-style Problem: random options, random near transition times."""
     bm, lit = _random_model(rng, n_steps, n_sats, charge_max=150.0)
     horizon = n_steps * DT
     opts = []
-    for t in range(n_tasks):
+    for t in range(n_targets):
         for _ in range(int(rng.integers(1, 4))):
             k = int(rng.integers(0, n_sats))
             s = float(rng.integers(0, int(horizon) - 40))
@@ -149,28 +149,28 @@ def _problem(rng, n_steps, n_sats=2, n_tasks=60, far=40.0):
             gap = opts[j][1] - opts[i][2]
             if sat[i] == sat[j] and 0.0 <= gap < far and rng.random() < 0.8:
                 near[i * n + j] = float(rng.uniform(0.0, far))
-    task_cands = [[] for _ in range(n_tasks)]
+    target_options = [[] for _ in range(n_targets)]
     for i, o in enumerate(opts):
-        task_cands[o[3]].append(i)
+        target_options[o[3]].append(i)
     lo = [sat.index(k) if k in sat else n for k in range(n_sats)]
     hi = [n - sat[::-1].index(k) if k in sat else n for k in range(n_sats)]
     keys = np.fromiter(near, np.int64, len(near))
     need = np.fromiter(near.values(), np.float64, len(near))
     pb = Problem(
         n_sats=n_sats,
-        weight=[float(w) for w in rng.integers(1, 6, n_tasks)],
-        c_task=[o[3] for o in opts],
-        c_sat=sat,
-        c_start=[o[1] for o in opts],
-        c_end=[o[2] for o in opts],
-        c_first=[float(rng.uniform(0.0, 30.0)) for _ in opts],
-        c_ls=[(0.0, 0.0, 1.0)] * n,
-        c_le=[(0.0, 0.0, 1.0)] * n,
+        target_value=[float(w) for w in rng.integers(1, 6, n_targets)],
+        option_target=[o[3] for o in opts],
+        option_sat=sat,
+        option_start=[o[1] for o in opts],
+        option_end=[o[2] for o in opts],
+        option_first=[float(rng.uniform(0.0, 30.0)) for _ in opts],
+        option_start_los=[(0.0, 0.0, 1.0)] * n,
+        option_end_los=[(0.0, 0.0, 1.0)] * n,
         tables=[None] * n_sats,
         pairs=NearPairs.from_arrays(n, keys // n, keys % n, need),
         far=[far] * n_sats,
         battery=bm,
-        task_cands=task_cands,
+        target_options=target_options,
         sat_lo=lo,
         sat_hi=hi,
         sat_starts=[[o[1] for o in opts[a:b]] for a, b in zip(lo, hi, strict=True)],
@@ -181,18 +181,18 @@ def _problem(rng, n_steps, n_sats=2, n_tasks=60, far=40.0):
 def _brute_insert(tl, c, lit, n_steps):
     """(fits in time, battery fits) of inserting c, from scratch."""
     pb = tl.pb
-    k = pb.c_sat[c]
-    if tl.assigned[pb.c_task[c]] >= 0:
+    k = pb.option_sat[c]
+    if tl.assigned[pb.option_target[c]] >= 0:
         return False, None
-    seq = sorted([*tl.tl[k], c], key=lambda x: pb.c_start[x])
+    seq = sorted([*tl.lines[k], c], key=lambda x: pb.option_start[x])
     man = []
     for i, x in enumerate(seq):
-        need = pb.c_first[x] if i == 0 else pb.need(seq[i - 1], x)
-        gap = pb.c_start[x] - (0.0 if i == 0 else pb.c_end[seq[i - 1]])
+        need = pb.option_first[x] if i == 0 else pb.need(seq[i - 1], x)
+        gap = pb.option_start[x] - (0.0 if i == 0 else pb.option_end[seq[i - 1]])
         if gap < need:
             return False, None
         man.append(need)
-    obs = [(pb.c_start[x], pb.c_end[x], m) for x, m in zip(seq, man, strict=True)]
+    obs = [(pb.option_start[x], pb.option_end[x], m) for x, m in zip(seq, man, strict=True)]
     lev = _resimulate(pb.battery.powers[k], lit[k], obs, n_steps)
     return True, float(lev.min())
 
@@ -221,7 +221,7 @@ def test_timeline_check_matches_brute_force(seed):
             assert tl.battery_failed == (got is None)
             battery_cut += got is None
         for k in range(pb.n_sats):  # the cached levels follow the timeline
-            obs = [(pb.c_start[x], pb.c_end[x], 0.0) for x in tl.tl[k]]
+            obs = [(pb.option_start[x], pb.option_end[x], 0.0) for x in tl.lines[k]]
             obs = [(s, e, tl.maneuver_into(k, i)) for i, (s, e, _) in enumerate(obs)]
             ref = _resimulate(pb.battery.powers[k], lit[k], obs, n_steps)
             np.testing.assert_allclose(tl.battery_level(k), ref, atol=1e-9)
@@ -232,17 +232,39 @@ def test_timeline_check_matches_brute_force(seed):
                 ok = [c for c in range(pb.n_options) if tl.check(c) is not None]
                 if ok:
                     tl.insert(py.choice(ok))
-        elif r < 0.8 and tl.N:
-            k = py.choice([k for k in range(pb.n_sats) if tl.tl[k]])
-            pos = py.randrange(len(tl.tl[k]))
-            tl.remove(tl.tl[k][pos])
+        elif r < 0.8 and tl.n_observations:
+            k = py.choice([k for k in range(pb.n_sats) if tl.lines[k]])
+            pos = py.randrange(len(tl.lines[k]))
+            tl.remove(tl.lines[k][pos])
             if not tl.removal_ok(k, pos):
                 tl.undo_to(mark)
-        elif tl.N:
+        elif tl.n_observations:
             tl.undo_to(0)
         if py.random() < 0.5:
             tl.commit()
     assert compared > 1000 and battery_cut > 50
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_withdrawn_options_are_never_offered(seed):
+    """A timeline that withdraws options never images them and leaves the Problem as
+    built; its greedy and LNS equal those on a problem built without those options."""
+    rng = np.random.default_rng(200 + seed)
+    pb, _ = _problem(rng, 200)
+    before = [list(x) for x in pb.target_options]
+    out = np.zeros(pb.n_options, bool)
+    out[rng.choice(pb.n_options, pb.n_options // 3, replace=False)] = True
+    without = [[c for c in x if not out[c]] for x in before]
+    plans = []
+    for tl in (Timeline(pb, out), Timeline(dataclasses.replace(pb, target_options=without))):
+        greedy(tl, math.inf)
+        lns(tl, math.inf, random.Random(seed), 300)
+        plans.append(list(tl.assigned))
+    assert plans[0] == plans[1] and any(c >= 0 for c in plans[0])
+    assert not any(out[c] for c in plans[0] if c >= 0)
+    assert pb.target_options == before
+    with pytest.raises(ValueError, match="withdrawn"):
+        Timeline(pb, out[:-1])
 
 
 DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
