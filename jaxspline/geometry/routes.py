@@ -40,7 +40,6 @@ from jaxspline.kernels._validate import check_finite, check_positive
 __all__ = [
     "POINT",
     "STRIP",
-    "RouteSpec",
     "RouteSet",
     "make_route_spec",
     "make_route_set",
@@ -94,7 +93,7 @@ def make_route_spec(
       t0_lo: float [R], earliest start [s from the epoch] (-inf: free).
       t0_hi: float [R], latest start [s from the epoch] (+inf: free).
     Returns:
-      RouteSpec with numpy [R] fields.
+      RouteSpec, a NamedTuple of the arguments broadcast to numpy [R] arrays.
     Raises:
       ValueError: naming the field (kind, not finite, lat range, value, length,
         duration, t0_lo > t0_hi, shapes).

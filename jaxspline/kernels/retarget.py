@@ -94,9 +94,7 @@ __all__ = [
     "AttitudeModel",
     "euler_rates_matrix",
     "orbital_to_body",
-    "attitude_rhs",
     "simulate",
-    "RetargetResult",
     "min_peak_retarget",
     "body_control",
 ]
@@ -174,7 +172,7 @@ def _inertia_matrix(inertia):
     return jnp.diag(J) if J.ndim == 1 else J
 
 
-def attitude_rhs(model: AttitudeModel, sigma, omega_rel, accel_body):
+def _attitude_rhs(model: AttitudeModel, sigma, omega_rel, accel_body):
     """Right-hand side of eqs. 4–6 for one state: returns (dσ/dt, dω̃/dt).
 
     dσ/dt = N(σ) ω̃; dω̃/dt = a + J⁻¹[M_gg − ω × J ω] + ω̃ × ω_o with ω_o = omega0 C e_z,
@@ -210,7 +208,7 @@ def _rk4_segment(model, x, a, t0, t1, steps):
     h = (t1 - t0) / steps
 
     def f(x):
-        return attitude_rhs(model, x[0], x[1], a)
+        return _attitude_rhs(model, x[0], x[1], a)
 
     def step(_, x):
         k1 = f(x)
@@ -463,7 +461,8 @@ def min_peak_retarget(
       steps: RK4 steps per constant-control segment.
       method: "picard" (the paper's simple iteration) or "broyden" (quasi-Newton).
     Returns:
-      :class:`RetargetResult` (check ``converged``).
+      RetargetResult, a NamedTuple: ``peak``, ``control``, ``iterations``,
+      ``angle_residual`` [rad], ``rate_residual`` [rad/s] and ``converged`` (check it).
     Raises:
       ValueError: naming the argument (shapes, NaN, T <= 0, |roll| >= π/2, model,
         method, max_iter).

@@ -6,7 +6,6 @@ figures); ``plan_view`` -> ``plan_html_columns`` -> ``plan_html_header`` -> ``pl
 (the self-contained web page).
 """
 
-from jaxspline.products.aem import aem_document as aem_document
 from jaxspline.products.aem import aem_file_name as aem_file_name
 from jaxspline.products.aem import read_aem as read_aem
 from jaxspline.products.aem import write_aems as write_aems

@@ -40,7 +40,7 @@ from jaxspline.geometry.frames import earth_rotation_angle, gmst, teme_to_ecef
 from jaxspline.geometry.orbit import MU_EARTH, orbit_position, tabulate_orbits
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 
-__all__ = ["SATELLITE_COLORS", "czml_document", "satellite_tracks", "write_czml"]
+__all__ = ["SATELLITE_COLORS", "satellite_tracks", "write_czml"]
 
 #: Colour of satellite k (``SATELLITE_COLORS[k % len]``), hex RGB: matplotlib's tab10
 #: without its green and grey, which mark imaged / not imaged targets.
@@ -125,7 +125,7 @@ def _period(r) -> float:
     return 2.0 * math.pi * math.sqrt(a**3 / MU_EARTH)
 
 
-def czml_document(result, *, step: float = 60.0):
+def _czml_document(result, *, step: float = 60.0):
     """The CZML document of a plan (a ``czml3.Document``; see the module docstring).
 
     Args:
@@ -482,7 +482,7 @@ def _area_packets(result) -> list:
 
 
 def write_czml(result, path, *, force: bool = False, step: float = 60.0) -> Path:
-    """Write the CZML document of a plan to ``path`` atomically (see :func:`czml_document`).
+    """Write the CZML document of a plan to ``path`` atomically (packets: module docstring).
 
     Args:
       result: :class:`jaxspline.planner.result.PlanResult`.
@@ -493,5 +493,5 @@ def write_czml(result, path, *, force: bool = False, step: float = 60.0) -> Path
       ``Path(path)``.
     """
     refuse_overwrite(path, force)
-    text = czml_document(result, step=step).to_json(indent=1) + "\n"
+    text = _czml_document(result, step=step).to_json(indent=1) + "\n"
     return atomic_write_text(path, text, force=force)

@@ -44,7 +44,7 @@ from jaxspline.planner.result import PlanResult
 from jaxspline.products import plan_html_columns as columns
 from jaxspline.products.plan_html_header import header_html
 
-__all__ = ["HTML_FILE", "plan_document", "plan_page", "read_plan", "write_plan_html"]
+__all__ = ["HTML_FILE", "plan_document", "read_plan", "write_plan_html"]
 
 HTML_FILE = "plan.html"
 LAND_COLOR = "#efeae0"  # as the PNG map (jaxspline.products.plot_plan)
@@ -442,7 +442,7 @@ def _battery(bat, sats, epoch, x_range):
     return batt, lines
 
 
-def plan_page(doc):
+def _plan_page(doc):
     """The Bokeh layout of a plan document (module docstring).
 
     Args:
@@ -521,5 +521,5 @@ def write_plan_html(doc, path, *, force: bool = False) -> Path:
     if isinstance(doc, PlanResult):
         doc = plan_document(doc)
     title = f"jaxspline plan: {doc['summary'].get('scenario', '')}"
-    text = file_html(plan_page(doc), INLINE, title=title)
+    text = file_html(_plan_page(doc), INLINE, title=title)
     return atomic_write_text(path, text, force=force)

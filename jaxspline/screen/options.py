@@ -17,13 +17,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import gmst, sun_direction
+from jaxspline.geometry.frames import SECONDS_PER_DAY, gmst, sun_direction
 from jaxspline.geometry.routes import STRIP, RouteSet, sample_aim_states
 from jaxspline.kernels._validate import check_positive
 from jaxspline.kernels.limits import AxisLimits
 
 __all__ = [
-    "OptionInfo",
     "RouteModel",
     "RouteOptions",
     "build_route_options",
@@ -228,7 +227,9 @@ def build_route_options(
 
     Returns:
       (RouteOptions with N options, OptionInfo). The options keep ``scan_ok == False``
-      rows; the caller drops them before screening.
+      rows; the caller drops them before screening. OptionInfo, a NamedTuple per
+      option: ``speed`` [m/s], ``t0`` [s], ``peak_rate`` [N, C] [rad/s], ``peak_accel``
+      [N, C] [rad/s^2], ``max_off_nadir`` [rad] and ``sun_elevation`` [rad].
     """
     if n_t0 < 1 or samples < 2:
         raise ValueError(f"n_t0 must be >= 1 and samples >= 2, got n_t0={n_t0}, samples={samples}")
@@ -345,7 +346,7 @@ def _sample_scans(routes: RouteSet, route, t0, speed, samples, chunk, progress) 
 
 def _sun_elevation(routes: RouteSet, route, t0, epoch_jd: float):
     """Sun elevation [rad] at each option's start point at its start time t0 [s]."""
-    jd = epoch_jd + t0 / 86400.0
+    jd = epoch_jd + t0 / SECONDS_PER_DAY
     sun = sun_direction(jd)
     th = gmst(jd)
     sun_e = np.stack(
