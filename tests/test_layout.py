@@ -25,6 +25,10 @@ while that ``__init__`` imports it back is caught.
 No module imports an underscore name from another module of the package (``from x
 import _y``, absolute or relative, ``__init__`` re-exports included; ``__future__``
 aside): a helper two modules share is public there, with a docstring.
+
+Size: a module has at most ``MAX_LINES`` lines and a function (docstring included, a
+nested function counted on its own as well) at most ``MAX_FUNCTION_LINES``, in every
+layer but those of ``PENDING_LAYERS``.
 """
 
 from __future__ import annotations
@@ -53,8 +57,11 @@ RANK = {
 }
 FACADE = 10  # jaxspline/__init__.py: on top of everything
 MAX_LINES = 600
-MAX_FUNCTION_LINES = 80  # in the layers below, docstring included
-SHORT_FUNCTION_LAYERS = ("search", "planning")
+MAX_FUNCTION_LINES = 80  # docstring included, nested functions counted on their own
+#: Layers still exempt from the function-length rule (their split is pending); empty it
+#: once their owner's branch is merged.
+PENDING_LAYERS = ("readers", "cli")
+SHORT_FUNCTION_LAYERS = tuple(name for name in RANK if name not in PENDING_LAYERS)
 LONG_MODULES: dict[str, int] = {}  # module -> its allowed length (none today)
 
 
@@ -224,14 +231,26 @@ def _long_functions(tree: ast.AST, limit: int) -> list[str]:
 
 
 @pytest.mark.parametrize("layer", SHORT_FUNCTION_LAYERS)
-def test_search_and_planning_functions_stay_short(layer):
+def test_functions_stay_short(layer):
+    in_layer = [(m, p) for m, p, _ in MODULES if m.split(".")[1:2] == [layer]]
+    assert in_layer, f"no module in layer {layer}"
     long = {
         module: found
-        for module, path, _ in MODULES
-        if module.split(".")[1:2] == [layer]
-        and (found := _long_functions(ast.parse(path.read_text()), MAX_FUNCTION_LINES))
+        for module, path in in_layer
+        if (found := _long_functions(ast.parse(path.read_text()), MAX_FUNCTION_LINES))
     }
     assert long == {}, f"functions over {MAX_FUNCTION_LINES} lines: {long}"
+
+
+def test_the_facade_functions_stay_short():
+    path = ROOT / "__init__.py"
+    assert _long_functions(ast.parse(path.read_text()), MAX_FUNCTION_LINES) == []
+
+
+def test_only_layers_are_exempt_from_the_function_rule():
+    """Every pending name is a layer (a misspelt one would exempt nothing and hide it)."""
+    assert set(PENDING_LAYERS) <= set(RANK)
+    assert set(SHORT_FUNCTION_LAYERS) | set(PENDING_LAYERS) == set(RANK)
 
 
 def test_the_function_length_rule_can_fail():
@@ -239,6 +258,7 @@ def test_the_function_length_rule_can_fail():
     assert _long_functions(ast.parse(f"def f():\n{body}\n"), MAX_FUNCTION_LINES) == [
         f"f ({MAX_FUNCTION_LINES + 1} lines)"
     ]
+    assert _long_functions(ast.parse(f"def f():\n{body}\n"), MAX_FUNCTION_LINES + 1) == []
 
 
 @pytest.mark.parametrize("name", ["check", "check_frames"])

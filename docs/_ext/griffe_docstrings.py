@@ -13,7 +13,7 @@ habits that Markdown reads differently:
   is put above every section title that has an indented line below it.
 
 Inspected objects that have no docstring of their own get their type's: a constant
-``RTOL_ULPS = 64.0`` would read "Convert a string or number to a floating point
+``MU_EARTH = 3.986004418e14`` would read "Convert a string or number to a floating point
 number", a NamedTuple field "Alias for field number 0". Those are dropped, so a
 constant shows its value and a class's ``Attributes`` section describes its fields.
 Only the rendered text changes, never the source.

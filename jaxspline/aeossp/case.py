@@ -7,7 +7,7 @@ file and the field. Files are UTF-8 (a byte-order mark and CRLF line ends are
 accepted); a key repeated in one mapping is an error (YAML would keep the last);
 fields the loader does not read are ignored. Each TLE must propagate (SGP4) at the
 horizon start; task positions lie in [-90, 90] x [-180, 180] deg, altitudes in
-:data:`ALTITUDE_RANGE_M`; a case has at least one satellite and one task. Times are
+:data:`_ALTITUDE_RANGE_M`; a case has at least one satellite and one task. Times are
 timezone-aware UTC ``datetime`` objects; the solution format uses ISO 8601 strings
 ending in ``Z``.
 """
@@ -31,7 +31,6 @@ from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 from jaxspline.readers.fields import read_text
 
 __all__ = [
-    "ALTITUDE_RANGE_M",
     "Case",
     "Satellite",
     "Task",
@@ -45,7 +44,7 @@ __all__ = [
 _Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 #: Task altitudes [m]: ground targets, the deepest trench to above the highest peak.
-ALTITUDE_RANGE_M = (-12e3, 12e3)
+_ALTITUDE_RANGE_M = (-12e3, 12e3)
 
 
 class _UniqueKeyLoader(_Loader):
@@ -386,7 +385,7 @@ def _load_task(raw: Any, where: str) -> Task:
         raise ValueError(f"{where}.latitude_deg: outside [-90, 90]: {task.latitude_deg}")
     if not -180.0 <= task.longitude_deg <= 180.0:
         raise ValueError(f"{where}.longitude_deg: outside [-180, 180]: {task.longitude_deg}")
-    lo, hi = ALTITUDE_RANGE_M
+    lo, hi = _ALTITUDE_RANGE_M
     if not lo <= task.altitude_m <= hi:
         raise ValueError(f"{where}.altitude_m: outside [{lo:g}, {hi:g}]: {task.altitude_m}")
     if task.due_time < task.release_time:

@@ -57,8 +57,6 @@ from jaxspline.aeossp.check_frames import (  # noqa: F401
 )
 
 __all__ = [
-    "CheckReport",
-    "Violation",
     "check_solution",
     "format_report",
 ]

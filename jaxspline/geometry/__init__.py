@@ -35,7 +35,6 @@ from jaxspline.geometry.ground import strip_centerline as strip_centerline
 from jaxspline.geometry.ground import strip_footprint as strip_footprint
 from jaxspline.geometry.ground import surface_point as surface_point
 from jaxspline.geometry.ground import unit_vectors as unit_vectors
-from jaxspline.geometry.orbit import J2_EARTH as J2_EARTH
 from jaxspline.geometry.orbit import MU_EARTH as MU_EARTH
 from jaxspline.geometry.orbit import CircularOrbit as CircularOrbit
 from jaxspline.geometry.orbit import HermiteOrbit as HermiteOrbit
@@ -48,7 +47,6 @@ from jaxspline.geometry.orbit import propagate_tle as propagate_tle
 from jaxspline.geometry.orbit import sso_inclination as sso_inclination
 from jaxspline.geometry.orbit import tabulate_orbits as tabulate_orbits
 from jaxspline.geometry.orbit import tle_orbit as tle_orbit
-from jaxspline.geometry.pointing import CHANNELS as CHANNELS
 from jaxspline.geometry.pointing import Scene as Scene
 from jaxspline.geometry.pointing import aim_angles as aim_angles
 from jaxspline.geometry.pointing import aim_geometry as aim_geometry
@@ -63,7 +61,6 @@ from jaxspline.geometry.pointing import visibility_windows as visibility_windows
 from jaxspline.geometry.routes import POINT as POINT
 from jaxspline.geometry.routes import STRIP as STRIP
 from jaxspline.geometry.routes import RouteSet as RouteSet
-from jaxspline.geometry.routes import RouteSpec as RouteSpec
 from jaxspline.geometry.routes import make_route_set as make_route_set
 from jaxspline.geometry.routes import make_route_spec as make_route_spec
 from jaxspline.geometry.routes import sample_aim_states as sample_aim_states

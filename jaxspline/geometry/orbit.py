@@ -30,12 +30,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import OMEGA_EARTH, R_EARTH, jd_split
+from jaxspline.geometry.frames import OMEGA_EARTH, R_EARTH, SECONDS_PER_DAY, jd_split
 from jaxspline.kernels._validate import check_finite, check_positive
 
 __all__ = [
     "MU_EARTH",
-    "J2_EARTH",
     "CircularOrbit",
     "HermiteOrbit",
     "sso_inclination",
@@ -50,8 +49,8 @@ __all__ = [
 ]
 
 MU_EARTH = 3.986004418e14  # m^3/s^2 (WGS84)
-J2_EARTH = 1.08262668e-3
-_TROPICAL_YEAR = 365.2421897 * 86400.0  # s
+_J2_EARTH = 1.08262668e-3
+_TROPICAL_YEAR = 365.2421897 * SECONDS_PER_DAY  # s
 _KM = 1e3
 
 
@@ -113,7 +112,7 @@ def sso_inclination(altitude: float) -> float:
     check_positive("altitude", altitude)
     a = R_EARTH + float(altitude)
     n = np.sqrt(MU_EARTH / a**3)
-    cos_i = -(2.0 * np.pi / _TROPICAL_YEAR) / (1.5 * n * J2_EARTH * (R_EARTH / a) ** 2)
+    cos_i = -(2.0 * np.pi / _TROPICAL_YEAR) / (1.5 * n * _J2_EARTH * (R_EARTH / a) ** 2)
     if not -1.0 <= cos_i <= 1.0:
         raise ValueError(f"altitude={altitude!r} m admits no Sun-synchronous orbit")
     return float(np.arccos(cos_i))
@@ -150,7 +149,7 @@ def circular_orbit(
         raise ValueError(f"inclination must be in [0, pi] rad, got {inclination!r}")
     a = R_EARTH + float(altitude)
     n = np.sqrt(MU_EARTH / a**3)
-    rate = -1.5 * n * J2_EARTH * (R_EARTH / a) ** 2 * np.cos(inclination) if j2_drift else 0.0
+    rate = -1.5 * n * _J2_EARTH * (R_EARTH / a) ** 2 * np.cos(inclination) if j2_drift else 0.0
     return CircularOrbit(*(jnp.asarray(float(x)) for x in (a, inclination, raan, arg_lat, n, rate)))
 
 
@@ -353,7 +352,7 @@ def propagate_tle(line1: str, line2: str, jd, fr=0.0, gravity: str = "wgs84"):
 def _gravity_j2(r):
     rn = np.linalg.norm(r, axis=-1, keepdims=True)
     z2 = (r[..., 2:3] / rn) ** 2
-    k = 1.5 * J2_EARTH * (R_EARTH / rn) ** 2
+    k = 1.5 * _J2_EARTH * (R_EARTH / rn) ** 2
     fac = np.concatenate([1 + k * (1 - 5 * z2), 1 + k * (1 - 5 * z2), 1 + k * (3 - 5 * z2)], -1)
     return -MU_EARTH * r / rn**3 * fac
 

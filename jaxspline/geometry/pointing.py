@@ -42,7 +42,6 @@ from jaxspline.kernels._validate import check_finite, check_positive
 
 __all__ = [
     "Scene",
-    "CHANNELS",
     "aim_params",
     "aim_angles",
     "aim_state",
@@ -54,8 +53,6 @@ __all__ = [
     "boresight",
     "visibility_windows",
 ]
-
-CHANNELS = ("roll", "pitch", "yaw")
 
 
 class Scene(NamedTuple):

@@ -40,7 +40,6 @@ from jaxspline.kernels._validate import check_finite, check_positive
 __all__ = [
     "POINT",
     "STRIP",
-    "RouteSpec",
     "RouteSet",
     "make_route_spec",
     "make_route_set",
@@ -94,7 +93,7 @@ def make_route_spec(
       t0_lo: float [R], earliest start [s from the epoch] (-inf: free).
       t0_hi: float [R], latest start [s from the epoch] (+inf: free).
     Returns:
-      RouteSpec with numpy [R] fields.
+      RouteSpec, a NamedTuple of the arguments broadcast to numpy [R] arrays.
     Raises:
       ValueError: naming the field (kind, not finite, lat range, value, length,
         duration, t0_lo > t0_hi, shapes).
@@ -320,38 +319,13 @@ def make_route_set(
 
     check_positive("max_off_nadir", max_off_nadir)
     check_positive("nominal_speed", nominal_speed)
-    lat, lon, az = spec.lat.copy(), spec.lon.copy(), spec.azimuth.copy()
     strip = spec.kind == STRIP
-    r_e = geodetic_to_ecef(lat, lon, 0.0)
     grid = np.linspace(t_begin, t_end, max(int((t_end - t_begin) / step), 1) + 1)
-    if strip.any():
-        rs_ = np.asarray(r_e)[strip]
-        offn = off_nadir_flat(scene, np.repeat(rs_, grid.size, 0), np.tile(grid, rs_.shape[0]))
-        offn = offn.reshape(rs_.shape[0], grid.size)
-        t_ca = grid[np.argmin(offn, axis=1)]
-        _, v = orbit_state(scene.orbit, jnp.asarray(t_ca))
-        theta = np.asarray(scene.gmst0) + OMEGA_EARTH * t_ca
-        d = strip_direction(lat[strip], lon[strip], az[strip])
-        # ECEF -> ECI rotation of the tangent (the Earth-rotation term does not matter for a sign)
-        c, s = np.cos(theta), np.sin(theta)
-        d_eci = np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], d[:, 2]], -1)
-        back = np.sum(d_eci * np.asarray(v), -1) < 0
-        if back.any():
-            idx = np.nonzero(strip)[0][back]
-            la, lo, azb = _great_circle_end(lat[idx], lon[idx], az[idx], spec.length[idx])
-            lat[idx], lon[idx], az[idx] = la, lo, azb
+    lat, lon, az = _scan_forward(scene, spec, strip, grid)
     r_e = np.asarray(geodetic_to_ecef(lat, lon, 0.0))
     wins = visibility_windows(scene, r_e, t_begin, t_end, max_off_nadir, step=step)
     dur = np.where(strip, spec.length / nominal_speed, spec.duration)
-    t0_min = np.full(lat.shape, np.inf)
-    t0_max = np.full(lat.shape, -np.inf)
-    for i, w in enumerate(wins):
-        if w.shape[0] == 0:
-            continue
-        k = int(np.argmax(w[:, 1] - w[:, 0]))
-        lo_, hi_ = max(w[k, 0], spec.t0_lo[i]), min(w[k, 1] - dur[i], spec.t0_hi[i])
-        if lo_ <= hi_:
-            t0_min[i], t0_max[i] = lo_, hi_
+    t0_min, t0_max = _start_windows(wins, dur, spec)
     d = strip_direction(lat, lon, az)
     params = np.array(aim_params(jnp.asarray(r_e), jnp.asarray(d), nominal_speed))
     params[:, 6] = np.where(strip, nominal_speed, 0.0)
@@ -369,6 +343,50 @@ def make_route_set(
         lon=jnp.asarray(lon),
         azimuth=jnp.asarray(az),
     )
+
+
+def _scan_forward(scene: Scene, spec: RouteSpec, strip, grid):
+    """Start points and azimuths [rad] of the routes, every strip scanned along the flight.
+
+    A strip whose ECI tangent at its start point opposes the satellite velocity at the
+    start point's closest approach (least off-nadir angle on ``grid``) starts from its
+    other end instead (push-broom images forward). Returns copies (lat, lon, azimuth).
+    """
+    lat, lon, az = spec.lat.copy(), spec.lon.copy(), spec.azimuth.copy()
+    if not strip.any():
+        return lat, lon, az
+    rs_ = np.asarray(geodetic_to_ecef(lat, lon, 0.0))[strip]
+    offn = off_nadir_flat(scene, np.repeat(rs_, grid.size, 0), np.tile(grid, rs_.shape[0]))
+    offn = offn.reshape(rs_.shape[0], grid.size)
+    t_ca = grid[np.argmin(offn, axis=1)]
+    _, v = orbit_state(scene.orbit, jnp.asarray(t_ca))
+    theta = np.asarray(scene.gmst0) + OMEGA_EARTH * t_ca
+    d = strip_direction(lat[strip], lon[strip], az[strip])
+    # ECEF -> ECI rotation of the tangent (the Earth-rotation term does not matter for a sign)
+    c, s = np.cos(theta), np.sin(theta)
+    d_eci = np.stack([c * d[:, 0] - s * d[:, 1], s * d[:, 0] + c * d[:, 1], d[:, 2]], -1)
+    back = np.sum(d_eci * np.asarray(v), -1) < 0
+    if back.any():
+        idx = np.nonzero(strip)[0][back]
+        la, lo, azb = _great_circle_end(lat[idx], lon[idx], az[idx], spec.length[idx])
+        lat[idx], lon[idx], az[idx] = la, lo, azb
+    return lat, lon, az
+
+
+def _start_windows(wins, dur, spec: RouteSpec):
+    """(t0_min, t0_max) [s] per route: the longest visibility interval of its start point
+    cut to the user window, its end reduced by the route's duration; (+inf, -inf) when
+    empty."""
+    t0_min = np.full(dur.shape, np.inf)
+    t0_max = np.full(dur.shape, -np.inf)
+    for i, w in enumerate(wins):
+        if w.shape[0] == 0:
+            continue
+        k = int(np.argmax(w[:, 1] - w[:, 0]))
+        lo_, hi_ = max(w[k, 0], spec.t0_lo[i]), min(w[k, 1] - dur[i], spec.t0_hi[i])
+        if lo_ <= hi_:
+            t0_min[i], t0_max[i] = lo_, hi_
+    return t0_min, t0_max
 
 
 def _great_circle_end(lat, lon, az, length):

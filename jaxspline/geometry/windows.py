@@ -66,6 +66,79 @@ def _exact_numpy(r_e, g):
     return offn, elev
 
 
+class _Knots(NamedTuple):
+    """The orbit table's time grid."""
+
+    t: np.ndarray  # [M] knot times [s]
+    step: float  # knot spacing [s]
+    in_horizon: np.ndarray  # bool [M], the knot lies in [0, duration]
+    theta: np.ndarray  # [M] Earth rotation angle at the knots [rad]
+
+
+class _Cone(NamedTuple):
+    """One satellite's Earth-fixed knots and its coarse pre-screen."""
+
+    r_e: np.ndarray  # [M, 3] Earth-fixed positions [m]
+    good: np.ndarray  # bool [M], valid knots inside the horizon
+    limit: float  # off-nadir limit [rad]
+    coarse: np.ndarray  # [Mc] the coarse knots (every _COARSE-th)
+    u_coarse: np.ndarray  # [Mc, 3] unit positions at the coarse knots
+    cos_c: float  # cosine of the pre-screen's Earth-central angle
+
+
+def _satellite_cone(knots: _Knots, r_teme, good, limit: float, r_min_t: float) -> _Cone:
+    """The pre-screen of one satellite: the cone's ground radius (Earth-central angle of
+    the off-nadir limit seen from the highest knot over the lowest target) widened by the
+    ground track's motion over half a coarse stride and a safety angle."""
+    r_e = rot_z(knots.theta, r_teme)
+    rn = np.linalg.norm(r_e, axis=-1)
+    u = r_e / rn[:, None]
+    lam = math.asin(min(1.0, rn.max() / r_min_t * math.sin(limit))) - limit
+    track = np.arccos(np.clip(np.sum(u[1:] * u[:-1], axis=-1), -1.0, 1.0)).max()
+    widen = track * (_COARSE / 2 + 1) + _SAFETY_ANGLE
+    kc = np.arange(0, knots.t.size, _COARSE)
+    return _Cone(r_e, good, limit, kc, u[kc], math.cos(min(math.pi, lam + widen)))
+
+
+def _near_knots(knots: _Knots, cone: _Cone, g_hat, tb, lo_t, hi_t):
+    """(target, knot) pairs of the block ``tb`` that may be visible: every knot within
+    half a coarse stride (plus one) of a coarse knot inside the widened cone, valid,
+    and inside the target's imaging window. Returns (ti, ks) int [P] each."""
+    m, tc = knots.t.size, knots.t[cone.coarse]
+    near = (g_hat[tb] @ cone.u_coarse.T) > cone.cos_c
+    near &= (tc[None, :] >= lo_t[tb, None] - _COARSE * knots.step) & (
+        tc[None, :] <= hi_t[tb, None] + _COARSE * knots.step
+    )
+    ii, ci = np.nonzero(near)
+    half = np.arange(-(_COARSE // 2) - 1, _COARSE // 2 + 2)
+    ks = np.clip((cone.coarse[ci][:, None] + half[None, :]).ravel(), 0, m - 1)
+    key = np.unique(np.repeat(ii, half.size) * m + ks)
+    ii, ks = key // m, key % m
+    ti = tb[ii]
+    tk = knots.t
+    keep = cone.good[ks] & (tk[ks] >= lo_t[ti] - 1e-9) & (tk[ks] <= hi_t[ti] + 1e-9)
+    return ti[keep], ks[keep]
+
+
+def _runs(ti, ks):
+    """First and last positions of the runs of consecutive knots of one target."""
+    brk = np.ones(ti.size, bool)
+    brk[1:] = (ti[1:] != ti[:-1]) | (ks[1:] != ks[:-1] + 1)
+    first = np.flatnonzero(brk)
+    return first, np.append(first[1:], ti.size) - 1
+
+
+def _sorted_windows(out: dict) -> Windows:
+    """The collected windows as one :class:`Windows` sorted by (sat, target, lo)."""
+    if not out["sat"]:
+        z = np.zeros(0)
+        return Windows(z.astype(np.int64), z.astype(np.int64), z, z)
+    w = Windows(*(np.concatenate(out[k]) for k in ("sat", "target", "lo", "hi")))
+    w = Windows(w.sat.astype(np.int64), w.target.astype(np.int64), w.lo, w.hi)
+    order = np.lexsort((w.lo, w.target, w.sat))
+    return Windows(*(x[order] for x in w))
+
+
 def visibility_windows_all(
     scene: Scene,
     ok_knots: np.ndarray,
@@ -95,64 +168,30 @@ def visibility_windows_all(
     orbit = scene.orbit
     tk = np.asarray(orbit.t)
     rk = np.asarray(orbit.r)
-    s_count, m = rk.shape[0], tk.size
-    step = tk[1] - tk[0]
     in_h = (tk >= -1e-9) & (tk <= duration + 1e-9)
-    theta = earth_rotation_angle(float(scene.gmst0), tk)
+    knots = _Knots(tk, tk[1] - tk[0], in_h, earth_rotation_angle(float(scene.gmst0), tk))
     g = np.asarray(points_ecef, np.float64)
     g_hat = g / np.linalg.norm(g, axis=-1, keepdims=True)
     r_min_t = float(np.min(np.linalg.norm(g, axis=-1))) if len(g) else 1.0
     lo_t = np.maximum(np.asarray(t_lo, np.float64), 0.0)
     hi_t = np.minimum(np.asarray(t_hi, np.float64), duration)
     out = {"sat": [], "target": [], "lo": [], "hi": []}
-    for s in range(s_count):
+    for s in range(rk.shape[0]):
         tasks = np.flatnonzero(allowed[s] & (lo_t <= hi_t))
         good_k = ok_knots[s] & in_h
         if tasks.size == 0 or not good_k.any():
             continue
-        r_e = rot_z(theta, rk[s])
-        rn = np.linalg.norm(r_e, axis=-1)
-        u = r_e / rn[:, None]
-        eta = float(off_nadir_limit[s])
-        lam = math.asin(min(1.0, rn.max() / r_min_t * math.sin(eta))) - eta
-        track = np.arccos(np.clip(np.sum(u[1:] * u[:-1], axis=-1), -1.0, 1.0)).max()
-        widen = track * (_COARSE / 2 + 1) + _SAFETY_ANGLE
-        cos_c = math.cos(min(math.pi, lam + widen))
-        kc = np.arange(0, m, _COARSE)
-        uc = u[kc]
-        half = np.arange(-(_COARSE // 2) - 1, _COARSE // 2 + 2)
+        cone = _satellite_cone(knots, rk[s], good_k, float(off_nadir_limit[s]), r_min_t)
         for b0 in range(0, tasks.size, _BLOCK):
-            tb = tasks[b0 : b0 + _BLOCK]
-            near = (g_hat[tb] @ uc.T) > cos_c
-            near &= (tk[kc][None, :] >= lo_t[tb, None] - _COARSE * step) & (
-                tk[kc][None, :] <= hi_t[tb, None] + _COARSE * step
-            )
-            ii, ci = np.nonzero(near)
-            if ii.size == 0:
-                continue
-            ks = np.clip((kc[ci][:, None] + half[None, :]).ravel(), 0, m - 1)
-            key = np.unique(np.repeat(ii, half.size) * m + ks)
-            ii, ks = key // m, key % m
-            ti = tb[ii]
-            keep = good_k[ks] & (tk[ks] >= lo_t[ti] - 1e-9) & (tk[ks] <= hi_t[ti] + 1e-9)
-            ti, ks = ti[keep], ks[keep]
-            offn, elev = _exact_numpy(r_e[ks], g[ti])
-            vis = _visible(offn, elev, eta, horizon)
+            ti, ks = _near_knots(knots, cone, g_hat, tasks[b0 : b0 + _BLOCK], lo_t, hi_t)
+            offn, elev = _exact_numpy(cone.r_e[ks], g[ti])
+            vis = _visible(offn, elev, cone.limit, horizon)
             ti, ks = ti[vis], ks[vis]
             if ti.size == 0:
                 continue
-            brk = np.ones(ti.size, bool)
-            brk[1:] = (ti[1:] != ti[:-1]) | (ks[1:] != ks[:-1] + 1)
-            first = np.flatnonzero(brk)
-            last = np.append(first[1:], ti.size) - 1
+            first, last = _runs(ti, ks)
             out["sat"].append(np.full(first.size, s))
             out["target"].append(ti[first])
             out["lo"].append(tk[ks[first]])
             out["hi"].append(tk[ks[last]])
-    if not out["sat"]:
-        z = np.zeros(0)
-        return Windows(z.astype(np.int64), z.astype(np.int64), z, z)
-    w = Windows(*(np.concatenate(out[k]) for k in ("sat", "target", "lo", "hi")))
-    w = Windows(w.sat.astype(np.int64), w.target.astype(np.int64), w.lo, w.hi)
-    order = np.lexsort((w.lo, w.target, w.sat))
-    return Windows(*(x[order] for x in w))
+    return _sorted_windows(out)

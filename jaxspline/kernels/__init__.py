@@ -30,7 +30,6 @@ from jaxspline.kernels.attitude import quat_rotate as quat_rotate
 from jaxspline.kernels.attitude import quat_to_dcm as quat_to_dcm
 from jaxspline.kernels.attitude import quat_to_mrp as quat_to_mrp
 from jaxspline.kernels.channel_join import DEFAULT_JOIN_SAMPLES as DEFAULT_JOIN_SAMPLES
-from jaxspline.kernels.channel_join import ChannelJoinPeaks as ChannelJoinPeaks
 from jaxspline.kernels.channel_join import channel_join_peaks as channel_join_peaks
 from jaxspline.kernels.flex import flexible_body_rate as flexible_body_rate
 from jaxspline.kernels.flex import initial_amplitude as initial_amplitude
@@ -40,7 +39,6 @@ from jaxspline.kernels.flex import residual_amplitude as residual_amplitude
 from jaxspline.kernels.flex import settling_time as settling_time
 from jaxspline.kernels.flex import tau_for_tolerance as tau_for_tolerance
 from jaxspline.kernels.flex import tau_for_tolerance_kernel as tau_for_tolerance_kernel
-from jaxspline.kernels.join_check import ManeuverCheck as ManeuverCheck
 from jaxspline.kernels.join_check import maneuver_check as maneuver_check
 from jaxspline.kernels.join_check import maneuver_check_kernel as maneuver_check_kernel
 from jaxspline.kernels.joins import Maneuver as Maneuver
@@ -52,7 +50,6 @@ from jaxspline.kernels.joins import poly_eval as poly_eval
 from jaxspline.kernels.joins import spline7_coeffs as spline7_coeffs
 from jaxspline.kernels.limits import AxisLimits as AxisLimits
 from jaxspline.kernels.limits import validate_limits as validate_limits
-from jaxspline.kernels.reach import RTOL_ULPS as RTOL_ULPS
 from jaxspline.kernels.reach import angle_interval as angle_interval
 from jaxspline.kernels.reach import angle_interval_kernel as angle_interval_kernel
 from jaxspline.kernels.reach import envelopes as envelopes
@@ -72,8 +69,6 @@ from jaxspline.kernels.reach_durations import min_peak_accel_kernel as min_peak_
 from jaxspline.kernels.reach_durations import min_transfer_time as min_transfer_time
 from jaxspline.kernels.reach_durations import min_transfer_time_kernel as min_transfer_time_kernel
 from jaxspline.kernels.retarget import AttitudeModel as AttitudeModel
-from jaxspline.kernels.retarget import RetargetResult as RetargetResult
-from jaxspline.kernels.retarget import attitude_rhs as attitude_rhs
 from jaxspline.kernels.retarget import body_control as body_control
 from jaxspline.kernels.retarget import euler_rates_matrix as euler_rates_matrix
 from jaxspline.kernels.retarget import min_peak_retarget as min_peak_retarget

@@ -20,7 +20,6 @@ __all__ = [
     "check_finite",
     "broadcast_named",
     "float_dtype_of",
-    "is_weak",
     "cast_broadcast",
     "common_float",
     "finite_vector",
@@ -154,7 +153,7 @@ def broadcast_named(**arrays):
     return tuple(jnp.broadcast_to(v, shape) for v in arrays.values())
 
 
-def is_weak(x) -> bool:
+def _is_weak(x) -> bool:
     """Python scalars and weakly typed arrays, which do not set a result dtype.
 
     Args:
@@ -178,7 +177,7 @@ def cast_broadcast(**named):
     Raises:
       ValueError: an input is not numeric or the shapes do not broadcast (named).
     """
-    dt = float_dtype_of(*[v for v in named.values() if not is_weak(v)])
+    dt = float_dtype_of(*[v for v in named.values() if not _is_weak(v)])
     return broadcast_named(**{k: as_float_array(k, v, dt) for k, v in named.items()})
 
 

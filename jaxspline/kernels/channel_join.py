@@ -24,7 +24,7 @@ import numpy as np
 from jaxspline.kernels._safe import safe_norm
 from jaxspline.kernels.joins import HERMITE_MAP
 
-__all__ = ["ChannelJoinPeaks", "channel_join_peaks", "DEFAULT_JOIN_SAMPLES"]
+__all__ = ["channel_join_peaks", "DEFAULT_JOIN_SAMPLES"]
 
 DEFAULT_JOIN_SAMPLES = 33  # grid of τ for the peaks (the polynomials have degree <= 6)
 
@@ -80,7 +80,9 @@ def channel_join_peaks(p0, v0, a0, j0, p1, v1, a1, j1, T, n_samples=DEFAULT_JOIN
       T: float scalar, duration [s].
       n_samples: static int >= 2, grid points of τ in [0, 1].
     Returns:
-      :class:`ChannelJoinPeaks`.
+      ChannelJoinPeaks, a NamedTuple: ``rate``, ``accel``, ``jerk`` float [C], the
+      peaks of |p'|, |p''|, |p'''| per channel, and ``rate_norm``, ``accel_norm``,
+      ``jerk_norm``, the peaks of their Euclidean norms over channels.
     """
     good = T > 0
     Ts = jnp.where(good, T, jnp.ones_like(T))

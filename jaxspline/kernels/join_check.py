@@ -28,7 +28,7 @@ from jaxspline.kernels._validate import (
 from jaxspline.kernels.joins import HERMITE_MAP
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
-__all__ = ["ManeuverCheck", "maneuver_check", "maneuver_check_kernel"]
+__all__ = ["maneuver_check", "maneuver_check_kernel"]
 
 
 # ---- fast sampled check: per-component scalars, one sample per scan step
@@ -272,7 +272,8 @@ def maneuver_check(
       j1: as in ``maneuver_plan``.
       n_samples: static int >= 2, equally spaced samples on [0, T] including both ends.
     Returns:
-      ManeuverCheck, float [...] peaks and bool [...] feasible.
+      ManeuverCheck, a NamedTuple: ``peak_rate`` [rad/s], ``peak_accel`` [rad/s²],
+      ``peak_jerk`` [rad/s³] float [...] and ``feasible`` bool [...].
     Raises:
       ValueError: n_samples < 2, invalid limits, or an argument as in ``maneuver_plan``.
     """

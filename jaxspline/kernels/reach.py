@@ -58,7 +58,6 @@ from jaxspline.kernels._validate import (
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 __all__ = [
-    "RTOL_ULPS",
     "angle_interval",
     "angle_interval_kernel",
     "envelopes",
@@ -74,15 +73,15 @@ __all__ = [
 ]
 
 #: Relative tolerance of the feasibility tests, in units of the dtype's machine epsilon.
-RTOL_ULPS = 64.0
+_RTOL_ULPS = 64.0
 
 
 # ----------------------------------------------------------------------------- helpers
 
 
 def rtol_of(x):
-    """Relative tolerance of the reach tests in the dtype of ``x``: ``RTOL_ULPS`` ulps."""
-    return RTOL_ULPS * jnp.finfo(jnp.result_type(x)).eps
+    """Relative tolerance of the reach tests in the dtype of ``x``: ``_RTOL_ULPS`` ulps."""
+    return _RTOL_ULPS * jnp.finfo(jnp.result_type(x)).eps
 
 
 def _hi(a1, b1, b2, T, b, d):

@@ -94,9 +94,7 @@ __all__ = [
     "AttitudeModel",
     "euler_rates_matrix",
     "orbital_to_body",
-    "attitude_rhs",
     "simulate",
-    "RetargetResult",
     "min_peak_retarget",
     "body_control",
 ]
@@ -174,7 +172,7 @@ def _inertia_matrix(inertia):
     return jnp.diag(J) if J.ndim == 1 else J
 
 
-def attitude_rhs(model: AttitudeModel, sigma, omega_rel, accel_body):
+def _attitude_rhs(model: AttitudeModel, sigma, omega_rel, accel_body):
     """Right-hand side of eqs. 4–6 for one state: returns (dσ/dt, dω̃/dt).
 
     dσ/dt = N(σ) ω̃; dω̃/dt = a + J⁻¹[M_gg − ω × J ω] + ω̃ × ω_o with ω_o = omega0 C e_z,
@@ -210,7 +208,7 @@ def _rk4_segment(model, x, a, t0, t1, steps):
     h = (t1 - t0) / steps
 
     def f(x):
-        return attitude_rhs(model, x[0], x[1], a)
+        return _attitude_rhs(model, x[0], x[1], a)
 
     def step(_, x):
         k1 = f(x)
@@ -289,6 +287,39 @@ class RetargetResult(NamedTuple):
     converged: jnp.ndarray
 
 
+def _linear_control(sigma_a, ra, c, T):
+    """The closed-form minimum-peak control (eq. 21) reaching c = (σ, σ') at T, no rate bound."""
+    inf = jnp.asarray(jnp.inf, T.dtype)
+    d = unbounded_peak(sigma_a, ra, c[:3], c[3:], T)
+    return control_from_peak(sigma_a, ra, c[:3], c[3:], T, inf, d)
+
+
+def _end_errors(s, w, sigma_b, omega_b):
+    """(max_k |σ_k(T) − σ_b,k|, max_k |ω̃_k(T) − ω̃_b,k|), +inf where not finite."""
+    inf = jnp.asarray(jnp.inf, s.dtype)
+    ea = jnp.max(jnp.abs(s - sigma_b))
+    er = jnp.max(jnp.abs(w - omega_b))
+    ea = jnp.where(jnp.isfinite(ea), ea, inf)
+    er = jnp.where(jnp.isfinite(er), er, inf)
+    return ea, er
+
+
+def _initial_jacobian(end_of, z0, e0, sc):
+    """Forward-difference Jacobian of the scaled end-state map at u⁽⁰⁾ (6 simulations,
+    vmapped); the identity where it is not finite."""
+    h = jnp.sqrt(jnp.finfo(z0.dtype).eps)
+    Es = jax.vmap(lambda zz: end_of(zz / sc)[0])(z0[None, :] + h * jnp.eye(6, dtype=z0.dtype))
+    B1 = ((Es - e0[None, :]) * sc[None, :]).T / h
+    return jnp.where(jnp.all(jnp.isfinite(B1)), B1, jnp.eye(6, dtype=z0.dtype))
+
+
+def _broyden_update(Bm, dz, r, r1):
+    """Good Broyden rank-one update of the Jacobian estimate after the step dz (r -> r1)."""
+    den = jnp.dot(dz, dz)
+    ok = den > 0
+    return Bm + jnp.where(ok, jnp.outer(r1 - r - Bm @ dz, dz) / jnp.where(ok, den, 1.0), 0.0)
+
+
 def _retarget_kernel(
     sigma_a,
     omega_a,
@@ -307,32 +338,17 @@ def _retarget_kernel(
     method,
 ):
     model = AttitudeModel(inertia, gain, omega0, gg)
-    p = jnp.array(CHANNEL_AXIS)
     ra = euler_rates_matrix(sigma_a) @ omega_a  # σ'(0)
     rb = euler_rates_matrix(sigma_b) @ omega_b  # σ'(T) target
-    inf = jnp.asarray(jnp.inf, T.dtype)
 
-    def solve(c):
-        d = unbounded_peak(sigma_a, ra, c[:3], c[3:], T)
-        return control_from_peak(sigma_a, ra, c[:3], c[3:], T, inf, d)
-
-    def end(c):
-        s, w = _simulate_kernel(model, sigma_a, omega_a, solve(c), T, steps)
+    def end(c):  # the true end state (σ, σ') under the linear control for targets c
+        s, w = _simulate_kernel(
+            model, sigma_a, omega_a, _linear_control(sigma_a, ra, c, T), T, steps
+        )
         return jnp.concatenate([s, euler_rates_matrix(s) @ w]), (s, w)
 
     target = jnp.concatenate([sigma_b, rb])
-
-    def residual(aux):
-        s, w = aux
-        ea = jnp.max(jnp.abs(s - sigma_b))
-        er = jnp.max(jnp.abs(w - omega_b))
-        ea = jnp.where(jnp.isfinite(ea), ea, inf)
-        er = jnp.where(jnp.isfinite(er), er, inf)
-        return ea, er
-
     e0, aux0 = end(target)
-    ea0, er0 = residual(aux0)
-
     sc = jnp.concatenate([jnp.ones(3, T.dtype), jnp.full((3,), T)])  # angle, rate·T
 
     def cond(st):
@@ -348,27 +364,19 @@ def _retarget_kernel(
         z1 = z + dz
         e1, aux = end(z1 / sc)
         r1 = (e1 - target) * sc
-        if method == "broyden":  # good Broyden rank-one update of the Jacobian estimate
-            den = jnp.dot(dz, dz)
-            ok = den > 0
-            Bm = Bm + jnp.where(ok, jnp.outer(r1 - r - Bm @ dz, dz) / jnp.where(ok, den, 1.0), 0.0)
-        ea, er = residual(aux)
-        return z1, r1, Bm, it + 1, ea, er
+        if method == "broyden":
+            Bm = _broyden_update(Bm, dz, r, r1)
+        return z1, r1, Bm, it + 1, *_end_errors(*aux, sigma_b, omega_b)
 
     z0 = target * sc
     B0 = jnp.eye(6, dtype=T.dtype)
-    if method == "broyden":  # forward-difference Jacobian at u0 (6 simulations, vmapped)
-        h = jnp.sqrt(jnp.finfo(T.dtype).eps)
-        Es = jax.vmap(lambda zz: end(zz / sc)[0])(z0[None, :] + h * jnp.eye(6, dtype=T.dtype))
-        B1 = ((Es - e0[None, :]) * sc[None, :]).T / h
-        B0 = jnp.where(jnp.all(jnp.isfinite(B1)), B1, B0)
-    st0 = (z0, (e0 - target) * sc, B0, jnp.int32(0), ea0, er0)
+    if method == "broyden":
+        B0 = _initial_jacobian(end, z0, e0, sc)
+    st0 = (z0, (e0 - target) * sc, B0, jnp.int32(0), *_end_errors(*aux0, sigma_b, omega_b))
     z, _, _, it, ea, er = jax.lax.while_loop(cond, body, st0)
-    c = z / sc
-    ctrl = solve(c)
+    ctrl = _linear_control(sigma_a, ra, z / sc, T)
     conv = (ea <= tol) & (er <= rate_tol)
-    g = jnp.abs(gain[p])
-    peak = jnp.max(ctrl.peak / g)
+    peak = jnp.max(ctrl.peak / jnp.abs(gain[jnp.array(CHANNEL_AXIS)]))
     return (peak, *ctrl, it, ea, er, conv)
 
 
@@ -453,7 +461,8 @@ def min_peak_retarget(
       steps: RK4 steps per constant-control segment.
       method: "picard" (the paper's simple iteration) or "broyden" (quasi-Newton).
     Returns:
-      :class:`RetargetResult` (check ``converged``).
+      RetargetResult, a NamedTuple: ``peak``, ``control``, ``iterations``,
+      ``angle_residual`` [rad], ``rate_residual`` [rad/s] and ``converged`` (check it).
     Raises:
       ValueError: naming the argument (shapes, NaN, T <= 0, |roll| >= π/2, model,
         method, max_iter).

@@ -2,11 +2,10 @@
 
 ``attitude_history`` (the flown attitude of a plan) -> ``aem`` (CCSDS attitude
 ephemerides); ``czml`` (Cesium); ``plot`` -> ``plot_plan`` / ``plot_attitude`` (PNG
-figures); ``plan_view`` -> ``plan_html_columns`` -> ``plan_html`` (the self-contained web
-page).
+figures); ``plan_view`` -> ``plan_html_columns`` -> ``plan_html_header`` -> ``plan_html``
+(the self-contained web page).
 """
 
-from jaxspline.products.aem import aem_document as aem_document
 from jaxspline.products.aem import aem_file_name as aem_file_name
 from jaxspline.products.aem import read_aem as read_aem
 from jaxspline.products.aem import write_aems as write_aems

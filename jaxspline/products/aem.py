@@ -30,7 +30,7 @@ import numpy as np
 
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 
-__all__ = ["aem_document", "aem_file_name", "read_aem", "write_aems"]
+__all__ = ["aem_file_name", "read_aem", "write_aems"]
 
 _NS_DIGITS = 9  # decimals of the epoch seconds (1 ns)
 _INTERPOLATION_DEGREE = 3
@@ -70,7 +70,7 @@ def _object_id(sat) -> str:
     return sat.name
 
 
-def aem_document(scenario, sat_index: int, history, *, created: _dt.datetime | None = None):
+def _aem_document(scenario, sat_index: int, history, *, created: _dt.datetime | None = None):
     """The ``ccsds_ndm`` AEM object of one satellite's :class:`AttitudeHistory`.
 
     Args:
@@ -175,7 +175,7 @@ def write_aems(result, attitude, outdir, *, force: bool = False) -> list[Path]:
         refuse_overwrite(p, force)
     io = NdmIo()
     for k, (s, p) in enumerate(zip(sc.satellites, paths, strict=True)):
-        doc = aem_document(sc, k, attitude.histories[s.name])
+        doc = _aem_document(sc, k, attitude.histories[s.name])
         atomic_write_text(p, io.to_string(doc, NDMFileFormats.XML), force=True)
     return paths
 

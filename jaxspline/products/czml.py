@@ -40,7 +40,7 @@ from jaxspline.geometry.frames import earth_rotation_angle, gmst, teme_to_ecef
 from jaxspline.geometry.orbit import MU_EARTH, orbit_position, tabulate_orbits
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 
-__all__ = ["SATELLITE_COLORS", "czml_document", "satellite_tracks", "write_czml"]
+__all__ = ["SATELLITE_COLORS", "satellite_tracks", "write_czml"]
 
 #: Colour of satellite k (``SATELLITE_COLORS[k % len]``), hex RGB: matplotlib's tab10
 #: without its green and grey, which mark imaged / not imaged targets.
@@ -125,7 +125,7 @@ def _period(r) -> float:
     return 2.0 * math.pi * math.sqrt(a**3 / MU_EARTH)
 
 
-def czml_document(result, *, step: float = 60.0):
+def _czml_document(result, *, step: float = 60.0):
     """The CZML document of a plan (a ``czml3.Document``; see the module docstring).
 
     Args:
@@ -135,68 +135,72 @@ def czml_document(result, *, step: float = 60.0):
       ``czml3.Document`` whose first packet (id ``"document"``) carries the clock;
       serialise with ``doc.to_json()``.
     """
-    from czml3 import CZML_VERSION, Document, Packet
-    from czml3.enums import (
-        ArcTypes,
-        ClockRanges,
-        ClockSteps,
-        HorizontalOrigins,
-        InterpolationAlgorithms,
-        LabelStyles,
-    )
-    from czml3.properties import (
-        Clock,
-        Color,
-        Label,
-        Path,
-        Point,
-        Polyline,
-        PolylineMaterial,
-        Position,
-        PositionList,
-        SolidColorMaterial,
-    )
-    from czml3.types import Cartesian2Value, TimeInterval
+    from czml3 import Document
+    from czml3.types import TimeInterval
 
     step = _check_step(step)
     sc = result.scenario
-    obs = result.observations
-    epoch, end = sc.at(0.0), sc.at(sc.duration)
-    horizon = TimeInterval(start=epoch, end=end)
+    horizon = TimeInterval(start=sc.at(0.0), end=sc.at(sc.duration))
+    packets = [_clock_packet(sc, horizon)]
+    packets += _satellite_packets(result, horizon, step)
+    packets += _target_packets(result)
+    packets += _observation_packets(result)
+    packets += _footprint_packets(result, horizon)
+    packets += _area_packets(result)
+    return Document(packets=packets)
 
-    def material(rgba):
-        return PolylineMaterial(solidColor=SolidColorMaterial(color=Color(rgba=rgba)))
 
-    packets = [
-        Packet(
-            id="document",
-            name=sc.name,
-            version=CZML_VERSION,
-            clock=Clock(
-                interval=horizon,
-                currentTime=epoch,
-                multiplier=CLOCK_MULTIPLIER,
-                range=ClockRanges.LOOP_STOP,
-                step=ClockSteps.SYSTEM_CLOCK_MULTIPLIER,
-            ),
-        )
-    ]
+def _line_material(rgba):
+    """A solid polyline material of colour ``rgba`` ([r, g, b, a], 0..255)."""
+    from czml3.properties import Color, PolylineMaterial, SolidColorMaterial
 
+    return PolylineMaterial(solidColor=SolidColorMaterial(color=Color(rgba=rgba)))
+
+
+def _clock_packet(sc, horizon):
+    """The document packet: the scenario's name and the clock over the horizon."""
+    from czml3 import CZML_VERSION, Packet
+    from czml3.enums import ClockRanges, ClockSteps
+    from czml3.properties import Clock
+
+    return Packet(
+        id="document",
+        name=sc.name,
+        version=CZML_VERSION,
+        clock=Clock(
+            interval=horizon,
+            currentTime=sc.at(0.0),
+            multiplier=CLOCK_MULTIPLIER,
+            range=ClockRanges.LOOP_STOP,
+            step=ClockSteps.SYSTEM_CLOCK_MULTIPLIER,
+        ),
+    )
+
+
+def _satellite_packets(result, horizon, step: float) -> list:
+    """One packet a satellite: sampled Earth-fixed positions, point, label, one-orbit path."""
+    from czml3 import Packet
+    from czml3.enums import HorizontalOrigins, InterpolationAlgorithms, LabelStyles
+    from czml3.properties import Color, Label, Path, Point, Position
+    from czml3.types import Cartesian2Value
+
+    sc, obs = result.scenario, result.observations
     t, r, ok = satellite_tracks(sc, step)
+    out = []
     for k, sat in enumerate(sc.satellites):
         rgba = _rgba(SATELLITE_COLORS[k % len(SATELLITE_COLORS)])
         good = ok[k]
         samples = np.column_stack([t[good], np.round(r[k, good], POSITION_DECIMALS)])
         half = 0.5 * _period(r[k, good])
         n_obs = int(np.sum(obs.sat == k))
-        packets.append(
+        out.append(
             Packet(
                 id=f"sat-{k}",
                 name=sat.name,
                 description=f"satellite {sat.name}: model {sat.model}, {n_obs} observations",
                 availability=horizon,
                 position=Position(
-                    epoch=epoch,
+                    epoch=sc.at(0.0),
                     referenceFrame="FIXED",
                     cartesian=samples.ravel().tolist(),
                     interpolationAlgorithm=InterpolationAlgorithms.LAGRANGE,
@@ -218,17 +222,25 @@ def czml_document(result, *, step: float = 60.0):
                     trailTime=half,
                     width=PATH_WIDTH,
                     resolution=step,
-                    material=material(rgba),
+                    material=_line_material(rgba),
                 ),
             )
         )
+    return out
 
-    tg = sc.targets
+
+def _target_packets(result) -> list:
+    """One packet a target: a point at its position, green when imaged, grey otherwise."""
+    from czml3 import Packet
+    from czml3.properties import Color, Point, Position
+
+    tg, obs = result.scenario.targets, result.observations
     imaged = np.zeros(len(tg), bool)
     imaged[np.asarray(obs.target, np.int64)] = True
+    out = []
     for i in range(len(tg)):
         kind = "strip" if int(tg.kind[i]) == 1 else "point"
-        packets.append(
+        out.append(
             Packet(
                 id=f"target-{i}",
                 name=str(tg.name[i]),
@@ -251,14 +263,24 @@ def czml_document(result, *, step: float = 60.0):
                 ),
             )
         )
+    return out
 
+
+def _observation_packets(result) -> list:
+    """One packet an observation: the satellite-to-target line during its imaging."""
+    from czml3 import Packet
+    from czml3.enums import ArcTypes
+    from czml3.properties import Polyline, PositionList
+    from czml3.types import TimeInterval
+
+    sc, obs = result.scenario, result.observations
+    out = []
     for i in range(len(obs)):
         k, j = int(obs.sat[i]), int(obs.target[i])
-        rgba = _rgba(SATELLITE_COLORS[k % len(SATELLITE_COLORS)])
-        packets.append(
+        out.append(
             Packet(
                 id=f"obs-{i}",
-                name=f"{sc.satellites[k].name} -> {tg.name[j]}",
+                name=f"{sc.satellites[k].name} -> {sc.targets.name[j]}",
                 description=(
                     f"imaging {float(obs.start[i]):.3f} s to {float(obs.end[i]):.3f} s, "
                     f"maneuver {float(obs.maneuver[i]):.3f} s, slack {float(obs.slack[i]):.3f} s"
@@ -270,13 +292,11 @@ def czml_document(result, *, step: float = 60.0):
                     ),
                     arcType=ArcTypes.NONE,
                     width=LINK_WIDTH,
-                    material=material(rgba),
+                    material=_line_material(_rgba(SATELLITE_COLORS[k % len(SATELLITE_COLORS)])),
                 ),
             )
         )
-    packets += _footprint_packets(result, horizon)
-    packets += _area_packets(result)
-    return Document(packets=packets)
+    return out
 
 
 def _degrees_list(lon, lat) -> list[float]:
@@ -287,20 +307,6 @@ def _degrees_list(lon, lat) -> list[float]:
 
 def _footprint_packets(result, horizon) -> list:
     """Sensor footprints of every observation and the taken strips of the areas."""
-    from czml3 import Packet
-    from czml3.properties import (
-        Color,
-        Ellipse,
-        Material,
-        Polygon,
-        Position,
-        PositionList,
-        SolidColorMaterial,
-    )
-    from czml3.types import IntervalValue, TimeInterval, TimeIntervalCollection
-
-    from jaxspline.readers.areas import footprint_lonlat
-
     sc = result.scenario
     obs = result.observations
     tg = sc.targets
@@ -308,71 +314,112 @@ def _footprint_packets(result, horizon) -> list:
     out = []
     for i in range(len(obs)):
         k, j = int(obs.sat[i]), int(obs.target[i])
-        sat = sc.satellites[k]
         color = SATELLITE_COLORS[k % len(SATELLITE_COLORS)]
-        t0, t1 = float(obs.start[i]), float(obs.end[i])
-        fill = Material(
-            solidColor=SolidColorMaterial(color=Color(rgba=_rgba(color, FOOTPRINT_ALPHA)))
-        )
-        name = f"footprint {sat.name} -> {tg.name[j]}"
         if int(tg.kind[j]) != 1:
-            out.append(
-                Packet(
-                    id=f"footprint-{i}",
-                    name=name,
-                    availability=TimeInterval(start=sc.at(t0), end=sc.at(t1)),
-                    position=Position(
-                        cartographicDegrees=[
-                            math.degrees(float(tg.lon[j])),
-                            math.degrees(float(tg.lat[j])),
-                            0.0,
-                        ]
-                    ),
-                    ellipse=Ellipse(
-                        semiMajorAxis=sat.swath / 2, semiMinorAxis=sat.swath / 2, material=fill
-                    ),
-                )
-            )
+            out.append(_disc_footprint(sc, obs, i, color))
             continue
-        frames = []
-        for f in range(FOOTPRINT_FRAMES):
-            a, b = (
-                t0 + (t1 - t0) * f / FOOTPRINT_FRAMES,
-                t0 + (t1 - t0) * (f + 1) / FOOTPRINT_FRAMES,
-            )
-            lon, lat = footprint_lonlat(tg, j, sat.swath, (f + 1) / FOOTPRINT_FRAMES)
-            frames.append(
-                IntervalValue(
-                    start=sc.at(a),
-                    end=sc.at(b),
-                    value=PositionList(cartographicDegrees=_degrees_list(lon, lat)),
-                )
-            )
-        out.append(
-            Packet(
-                id=f"footprint-{i}",
-                name=name,
-                availability=TimeInterval(start=sc.at(t0), end=sc.at(t1)),
-                polygon=Polygon(positions=TimeIntervalCollection(values=frames), material=fill),
+        out.append(_strip_footprint(sc, obs, i, color))
+        if j in in_area:
+            out.append(_taken_strip(sc, obs, i, color, horizon))
+    return out
+
+
+def _footprint_fill(color: str):
+    """The translucent fill of a footprint during imaging."""
+    from czml3.properties import Color, Material, SolidColorMaterial
+
+    rgba = _rgba(color, FOOTPRINT_ALPHA)
+    return Material(solidColor=SolidColorMaterial(color=Color(rgba=rgba)))
+
+
+def _disc_footprint(sc, obs, i: int, color: str):
+    """Observation i of a point target: a disc as wide as the swath during imaging."""
+    from czml3 import Packet
+    from czml3.properties import Ellipse, Position
+    from czml3.types import TimeInterval
+
+    k, j = int(obs.sat[i]), int(obs.target[i])
+    sat, tg = sc.satellites[k], sc.targets
+    t0, t1 = float(obs.start[i]), float(obs.end[i])
+    return Packet(
+        id=f"footprint-{i}",
+        name=f"footprint {sat.name} -> {tg.name[j]}",
+        availability=TimeInterval(start=sc.at(t0), end=sc.at(t1)),
+        position=Position(
+            cartographicDegrees=[
+                math.degrees(float(tg.lon[j])),
+                math.degrees(float(tg.lat[j])),
+                0.0,
+            ]
+        ),
+        ellipse=Ellipse(
+            semiMajorAxis=sat.swath / 2,
+            semiMinorAxis=sat.swath / 2,
+            material=_footprint_fill(color),
+        ),
+    )
+
+
+def _strip_footprint(sc, obs, i: int, color: str):
+    """Observation i of a strip: the ground imaged so far, growing in
+    :data:`FOOTPRINT_FRAMES` steps during imaging."""
+    from czml3 import Packet
+    from czml3.properties import Polygon, PositionList
+    from czml3.types import IntervalValue, TimeInterval, TimeIntervalCollection
+
+    from jaxspline.readers.areas import footprint_lonlat
+
+    k, j = int(obs.sat[i]), int(obs.target[i])
+    sat, tg = sc.satellites[k], sc.targets
+    t0, t1 = float(obs.start[i]), float(obs.end[i])
+    frames = []
+    for f in range(FOOTPRINT_FRAMES):
+        a, b = (
+            t0 + (t1 - t0) * f / FOOTPRINT_FRAMES,
+            t0 + (t1 - t0) * (f + 1) / FOOTPRINT_FRAMES,
+        )
+        lon, lat = footprint_lonlat(tg, j, sat.swath, (f + 1) / FOOTPRINT_FRAMES)
+        frames.append(
+            IntervalValue(
+                start=sc.at(a),
+                end=sc.at(b),
+                value=PositionList(cartographicDegrees=_degrees_list(lon, lat)),
             )
         )
-        if j in in_area:
-            lon, lat = footprint_lonlat(tg, j, sat.swath)
-            taken = _rgba(color, TAKEN_ALPHA)
-            out.append(
-                Packet(
-                    id=f"taken-{i}",
-                    name=f"strip {tg.name[j]} ({sat.name})",
-                    availability=TimeInterval(start=sc.at(t0), end=horizon.end),
-                    polygon=Polygon(
-                        positions=PositionList(cartographicDegrees=_degrees_list(lon, lat)),
-                        material=Material(solidColor=SolidColorMaterial(color=Color(rgba=taken))),
-                        outline=True,
-                        outlineColor=Color(rgba=_rgba(color)),
-                    ),
-                )
-            )
-    return out
+    return Packet(
+        id=f"footprint-{i}",
+        name=f"footprint {sat.name} -> {tg.name[j]}",
+        availability=TimeInterval(start=sc.at(t0), end=sc.at(t1)),
+        polygon=Polygon(
+            positions=TimeIntervalCollection(values=frames), material=_footprint_fill(color)
+        ),
+    )
+
+
+def _taken_strip(sc, obs, i: int, color: str, horizon):
+    """Observation i of an area's strip: its footprint from the start of imaging to the
+    end of the horizon, in the satellite's colour."""
+    from czml3 import Packet
+    from czml3.properties import Color, Material, Polygon, PositionList, SolidColorMaterial
+    from czml3.types import TimeInterval
+
+    from jaxspline.readers.areas import footprint_lonlat
+
+    k, j = int(obs.sat[i]), int(obs.target[i])
+    sat, tg = sc.satellites[k], sc.targets
+    lon, lat = footprint_lonlat(tg, j, sat.swath)
+    taken = _rgba(color, TAKEN_ALPHA)
+    return Packet(
+        id=f"taken-{i}",
+        name=f"strip {tg.name[j]} ({sat.name})",
+        availability=TimeInterval(start=sc.at(float(obs.start[i])), end=horizon.end),
+        polygon=Polygon(
+            positions=PositionList(cartographicDegrees=_degrees_list(lon, lat)),
+            material=Material(solidColor=SolidColorMaterial(color=Color(rgba=taken))),
+            outline=True,
+            outlineColor=Color(rgba=_rgba(color)),
+        ),
+    )
 
 
 def _polygon_parts(geometry: dict):
@@ -435,7 +482,7 @@ def _area_packets(result) -> list:
 
 
 def write_czml(result, path, *, force: bool = False, step: float = 60.0) -> Path:
-    """Write the CZML document of a plan to ``path`` atomically (see :func:`czml_document`).
+    """Write the CZML document of a plan to ``path`` atomically (packets: module docstring).
 
     Args:
       result: :class:`jaxspline.planner.result.PlanResult`.
@@ -446,5 +493,5 @@ def write_czml(result, path, *, force: bool = False, step: float = 60.0) -> Path
       ``Path(path)``.
     """
     refuse_overwrite(path, force)
-    text = czml_document(result, step=step).to_json(indent=1) + "\n"
+    text = _czml_document(result, step=step).to_json(indent=1) + "\n"
     return atomic_write_text(path, text, force=force)

@@ -42,9 +42,9 @@ import numpy as np
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 from jaxspline.planner.result import PlanResult
 from jaxspline.products import plan_html_columns as columns
-from jaxspline.search import BoundStatus
+from jaxspline.products.plan_html_header import header_html
 
-__all__ = ["HTML_FILE", "plan_document", "plan_page", "read_plan", "write_plan_html"]
+__all__ = ["HTML_FILE", "plan_document", "read_plan", "write_plan_html"]
 
 HTML_FILE = "plan.html"
 LAND_COLOR = "#efeae0"  # as the PNG map (jaxspline.products.plot_plan)
@@ -136,106 +136,24 @@ def plan_document(result) -> dict:
     return result.to_dict(extra={"view": view_data(result)})
 
 
-def _header(doc) -> str:
-    s, rep, st = doc["summary"], doc["report"], doc.get("stats") or {}
-    tim = doc.get("timings_s") or {}
-
-    def cell(key, value, spec=".6g"):
-        return f'<span class="v" data-key="{key}">{columns.fmt(value, spec)}</span>'
-
-    bound = s.get("bound") or 0.0
-    gap_pct = 100.0 * s["gap"] / bound if bound and s.get("gap") is not None else None
-    total = s.get("total_value") or 0.0
-    view = doc.get("view") or {}
-    when = ""
-    if "epoch_utc" in view:
-        when = (
-            f", {cell('duration_h', view['duration_s'] / 3600.0, '.4g')} h from "
-            f"{html.escape(columns.utc_text(view['epoch_utc'])[:16])} UTC"
-        )
-    valid = bool(s.get("valid"))
-    status = BoundStatus.CONVERGED if s.get("bound_converged") else "-"
-    low = rep.get("min_battery_wh")  # per powered satellite (older files: one number)
-    low = low if isinstance(low, dict) else ({} if low is None else {"all": low})
-    battery = ", ".join(
-        f"{html.escape(k)} {cell('min_battery_wh.' + k, v, '.5g')}" for k, v in low.items()
-    )
-    dropped = ", ".join(f"{n} {html.escape(k)}" for k, n in (rep.get("dropped") or {}).items())
-    lines = [
-        f"<b>scenario</b> {cell('scenario', s['scenario'])}: "
-        f"{cell('satellites', s['satellites'])} satellites, "
-        f"{cell('targets', s['targets'])} targets{when}",
-        f"<b>plan</b> {cell('observations', s['observations'])} observations, value "
-        f"{cell('value', s['value'])} of {cell('total_value', total)}"
-        + (f" ({100.0 * s['value'] / total:.1f} %)" if total else ""),
-        f"<b>bound</b> {cell('bound', s['bound'])} "
-        f"({html.escape(str(st.get('bound_status', status)))}); "
-        f"<b>gap</b> {cell('gap', s['gap'])}"
-        + (
-            f" ({cell('gap_percent', gap_pct, '.3g')} % of the bound)"
-            if gap_pct is not None
-            else ""
-        ),
-        f'<b>check</b> <span class="{"ok" if valid else "bad"}" data-key="valid">'
-        f"{'valid' if valid else 'INVALID'}</span>: {cell('checked', rep.get('checked'))} checked, "
-        f"{cell('violations', len(rep.get('violations') or []))} violations"
-        + (f", dropped {dropped}" if dropped else "")
-        + f"; min slack {cell('min_slack_s', rep.get('min_slack_s'), '.4g')} s"
-        + (f"; min battery {battery} Wh" if battery else ""),
-    ]
-    j = rep.get("joins")
-    if j:
-        lines.append(
-            f"<b>joins</b> {cell('joins', j.get('joins'))} degree-7 joins, "
-            f"{cell('joins_retimed', j.get('retimed'))} re-timed, "
-            f"{cell('joins_rejected', j.get('rejected'))} rejected; peak ratios rate "
-            f"{cell('max_rate_ratio', j.get('max_rate_ratio'), '.3f')}, accel "
-            f"{cell('max_accel_ratio', j.get('max_accel_ratio'), '.3f')}, jerk "
-            f"{cell('max_jerk_ratio', j.get('max_jerk_ratio'), '.3f')}"
-        )
-    else:
-        lines.append("<b>joins</b> not checked (planned with --no-aem)")
-    for a in rep.get("areas") or []:
-        lines.append(
-            f"<b>area</b> {html.escape(str(a.get('area')))}: "
-            f"{a.get('strips_planned')}/{a.get('strips')} strips planned, "
-            f"{columns.fmt(100.0 * (a.get('covered_fraction') or 0.0), '.1f')} % covered"
-        )
-    counts = [
-        (k, st[k])
-        for k in ("windows", "options", "near_pairs", "lagrangian_iterations", "lns_iterations")
-        if isinstance(st.get(k), int | float)
-    ]
-    if counts:
-        lines.append(
-            "<b>search</b> " + ", ".join(f"{k.replace('_', ' ')} {cell(k, v)}" for k, v in counts)
-        )
-    if tim:
-        lines.append(
-            "<b>wall time [s]</b> "
-            + ", ".join(f"{html.escape(k)} {cell('t_' + k, v, '.3g')}" for k, v in tim.items())
-            + f"; total {cell('t_total', sum(v for v in tim.values() if v), '.3g')}"
-        )
-    style = (
-        "<style>.hdr{font:13px/1.5 sans-serif} .hdr .v{font-weight:600}"
-        " .hdr .ok{color:#2ca02c;font-weight:700} .hdr .bad{color:#d62728;font-weight:700}"
-        " .hdr h2{margin:0 0 4px 0;font-size:18px}</style>"
-    )
-    title = f"<h2>jaxspline plan: {html.escape(str(s['scenario']))}</h2>"
-    return style + '<div class="hdr">' + title + "<br>".join(lines) + "</div>"
-
-
 def _map(doc, sats, obs):
-    from bokeh.models import (
-        BooleanFilter,
-        CDSView,
-        ColumnDataSource,
-        HoverTool,
-        Range1d,
-    )
+    """The map (module docstring) and its renderers filtered by satellite and time."""
+    view = doc.get("view") or {}
+    fig = _world_figure()
+    _add_areas(fig, doc)
+    _add_strips(fig, view.get("strips") or [])
+    filt = _add_tracks_and_footprints(fig, doc, sats, obs)
+    if view.get("targets"):
+        _add_free_targets(fig, view["targets"], obs)
+    filt.append(_add_imaged_targets(fig, obs))
+    return fig, filt
+
+
+def _world_figure():
+    """The empty world map (equirectangular, pan / zoom) with land and coastlines."""
+    from bokeh.models import Range1d
     from bokeh.plotting import figure
 
-    view = doc.get("view") or {}
     fig = figure(
         name="map",
         width=MAP_WIDTH,
@@ -254,42 +172,60 @@ def _map(doc, sats, obs):
     land_xs, land_ys, coast_xs, coast_ys = columns.coast()
     fig.multi_polygons(xs=land_xs, ys=land_ys, fill_color=LAND_COLOR, line_color=None, name="land")
     fig.multi_line(xs=coast_xs, ys=coast_ys, line_color=COAST_COLOR, line_width=0.6, name="coast")
+    return fig
 
-    def filtered(cols):
-        src = ColumnDataSource(cols)
-        return {"source": src, "view": CDSView(filter=BooleanFilter([True] * len(cols["sat"])))}
 
-    hover_renderers = []
+def _filtered(cols) -> dict:
+    """Glyph arguments of a source whose rows the page's filter shows or hides."""
+    from bokeh.models import BooleanFilter, CDSView, ColumnDataSource
+
+    src = ColumnDataSource(cols)
+    return {"source": src, "view": CDSView(filter=BooleanFilter([True] * len(cols["sat"])))}
+
+
+def _add_areas(fig, doc) -> None:
+    """The area polygons, with their priority and covered fraction on hover."""
+    from bokeh.models import ColumnDataSource, HoverTool
+
     areas = columns.area_columns(doc)
-    if areas["name"]:
-        ra = fig.multi_polygons(
-            xs="xs",
-            ys="ys",
-            source=ColumnDataSource(areas),
-            fill_color=AREA_COLOR,
-            fill_alpha=0.25,
-            line_color=AREA_COLOR,
-            line_width=1.5,
-            name="areas",
+    if not areas["name"]:
+        return
+    ra = fig.multi_polygons(
+        xs="xs",
+        ys="ys",
+        source=ColumnDataSource(areas),
+        fill_color=AREA_COLOR,
+        fill_alpha=0.25,
+        line_color=AREA_COLOR,
+        line_width=1.5,
+        name="areas",
+    )
+    fig.add_tools(
+        HoverTool(
+            renderers=[ra],
+            tooltips=[("area", "@name"), ("priority", "@priority"), ("covered", "@covered")],
         )
-        fig.add_tools(
-            HoverTool(
-                renderers=[ra],
-                tooltips=[("area", "@name"), ("priority", "@priority"), ("covered", "@covered")],
-            )
-        )
-    strips = view.get("strips") or []
-    if strips:
-        fig.multi_line(
-            xs=[np.asarray(s["lon_deg"], np.float64) for s in strips],
-            ys=[np.asarray(s["lat_deg"], np.float64) for s in strips],
-            line_color=STRIP_COLOR,
-            line_width=1.5,
-            line_alpha=0.7,
-            name="strips",
-        )
-    tracks = columns.track_columns(doc, sats)
+    )
+
+
+def _add_strips(fig, strips) -> None:
+    """The centrelines of the strip targets."""
+    if not strips:
+        return
+    fig.multi_line(
+        xs=[np.asarray(s["lon_deg"], np.float64) for s in strips],
+        ys=[np.asarray(s["lat_deg"], np.float64) for s in strips],
+        line_color=STRIP_COLOR,
+        line_width=1.5,
+        line_alpha=0.7,
+        name="strips",
+    )
+
+
+def _add_tracks_and_footprints(fig, doc, sats, obs) -> list:
+    """The ground tracks and the observations' footprints (filtered renderers)."""
     filt = []
+    tracks = columns.track_columns(doc, sats)
     if tracks["sat"]:
         rt = fig.multi_line(
             xs="xs",
@@ -298,7 +234,7 @@ def _map(doc, sats, obs):
             line_width=1.2,
             line_alpha=0.8,
             name="tracks",
-            **filtered(tracks),
+            **_filtered(tracks),
         )
         filt.append(rt)
     fp = columns.footprint_columns(doc, obs)
@@ -311,41 +247,52 @@ def _map(doc, sats, obs):
             line_color="color",
             line_width=1.0,
             name="footprints",
-            **filtered(fp),
+            **_filtered(fp),
         )
         filt.append(rf)
-    tg = view.get("targets")
-    if tg:
-        imaged = set(obs["target"])
-        free = [i for i, n in enumerate(tg["name"]) if n not in imaged]
-        rn = fig.scatter(
-            x="x",
-            y="y",
-            source=ColumnDataSource(
-                {
-                    "x": np.asarray([tg["lon_deg"][i] for i in free], np.float64),
-                    "y": np.asarray([tg["lat_deg"][i] for i in free], np.float64),
-                    "target": [tg["name"][i] for i in free],
-                    "kind": [tg["kind"][i] for i in free],
-                    "priority": np.asarray([tg["value"][i] for i in free], np.float64),
-                }
-            ),
-            size=4,
-            color=NOT_IMAGED_COLOR,
-            alpha=0.8,
-            name="targets_not_imaged",
+    return filt
+
+
+def _add_free_targets(fig, tg, obs) -> None:
+    """The targets no observation images (grey), with their name and priority on hover."""
+    from bokeh.models import ColumnDataSource, HoverTool
+
+    imaged = set(obs["target"])
+    free = [i for i, n in enumerate(tg["name"]) if n not in imaged]
+    rn = fig.scatter(
+        x="x",
+        y="y",
+        source=ColumnDataSource(
+            {
+                "x": np.asarray([tg["lon_deg"][i] for i in free], np.float64),
+                "y": np.asarray([tg["lat_deg"][i] for i in free], np.float64),
+                "target": [tg["name"][i] for i in free],
+                "kind": [tg["kind"][i] for i in free],
+                "priority": np.asarray([tg["value"][i] for i in free], np.float64),
+            }
+        ),
+        size=4,
+        color=NOT_IMAGED_COLOR,
+        alpha=0.8,
+        name="targets_not_imaged",
+    )
+    fig.add_tools(
+        HoverTool(
+            renderers=[rn],
+            tooltips=[
+                ("target", "@target (@kind)"),
+                ("priority", "@priority{0.[000]}"),
+                ("imaged", "no"),
+            ],
         )
-        hover_renderers.append(rn)
-        fig.add_tools(
-            HoverTool(
-                renderers=[rn],
-                tooltips=[
-                    ("target", "@target (@kind)"),
-                    ("priority", "@priority{0.[000]}"),
-                    ("imaged", "no"),
-                ],
-            )
-        )
+    )
+
+
+def _add_imaged_targets(fig, obs):
+    """One glyph per observation at its target in the satellite's colour (filtered),
+    who images it when on hover. Returns the renderer."""
+    from bokeh.models import HoverTool
+
     ri = fig.scatter(
         x="x",
         y="y",
@@ -354,9 +301,8 @@ def _map(doc, sats, obs):
         line_color="black",
         line_width=0.6,
         name="targets_imaged",
-        **filtered(obs),
+        **_filtered(obs),
     )
-    filt.append(ri)
     fig.add_tools(
         HoverTool(
             renderers=[ri],
@@ -372,25 +318,41 @@ def _map(doc, sats, obs):
             ],
         )
     )
-    return fig, filt
+    return ri
 
 
 def _timeline(doc, sats, obs):
-    from bokeh.models import ColumnDataSource, Div, FactorRange, HoverTool, Range1d
-    from bokeh.plotting import figure
+    """The Gantt chart and the battery figure below it, on one time axis.
+
+    Returns ``(gantt, battery figure or note, x_range, battery lines)``.
+    """
+    from bokeh.models import Div, Range1d
 
     view = doc.get("view") or {}
     epoch = columns.epoch_ms(doc)
     duration = view.get("duration_s") or max([o["end_s"] for o in doc["observations"]] or [1.0])
     end = epoch + columns.MS * duration
     x_range = Range1d(epoch, end, bounds=(epoch, end), min_interval=10.0 * columns.MS)
-    names = [s["name"] for s in sats]
+    gantt = _gantt(sats, obs, x_range)
+    bat = view.get("battery") or {}
+    if not bat:
+        note = "<i>battery: no satellite of this plan has a power model</i>"
+        return gantt, Div(text=note, name="battery"), x_range, []
+    batt, lines = _battery(bat, sats, epoch, x_range)
+    return gantt, batt, x_range, lines
+
+
+def _gantt(sats, obs, x_range):
+    """Per-satellite rows of imaging bars and the maneuvers before them."""
+    from bokeh.models import ColumnDataSource, FactorRange, HoverTool
+    from bokeh.plotting import figure
+
     gantt = figure(
         name="timeline",
         width=MAP_WIDTH + CONTROLS_WIDTH,
         height=70 + TIMELINE_ROW_PX * max(len(sats), 1),
         x_range=x_range,
-        y_range=FactorRange(*reversed(names)),
+        y_range=FactorRange(*reversed([s["name"] for s in sats])),
         x_axis_type="datetime",
         tools="xpan,xwheel_zoom,xbox_zoom,reset,save",
         active_scroll="xwheel_zoom",
@@ -430,11 +392,15 @@ def _timeline(doc, sats, obs):
             ],
         )
     )
-    bat = view.get("battery") or {}
-    if not bat:
-        note = "<i>battery: no satellite of this plan has a power model</i>"
-        return gantt, Div(text=note, name="battery"), x_range, []
-    index = {n: k for k, n in enumerate(names)}
+    return gantt
+
+
+def _battery(bat, sats, epoch, x_range):
+    """The battery level [Wh] of every powered satellite: ``(figure, lines)``."""
+    from bokeh.models import HoverTool
+    from bokeh.plotting import figure
+
+    index = {s["name"]: k for k, s in enumerate(sats)}
     batt = figure(
         name="battery",
         width=MAP_WIDTH + CONTROLS_WIDTH,
@@ -473,10 +439,10 @@ def _timeline(doc, sats, obs):
             mode="vline",
         )
     )
-    return gantt, batt, x_range, lines
+    return batt, lines
 
 
-def plan_page(doc):
+def _plan_page(doc):
     """The Bokeh layout of a plan document (module docstring).
 
     Args:
@@ -529,7 +495,7 @@ def plan_page(doc):
         width=CONTROLS_WIDTH,
     )
     controls = column(key, boxes, show_all, width=CONTROLS_WIDTH)
-    header = Div(text=_header(doc), width=MAP_WIDTH + CONTROLS_WIDTH, name="header")
+    header = Div(text=header_html(doc), width=MAP_WIDTH + CONTROLS_WIDTH, name="header")
     status.text = (
         f"map shows all {len(sats)} satellites over the whole horizon "
         "(zoom the timeline or uncheck satellites to filter)"
@@ -555,5 +521,5 @@ def write_plan_html(doc, path, *, force: bool = False) -> Path:
     if isinstance(doc, PlanResult):
         doc = plan_document(doc)
     title = f"jaxspline plan: {doc['summary'].get('scenario', '')}"
-    text = file_html(plan_page(doc), INLINE, title=title)
+    text = file_html(_plan_page(doc), INLINE, title=title)
     return atomic_write_text(path, text, force=force)

@@ -25,7 +25,6 @@ __all__ = [
     "fmt",
     "footprint_columns",
     "observation_columns",
-    "parse_utc",
     "satellites",
     "track_columns",
     "utc_text",
@@ -68,7 +67,7 @@ def coast():
     return land_xs, land_ys, [ln[:, 0] for ln in lines], [ln[:, 1] for ln in lines]
 
 
-def parse_utc(text: str) -> _dt.datetime:
+def _parse_utc(text: str) -> _dt.datetime:
     return _dt.datetime.strptime(text, "%Y-%m-%dT%H:%M:%S.%fZ").replace(tzinfo=_dt.UTC)
 
 
@@ -76,10 +75,10 @@ def epoch_ms(doc) -> float:
     """Scenario epoch [ms since 1970] (Bokeh datetime) from the view or the first row."""
     view = doc.get("view") or {}
     if "epoch_utc" in view:
-        return parse_utc(view["epoch_utc"]).timestamp() * MS
+        return _parse_utc(view["epoch_utc"]).timestamp() * MS
     rows = doc["observations"]
     if rows:
-        return (parse_utc(rows[0]["start_utc"]).timestamp() - rows[0]["start_s"]) * MS
+        return (_parse_utc(rows[0]["start_utc"]).timestamp() - rows[0]["start_s"]) * MS
     return 0.0
 
 

@@ -7,7 +7,7 @@ is rebuilt from ``plan.json`` alone, without the scenario or a re-plan
 
 * ``satellites``: name, maneuver model, colour (:data:`jaxspline.products.czml.SATELLITE_COLORS`)
   and swath of each satellite;
-* ``tracks``: sub-satellite points every :data:`TRACK_STEP_S` seconds
+* ``tracks``: sub-satellite points every :data:`_TRACK_STEP_S` seconds
   (:func:`jaxspline.products.czml.satellite_tracks`), ``null`` where the orbit table is unusable;
 * ``targets``: name, kind, position and priority of every target;
 * ``strips``: the centreline of every strip target;
@@ -47,10 +47,10 @@ from jaxspline.products.czml import SATELLITE_COLORS, satellite_tracks
 from jaxspline.readers.areas import FOOTPRINT_STEP_M, footprint_lonlat
 from jaxspline.readers.mission import STRIP
 
-__all__ = ["TRACK_STEP_S", "VIEW_VERSION", "disc", "view_data"]
+__all__ = ["disc", "view_data"]
 
-VIEW_VERSION = 1  # bumped when the layout of the "view" section changes
-TRACK_STEP_S = 30.0  # ground-track sample step [s]
+_VIEW_VERSION = 1  # bumped when the layout of the "view" section changes
+_TRACK_STEP_S = 30.0  # ground-track sample step [s]
 DISC_SIDES = 24  # polygon sides of a point target's footprint disc
 DEG_DECIMALS = 4  # longitudes / latitudes rounded to ~10 m
 TIME_DECIMALS = 3  # seconds rounded to milliseconds
@@ -131,10 +131,10 @@ def _off_nadir_deg(sc, obs) -> np.ndarray:
 
 
 def _tracks(sc) -> dict:
-    t, r, ok = satellite_tracks(sc, TRACK_STEP_S)
+    t, r, ok = satellite_tracks(sc, _TRACK_STEP_S)
     lon, lat = _lonlat(r)
     return {
-        "step_s": TRACK_STEP_S,
+        "step_s": _TRACK_STEP_S,
         "t_s": _round(t, TIME_DECIMALS),
         "lon_deg": [_round(np.where(ok[k], lon[k], np.nan), DEG_DECIMALS) for k in range(len(r))],
         "lat_deg": [_round(np.where(ok[k], lat[k], np.nan), DEG_DECIMALS) for k in range(len(r))],
@@ -187,7 +187,7 @@ def view_data(result) -> dict:
     tg = sc.targets
     lon = _wrap_deg(np.degrees(tg.lon))
     return {
-        "version": VIEW_VERSION,
+        "version": _VIEW_VERSION,
         "epoch_utc": sc.epoch.strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
         "duration_s": float(sc.duration),
         "satellites": [

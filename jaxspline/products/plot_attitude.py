@@ -21,7 +21,7 @@ from jaxspline.products.attitude_history import PHASES, plan_scene
 from jaxspline.products.czml import SATELLITE_COLORS
 from jaxspline.products.plot import pyplot, save_figure
 
-__all__ = ["flown_ratios", "plot_attitude_profile"]
+__all__ = ["plot_attitude_profile"]
 
 SECONDS_PER_HOUR = 3600.0
 LAW_COLOR = "0.55"
@@ -30,7 +30,7 @@ WIDTH_IN = 13.0
 _JOIN = PHASES.index("join")
 
 
-def flown_ratios(scene, k: int, sat, hist) -> np.ndarray:
+def _flown_ratios(scene, k: int, sat, hist) -> np.ndarray:
     """Checked rate, acceleration and jerk of a history as fractions of the limits.
 
     NaN in the jerk column where the model has no jerk limit (see module docstring).
@@ -80,7 +80,7 @@ def plot_attitude_profile(result, attitude, path) -> None:
     titles = ("rate / limit", "acceleration / limit", "jerk / limit (or |ε'| deg/s³)")
     for k, s in enumerate(sats):
         h = attitude.histories[s.name]
-        r = flown_ratios(scene, k, s, h)
+        r = _flown_ratios(scene, k, s, h)
         th = h.t / SECONDS_PER_HOUR
         join = h.phase == _JOIN
         color = SATELLITE_COLORS[k % len(SATELLITE_COLORS)]

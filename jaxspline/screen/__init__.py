@@ -13,11 +13,9 @@ from jaxspline.screen.models import Flexible as Flexible
 from jaxspline.screen.models import ManeuverModel as ManeuverModel
 from jaxspline.screen.models import PerChannel as PerChannel
 from jaxspline.screen.models import RestToRest as RestToRest
-from jaxspline.screen.models import flex_tau as flex_tau
 from jaxspline.screen.models import maneuver_model as maneuver_model
 from jaxspline.screen.models import model_names as model_names
 from jaxspline.screen.models import register_model as register_model
-from jaxspline.screen.options import OptionInfo as OptionInfo
 from jaxspline.screen.options import RouteModel as RouteModel
 from jaxspline.screen.options import RouteOptions as RouteOptions
 from jaxspline.screen.options import build_route_options as build_route_options

@@ -16,6 +16,7 @@ Units: radians, seconds.
 from __future__ import annotations
 
 import functools
+from typing import NamedTuple
 
 import jax
 import jax.numpy as jnp
@@ -243,7 +244,47 @@ def fused_chunks(
     if total == 0:
         return 0, dtype, iter(())
     mesh = device_mesh()
-    ndev = mesh.devices.size
+    rt = _row_table(runs, chunk_size, mesh.devices.size)
+    o = runs.order
+    tab, pair, params, put = _device_table(options, model, dtype, o, mesh)
+    program = _fused_program(pair, rt.rows, rt.width, mesh, np.dtype(dtype))
+    if top_k is not None:
+        topk = _topk_program(rt.rows, rt.width, min(int(top_k), rt.width), top_k_by)
+        value = put(np.asarray(options.value, np.float64)[o])
+
+        def compact(order, rk, rd, *out):
+            return topk(order, value, tab[1], rk, rd, *out)
+    else:
+        compact = _compact_program(rt.rows, rt.width, bool(feasible_only))
+
+    cand = NamedSharding(mesh, P("cand"))
+
+    def screened(rows):  # one chunk's rows: screened, then compacted, on the devices
+        rk, rd, rn = (jax.device_put(a, cand) for a in rows)
+        return compact(tab[-1], rk, rd, *program(tab, params, rk, rd, rn))
+
+    chunks = _chunks(rt, screened, functools.partial(_rows_of, o, top_k), total, progress, pi, pc)
+    if top_k is not None:
+        score = top_k_score(options, top_k_by)
+        return total, dtype, top_k_merge(chunks, int(top_k), score)
+    return total, dtype, chunks
+
+
+class _RowTable(NamedTuple):
+    """The candidate layout: a source's run of destinations cut into rows of ``width``
+    slots, padded to ``nchunks * rows`` rows (host numpy, int32 or int64)."""
+
+    row_k: np.ndarray  # [nchunks * rows] source position in the time-sorted table
+    row_d: np.ndarray  # first destination position of the row
+    row_n: np.ndarray  # live slots of the row (0 for padding)
+    width: int  # slots per row
+    rows: int  # rows per chunk
+    nchunks: int
+    per_chunk: np.ndarray  # [nchunks] candidate slots per chunk (progress)
+
+
+def _row_table(runs, chunk_size: int, ndev: int) -> _RowTable:
+    """The row table of the candidate runs (:func:`candidate_runs`) for ``ndev`` devices."""
     width = _row_width(runs.counts, chunk_size)
     nrows = -(-runs.counts // width)
     row_k, first = ragged_positions(nrows)
@@ -254,77 +295,75 @@ def fused_chunks(
     nchunks = -(-row_k.size // rows)
     pad = nchunks * rows - row_k.size
     itype = np.int32 if row_k.size < 2**31 and runs.order.size < 2**31 else np.int64
+    row_k, row_d, row_n = (
+        np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype) for a in (row_k, row_d, row_n)
+    )
+    per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
+    return _RowTable(row_k, row_d, row_n, width, rows, nchunks, per_chunk)
+
+
+def _device_table(options, model, dtype, order, mesh):
+    """The time-sorted option table on the devices, replicated: ``(tab, pair, params,
+    put)`` with ``tab = (model fields, t_end, t_start, route, order)`` and ``put`` the
+    function that sends one more column.
+
+    The option axis is padded to a power of two (at least ``_MIN_TABLE``): programs are
+    reused across tables of similar size (the planner screens one table per satellite).
+    """
     rep = NamedSharding(mesh, P())
-    cand = NamedSharding(mesh, P("cand"))
+    nv_pad = padded_size(max(order.size, _MIN_TABLE))
 
     def put(a, dt=None):
-        # the option axis is padded to a power of two: programs are reused across
-        # tables of similar size (the planner screens one table per satellite)
         a = np.asarray(a)
         a = np.pad(a, [(0, 0)] * (a.ndim - 1) + [(0, nv_pad - a.shape[-1])])
         return jax.device_put(jnp.asarray(a, dt), rep)
 
-    row_k, row_d, row_n = (
-        np.concatenate([a, np.zeros(pad, a.dtype)]).astype(itype) for a in (row_k, row_d, row_n)
-    )
-    o = runs.order
-    nv_pad = padded_size(max(o.size, _MIN_TABLE))
-    pair, fields, params = model_arrays(model, options, dtype, o)
+    pair, fields, params = model_arrays(model, options, dtype, order)
     tab = (
         tuple(put(a) for a in fields),
-        put(np.asarray(options.t_end, np.float64)[o]),
-        put(np.asarray(options.t_start, np.float64)[o]),
-        put(np.asarray(options.route)[o]),
-        put(o.astype(np.int64)),
+        put(np.asarray(options.t_end, np.float64)[order]),
+        put(np.asarray(options.t_start, np.float64)[order]),
+        put(np.asarray(options.route)[order]),
+        put(order.astype(np.int64)),
     )
     params = tuple(jax.device_put(jnp.asarray(a), rep) for a in params)
-    program = _fused_program(pair, rows, width, mesh, np.dtype(dtype))
+    return tab, pair, params, put
+
+
+def _rows_of(order, top_k, p):
+    """One compacted chunk back on the host: a :class:`Transitions`, or with ``top_k``
+    ``(src position, columns, n_screened)`` of the feasible picks of the row top-k's."""
     if top_k is not None:
-        topk = _topk_program(rows, width, min(int(top_k), width), top_k_by)
-        value = put(np.asarray(options.value, np.float64)[o])
+        kept, pos, *cols = (np.asarray(x) for x in p)
+        ok = cols[2].reshape(-1)
+        pos = pos.reshape(-1)[ok]
+        cols = [x.reshape(-1)[ok] for x in cols]
+        return pos, [order[pos], *cols], int(kept)
+    kept, count, *cols = p
+    m = int(count)
+    return Transitions(*(np.asarray(x)[:m] for x in cols), n_screened=int(kept))
 
-        def compact(order, rk, rd, *out):
-            return topk(order, value, tab[1], rk, rd, *out)
-    else:
-        compact = _compact_program(rows, width, bool(feasible_only))
-    per_chunk = np.add.reduceat(np.asarray(row_n), np.arange(0, nchunks * rows, rows))
 
-    def rows_of(p):
-        if top_k is not None:  # (src position, columns, n): feasible rows of the row top-k's
-            kept, pos, *cols = (np.asarray(x) for x in p)
-            ok = cols[2].reshape(-1)
-            pos = pos.reshape(-1)[ok]
-            cols = [x.reshape(-1)[ok] for x in cols]
-            return pos, [o[pos], *cols], int(kept)
-        kept, count, *cols = p
-        m = int(count)
-        return Transitions(*(np.asarray(x)[:m] for x in cols), n_screened=int(kept))
+def _chunks(rt: _RowTable, screened, rows_of, total, progress, pi, pc):
+    """This process's chunks in order, with one chunk in flight on the devices: chunk k
+    is dispatched (``screened``) before chunk k - 1 comes back (``rows_of``)."""
+    pending = None
+    from tqdm.auto import tqdm
 
-    def chunks():
-        pending = None
-        from tqdm.auto import tqdm
-
-        bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
-        try:
-            for k in range(nchunks):
-                if k % pc == pi:
-                    sl = slice(k * rows, (k + 1) * rows)  # the chunk's rows: a few kB
-                    rk, rd, rn = (jax.device_put(a[sl], cand) for a in (row_k, row_d, row_n))
-                    out = program(tab, params, rk, rd, rn)
-                    nxt = compact(tab[-1], rk, rd, *out)
-                    if pending is not None:
-                        yield rows_of(pending)
-                    pending = nxt
-                bar.update(int(per_chunk[k]))
-            if pending is not None:
-                yield rows_of(pending)
-        finally:
-            bar.close()
-
-    if top_k is not None:
-        score = top_k_score(options, top_k_by)
-        return total, dtype, top_k_merge(chunks(), int(top_k), score)
-    return total, dtype, chunks()
+    bar = tqdm(total=total, unit="cand", disable=not progress, desc="screen")
+    try:
+        for k in range(rt.nchunks):
+            if k % pc == pi:
+                sl = slice(k * rt.rows, (k + 1) * rt.rows)  # the chunk's rows: a few kB
+                nxt = screened((rt.row_k[sl], rt.row_d[sl], rt.row_n[sl]))
+                if pending is not None:
+                    yield rows_of(pending)
+                pending = nxt
+            bar.update(int(rt.per_chunk[k]))
+        if pending is not None:
+            yield rows_of(pending)
+    finally:
+        bar.close()
 
 
 def screen_transitions_fused(

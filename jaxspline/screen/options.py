@@ -17,13 +17,12 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import gmst, sun_direction
+from jaxspline.geometry.frames import SECONDS_PER_DAY, gmst, sun_direction
 from jaxspline.geometry.routes import STRIP, RouteSet, sample_aim_states
 from jaxspline.kernels._validate import check_positive
 from jaxspline.kernels.limits import AxisLimits
 
 __all__ = [
-    "OptionInfo",
     "RouteModel",
     "RouteOptions",
     "build_route_options",
@@ -228,18 +227,57 @@ def build_route_options(
 
     Returns:
       (RouteOptions with N options, OptionInfo). The options keep ``scan_ok == False``
-      rows; the caller drops them before screening.
+      rows; the caller drops them before screening. OptionInfo, a NamedTuple per
+      option: ``speed`` [m/s], ``t0`` [s], ``peak_rate`` [N, C] [rad/s], ``peak_accel``
+      [N, C] [rad/s^2], ``max_off_nadir`` [rad] and ``sun_elevation`` [rad].
     """
     if n_t0 < 1 or samples < 2:
         raise ValueError(f"n_t0 must be >= 1 and samples >= 2, got n_t0={n_t0}, samples={samples}")
     speeds = np.atleast_1d(np.asarray(scan_speeds, np.float64))
     check_positive("scan_speeds", speeds)
+    grid = _option_grid(routes, n_t0, speeds)
+    if grid is None:
+        return _no_options()
+    route, t0, speed = grid
+    scan = _sample_scans(routes, route, t0, speed, samples, chunk, progress)
     rate_lim = np.broadcast_to(np.asarray(limits.rate, np.float64), (3,))
     acc_lim = np.broadcast_to(np.asarray(limits.accel, np.float64), (3,))
+    peak_rate = np.abs(scan.rate).max(1)
+    peak_acc = np.abs(scan.accel).max(1)
+    max_off = scan.off_nadir.max(1)
+    ok = (
+        (peak_rate <= rate_lim).all(-1)
+        & (peak_acc <= acc_lim).all(-1)
+        & (max_off <= max_off_nadir + 1e-9)
+        & np.isfinite(scan.angle).all((1, 2))
+    )
+    sun_el = np.full(route.size, np.nan)
+    if epoch_jd is not None:
+        sun_el = _sun_elevation(routes, route, t0, epoch_jd)
+        if sun_elevation_min is not None:
+            ok &= sun_el >= sun_elevation_min
+    dtype = jnp.result_type(float)
+    opts = RouteOptions(
+        route=jnp.asarray(route),
+        t_start=jnp.asarray(t0, dtype),
+        t_end=jnp.asarray(t0 + scan.duration, dtype),
+        start_angle=jnp.asarray(scan.angle[:, 0], dtype),
+        start_rate=jnp.asarray(scan.rate[:, 0], dtype),
+        end_angle=jnp.asarray(scan.angle[:, -1], dtype),
+        end_rate=jnp.asarray(scan.rate[:, -1], dtype),
+        value=jnp.asarray(np.asarray(routes.value)[route], dtype),
+        scan_ok=jnp.asarray(ok),
+    )
+    info = OptionInfo(speed, t0, peak_rate, peak_acc, max_off, sun_el)
+    return opts, info
+
+
+def _option_grid(routes: RouteSet, n_t0: int, speeds):
+    """(route, t0, speed) [N] of every option: ``n_t0`` starts spread over each non-empty
+    window (one when the window is a point) times every speed for strips (0 for points);
+    None when no route has a window."""
     kind = np.asarray(routes.kind)
     t0_min, t0_max = np.asarray(routes.t0_min), np.asarray(routes.t0_max)
-    length, duration = np.asarray(routes.length), np.asarray(routes.duration)
-    params = np.asarray(routes.params)
     rows_r, rows_t0, rows_v = [], [], []
     for r in np.nonzero(t0_min <= t0_max)[0]:
         t0s = (
@@ -250,21 +288,39 @@ def build_route_options(
         rows_r.append(rr.ravel())
         rows_t0.append(tt.ravel())
         rows_v.append(vv.ravel())
-    dtype = jnp.result_type(float)
-    c = 3
     if not rows_r:
-        empty = np.zeros((0, c))
-        z = np.zeros(0)
-        opts = RouteOptions(
-            *(jnp.asarray(x) for x in (z.astype(np.int64), z, z, empty, empty, empty, empty, z)),
-            scan_ok=jnp.zeros(0, bool),
-        )
-        return opts, OptionInfo(z, z, empty, empty, z, z)
-    route = np.concatenate(rows_r)
-    t0 = np.concatenate(rows_t0)
-    speed = np.concatenate(rows_v)
-    n = route.size
-    p = params[route].copy()
+        return None
+    return np.concatenate(rows_r), np.concatenate(rows_t0), np.concatenate(rows_v)
+
+
+def _no_options():
+    """The empty option table and side data (no route has a window)."""
+    empty = np.zeros((0, 3))
+    z = np.zeros(0)
+    opts = RouteOptions(
+        *(jnp.asarray(x) for x in (z.astype(np.int64), z, z, empty, empty, empty, empty, z)),
+        scan_ok=jnp.zeros(0, bool),
+    )
+    return opts, OptionInfo(z, z, empty, empty, z, z)
+
+
+class _Scans(NamedTuple):
+    """The sampled scans of N options (numpy): duration [N] [s]; angle, rate, accel
+    [N, samples, 3] [rad, rad/s, rad/s^2]; off_nadir [N, samples] [rad]."""
+
+    duration: np.ndarray
+    angle: np.ndarray
+    rate: np.ndarray
+    accel: np.ndarray
+    off_nadir: np.ndarray
+
+
+def _sample_scans(routes: RouteSet, route, t0, speed, samples, chunk, progress) -> _Scans:
+    """The exact pointing law of every option at ``samples`` instants of its scan."""
+    kind = np.asarray(routes.kind)
+    length, duration = np.asarray(routes.length), np.asarray(routes.duration)
+    n, c = route.size, 3
+    p = np.asarray(routes.params)[route].copy()
     p[:, 6] = speed
     dur = np.where(
         kind[route] == STRIP, length[route] / np.where(speed > 0, speed, 1.0), duration[route]
@@ -279,47 +335,28 @@ def build_route_options(
         chunk,
         "route options" if progress else None,
     )
-    ang = ang.reshape(n, samples, c)
-    rate = rate.reshape(n, samples, c)
-    acc = acc.reshape(n, samples, c)
-    offn = offn.reshape(n, samples)
-    peak_rate = np.abs(rate).max(1)
-    peak_acc = np.abs(acc).max(1)
-    max_off = offn.max(1)
-    ok = (
-        (peak_rate <= rate_lim).all(-1)
-        & (peak_acc <= acc_lim).all(-1)
-        & (max_off <= max_off_nadir + 1e-9)
-        & np.isfinite(ang).all((1, 2))
+    return _Scans(
+        dur,
+        ang.reshape(n, samples, c),
+        rate.reshape(n, samples, c),
+        acc.reshape(n, samples, c),
+        offn.reshape(n, samples),
     )
-    sun_el = np.full(n, np.nan)
-    if epoch_jd is not None:
-        jd = epoch_jd + t0 / 86400.0
-        sun = sun_direction(jd)
-        th = gmst(jd)
-        sun_e = np.stack(
-            [
-                np.cos(th) * sun[:, 0] + np.sin(th) * sun[:, 1],
-                -np.sin(th) * sun[:, 0] + np.cos(th) * sun[:, 1],
-                sun[:, 2],
-            ],
-            -1,
-        )
-        la, lo = np.asarray(routes.lat)[route], np.asarray(routes.lon)[route]
-        up = np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], -1)
-        sun_el = np.arcsin(np.clip(np.sum(up * sun_e, -1), -1.0, 1.0))
-        if sun_elevation_min is not None:
-            ok &= sun_el >= sun_elevation_min
-    opts = RouteOptions(
-        route=jnp.asarray(route),
-        t_start=jnp.asarray(t0, dtype),
-        t_end=jnp.asarray(t0 + dur, dtype),
-        start_angle=jnp.asarray(ang[:, 0], dtype),
-        start_rate=jnp.asarray(rate[:, 0], dtype),
-        end_angle=jnp.asarray(ang[:, -1], dtype),
-        end_rate=jnp.asarray(rate[:, -1], dtype),
-        value=jnp.asarray(np.asarray(routes.value)[route], dtype),
-        scan_ok=jnp.asarray(ok),
+
+
+def _sun_elevation(routes: RouteSet, route, t0, epoch_jd: float):
+    """Sun elevation [rad] at each option's start point at its start time t0 [s]."""
+    jd = epoch_jd + t0 / SECONDS_PER_DAY
+    sun = sun_direction(jd)
+    th = gmst(jd)
+    sun_e = np.stack(
+        [
+            np.cos(th) * sun[:, 0] + np.sin(th) * sun[:, 1],
+            -np.sin(th) * sun[:, 0] + np.cos(th) * sun[:, 1],
+            sun[:, 2],
+        ],
+        -1,
     )
-    info = OptionInfo(speed, t0, peak_rate, peak_acc, max_off, sun_el)
-    return opts, info
+    la, lo = np.asarray(routes.lat)[route], np.asarray(routes.lon)[route]
+    up = np.stack([np.cos(la) * np.cos(lo), np.cos(la) * np.sin(lo), np.sin(la)], -1)
+    return np.arcsin(np.clip(np.sum(up * sun_e, -1), -1.0, 1.0))

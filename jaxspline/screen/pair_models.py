@@ -6,10 +6,10 @@ The second argument of :func:`jaxspline.screen.pairs.screen_transitions`,
 
 * :class:`jaxspline.kernels.limits.AxisLimits` - per-channel exact-T reachable sets
   (SPEC section 1): every channel goes from ``(end_angle[i], end_rate[i])`` to
-  ``(start_angle[j], start_rate[j])`` in exactly T (:class:`ChannelPairs`).
+  ``(start_angle[j], start_rate[j])`` in exactly T (:class:`_ChannelPairs`).
 * :class:`jaxspline.screen.slew_table.SlewTable` - a tabulated rest-to-rest slew
   (eigen-axis bang-coast-bang or flexible profile, settle and gap margin included)
-  through the angle between ``end_los[i]`` and ``start_los[j]`` (:class:`SlewPairs`).
+  through the angle between ``end_los[i]`` and ``start_los[j]`` (:class:`_SlewPairs`).
 
 :func:`model_arrays` is the one dispatch: it validates the model against the option
 table and returns the pair function with its option columns and parameters. Every
@@ -35,7 +35,7 @@ from jaxspline.kernels.limits import AxisLimits, validate_limits
 from jaxspline.screen.options import RouteOptions, validate_options
 from jaxspline.screen.slew_table import SlewTable
 
-__all__ = ["ChannelPairs", "SlewPairs", "model_arrays", "validate_model"]
+__all__ = ["model_arrays", "validate_model"]
 
 #: Rounding guard of the slew-table index (the same as ``SlewTable.__call__``).
 _INDEX_EPS = 1e-12
@@ -121,7 +121,7 @@ def _all_channels(reach, table, src, dst, T, rate, accel):
 
 
 @dataclasses.dataclass(frozen=True)
-class ChannelPairs:
+class _ChannelPairs:
     """Per-channel exact-T pair function (SPEC section 1), reduced over channels.
 
     ``table`` = (end_angle, end_rate, start_angle, start_rate), channel-major [C, N];
@@ -150,7 +150,7 @@ class ChannelPairs:
 
 
 @dataclasses.dataclass(frozen=True)
-class SlewPairs:
+class _SlewPairs:
     """Rest-to-rest pair function: a :class:`~jaxspline.screen.slew_table.SlewTable` lookup.
 
     ``table`` = (end_los, start_los), component-major [3, N], unit vectors
@@ -254,20 +254,20 @@ def model_arrays(model, options: RouteOptions, dtype, order=None):
       dtype: the dtype the engine computes in.
       order: optional int [M], the options to take (in this order); None: all.
     Returns:
-      ``(pair, table, params)``: the pair function (:class:`ChannelPairs` or
-      :class:`SlewPairs`), a tuple of contiguous field-major numpy arrays [F, M] of
+      ``(pair, table, params)``: the pair function (:class:`_ChannelPairs` or
+      :class:`_SlewPairs`), a tuple of contiguous field-major numpy arrays [F, M] of
       ``dtype`` and a tuple of parameter arrays of ``dtype``.
     """
     if isinstance(model, AxisLimits):
         c = np.shape(options.start_angle)[1]
-        pair, fields = ChannelPairs(_reach()), _CHANNEL_FIELDS
+        pair, fields = _ChannelPairs(_reach()), _CHANNEL_FIELDS
         params = tuple(np.asarray(x) for x in _channel_limits(model, c, dtype))
     else:
-        pair, fields = SlewPairs(), _LOS_FIELDS
+        pair, fields = _SlewPairs(), _LOS_FIELDS
         params = (np.asarray(model.time, np.dtype(dtype)),)
     sel = slice(None) if order is None else order
     cols = [np.asarray(getattr(options, f))[sel] for f in fields]
-    if pair == SlewPairs():
+    if pair == _SlewPairs():
         cols = [x / np.linalg.norm(x.astype(np.float64), axis=1, keepdims=True) for x in cols]
     table = tuple(np.ascontiguousarray(x.T, np.dtype(dtype)) for x in cols)
     return pair, table, params

@@ -9,7 +9,6 @@ sequence step by step (``steps_check``) and refine its start times with optax
 of a plan).
 """
 
-from jaxspline.sequences.refine import RefineResult as RefineResult
 from jaxspline.sequences.refine import plan_costs as plan_costs
 from jaxspline.sequences.refine import refine_plan as refine_plan
 from jaxspline.sequences.refine import try_insert as try_insert

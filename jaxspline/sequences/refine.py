@@ -40,7 +40,7 @@ from jaxspline.screen.options import RouteOptions, validate_options
 from jaxspline.sequences.sequencer import Plan
 from jaxspline.sequences.steps_check import StepsReport, check_steps
 
-__all__ = ["RefineResult", "refine_plan", "try_insert", "plan_costs"]
+__all__ = ["refine_plan", "try_insert", "plan_costs"]
 
 _OBJECTIVES = ("softmin_margin", "effort")
 
@@ -219,8 +219,10 @@ def refine_plan(
       samples: samples per maneuver for the final validation.
 
     Returns:
-      RefineResult with margins/efforts before and after, the objective
-      history, and the independent validation of the refined plan. Steps keep
+      RefineResult, a NamedTuple: ``t0`` [K] refined starts [s], ``steps`` (their
+      RouteOptions), ``margin_before`` / ``margin_after`` [K-1] [rad] and
+      ``effort_before`` / ``effort_after`` [K-1], the objective ``history``, and the
+      independent validation of the refined plan (``report``, ``ok``). Steps keep
       the ``scan_ok`` flag of their original option.
     """
     limits, idx = _validated(plan, options, limits, objective, steps, learning_rate)

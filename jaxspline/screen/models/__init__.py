@@ -25,7 +25,7 @@ from jaxspline.screen.models.base import (
     register_model,
 )
 from jaxspline.screen.models.eigen_axis import EigenAxis
-from jaxspline.screen.models.flexible import Flexible, flex_tau
+from jaxspline.screen.models.flexible import Flexible
 from jaxspline.screen.models.per_channel import PerChannel
 from jaxspline.screen.models.rest_to_rest import RestToRest
 
@@ -35,7 +35,6 @@ __all__ = [
     "ManeuverModel",
     "PerChannel",
     "RestToRest",
-    "flex_tau",
     "maneuver_model",
     "model_names",
     "register_model",

@@ -14,10 +14,10 @@ import math
 
 from jaxspline.screen.models.rest_to_rest import RestToRest
 
-__all__ = ["Flexible", "flex_tau"]
+__all__ = ["Flexible"]
 
 
-def flex_tau(sat) -> float:
+def _flex_tau(sat) -> float:
     """Ramp time tau [s] of a flexible satellite's profile (its mode at its tolerance).
 
     Raises:
@@ -53,7 +53,7 @@ class Flexible(RestToRest):
         from jaxspline.kernels.slew import slew_profile_time
 
         rate, accel = float(sat.limits.rate), float(sat.limits.accel)
-        return slew_profile_time(theta, rate, accel, flex_tau(sat))
+        return slew_profile_time(theta, rate, accel, _flex_tau(sat))
 
     def time_drops(self, sat, gap_margin: float, rel: float, abs_: float) -> list:
         """The drop at the A -> C switch, with a bound of its left limit.
@@ -81,9 +81,9 @@ class Flexible(RestToRest):
         rate, accel = float(sat.limits.rate), float(sat.limits.accel)
         theta_s = 7.0 / 6.0 * rate * rate / accel
         lo, hi = theta_s * (1.0 - rel) - abs_, min(math.pi, theta_s * (1.0 + rel) + abs_)
-        t_a = float(slew_profile_time(hi, rate, accel, flex_tau(sat), kind="A"))
+        t_a = float(slew_profile_time(hi, rate, accel, _flex_tau(sat), kind="A"))
         return [(lo, hi, t_a + sat.settle + gap_margin)] if lo < math.pi else []
 
     def jerk_limit(self, sat) -> float:
         """The profile's jerk bound ``accel / tau`` [rad/s^3]."""
-        return float(sat.limits.accel) / flex_tau(sat)
+        return float(sat.limits.accel) / _flex_tau(sat)
