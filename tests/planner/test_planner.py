@@ -261,12 +261,15 @@ EXACT_CASE = dict(n_points=15, n_strips=1, off_nadir_deg=10.0, exact_max_options
         2,
         pytest.param(
             8,
-            marks=pytest.mark.xfail(
-                reason="search gap: LNS stays at 63 of the optimum 66 (search seeds 0-2, "
-                "also with the full 20 s budget); the optimal plan passes Timeline.check "
-                "and plan_check",
-                strict=False,
-            ),
+            marks=[
+                pytest.mark.xfail(
+                    reason="search gap: LNS stays at 63 of the optimum 66 (search seeds 0-2, "
+                    "also with the full 20 s budget); the optimal plan passes Timeline.check "
+                    "and plan_check",
+                    strict=False,
+                ),
+                pytest.mark.slow,  # a known miss: no check of the default run rests on it
+            ],
         ),
     ],
 )
