@@ -19,7 +19,10 @@ process-wide setting is left alone):
    violation, so the returned plan is valid under every check that ran.
 
 Ctrl-C or SIGTERM during stages 5-6 stops the search: the best plan so far goes
-through the repair and is returned with ``report["interrupted"]`` set.
+through the repair and is returned with ``report["interrupted"]`` set. Stages 1-4
+check the time limit (:mod:`jaxspline.planner.deadline`): when it passes there, the
+call stops with :class:`jaxspline.planner.deadline.TimeLimitError` (what was done, an
+estimate of the time needed, the remedy) instead of searching past it.
 """
 
 from __future__ import annotations
@@ -40,6 +43,7 @@ from jaxspline.geometry.frames import in_shadow, jd_split, sun_direction
 from jaxspline.geometry.pointing import Scene
 from jaxspline.geometry.windows import visibility_windows_all
 from jaxspline.planner.assemble import assemble_result
+from jaxspline.planner.deadline import StageDeadline
 from jaxspline.planner.join_screen import (
     channel_states,
     join_far_gap,
@@ -192,7 +196,7 @@ def _orbits(sc: Scenario):
     return table, scene, sunlit
 
 
-def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
+def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None):
     """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need.
 
     The slack (the shortest observation) lets the DP process a block of starts that
@@ -208,6 +212,8 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
     (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go
     straight into a :class:`jaxspline.search.store.PairsBuilder`: memory is the
     compact table plus one satellite's compact rows, whatever the candidate count.
+    ``tick(share done)`` (the clock of :class:`jaxspline.planner.deadline.StageDeadline`)
+    is called after every chunk.
 
     Returns:
       (NearPairs, pairs removed by ``join_filter``).
@@ -232,6 +238,8 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
             process_index=0,  # every pair of these satellites here, also under
             process_count=1,  # jax.distributed (shards split by satellite, not chunk)
         ):
+            if tick is not None and tr.src.size:  # sources come in start order
+                tick((ids[0] + (int(tr.src.max()) + 1) * ids.size / n) / len(opp))
             ii, jj = ids[tr.src], ids[tr.dst]
             keep = o.t_end[ii] > o.t_start[jj] - far[k] - slack
             need = sat.maneuver.need(tr.t_min, tr.T)
@@ -287,6 +295,7 @@ def build_problem(
     progress: bool = False,
     joins: bool = False,
     reduce_slack=None,
+    deadline: StageDeadline | None = None,
     _clock=None,
 ) -> Prepared:
     """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
@@ -302,21 +311,28 @@ def build_problem(
         shortest observation [s], the DP's block width): processes that each build
         a shard of the satellites pass the minimum over all of them, so every shard
         screens the same window as a single process would.
+      deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` checked
+        between the stages and inside options and screening
+        (:class:`jaxspline.planner.deadline.TimeLimitError` once it has passed).
       _clock: private; the stage timer of an enclosing :func:`plan` call.
     Returns:
       Prepared, the inputs of the search stage.
     """
     sc = scenario
     clock = _clock or _Clock(sc.name, progress)
+    check = _stage_check(deadline, clock)
     with jax.enable_x64(True):
         sats = sc.satellites
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
+        check("orbits")
         windows = _windows(sc, scene, table)
         n_tg = len(np.unique(windows.target))
         clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
-        opp = build_opportunities(sc, scene, table.usable, windows)
+        check("windows")
+        opp = build_opportunities(sc, scene, table.usable, windows, tick=check("options", 0))
         clock.lap("options", f"{len(opp)} options")
+        tick = check("screening", 0, f"{len(opp)} options")
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
         omega = nadir_rate(scene)
         far, first = _far_and_first(sats, opp, tables, omega)
@@ -325,12 +341,32 @@ def build_problem(
         if joins and len(opp):
             far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega)
             lookup = np.ones(len(sats), bool)
-        near, removed = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK, join_filter)
+        if tick is not None:
+            tick(0.0)  # the far gaps and the join screens may take a while
+        near, removed = _near_pairs(
+            sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
+        )
         clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
+        check("screening")
         battery = _battery(sc, sunlit)
         pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.targets.value, lookup)
         pb.near_slack = slack
     return Prepared(pb, opp, windows, scene, table, battery, far)
+
+
+def _stage_check(deadline: StageDeadline | None, clock):
+    """``check(stage, done=1, what="")``: with ``done`` = 1 it checks the deadline at the
+    end of a stage; with ``done`` = 0 it returns the stage's ``tick(share)`` (None
+    without a deadline). A stage starts at the clock's last lap."""
+
+    def check(stage, done=1.0, what=""):
+        if deadline is None:
+            return None
+        if done >= 1.0:
+            return deadline.check(stage, 1.0, clock.last, what)
+        return lambda share: deadline.check(stage, share, clock.last, what)
+
+    return check
 
 
 def _windows(sc: Scenario, scene, table):
@@ -450,7 +486,9 @@ def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) 
     the result."""
     clock = _Clock(sc.name, progress)
     budget = _budget(sc, limit, clock.t0)
-    prep = build_problem(sc, joins=flown_joins, _clock=clock)
+    size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
+    deadline = StageDeadline(clock.t0, limit, size)
+    prep = build_problem(sc, joins=flown_joins, deadline=deadline, _clock=clock)
     res, rep, interrupted = _search_and_repair(
         sc, prep, budget, seed, max_iters, flown_joins, clock
     )
