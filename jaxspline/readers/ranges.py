@@ -28,6 +28,7 @@ __all__ = [
     "MAX_TLE_AGE_DAYS",
     "RANGES",
     "bounds",
+    "range_text",
 ]
 
 #: Marker of an upper bound that is the scenario's horizon (``duration`` [s]).
@@ -83,7 +84,6 @@ RANGES: dict[str, tuple] = {
     "targets[].desired_s": (0.0, HORIZON),
     "targets[].tolerance_s": (0.0, HORIZON),
     "targets[].min_duration_s": (0.0, 3600.0),
-    "areas[].lonlat_deg": (None, None),  # [lon, lat] pairs: lon [-180, 180], lat [-90, 90]
     "areas[].priority": (1e-6, 1e6),
     "areas[].swath_km": (0.01, 5000.0),
     "areas[].max_length_km": (1.0, 10000.0),
@@ -127,3 +127,23 @@ def bounds(key: str, horizon: float | None = None) -> dict:
     if hi == HORIZON:
         hi = RANGES["scenario.duration_s"][1] if horizon is None else horizon
     return {"lo": lo, "hi": hi}
+
+
+def _text(x) -> str:
+    if x == HORIZON:
+        return "the horizon"
+    if isinstance(x, int) or (float(x) == int(x) and abs(x) >= 1000):
+        return f"{int(x):,}"
+    return f"{x:g}"
+
+
+def range_text(key: str) -> str:
+    """``[lo, hi]`` of a key as ``docs/scenarios.md`` writes it (``[0.01, 90]``).
+
+    Args:
+      key: a key of :data:`RANGES`.
+    Returns:
+      str; thousands with commas, times from the epoch up to ``the horizon``.
+    """
+    lo, hi = RANGES[key]
+    return f"[{_text(lo)}, {_text(hi)}]"
