@@ -68,7 +68,7 @@ EXIT_INTERRUPTED = 130  # exit code after Ctrl-C / SIGTERM (128 + SIGINT, the sh
 # 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
 AEM_STEP_S = 10.0
 AEM_STEP_RANGE_S = (1e-3, 86400.0)
-MAX_AEM_STATES = 200_000  # sampled attitude states over all AEM files (~100 s to write)
+MAX_AEM_STATES = 50_000  # sampled attitude states over all AEM files (~30-60 s to compute and write)
 
 
 def register(sub) -> None:

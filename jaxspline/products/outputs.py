@@ -266,15 +266,15 @@ class OutputSet:
         if self.staging is not None:
             shutil.rmtree(self.staging, ignore_errors=True)
             self.staging = None
-        for p in reversed(self._made):
-            with contextlib.suppress(OSError):
-                p.rmdir()  # only when still empty
-        self._made = []
         if self._lock_fd is not None:
             with contextlib.suppress(OSError):
                 os.unlink(self._lock_path)  # before unlocking: see _lock
             os.close(self._lock_fd)
             self._lock_fd = None
+        for p in reversed(self._made):
+            with contextlib.suppress(OSError):
+                p.rmdir()  # only when still empty
+        self._made = []
 
     def __enter__(self) -> OutputSet:
         return self.open()
