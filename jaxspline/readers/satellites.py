@@ -175,8 +175,14 @@ def _circular(ctx, f, sat, epoch_jd, duration):
         return circular_orbit_over(
             math.radians(lat), math.radians(lon), t_over, gmst0, 1e3 * alt, inc, descending=desc
         )
-    except ValueError as exc:
-        raise ctx.error(f"{f}.over.lat_deg", str(exc)) from None
+    except ValueError:  # |lat| above what the inclination reaches
+        reach = circular_orbit(1e3 * alt, inc, 0.0, 0.0).inclination
+        reach = math.degrees(min(float(reach), math.pi - float(reach)))
+        raise ctx.error(
+            f"{f}.over.lat_deg",
+            f"{lat:g} deg is not reachable: the orbit's ground track reaches latitudes "
+            f"within +-{reach:.4g} deg (its inclination)",
+        ) from None
 
 
 # --- agility, flexible mode, battery ---

@@ -268,21 +268,22 @@ def _planner(ctx, pl, duration: float, sats) -> PlannerConfig:
     sun = pl.get("sun_elevation_min_deg")
     if sun is not None:
         sun = math.radians(num("sun_elevation_min_deg", sun))
+    kw = {
+        "time_step": time_step,
+        "geometry_step": geometry_step,
+        "scan_speeds": _speeds(ctx, pl, d),
+        "sun_elevation_min": sun,
+        "margins": _margins(ctx, pl, sats),
+        "exact_max_options": _int(ctx, pl, "exact_max_options", d.exact_max_options),
+        "lagrangian_share": num("lagrangian_share", d.lagrangian_share),
+        "bound_worker": field_bool(
+            ctx, "planner.bound_worker", pl.get("bound_worker", d.bound_worker)
+        ),
+        "refine_steps": _int(ctx, pl, "refine_steps", d.refine_steps),
+        "default_time_limit": num("time_limit_s", d.default_time_limit),
+    }
     try:
-        return PlannerConfig(
-            time_step=time_step,
-            geometry_step=geometry_step,
-            scan_speeds=_speeds(ctx, pl, d),
-            sun_elevation_min=sun,
-            margins=_margins(ctx, pl, sats),
-            exact_max_options=_int(ctx, pl, "exact_max_options", d.exact_max_options),
-            lagrangian_share=num("lagrangian_share", d.lagrangian_share),
-            bound_worker=field_bool(
-                ctx, "planner.bound_worker", pl.get("bound_worker", d.bound_worker)
-            ),
-            refine_steps=_int(ctx, pl, "refine_steps", d.refine_steps),
-            default_time_limit=num("time_limit_s", d.default_time_limit),
-        )
+        return PlannerConfig(**kw)
     except ValueError as exc:  # PlannerConfig's own checks (the fields are checked above)
         raise ctx.error("planner", str(exc)) from None
 
