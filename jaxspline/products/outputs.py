@@ -162,6 +162,7 @@ class OutputSet:
                 f"({', '.join(repr(n) for n in foreign[:3])}{', ...' * (len(foreign) > 3)}); "
                 "the outputs replace the directory as one set: give a new or an empty directory"
             )
+        entries.sort(key=lambda n: (n not in OUTPUT_FILES, n))  # plan.json first
         if entries and not self.force:
             raise FileExistsError(
                 f"{self.outdir}/ holds the outputs of an earlier run ({', '.join(entries[:4])}"

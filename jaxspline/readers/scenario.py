@@ -117,7 +117,7 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
     gap_margin_s = 0.1                  # added to every rest-to-rest slew time [s]
     battery_margin_wh = 10.0            # battery level kept >= this [Wh]
     shadow_guard_steps = 0              # battery steps of sunlight required around a step
-    exact_max_options = 60              # solve exactly up to this many options
+    exact_max_options = 60              # solve exactly up to this many options (<= 500)
     lagrangian_share = 0.3              # search budget share of the Lagrangian phase
     bound_worker = true                 # iterate the bound on a second CPU during the search
     refine_steps = 100                  # optax steps refining per-channel start times (0 = off)
