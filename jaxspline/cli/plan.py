@@ -68,7 +68,7 @@ EXIT_INTERRUPTED = 130  # exit code after Ctrl-C / SIGTERM (128 + SIGINT, the sh
 # 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
 AEM_STEP_S = 10.0
 AEM_STEP_RANGE_S = (1e-3, 86400.0)
-MAX_AEM_STATES = 50_000  # sampled attitude states over all AEM files (~30-60 s to compute and write)
+MAX_AEM_STATES = 50_000  # attitude states over all AEM files (~30-60 s to compute and write)
 
 
 def register(sub) -> None:
@@ -248,15 +248,18 @@ def run_plan(
 
 
 def _plan(sc, limit, t_start, seed, max_iters, certify, progress, aem):
-    """:func:`jaxspline.plan` with what is left of ``limit`` after loading the scenario."""
+    """:func:`jaxspline.plan` with what is left of ``limit`` after loading the scenario,
+    its stages before the search bound by the limit from ``t_start`` on."""
     from jaxspline.planner.deadline import StageDeadline
     from jaxspline.planner.pipeline import plan
 
-    StageDeadline(t_start, limit, "loading the scenario").check("loading", 1.0)
-    left = limit - (time.monotonic() - t_start)
+    size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
+    deadline = StageDeadline(t_start, limit, size)
+    deadline.check("loading", 1.0)
+    left = max(limit - (time.monotonic() - t_start), 1e-3)  # the search's share (may be none)
     # with --aem the flown joins are checked: the AEM files never exceed a limit
     return plan(sc, time_limit=left, seed=seed, progress=progress, max_iters=max_iters,
-                certify=certify, flown_joins=aem)  # fmt: skip
+                certify=certify, flown_joins=aem, deadline=deadline)  # fmt: skip
 
 
 def _write(result, outputs, plots, aem, aem_step, html):

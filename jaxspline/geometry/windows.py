@@ -76,6 +76,7 @@ def visibility_windows_all(
     t_lo: np.ndarray,
     t_hi: np.ndarray,
     duration: float,
+    tick=None,
 ) -> Windows:
     """All visibility windows of R points from S satellites of a tabulated ``scene``.
 
@@ -89,6 +90,8 @@ def visibility_windows_all(
       t_lo: [R] start of each target's window [s] (-inf: free).
       t_hi: [R] end of each target's window [s] (+inf: free).
       duration: horizon end [s] (windows lie in [0, duration]).
+      tick: optional ``tick(share done)`` called before every block of targets (a
+        clock that may stop the call by raising; the windows do not depend on it).
     Returns:
       :class:`Windows`.
     """
@@ -122,6 +125,8 @@ def visibility_windows_all(
         uc = u[kc]
         half = np.arange(-(_COARSE // 2) - 1, _COARSE // 2 + 2)
         for b0 in range(0, tasks.size, _BLOCK):
+            if tick is not None:
+                tick((s + b0 / tasks.size) / s_count)
             tb = tasks[b0 : b0 + _BLOCK]
             near = (g_hat[tb] @ uc.T) > cos_c
             near &= (tk[kc][None, :] >= lo_t[tb, None] - _COARSE * step) & (

@@ -19,10 +19,11 @@ process-wide setting is left alone):
    violation, so the returned plan is valid under every check that ran.
 
 Ctrl-C or SIGTERM during stages 5-6 stops the search: the best plan so far goes
-through the repair and is returned with ``report["interrupted"]`` set. Stages 1-4
-check the time limit (:mod:`jaxspline.planner.deadline`): when it passes there, the
-call stops with :class:`jaxspline.planner.deadline.TimeLimitError` (what was done, an
-estimate of the time needed, the remedy) instead of searching past it.
+through the repair and is returned with ``report["interrupted"]`` set. Given a
+``deadline`` (``jaxspline plan`` passes one), stages 1-4 check it
+(:mod:`jaxspline.planner.deadline`): when it passes there, the call stops with
+:class:`jaxspline.planner.deadline.TimeLimitError` (what was done, an estimate of the
+time needed, the remedy) instead of searching past it.
 """
 
 from __future__ import annotations
@@ -139,6 +140,7 @@ def plan(
     max_iters: int | None = None,
     certify: float = 0.0,
     flown_joins: bool = False,
+    deadline: StageDeadline | None = None,
 ) -> PlanResult:
     """Plan a scenario: the best observations found within ``time_limit`` seconds.
 
@@ -163,8 +165,14 @@ def plan(
         aeossp rules). The transitions are then also screened with the joins
         (:mod:`jaxspline.planner.join_screen`). The check's time (first call:
         compilation of the join kernels) is not part of ``time_limit``.
+      deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` (``jaxspline
+        plan`` passes one): the stages before the search check it and stop with
+        :class:`jaxspline.planner.deadline.TimeLimitError` once it has passed. Without
+        it (the default) only the search is bound by ``time_limit``.
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
+    Raises:
+      jaxspline.planner.deadline.TimeLimitError: ``deadline`` passed before the search.
     """
     if not isinstance(scenario, Scenario):
         raise ValueError(f"scenario must be a jaxspline Scenario, got {type(scenario).__name__}")
@@ -178,9 +186,8 @@ def plan(
     ):
         raise ValueError(f"max_iters must be an integer >= 1, got {max_iters!r}")
     with jax.enable_x64(True):
-        return _plan(
-            scenario, float(limit), int(seed), bool(progress), max_iters, certify, flown_joins
-        )
+        args = (float(limit), int(seed), bool(progress), max_iters, certify, flown_joins)
+        return _plan(scenario, *args, deadline)
 
 
 def _orbits(sc: Scenario):
@@ -326,7 +333,7 @@ def build_problem(
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
         check("orbits")
-        windows = _windows(sc, scene, table)
+        windows = _windows(sc, scene, table, check("windows", 0))
         n_tg = len(np.unique(windows.target))
         clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
         check("windows")
@@ -369,10 +376,11 @@ def _stage_check(deadline: StageDeadline | None, clock):
     return check
 
 
-def _windows(sc: Scenario, scene, table):
+def _windows(sc: Scenario, scene, table, tick=None):
     """Stage 2: every visibility window of every target's reference point on every
     satellite allowed to image it (sensor type), within the off-nadir limit and the
-    horizon (both minus their margins) and the target's imaging window."""
+    horizon (both minus their margins) and the target's imaging window (``tick``: the
+    clock, between blocks of targets)."""
     pc = sc.planner
     tg = sc.targets
     sensors = np.array([s.sensor for s in sc.satellites])
@@ -388,6 +396,7 @@ def _windows(sc: Scenario, scene, table):
         tg.t_lo,
         tg.t_hi,
         sc.duration,
+        tick=tick,
     )
 
 
@@ -480,14 +489,14 @@ def _search(pb, deadline, seed, max_iters, pc, clock):
         clock.bar = None
 
 
-def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
+def _plan(
+    sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins, deadline
+) -> PlanResult:
     """:func:`plan` after its argument checks (inside ``jax.enable_x64``): stages 1-4,
     then search and repair under the signal guard, the optional HiGHS certificate, and
     the result."""
     clock = _Clock(sc.name, progress)
     budget = _budget(sc, limit, clock.t0)
-    size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
-    deadline = StageDeadline(clock.t0, limit, size)
     prep = build_problem(sc, joins=flown_joins, deadline=deadline, _clock=clock)
     res, rep, interrupted = _search_and_repair(
         sc, prep, budget, seed, max_iters, flown_joins, clock
