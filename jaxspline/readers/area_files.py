@@ -210,6 +210,8 @@ def read_geojson(path):
         raise ValueError(f"{path.name}: invalid JSON: {exc}") from None
     except ValueError as exc:
         raise ValueError(f"{path.name}: invalid GeoJSON: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"{path.name}: invalid GeoJSON: nested too deeply") from None
     try:
         return _geojson_geometry(doc)
     except ValueError as exc:

@@ -117,6 +117,7 @@ _KEYS = {
     ),
 }
 _KINDS = {"point": POINT, "strip": STRIP}
+_TEXT_COLUMNS = ("name", "kind", "sensor")
 
 
 def scenario_targets(
@@ -206,12 +207,14 @@ def _target_row(get, err, default_name, text=False, horizon=None) -> tuple:
 
 
 def _string(get, err, col, default):
-    """The text of column ``col`` (stripped; ``default`` when empty), no control characters."""
+    """The text of column ``col`` (stripped; ``default`` when empty), no control characters
+    (before stripping: Python strips some of them as white space)."""
     raw = get(col)
     if raw is None:
         return default
     if not isinstance(raw, str):
         raise err(col)(f"must be a string, got {raw!r}")
+    check_text(raw, err(col))
     return check_text(raw.strip(), err(col), MAX_NAME_CHARS)
 
 
@@ -352,6 +355,10 @@ def _read_csv(path, horizon=None) -> tuple[Targets, list[str]]:
 
             def err(col, line=line):
                 return lambda m: ValueError(f"{label} row {line}, column {col!r}: {m}")
+
+            for col, cell in zip(header, cells, strict=True):  # before stripping
+                if col in _TEXT_COLUMNS:
+                    check_text(cell, err(col))
 
             rows.append(_target_row(rec.get, err, f"row_{line}", text=True, horizon=horizon))
             origins.append(f"{label} row {line}")
