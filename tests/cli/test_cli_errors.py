@@ -204,7 +204,8 @@ def test_the_time_limit_stops_a_scenario_too_big_for_it(tmp_path, capsys):
     scen = tmp_path / "big.toml"
     scen.write_text(big, encoding="utf-8")
     out = tmp_path / "out"
-    code, err, seconds = _run(capsys, ["plan", str(scen), "-o", str(out), "--time-limit", "0.05"])
+    argv = ["plan", str(scen), "-o", str(out), "--time-limit", "0.05", "--quiet"]
+    code, err, seconds = _run(capsys, argv)
     assert code == EXIT_TIME_LIMIT, err
     assert err.startswith("jaxspline: time limit: time limit of 0.05 s reached before the search")
     assert "give a time limit of" in err and "--time-limit" in err, err
