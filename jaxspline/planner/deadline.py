@@ -106,8 +106,11 @@ class StageDeadline:
       allowance: compile time not counted [s] (default :data:`COMPILE_ALLOWANCE_S`).
 
     Attributes:
-      t0, limit, scale, allowance: as given; ``compiled0``: :func:`compile_seconds` at
-      creation.
+      t0: as given.
+      limit: as given.
+      scale: as given.
+      allowance: as given.
+      compiled0: :func:`compile_seconds` when the deadline was made.
     """
 
     def __init__(self, t0, limit, scale="", allowance=COMPILE_ALLOWANCE_S):

@@ -113,7 +113,8 @@ class OutputSet:
       flag: the option's name in messages (``-o/--outdir``).
 
     Attributes:
-      outdir: Path as given; ``target``: the directory itself (symlinks resolved);
+      outdir: Path as given.
+      target: the directory itself (symlinks resolved).
       staging: Path of the staging directory (after :meth:`open`), None before.
     """
 

@@ -46,6 +46,7 @@ from jaxspline.readers.ranges import MAX_SCAN_SPEEDS as MAX_SCAN_SPEEDS
 from jaxspline.readers.ranges import MAX_TLE_AGE_DAYS as MAX_TLE_AGE_DAYS
 from jaxspline.readers.ranges import RANGES as RANGES
 from jaxspline.readers.ranges import bounds as bounds
+from jaxspline.readers.ranges import range_text as range_text
 from jaxspline.readers.satellites import SATELLITE_KEYS as SATELLITE_KEYS
 from jaxspline.readers.satellites import parse_satellites as parse_satellites
 from jaxspline.readers.satellites import tle_epoch as tle_epoch
