@@ -117,10 +117,7 @@ def visibility_windows_all(
         rn = np.linalg.norm(r_e, axis=-1)
         u = r_e / rn[:, None]
         eta = float(off_nadir_limit[s])
-        lam = math.asin(min(1.0, rn.max() / r_min_t * math.sin(eta))) - eta
-        track = np.arccos(np.clip(np.sum(u[1:] * u[:-1], axis=-1), -1.0, 1.0)).max()
-        widen = track * (_COARSE / 2 + 1) + _SAFETY_ANGLE
-        cos_c = math.cos(min(math.pi, lam + widen))
+        cos_c = _coarse_cos(u, rn, r_min_t, eta)
         kc = np.arange(0, m, _COARSE)
         uc = u[kc]
         half = np.arange(-(_COARSE // 2) - 1, _COARSE // 2 + 2)
@@ -128,10 +125,7 @@ def visibility_windows_all(
             if tick is not None:
                 tick((s + b0 / tasks.size) / s_count)
             tb = tasks[b0 : b0 + _BLOCK]
-            near = (g_hat[tb] @ uc.T) > cos_c
-            near &= (tk[kc][None, :] >= lo_t[tb, None] - _COARSE * step) & (
-                tk[kc][None, :] <= hi_t[tb, None] + _COARSE * step
-            )
+            near = _coarse_near(g_hat[tb], uc, tk[kc], lo_t[tb], hi_t[tb], _COARSE * step, cos_c)
             ii, ci = np.nonzero(near)
             if ii.size == 0:
                 continue
@@ -146,14 +140,44 @@ def visibility_windows_all(
             ti, ks = ti[vis], ks[vis]
             if ti.size == 0:
                 continue
-            brk = np.ones(ti.size, bool)
-            brk[1:] = (ti[1:] != ti[:-1]) | (ks[1:] != ks[:-1] + 1)
-            first = np.flatnonzero(brk)
-            last = np.append(first[1:], ti.size) - 1
+            first, last = _runs(ti, ks)
             out["sat"].append(np.full(first.size, s))
             out["target"].append(ti[first])
             out["lo"].append(tk[ks[first]])
             out["hi"].append(tk[ks[last]])
+    return _collect(out)
+
+
+def _coarse_cos(u, rn, r_min_t: float, eta: float) -> float:
+    """Cosine of the pre-screen's Earth-central angle for one satellite (unit positions
+    ``u`` [M, 3], radii ``rn`` [M] [m], nearest target radius ``r_min_t`` [m], off-nadir
+    limit ``eta`` [rad]): the cone's ground radius widened by the track over half a
+    coarse stride and a safety angle (module docstring)."""
+    lam = math.asin(min(1.0, rn.max() / r_min_t * math.sin(eta))) - eta
+    track = np.arccos(np.clip(np.sum(u[1:] * u[:-1], axis=-1), -1.0, 1.0)).max()
+    widen = track * (_COARSE / 2 + 1) + _SAFETY_ANGLE
+    return math.cos(min(math.pi, lam + widen))
+
+
+def _coarse_near(g_hat, uc, tc, lo, hi, pad: float, cos_c: float):
+    """bool [B, C]: targets (unit vectors ``g_hat`` [B, 3], windows [lo, hi] [s]) within
+    the pre-screen angle of the coarse knots (unit positions ``uc`` [C, 3] at ``tc`` [s])
+    inside their window widened by ``pad`` [s]."""
+    near = (g_hat @ uc.T) > cos_c
+    return near & (tc[None, :] >= lo[:, None] - pad) & (tc[None, :] <= hi[:, None] + pad)
+
+
+def _runs(ti, ks):
+    """First and last index of every run of consecutive knots ``ks`` of one target ``ti``
+    (both sorted by target, then knot)."""
+    brk = np.ones(ti.size, bool)
+    brk[1:] = (ti[1:] != ti[:-1]) | (ks[1:] != ks[:-1] + 1)
+    first = np.flatnonzero(brk)
+    return first, np.append(first[1:], ti.size) - 1
+
+
+def _collect(out: dict) -> Windows:
+    """The windows of the lists ``out`` (sat, target, lo, hi), sorted by (sat, target, lo)."""
     if not out["sat"]:
         z = np.zeros(0)
         return Windows(z.astype(np.int64), z.astype(np.int64), z, z)
