@@ -28,9 +28,10 @@ a failure leaves the previous set or none. An earlier set is replaced only with
 
 Time limit: ``--time-limit`` (default: the scenario's ``planner.time_limit_s``) counts
 from the start of the command: loading the scenario, the stages before the search
-(which stop the run with exit 3, an estimate and the remedy when it runs out there),
-the search (which ends at the limit less a reserve for the check and the outputs).
-The repair, the flown-join check (its first compilation), the attitude history and the
+(which stop the run with exit 3, an estimate and the remedy when it runs out there;
+up to 20 s of compiling are not counted: :mod:`jaxspline.planner.deadline`), the
+search (which ends at the limit less a reserve for the check and the outputs). The
+repair, the flown-join check (its first compilation), the attitude history and the
 files follow the search; a run that ends past its limit says so on stderr.
 """
 
