@@ -50,9 +50,9 @@ class _Checker:
         kind for every entry of a list: ``[kind]``); ``required`` must be there."""
         if not isinstance(x, dict):
             self.fail(where, f"must be an object, got {_show(x)}")
-        for k in required:
-            if k not in x:
-                self.fail(f"{where}.{k}".lstrip("."), "missing")
+        missing = [k for k in required if k not in x]
+        if missing:
+            self.fail(where, f"missing {', '.join(missing)}")
         for k, kind in fields.items():
             if k in x:
                 self.field(f"{where}.{k}".lstrip("."), x[k], kind)

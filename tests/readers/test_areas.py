@@ -291,12 +291,12 @@ BAD = [
     (
         "[[areas]]\nlonlat_deg = [[13, 45], [14, 45], [14, 46]]\npriority = 0\n",
         "areas[0].priority",
-        "> 0",
+        "must be within [1e-06, 1e+06], got 0",
     ),
     (
         "[[areas]]\nlonlat_deg = [[13, 45], [14, 45], [14, 46]]\nswath_km = -1\n",
         "areas[0].swath_km",
-        "> 0",
+        "must be within [0.01, 5000], got -1",
     ),
     (
         '[[areas]]\nlonlat_deg = [[13, 45], [14, 45], [14, 46]]\nsensor = "radar"\n',
@@ -306,7 +306,7 @@ BAD = [
     (
         "[[areas]]\nlonlat_deg = [[13, 45], [14, 45], [14, 46]]\nmax_length_km = 0\n",
         "areas[0].max_length_km",
-        "> 0",
+        "must be within [1, 10000], got 0",
     ),
     (
         "[[areas]]\nlonlat_deg = [[13, 45], [14, 45], [14, 46]]\nwindow_s = [900, 100]\n",
