@@ -185,11 +185,8 @@ class OutputSet:
             self._lock()
             self.check()  # again, under the lock
             self._remove_stale()
-            self.staging = Path(
-                tempfile.mkdtemp(
-                    prefix=f".{self.target.name}.", suffix=_PARTIAL, dir=self.target.parent
-                )  # fmt: skip
-            )
+            name, parent = self.target.name, self.target.parent
+            self.staging = Path(tempfile.mkdtemp(prefix=f".{name}.", suffix=_PARTIAL, dir=parent))
             _probe(self.staging / ".probe")
         except OSError as exc:
             self.close()
@@ -202,7 +199,10 @@ class OutputSet:
     def _make_parents(self) -> None:
         missing = [p for p in reversed(self.target.parents) if not p.exists()]
         for p in missing:
-            p.mkdir()
+            try:
+                p.mkdir()
+            except FileExistsError:  # made by someone else meanwhile: not ours to remove
+                continue
             self._made.append(p)
 
     def _lock(self) -> None:
