@@ -272,6 +272,8 @@ def _read_yaml(path: Path) -> Any:
         return yaml.load(text, Loader=_UniqueKeyLoader)
     except yaml.YAMLError as exc:
         raise ValueError(f"{path}: not valid YAML: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"{path}: not valid YAML here: nested too deeply") from None
 
 
 def _get(mapping: Any, key: str, where: str) -> Any:
@@ -455,11 +457,12 @@ def load_solution(path: str | os.PathLike) -> dict:
       ValueError: the file is not valid JSON or not an object with an "actions" list.
     """
     path = Path(path)
-    with open(path, encoding="utf-8") as fh:
-        try:
-            data = json.load(fh)
-        except json.JSONDecodeError as exc:
-            raise ValueError(f"{path}: not valid JSON: {exc}") from None
+    try:
+        data = json.loads(read_text(path))  # UTF-8, else names the line
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{path}: not valid JSON: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"{path}: not valid JSON here: nested too deeply") from None
     if not isinstance(data, dict) or not isinstance(data.get("actions"), list):
         raise ValueError(f"{path}: expected an object with an 'actions' list")
     return data

@@ -14,6 +14,8 @@ import sys
 import time
 from pathlib import Path
 
+from jaxspline.cli.flags import MAX_SEED, check_int, check_path, check_seconds
+
 __all__ = ["register"]
 
 
@@ -38,9 +40,17 @@ def _check_and_print(case, solution: dict, json_out: str | None) -> int:
     return 0 if report.valid else 1
 
 
+def _check_paths(args) -> None:
+    """The path flags of both sub-commands, each by its name (ValueError)."""
+    check_path("CASE_DIR", args.case_dir, kind="dir", exists=True)
+    check_path("--json", None if args.json in (None, "-") else args.json, kind="file")
+
+
 def _cmd_check(args) -> int:
     from jaxspline.aeossp.case import load_case, load_solution
 
+    _check_paths(args)
+    check_path("SOLUTION", args.solution, kind="file", exists=True)
     case = load_case(args.case_dir)
     solution = load_solution(args.solution)
     return _check_and_print(case, solution, args.json)
@@ -49,8 +59,10 @@ def _cmd_check(args) -> int:
 def _cmd_solve(args) -> int:
     from jaxspline.aeossp.case import load_case, write_solution
 
-    if args.time_limit <= 0:
-        raise ValueError(f"--time-limit: must be > 0, got {args.time_limit}")
+    check_seconds("--time-limit", args.time_limit)
+    check_int("--seed", args.seed, 0, MAX_SEED)
+    check_path("-o/--output", args.output, kind="file")
+    _check_paths(args)
     out = Path(args.output)
     if out.exists() and not args.force:
         raise FileExistsError(f"{out}: exists (use --force to overwrite)")

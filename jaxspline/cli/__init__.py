@@ -6,11 +6,21 @@ default job compiles ~160 programs, 20-40 s on 2 cores, most of its first run):
 unset). ``JAXSPLINE_CACHE_DIR=off`` (or empty) disables it; a cache directory set for
 JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left alone.
 
-This package: the parser, the sub-command registry and :func:`main`. Layer 7: may
-import everything below (``kernels`` ... ``io``); only the ``aeossp`` adapter sits above,
-and its sub-command is registered by name (``_SUBCOMMANDS``), not imported here. One
-module per sub-command: ``plan`` (``jaxspline plan``), ``bound`` (``jaxspline bound``),
-``view`` (``jaxspline view``). The entry point lives in this ``__init__`` so the console
+Exit codes (every command): 0 done; 1 the plan or solution failed its check; 2 bad
+input (a scenario, case or plan file, a flag; nothing was planned or written); 3 the
+time limit ran out before the search could start (the message estimates the time
+needed); 4 an output could not be written (read-only or full disk, a path that is a
+file; the previous outputs are left as they were); 5 the output directory is in use by
+another run; 70 an internal error (a bug: run again with ``--debug`` for the
+traceback); 130 interrupted (Ctrl-C or SIGTERM). No Python traceback reaches the
+terminal without ``--debug``.
+
+This package: the parser, the sub-command registry, the exit codes and :func:`main`.
+Layer 8: may import everything below (``kernels`` ... ``products``); only the
+``aeossp`` adapter sits above, and its sub-command is registered by name
+(``_SUBCOMMAND_MODULES``), not imported here. One module per sub-command: ``plan``
+(``jaxspline plan``), ``bound`` (``jaxspline bound``), ``view`` (``jaxspline view``);
+``flags`` checks the flags. The entry point lives in this ``__init__`` so the console
 script ``jaxspline = "jaxspline.cli:main"`` and ``python -m jaxspline.cli``
 (``__main__``) keep working.
 """
@@ -22,14 +32,37 @@ import os
 import signal
 import sys
 import threading
+import traceback
 from pathlib import Path
 
-__all__ = ["CACHE_ENV", "cache_dir", "main"]
+__all__ = [
+    "CACHE_ENV",
+    "EXIT_BAD_INPUT",
+    "EXIT_BUSY",
+    "EXIT_CHECK_FAILED",
+    "EXIT_INTERNAL",
+    "EXIT_INTERRUPTED",
+    "EXIT_OK",
+    "EXIT_TIME_LIMIT",
+    "EXIT_WRITE",
+    "build_parser",
+    "cache_dir",
+    "main",
+]
 
 CACHE_ENV = "JAXSPLINE_CACHE_DIR"
 _CACHE_OFF = ("", "off", "0", "none")
 # the command's help: the docstring up to the package notes
-_DESCRIPTION = __doc__[: __doc__.index("\n\nThis package:")]
+_DESCRIPTION = __doc__[: __doc__.index("\n\nExit codes")]
+
+EXIT_OK = 0
+EXIT_CHECK_FAILED = 1  # the plan (aeossp: the solution) failed its check
+EXIT_BAD_INPUT = 2  # a bad file or flag (argparse uses 2 too)
+EXIT_TIME_LIMIT = 3  # the time limit ran out before the search
+EXIT_WRITE = 4  # an output could not be written
+EXIT_BUSY = 5  # the output directory is locked by another run
+EXIT_INTERNAL = 70  # an unexpected error (EX_SOFTWARE of sysexits.h)
+EXIT_INTERRUPTED = 130  # Ctrl-C / SIGTERM (128 + SIGINT, the shell convention)
 
 
 def cache_dir() -> Path | None:
@@ -74,14 +107,34 @@ _SUBCOMMAND_MODULES = (
 
 
 def build_parser() -> argparse.ArgumentParser:
-    """The argument parser of the ``jaxspline`` command (sub-commands register here)."""
+    """The argument parser of the ``jaxspline`` command (sub-commands register here).
+
+    Every sub-command (and sub-sub-command) also takes ``--debug``.
+    """
     import importlib
 
     parser = argparse.ArgumentParser(prog="jaxspline", description=_DESCRIPTION)
+    parser.add_argument("--debug", action="store_true", help=_DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", required=True)
     for name in _SUBCOMMAND_MODULES:
         importlib.import_module(name).register(sub)
+    _add_debug(sub)
     return parser
+
+
+_DEBUG_HELP = "on an error, also print the Python traceback"
+
+
+def _add_debug(subparsers) -> None:
+    """``--debug`` on every sub-parser below ``subparsers`` (not set: the top level's)."""
+    for p in subparsers.choices.values():
+        if "--debug" not in p._option_string_actions:
+            p.add_argument(
+                "--debug", action="store_true", default=argparse.SUPPRESS, help=_DEBUG_HELP
+            )
+        for action in p._actions:
+            if isinstance(action, argparse._SubParsersAction):
+                _add_debug(action)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -90,25 +143,25 @@ def main(argv: list[str] | None = None) -> int:
     Args:
       argv: command-line arguments without the program name; None: ``sys.argv[1:]``.
     Returns:
-      int, the exit code.
+      int, the exit code (module docstring).
     """
     parser = build_parser()
     args = parser.parse_args(argv)
-    _enable_compile_cache()
+    debug = bool(getattr(args, "debug", False))
     old_term = signal.getsignal(signal.SIGTERM)
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, _terminate)  # like Ctrl-C: clean-up runs
     try:
+        _enable_compile_cache()
         return int(args.func(args) or 0)
-    except (ValueError, FileExistsError, FileNotFoundError) as exc:
-        print(f"jaxspline: error: {exc}", file=sys.stderr)
-        return 2
     except KeyboardInterrupt:
         print(
-            "jaxspline: interrupted (outputs are written atomically: none is partial)",
+            "jaxspline: interrupted (outputs are published as whole sets: none is partial)",
             file=sys.stderr,
         )
-        return 130
+        return EXIT_INTERRUPTED
+    except Exception as exc:  # noqa: BLE001 - every error ends in one line and a code
+        return _report(exc, debug)
     finally:
         if threading.current_thread() is threading.main_thread():
             # called as the process (argv None): the work is done, later signals only
@@ -116,6 +169,41 @@ def main(argv: list[str] | None = None) -> int:
             signal.signal(signal.SIGTERM, signal.SIG_IGN if argv is None else old_term)
             if argv is None:
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _report(exc: Exception, debug: bool) -> int:
+    """Print ``exc`` as one line (with the traceback before it under ``--debug``) and
+    return its exit code."""
+    from jaxspline.planner.deadline import TimeLimitError
+    from jaxspline.products.outputs import OutputBusyError, OutputError
+
+    code, label = _classify(exc, TimeLimitError, OutputBusyError, OutputError)
+    if debug:
+        traceback.print_exception(exc, file=sys.stderr)
+    text = str(exc).replace("\r", " ").replace("\n", " ").strip() or type(exc).__name__
+    if code == EXIT_INTERNAL:
+        text = f"{type(exc).__name__}: {text}"
+        if not debug:
+            text += " (a bug: run again with --debug for the traceback, and report it)"
+    print(f"jaxspline: {label}: {text}", file=sys.stderr)
+    return code
+
+
+def _classify(exc, time_limit, busy, output) -> tuple[int, str]:
+    """(exit code, label) of an exception (module docstring)."""
+    if isinstance(exc, time_limit):
+        return EXIT_TIME_LIMIT, "time limit"
+    if isinstance(exc, busy):
+        return EXIT_BUSY, "busy"
+    if isinstance(exc, output):
+        return EXIT_WRITE, "cannot write"
+    if isinstance(exc, ValueError | FileExistsError | FileNotFoundError | IsADirectoryError):
+        return EXIT_BAD_INPUT, "error"
+    if isinstance(exc, OSError):  # writing a --json / solution file, a full disk, ...
+        return EXIT_WRITE, "cannot write"
+    if isinstance(exc, MemoryError):
+        return EXIT_INTERNAL, "out of memory"
+    return EXIT_INTERNAL, "internal error"
 
 
 def _terminate(signum, frame):

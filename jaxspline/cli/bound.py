@@ -27,7 +27,18 @@ from __future__ import annotations
 
 import sys
 
-__all__ = ["register"]
+from jaxspline.cli.flags import (
+    MAX_ITERS,
+    MAX_PROCESSES,
+    MAX_SEED,
+    check_host_port,
+    check_int,
+    check_path,
+    check_seconds,
+    check_value,
+)
+
+__all__ = ["check_bound_flags", "register"]
 
 
 def register(sub) -> None:
@@ -80,8 +91,39 @@ def register(sub) -> None:
     p.set_defaults(func=_main)
 
 
+def check_bound_flags(args) -> None:
+    """The flags of ``jaxspline bound``, each by its name, before any work.
+
+    Args:
+      args: the parsed ``argparse`` namespace.
+    Raises:
+      ValueError: naming the flag and its value.
+    """
+    check_path("SCENARIO", args.scenario, kind="file")
+    check_seconds("--time-limit", args.time_limit)
+    check_int("--max-iters", args.max_iters, 1, MAX_ITERS)
+    check_value("--target", args.target)
+    check_path("--json", args.json, kind="file")
+    check_path("--plan", args.plan, kind="file")
+    check_seconds("--search-time", args.search_time)
+    check_int("--search-iters", args.search_iters, 1, MAX_ITERS)
+    check_int("--seed", args.seed, 0, MAX_SEED)
+    check_host_port("--coordinator", args.coordinator)
+    check_int("--num-processes", args.num_processes, 1, MAX_PROCESSES)
+    check_int("--process-id", args.process_id, 0, args.num_processes - 1)
+    if args.num_processes > 1 and args.coordinator is None:
+        raise ValueError("--num-processes: more than one process needs --coordinator HOST:PORT")
+    if args.plan is None and (args.search_time is not None or args.search_iters is not None):
+        raise ValueError("--search-time / --search-iters: only with --plan PLAN.json")
+    same = args.json is not None and args.json == args.plan
+    if same:
+        raise ValueError(f"--json and --plan: must be two files, both are {args.json!r}")
+
+
 def _main(args) -> int:
     from jaxspline.planner.bound import run_bound
+
+    check_bound_flags(args)
 
     more = {} if args.search_time is None else {"search_time": args.search_time}
     res = run_bound(

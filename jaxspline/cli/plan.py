@@ -20,8 +20,19 @@ calls :func:`jaxspline.plan` and writes into the output directory:
   sampled every ``--aem-step`` seconds plus every junction instant, and
   ``attitude.png`` (flown rate / acceleration / jerk against the limits).
 
-Existing outputs are never overwritten unless ``--force``; every file is written
-atomically.
+The outputs are one set (:mod:`jaxspline.products.outputs`): before planning the
+output directory is checked, locked against a second run and probed for room; the
+files are written into a staging directory beside it and moved into place at once, so
+a failure leaves the previous set or none. An earlier set is replaced only with
+``--force``. Every flag is checked before any work (:mod:`jaxspline.cli.flags`).
+
+Time limit: ``--time-limit`` (default: the scenario's ``planner.time_limit_s``) counts
+from the start of the command: loading the scenario, the stages before the search
+(which stop the run with exit 3, an estimate and the remedy when it runs out there;
+up to 20 s of compiling are not counted: :mod:`jaxspline.planner.deadline`), the
+search (which ends at the limit less a reserve for the check and the outputs). The
+repair, the flown-join check (its first compilation), the attitude history and the
+files follow the search; a run that ends past its limit says so on stderr.
 """
 
 from __future__ import annotations
@@ -31,14 +42,22 @@ import sys
 import time
 from pathlib import Path
 
-from jaxspline.planner.files import refuse_overwrite
+from jaxspline.cli.flags import (
+    MAX_ITERS,
+    MAX_SECONDS,
+    MAX_SEED,
+    check_int,
+    check_path,
+    check_seconds,
+)
+from jaxspline.products.outputs import ATTITUDE_FIGURE, OUTPUT_FILES
 from jaxspline.products.plan_html import HTML_FILE
-from jaxspline.search.clock import catch_signals
 
 __all__ = [
     "AEM_STEP_S",
     "ATTITUDE_FIGURE",
     "EXIT_INTERRUPTED",
+    "MAX_AEM_STATES",
     "OUTPUT_FILES",
     "register",
     "run_plan",
@@ -49,17 +68,8 @@ EXIT_INTERRUPTED = 130  # exit code after Ctrl-C / SIGTERM (128 + SIGINT, the sh
 # AEM sample step of the plan command [s]: ccsds-ndm serializes ~2,000 states/s, so
 # 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
 AEM_STEP_S = 10.0
-
-OUTPUT_FILES = (
-    "plan.json",
-    "plan.csv",
-    "plan.czml",
-    "ground_track.png",
-    "timeline.png",
-    "slack.png",
-)
-ATTITUDE_FIGURE = "attitude.png"  # with --aem (the default)
-_PLOTS = OUTPUT_FILES[3:]
+AEM_STEP_RANGE_S = (1e-3, 86400.0)
+MAX_AEM_STATES = 50_000  # attitude states over all AEM files (~30-60 s to compute and write)
 
 
 def register(sub) -> None:
@@ -75,7 +85,7 @@ def register(sub) -> None:
     )
     p.add_argument("scenario", nargs="?", help="scenario TOML (default: built-in scenario)")
     p.add_argument("-o", "--outdir", default="plan_out", help="output directory (default plan_out)")
-    p.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    p.add_argument("--force", action="store_true", help="replace an earlier set of outputs")
     p.add_argument(
         "--time-limit", type=float, default=None, help="planning budget [s] (default: scenario's)"
     )
@@ -140,6 +150,42 @@ def _main(args) -> int:
     return 0 if result.report["valid"] else 1
 
 
+def _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step) -> None:
+    """The flags of ``jaxspline plan``, each by its name (ValueError), before any work."""
+    if isinstance(scenario, str):
+        check_path("SCENARIO", scenario, kind="file")
+    check_seconds("--time-limit", time_limit)
+    check_int("--seed", seed, 0, MAX_SEED)
+    check_int("--max-iters", max_iters, 1, MAX_ITERS)
+    check_seconds("--certify", certify, zero=True, hi=MAX_SECONDS)
+    check_seconds("--aem-step", aem_step, hi=AEM_STEP_RANGE_S[1])
+    if aem_step < AEM_STEP_RANGE_S[0]:
+        raise ValueError(f"--aem-step: must be >= {AEM_STEP_RANGE_S[0]:g} s, got {aem_step:g}")
+
+
+def _check_aem(sc, aem_step: float) -> tuple[str, ...]:
+    """The AEM file names of the satellites: distinct, and not too many states to write."""
+    from jaxspline.products.aem import aem_file_name
+
+    names = tuple(aem_file_name(s.name) for s in sc.satellites)
+    for k, n in enumerate(names):
+        if n in names[:k]:
+            other = sc.satellites[names.index(n)].name
+            raise ValueError(
+                f"satellites {other!r} and {sc.satellites[k].name!r} would share the AEM "
+                f"file {n}: give them names that differ in letters, digits, '_', '.' or '-'"
+            )
+    states = sc.duration / aem_step * len(names)
+    if states > MAX_AEM_STATES:
+        least = sc.duration * len(names) / MAX_AEM_STATES
+        raise ValueError(
+            f"--aem-step: {aem_step:g} s over the {sc.duration:g} s horizon and "
+            f"{len(names)} satellites is {states:.3g} attitude states (at most "
+            f"{MAX_AEM_STATES:,}); use --aem-step {least:.3g} or more, or --no-aem"
+        )
+    return names
+
+
 def run_plan(
     scenario=None,
     outdir="plan_out",
@@ -155,15 +201,16 @@ def run_plan(
     aem: bool = True,
     aem_step: float = AEM_STEP_S,
 ):
-    """Load ``scenario``, plan it, write the outputs.
+    """Load ``scenario``, plan it, write the outputs as one set (module docstring).
 
-    Every output name is checked before planning, so an existing file fails fast.
+    The arguments and the output directory are checked before the scenario is loaded,
+    the directory is locked and probed before planning.
 
     Args:
       scenario: path of a scenario TOML file, a Scenario, or None (the default scenario).
       outdir: str or Path of the output folder.
-      force: overwrite existing outputs.
-      time_limit: wall-clock budget of the planner [s]; None: the scenario default.
+      force: replace an earlier set of outputs.
+      time_limit: wall-clock budget [s] from this call on; None: the scenario default.
       seed: int, seed of the randomized search.
       max_iters: iteration cap of the search (reproducible plans); None: time-bound.
       certify: extra seconds after the time limit for a tighter certificate (0: none).
@@ -175,91 +222,91 @@ def run_plan(
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
-      FileExistsError: an output exists and ``force`` is false.
-      ValueError: a bad scenario file (naming the field).
+      FileExistsError: an earlier set exists and ``force`` is false.
+      ValueError: a bad flag or scenario file (naming it).
+      jaxspline.planner.deadline.TimeLimitError: the limit ran out before the search.
+      jaxspline.products.outputs.OutputError: the outputs cannot be written
+        (``OutputBusyError``: another run holds the directory).
     """
-    from jaxspline.planner.pipeline import plan
-    from jaxspline.products.aem import aem_file_name
+    from jaxspline.products.outputs import OutputSet
     from jaxspline.readers.scenario import scenario_from
 
-    out = Path(outdir)
+    t_start = time.monotonic()
+    _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step)
+    outputs = OutputSet(outdir, force=force)
+    outputs.check()  # fail before loading, nothing written
     sc = scenario_from(scenario)
+    aems = _check_aem(sc, aem_step) if aem else ()
+    limit = sc.planner.default_time_limit if time_limit is None else time_limit
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
-    names += (HTML_FILE,) * html
-    if aem:
-        names += (ATTITUDE_FIGURE,) * plots + tuple(aem_file_name(s.name) for s in sc.satellites)
-    for name in names:  # fail before planning, not after
-        refuse_overwrite(out / name, force)
-    # with --aem the flown joins are checked: the AEM files never exceed a limit
-    result = plan(
-        sc,
-        time_limit=time_limit,
-        seed=seed,
-        progress=progress,
-        max_iters=max_iters,
-        certify=certify,
-        flown_joins=aem,
-    )
-
-    def late(name):  # plan.json says so if it is not written yet
-        result.report.setdefault("interrupted", name)
-
-    with catch_signals(late):  # signals wait: every output is written whole
-        _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html)
-    if result.report.get("interrupted"):
-        print(
-            f"jaxspline: interrupted ({result.report['interrupted']}): the best plan found "
-            f"so far was checked and written to {out}/",
-            file=sys.stderr,
-        )
+    names += (HTML_FILE,) * html + ((ATTITUDE_FIGURE,) * plots + aems if aem else ())
+    with outputs:  # locked, staged and probed: planning starts only now
+        result = _plan(sc, limit, t_start, seed, max_iters, certify, progress, aem)
+        page, t_write = _write(result, outputs, plots, aem, aem_step, html)
+    _print_summary(result, Path(outdir), names, page)
+    _say_late(result, limit, time.monotonic() - t_start, t_write)
     return result
 
 
-def _write_outputs(result, sc, out, names, force, plots, aem, aem_step, html):
-    from jaxspline.products.aem import write_aems
-    from jaxspline.products.attitude_history import attitude_history
+def _plan(sc, limit, t_start, seed, max_iters, certify, progress, aem):
+    """:func:`jaxspline.plan` with what is left of ``limit`` after loading the scenario,
+    its stages before the search bound by the limit from ``t_start`` on."""
+    from jaxspline.planner.deadline import StageDeadline
+    from jaxspline.planner.pipeline import plan
 
-    if sc.areas:  # covered fraction per area, into plan.json's report
-        from jaxspline.readers.areas import area_coverage
+    size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
+    deadline = StageDeadline(t_start, limit, size)
+    deadline.check("loading", 1.0)
+    left = max(limit - (time.monotonic() - t_start), 1e-3)  # the search's share (may be none)
+    # with --aem the flown joins are checked: the AEM files never exceed a limit
+    return plan(sc, time_limit=left, seed=seed, progress=progress, max_iters=max_iters,
+                certify=certify, flown_joins=aem, deadline=deadline)  # fmt: skip
 
-        t0 = time.monotonic()
-        result.report["areas"] = area_coverage(result)
-        result.timings["coverage"] = round(time.monotonic() - t0, 3)
-    if aem:
-        t0 = time.monotonic()
-        attitude = attitude_history(result, aem_step)
-        write_aems(result, attitude, out, force=force)
-        result.timings["attitude"] = round(time.monotonic() - t0, 3)
-    from jaxspline.products.plan_view import view_data
 
-    view = {"view": view_data(result)}  # what plan.html draws: `jaxspline view` rebuilds it
-    result.to_json(out / "plan.json", force=force, extra=view)
-    result.to_csv(out / "plan.csv", force=force)
-    from jaxspline.products.czml import write_czml
+def _write(result, outputs, plots, aem, aem_step, html):
+    """Write the set into the staging folder and publish it, signals held until it is
+    whole; a signal during writing is recorded in plan.json. Returns (page, seconds)."""
+    from jaxspline.products.outputs import rewrite_plan_json, write_plan_outputs
+    from jaxspline.search.clock import catch_signals
 
-    write_czml(result, out / "plan.czml", force=True)
-    if plots:
-        from jaxspline.products.plot_plan import (
-            plot_plan_ground_tracks,
-            plot_plan_slack,
-            plot_plan_timeline,
+    def late(name):  # plan.json says so
+        result.report.setdefault("interrupted", name)
+
+    t0 = time.monotonic()
+    with catch_signals(late):  # signals wait: the set is written whole
+        before = result.report.get("interrupted")
+        page = write_plan_outputs(result, outputs.staging, plots=plots, aem=aem,
+                                  aem_step=aem_step, html=html)  # fmt: skip
+        if result.report.get("interrupted") != before:
+            rewrite_plan_json(result, outputs.staging)
+        before = result.report.get("interrupted")
+        outputs.publish()
+        if result.report.get("interrupted") != before:  # during the rename itself
+            rewrite_plan_json(result, outputs.target)
+    if result.report.get("interrupted"):
+        print(
+            f"jaxspline: interrupted ({result.report['interrupted']}): the best plan found "
+            f"so far was checked and written to {outputs.outdir}/",
+            file=sys.stderr,
         )
+    return page, time.monotonic() - t0
 
-        plot_plan_ground_tracks(result, out / "ground_track.png")
-        plot_plan_timeline(result, out / "timeline.png")
-        plot_plan_slack(result, out / "slack.png")
-        if aem:
-            from jaxspline.products.plot_attitude import plot_attitude_profile
 
-            plot_attitude_profile(result, attitude, out / ATTITUDE_FIGURE)
-    page = None
-    if html:
-        from jaxspline.products.plan_html import write_plan_html
+def _say_late(result, limit: float, elapsed: float, t_write: float) -> None:
+    """A line on stderr when the run ended past its time limit (never silently)."""
+    if elapsed <= limit:
+        return
+    after = {k: v for k, v in result.timings.items() if k in _AFTER_SEARCH}
+    parts = ", ".join(f"{k} {v:.1f} s" for k, v in after.items())
+    print(
+        f"jaxspline: note: the run took {elapsed:.1f} s, {elapsed - limit:.1f} s past its "
+        f"{limit:g} s time limit; after the search: {parts + ', ' if parts else ''}"
+        f"writing {t_write:.1f} s",
+        file=sys.stderr,
+    )
 
-        t0 = time.monotonic()
-        path = write_plan_html(result.to_dict(extra=view), out / HTML_FILE, force=force)
-        page = (path.stat().st_size, time.monotonic() - t0)
-    _print_summary(result, out, names, page)
+
+_AFTER_SEARCH = ("repair", "certify", "coverage", "attitude")
 
 
 def _print_summary(r, out: Path, names, page=None) -> None:

@@ -9,10 +9,13 @@ next to it. Nothing is re-planned. An existing page is never overwritten unless
 
 from __future__ import annotations
 
+import json
 import sys
 from pathlib import Path
 
-__all__ = ["register", "run_view"]
+from jaxspline.cli.flags import check_path
+
+__all__ = ["read_plan_file", "register", "run_view"]
 
 
 def register(sub) -> None:
@@ -40,6 +43,33 @@ def _main(args) -> int:
     return 0
 
 
+def read_plan_file(plan: Path) -> dict:
+    """The checked document of a ``plan.json`` (:func:`jaxspline.cli.plan_file.check_plan_doc`).
+
+    Args:
+      plan: Path of the file.
+    Returns:
+      dict.
+    Raises:
+      FileNotFoundError: no such file.
+      ValueError: not readable UTF-8 JSON, or a field the page reads is malformed.
+    """
+    from jaxspline.cli.plan_file import check_plan_doc
+    from jaxspline.readers.fields import read_text
+
+    try:
+        text = read_text(plan)
+    except FileNotFoundError:
+        raise FileNotFoundError(f"plan file not found: {plan}") from None
+    try:
+        doc = json.loads(text)
+    except json.JSONDecodeError as exc:
+        raise ValueError(f"{plan}: not JSON ({exc})") from None
+    except RecursionError:
+        raise ValueError(f"{plan}: not JSON this reader takes (nested too deeply)") from None
+    return check_plan_doc(doc, str(plan))
+
+
 def run_view(plan, output=None, *, force: bool = False) -> Path:
     """Write the page of a ``plan.json``.
 
@@ -52,11 +82,18 @@ def run_view(plan, output=None, *, force: bool = False) -> Path:
     Raises:
       FileNotFoundError: no such plan file.
       FileExistsError: the page exists and ``force`` is false.
-      ValueError: the file is not a plan document.
+      ValueError: the file is not a plan document (naming the file and the field), or a
+        flag is bad.
     """
-    from jaxspline.products.plan_html import HTML_FILE, read_plan, write_plan_html
+    from jaxspline.products.plan_html import HTML_FILE, write_plan_html
 
+    check_path("PLAN", str(plan), kind="file")
+    check_path("-o/--output", None if output is None else str(output), kind="file")
     plan = Path(plan)
     out = plan.parent / HTML_FILE if output is None else Path(output)
-    doc = read_plan(plan)
-    return write_plan_html(doc, out, force=force)
+    doc = read_plan_file(plan)
+    try:
+        return write_plan_html(doc, out, force=force)
+    except (KeyError, TypeError, IndexError, AttributeError, ValueError) as exc:
+        # a field the checks let through that the page cannot draw
+        raise ValueError(f"{plan}: cannot draw this plan ({type(exc).__name__}: {exc})") from None

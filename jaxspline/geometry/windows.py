@@ -149,6 +149,7 @@ def visibility_windows_all(
     t_lo: np.ndarray,
     t_hi: np.ndarray,
     duration: float,
+    tick=None,
 ) -> Windows:
     """All visibility windows of R points from S satellites of a tabulated ``scene``.
 
@@ -162,6 +163,8 @@ def visibility_windows_all(
       t_lo: [R] start of each target's window [s] (-inf: free).
       t_hi: [R] end of each target's window [s] (+inf: free).
       duration: horizon end [s] (windows lie in [0, duration]).
+      tick: optional ``tick(share done)`` called before every block of targets (a
+        clock that may stop the call by raising; the windows do not depend on it).
     Returns:
       :class:`Windows`.
     """
@@ -176,13 +179,16 @@ def visibility_windows_all(
     lo_t = np.maximum(np.asarray(t_lo, np.float64), 0.0)
     hi_t = np.minimum(np.asarray(t_hi, np.float64), duration)
     out = {"sat": [], "target": [], "lo": [], "hi": []}
-    for s in range(rk.shape[0]):
+    s_count = rk.shape[0]
+    for s in range(s_count):
         tasks = np.flatnonzero(allowed[s] & (lo_t <= hi_t))
         good_k = ok_knots[s] & in_h
         if tasks.size == 0 or not good_k.any():
             continue
         cone = _satellite_cone(knots, rk[s], good_k, float(off_nadir_limit[s]), r_min_t)
         for b0 in range(0, tasks.size, _BLOCK):
+            if tick is not None:
+                tick((s + b0 / tasks.size) / s_count)
             ti, ks = _near_knots(knots, cone, g_hat, tasks[b0 : b0 + _BLOCK], lo_t, hi_t)
             offn, elev = _exact_numpy(cone.r_e[ks], g[ti])
             vis = _visible(offn, elev, cone.limit, horizon)

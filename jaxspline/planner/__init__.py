@@ -9,13 +9,18 @@ those joins) -> ``context`` (:class:`PlanContext`, what the stages share) -> ``p
 ``refine_starts`` -> ``plan_check`` (the independent re-check) -> ``assemble`` /
 ``result`` (the :class:`PlanResult`). ``sharded`` runs the plan over
 several hosts; ``bound`` the bound alone; ``files`` the atomic file writes every writer
-uses.
+uses; ``deadline`` the time limit of the stages before the search.
 """
 
 from jaxspline.planner.bound import SEARCH_TIME_S as SEARCH_TIME_S
 from jaxspline.planner.bound import BoundRun as BoundRun
 from jaxspline.planner.bound import run_bound as run_bound
 from jaxspline.planner.context import PlanContext as PlanContext
+from jaxspline.planner.deadline import COMPILE_ALLOWANCE_S as COMPILE_ALLOWANCE_S
+from jaxspline.planner.deadline import StageDeadline as StageDeadline
+from jaxspline.planner.deadline import TimeLimitError as TimeLimitError
+from jaxspline.planner.deadline import compile_seconds as compile_seconds
+from jaxspline.planner.deadline import suggested_limit as suggested_limit
 from jaxspline.planner.flown_joins import DIRECT_MAX_S as DIRECT_MAX_S
 from jaxspline.planner.flown_joins import JOIN_SAMPLES as JOIN_SAMPLES
 from jaxspline.planner.flown_joins import RETURN_S as RETURN_S

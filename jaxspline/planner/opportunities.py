@@ -53,6 +53,8 @@ __all__ = [
 ]
 
 _CHUNK = 1 << 13  # candidates per compiled evaluation (padded)
+_TICK_CHUNKS = 16  # chunks between two clock checks (evaluate's tick)
+_SAMPLES_SHARE = 0.6  # share of the options stage the sample checks take (for the clock)
 _GRID_TOL = 1e-6  # [s] a time within this of a knot is on the knot
 _KNOT_TOL = 1e-6  # [steps] knots this close to a start / end are left to that sample
 _DURATION_TOL = 1e-9  # [s] an imaging time this much short of min_duration still counts
@@ -93,7 +95,7 @@ state_batched = jax.jit(jax.vmap(_state, in_axes=(None, 0, 0, 0, 0)))
 """``aim_state`` (angles, rates, accelerations) batched like :data:`geometry_batched`."""
 
 
-def evaluate(fn, scene: Scene, sat, p, t0, t):
+def evaluate(fn, scene: Scene, sat, p, t0, t, tick=None):
     """Apply a vmapped kernel ``fn(scene, sat, p, t0, t)`` in padded chunks (numpy out).
 
     Every chunk is padded to :data:`_CHUNK` rows by repeating the last row, so one
@@ -107,13 +109,26 @@ def evaluate(fn, scene: Scene, sat, p, t0, t):
       p: float [M, 8], aim laws.
       t0: float [M], aim-law start times [s from the epoch].
       t: float [M], evaluation times [s from the epoch].
+      tick: optional ``tick(share done)`` called after every block of
+        :data:`_TICK_CHUNKS` chunks (the results are the same with or without it).
     Returns:
       list of numpy arrays [M, ...] (one per kernel output), or None when M = 0.
     """
-    if int(np.shape(sat)[0]) == 0:
+    m = int(np.shape(sat)[0])
+    if m == 0:
         return None
     args = [np.asarray(x) for x in (sat, p, t0, t)]
-    return map_chunked(lambda *a: fn(scene, *(jnp.asarray(x) for x in a)), args, _CHUNK)
+
+    def run(*a):
+        return fn(scene, *(jnp.asarray(x) for x in a))
+
+    if tick is None:
+        return map_chunked(run, args, _CHUNK)
+    block, parts = _TICK_CHUNKS * _CHUNK, []
+    for a in range(0, m, block):  # whole chunks: the same padding as one call
+        parts.append(map_chunked(run, [x[a : a + block] for x in args], _CHUNK))
+        tick(min(m, a + block) / m)
+    return [np.concatenate(col) for col in zip(*parts, strict=True)]
 
 
 def aim_laws(sc: Scenario):
@@ -186,7 +201,9 @@ def _limit_table(sats, name: str) -> np.ndarray:
     )
 
 
-def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) -> Opportunities:
+def build_opportunities(
+    sc: Scenario, scene: Scene, table_ok, windows: Windows, tick=None
+) -> Opportunities:
     """All valid options of the windows (see module docstring).
 
     Args:
@@ -194,10 +211,12 @@ def build_opportunities(sc: Scenario, scene: Scene, table_ok, windows: Windows) 
       scene: multi-satellite :class:`Scene` (orbit tables [S, M, 3]).
       table_ok: callable ``(sat [N], t [N]) -> bool [N]``, ephemeris usable.
       windows: visibility windows of the targets' reference points.
+      tick: optional ``tick(share of the stage done)``, called while the samples are
+        checked (the clock of :class:`jaxspline.planner.deadline.StageDeadline`).
     """
     per_ch = np.array([not s.maneuver.rest_to_rest for s in sc.satellites])
     cand = _grid_candidates(sc, aim_laws(sc), windows)
-    ok = _samples_ok(sc, scene, table_ok, cand, per_ch)
+    ok = _samples_ok(sc, scene, table_ok, cand, per_ch, tick)
     if sc.planner.sun_elevation_min is not None and cand.sat.size:
         ok &= _sun_ok(sc, scene, cand)
     sel = np.flatnonzero(ok)
@@ -274,12 +293,15 @@ def _start_range(sc: Scenario, windows: Windows, keep, strip, dur):
     return k_lo, k_hi
 
 
-def _samples_ok(sc: Scenario, scene: Scene, table_ok, cand: _Candidates, per_ch) -> np.ndarray:
+def _samples_ok(
+    sc: Scenario, scene: Scene, table_ok, cand: _Candidates, per_ch, tick=None
+) -> np.ndarray:
     """bool [N]: the candidate holds at every sample (start, every geometry knot inside,
     end): the off-nadir limit minus margin, the horizon margin, the usable ephemeris and,
     on ``per_ch`` satellites, a flyable scan (:func:`_scan_flyable`). Point candidates of
     rest-to-rest satellites starting and ending on knots pass unsampled (their window
-    was computed on every knot)."""
+    was computed on every knot). ``tick(share)``: the clock, while the geometry is
+    evaluated."""
     pc = sc.planner
     gstep = pc.geometry_step
     limit = np.array([s.off_nadir_max for s in sc.satellites]) - pc.margins.off_nadir
@@ -294,7 +316,8 @@ def _samples_ok(sc: Scenario, scene: Scene, table_ok, cand: _Candidates, per_ch)
     if idx.size:
         owner, ts = observation_samples(t0[idx], t1[idx], gstep)
         o = idx[owner]
-        offn, elev, _, _ = evaluate(geometry_batched, scene, sat[o], params[o], t0[o], ts)
+        share = None if tick is None else (lambda x: tick(_SAMPLES_SHARE * x))
+        offn, elev, _, _ = evaluate(geometry_batched, scene, sat[o], params[o], t0[o], ts, share)
         good = (offn <= limit[sat[o]]) & (elev > pc.margins.horizon) & table_ok(sat[o], ts)
         if per_ch.any():
             pcm = per_ch[sat[o]]

@@ -19,7 +19,11 @@ process-wide setting is left alone):
    violation, so the returned plan is valid under every check that ran.
 
 Ctrl-C or SIGTERM during stages 5-6 stops the search: the best plan so far goes
-through the repair and is returned with ``report["interrupted"]`` set.
+through the repair and is returned with ``report["interrupted"]`` set. Given a
+``deadline`` (``jaxspline plan`` passes one), stages 1-4 check it
+(:mod:`jaxspline.planner.deadline`): when it passes there, the call stops with
+:class:`jaxspline.planner.deadline.TimeLimitError` (what was done, an estimate of the
+time needed, the remedy) instead of searching past it.
 """
 
 from __future__ import annotations
@@ -40,6 +44,7 @@ from jaxspline.geometry.frames import in_shadow, jd_split, sun_direction
 from jaxspline.geometry.windows import visibility_windows_all
 from jaxspline.planner.assemble import assemble_result
 from jaxspline.planner.context import PlanContext
+from jaxspline.planner.deadline import StageDeadline
 from jaxspline.planner.join_screen import (
     channel_states,
     join_far_gap,
@@ -135,6 +140,7 @@ def plan(
     max_iters: int | None = None,
     certify: float = 0.0,
     flown_joins: bool = False,
+    deadline: StageDeadline | None = None,
 ) -> PlanResult:
     """Plan a scenario: the best observations found within ``time_limit`` seconds.
 
@@ -159,8 +165,14 @@ def plan(
         aeossp rules). The transitions are then also screened with the joins
         (:mod:`jaxspline.planner.join_screen`). The check's time (first call:
         compilation of the join kernels) is not part of ``time_limit``.
+      deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` (``jaxspline
+        plan`` passes one): the stages before the search check it and stop with
+        :class:`jaxspline.planner.deadline.TimeLimitError` once it has passed. Without
+        it (the default) only the search is bound by ``time_limit``.
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
+    Raises:
+      jaxspline.planner.deadline.TimeLimitError: ``deadline`` passed before the search.
     """
     if not isinstance(scenario, Scenario):
         raise ValueError(f"scenario must be a jaxspline Scenario, got {type(scenario).__name__}")
@@ -174,9 +186,8 @@ def plan(
     ):
         raise ValueError(f"max_iters must be an integer >= 1, got {max_iters!r}")
     with jax.enable_x64(True):
-        return _plan(
-            scenario, float(limit), int(seed), bool(progress), max_iters, certify, flown_joins
-        )
+        args = (float(limit), int(seed), bool(progress), max_iters, certify, flown_joins)
+        return _plan(scenario, *args, deadline)
 
 
 def _orbits(sc: Scenario):
@@ -192,7 +203,7 @@ def _orbits(sc: Scenario):
     return table, scene, sunlit
 
 
-def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
+def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None):
     """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need.
 
     The slack (the shortest observation) lets the DP process a block of starts that
@@ -208,6 +219,8 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
     (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go
     straight into a :class:`jaxspline.search.store.PairsBuilder`: memory is the
     compact table plus one satellite's compact rows, whatever the candidate count.
+    ``tick(share done)`` (the clock of :class:`jaxspline.planner.deadline.StageDeadline`)
+    is called after every chunk.
 
     Returns:
       (NearPairs, pairs removed by ``join_filter``).
@@ -232,6 +245,8 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None):
             process_index=0,  # every pair of these satellites here, also under
             process_count=1,  # jax.distributed (shards split by satellite, not chunk)
         ):
+            if tick is not None and tr.src.size:  # sources come in start order
+                tick((ids[0] + (int(tr.src.max()) + 1) * ids.size / n) / len(opp))
             ii, jj = ids[tr.src], ids[tr.dst]
             keep = o.t_end[ii] > o.t_start[jj] - far[k] - slack
             need = sat.maneuver.need(tr.t_min, tr.T)
@@ -264,6 +279,7 @@ def build_problem(
     progress: bool = False,
     joins: bool = False,
     reduce_slack=None,
+    deadline: StageDeadline | None = None,
     _clock=None,
 ) -> PlanContext:
     """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
@@ -279,6 +295,9 @@ def build_problem(
         shortest observation [s], the DP's block width): processes that each build
         a shard of the satellites pass the minimum over all of them, so every shard
         screens the same window as a single process would.
+      deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` checked
+        between the stages and inside options and screening
+        (:class:`jaxspline.planner.deadline.TimeLimitError` once it has passed).
       _clock: private; the stage timer of an enclosing :func:`plan` call.
     Returns:
       :class:`jaxspline.planner.context.PlanContext`: the search's problem and what the
@@ -286,15 +305,19 @@ def build_problem(
     """
     sc = scenario
     clock = _clock or _Clock(sc.name, progress)
+    check = _stage_check(deadline, clock)
     with jax.enable_x64(True):
         sats = sc.satellites
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
-        windows = _windows(sc, scene, table)
+        check("orbits")
+        windows = _windows(sc, scene, table, check("windows", 0))
         n_tg = len(np.unique(windows.target))
         clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
-        opp = build_opportunities(sc, scene, table.usable, windows)
+        check("windows")
+        opp = build_opportunities(sc, scene, table.usable, windows, tick=check("options", 0))
         clock.lap("options", f"{len(opp)} options")
+        tick = check("screening", 0, f"{len(opp)} options")
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
         omega = nadir_rate(scene)
         far, first = _far_and_first(sats, opp, tables, omega)
@@ -303,18 +326,39 @@ def build_problem(
         if joins and len(opp):
             far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega)
             lookup = np.ones(len(sats), bool)
-        near, removed = _near_pairs(sc, opp, tables, far, slack + _NEAR_SLACK, join_filter)
+        if tick is not None:
+            tick(0.0)  # the far gaps and the join screens may take a while
+        near, removed = _near_pairs(
+            sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
+        )
         clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
+        check("screening")
         battery = _battery(sc, sunlit)
         pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.targets.value, lookup)
         pb.near_slack = slack
     return PlanContext(sc, pb, opp, windows, scene, table, battery, far)
 
 
-def _windows(sc: Scenario, scene, table):
+def _stage_check(deadline: StageDeadline | None, clock):
+    """``check(stage, done=1, what="")``: with ``done`` = 1 it checks the deadline at the
+    end of a stage; with ``done`` = 0 it returns the stage's ``tick(share)`` (None
+    without a deadline). A stage starts at the clock's last lap."""
+
+    def check(stage, done=1.0, what=""):
+        if deadline is None:
+            return None
+        if done >= 1.0:
+            return deadline.check(stage, 1.0, clock.last, what)
+        return lambda share: deadline.check(stage, share, clock.last, what)
+
+    return check
+
+
+def _windows(sc: Scenario, scene, table, tick=None):
     """Stage 2: every visibility window of every target's reference point on every
     satellite allowed to image it (sensor type), within the off-nadir limit and the
-    horizon (both minus their margins) and the target's imaging window."""
+    horizon (both minus their margins) and the target's imaging window (``tick``: the
+    clock, between blocks of targets)."""
     pc = sc.planner
     tg = sc.targets
     sensors = np.array([s.sensor for s in sc.satellites])
@@ -330,6 +374,7 @@ def _windows(sc: Scenario, scene, table):
         tg.t_lo,
         tg.t_hi,
         sc.duration,
+        tick=tick,
     )
 
 
@@ -422,13 +467,15 @@ def _search(pb, deadline, seed, max_iters, pc, clock):
         clock.bar = None
 
 
-def _plan(sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins) -> PlanResult:
+def _plan(
+    sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins, deadline
+) -> PlanResult:
     """:func:`plan` after its argument checks (inside ``jax.enable_x64``): stages 1-4,
     then search and repair under the signal guard, the optional HiGHS certificate, and
     the result."""
     clock = _Clock(sc.name, progress)
     budget = _budget(sc, limit, clock.t0)
-    ctx = build_problem(sc, joins=flown_joins, _clock=clock)
+    ctx = build_problem(sc, joins=flown_joins, deadline=deadline, _clock=clock)
     res, rep, interrupted = _search_and_repair(ctx, budget, seed, max_iters, flown_joins, clock)
     clock.lap(
         "repair",

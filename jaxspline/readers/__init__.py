@@ -2,10 +2,12 @@
 
 ``mission`` holds the types every later stage reads (:class:`Scenario`,
 :class:`Satellite`, :class:`Targets`, :class:`Area`, ...) and :func:`orbit_scene`;
-``fields`` the checked TOML/CSV field readers; ``land`` the land mask; ``targets`` the
-target tables (CSV and TOML); ``area_files`` the GeoJSON/TOML areas; ``areas`` cuts
-areas into strip targets along the ground tracks and reports their coverage;
-``scenario`` the TOML scenario reader (the full schema is its docstring).
+``fields`` the checked TOML/CSV field readers; ``ranges`` the physical range of every
+number of a scenario file; ``land`` the land mask; ``satellites`` the satellite tables
+(TLE checks); ``targets`` the target tables (CSV and TOML); ``area_files`` the
+GeoJSON/TOML areas; ``areas`` cuts areas into strip targets along the ground tracks and
+reports their coverage; ``scenario`` the TOML scenario reader (the full schema is its
+docstring).
 """
 
 from jaxspline.readers.area_files import AREA_KEYS as AREA_KEYS
@@ -25,6 +27,7 @@ from jaxspline.readers.areas import coverage_line as coverage_line
 from jaxspline.readers.areas import cut_areas as cut_areas
 from jaxspline.readers.areas import footprint_lonlat as footprint_lonlat
 from jaxspline.readers.mission import DEFAULT_SWATH as DEFAULT_SWATH
+from jaxspline.readers.mission import MAX_EXACT_OPTIONS as MAX_EXACT_OPTIONS
 from jaxspline.readers.mission import MODELS as MODELS
 from jaxspline.readers.mission import Area as Area
 from jaxspline.readers.mission import FlexMode as FlexMode
@@ -36,6 +39,17 @@ from jaxspline.readers.mission import Scenario as Scenario
 from jaxspline.readers.mission import Targets as Targets
 from jaxspline.readers.mission import make_targets as make_targets
 from jaxspline.readers.mission import orbit_scene as orbit_scene
+from jaxspline.readers.ranges import EPOCH_RANGE as EPOCH_RANGE
+from jaxspline.readers.ranges import HORIZON as HORIZON
+from jaxspline.readers.ranges import MAX_NAME_CHARS as MAX_NAME_CHARS
+from jaxspline.readers.ranges import MAX_SCAN_SPEEDS as MAX_SCAN_SPEEDS
+from jaxspline.readers.ranges import MAX_TLE_AGE_DAYS as MAX_TLE_AGE_DAYS
+from jaxspline.readers.ranges import RANGES as RANGES
+from jaxspline.readers.ranges import bounds as bounds
+from jaxspline.readers.ranges import range_text as range_text
+from jaxspline.readers.satellites import SATELLITE_KEYS as SATELLITE_KEYS
+from jaxspline.readers.satellites import parse_satellites as parse_satellites
+from jaxspline.readers.satellites import tle_epoch as tle_epoch
 from jaxspline.readers.scenario import DEFAULT_SCENARIO_PATH as DEFAULT_SCENARIO_PATH
 from jaxspline.readers.scenario import default_scenario as default_scenario
 from jaxspline.readers.scenario import load_scenario as load_scenario

@@ -45,6 +45,7 @@ from jaxspline.readers.fields import (
     field_tables,
     read_text,
 )
+from jaxspline.readers.ranges import MAX_NAME_CHARS, RANGES, bounds
 
 __all__ = [
     "AREA_KEYS",
@@ -66,7 +67,7 @@ AREA_KEYS = frozenset(
 MAX_RADIUS_DEG = 10.0  # largest central angle from an area's centre to a vertex [deg]
 DENSIFY_DEG = 0.05  # polygon edges are split into pieces at most this long [deg]
 MIN_STRIP_M = 1000.0  # shorter strips are lengthened about their middle to this [m]
-MAX_SWATH_KM = 5000.0  # a wider strip is a unit mistake [km]
+MAX_SWATH_KM = RANGES["areas[].swath_km"][1]  # a wider strip is a unit mistake [km]
 MAX_AREA_STRIPS = 20_000  # most strips one cutting of an area may have (size / swath ...)
 _KM_PER_DEG = 111.195  # great-circle km per degree (mean Earth radius)
 _MERIDIAN = (
@@ -107,13 +108,43 @@ def _polygonal(geom, where: str):
     raise ValueError(f"{where}: a {geom.geom_type} is not an area (Polygon or MultiPolygon)")
 
 
+_POSITION_DEPTH = {"Polygon": 3, "MultiPolygon": 4}  # list levels down to a position
+
+
+def _is_number(x) -> bool:
+    return isinstance(x, int | float) and not isinstance(x, bool)
+
+
+def _positions(node, depth: int, where: str) -> None:
+    """Check that ``node`` is ``depth`` levels of lists ending in positions of 2 or 3
+    numbers (``[lon, lat]`` or ``[lon, lat, height]``); ValueError naming the first bad one."""
+    if depth == 1:
+        if not (isinstance(node, list) and len(node) in (2, 3) and all(map(_is_number, node))):
+            raise ValueError(f"{where}: a position must be 2 or 3 numbers [lon, lat], got {node!r}")
+        return
+    if not isinstance(node, list):
+        raise ValueError(f"{where}: must be a list, got {node!r}")
+    for i, x in enumerate(node):
+        _positions(x, depth - 1, f"{where}[{i}]")
+
+
+def _shape(geometry, where: str):
+    """The shapely geometry of a GeoJSON geometry object whose positions are numbers."""
+    if not isinstance(geometry, dict):
+        raise ValueError(f"{where}: must be a GeoJSON geometry object, got {geometry!r}")
+    depth = _POSITION_DEPTH.get(geometry.get("type"))
+    if depth is not None:
+        _positions(geometry.get("coordinates"), depth, f"{where} coordinates")
+    return _polygonal(shape(geometry), where)
+
+
 def _feature_geometry(f, where: str):
     if not isinstance(f, dict) or f.get("type") != "Feature":
         got = f.get("type") if isinstance(f, dict) else f
         raise ValueError(f"{where}: must be a GeoJSON Feature, got {got!r}")
     if f.get("geometry") is None:
         raise ValueError(f"{where}: the Feature has no geometry (null)")
-    return _polygonal(shape(f["geometry"]), f"{where} geometry")
+    return _shape(f["geometry"], f"{where} geometry")
 
 
 def _geojson_geometry(doc):
@@ -131,7 +162,7 @@ def _geojson_geometry(doc):
         elif kind == "Feature":
             geom = _feature_geometry(doc, "Feature")
         else:
-            geom = _polygonal(shape(doc), "geometry")
+            geom = _shape(doc, "geometry")
     except (AttributeError, TypeError, IndexError, KeyError, shapely.errors.ShapelyError) as exc:
         raise ValueError(f"not a valid GeoJSON {kind or 'object'}: {exc}") from None
     return geom
@@ -179,6 +210,8 @@ def read_geojson(path):
         raise ValueError(f"{path.name}: invalid JSON: {exc}") from None
     except ValueError as exc:
         raise ValueError(f"{path.name}: invalid GeoJSON: {exc}") from None
+    except RecursionError:
+        raise ValueError(f"{path.name}: invalid GeoJSON: nested too deeply") from None
     try:
         return _geojson_geometry(doc)
     except ValueError as exc:
@@ -272,7 +305,7 @@ def _check_strip_count(ctx, f, swath_from: str, radius: float, swath: float, max
     )
 
 
-def parse_areas(ctx, data: dict, base_dir, satellites) -> list[AreaSpec]:
+def parse_areas(ctx, data: dict, base_dir, satellites, horizon=None) -> list[AreaSpec]:
     """The ``[[areas]]`` (alias ``[area]``) tables of a parsed scenario file, checked.
 
     Args:
@@ -281,6 +314,8 @@ def parse_areas(ctx, data: dict, base_dir, satellites) -> list[AreaSpec]:
       base_dir: folder that relative GeoJSON paths start from (None: the working directory).
       satellites: the scenario's :class:`jaxspline.readers.mission.Satellite` tuple (the
         default swath is the narrowest of those whose sensor the area accepts).
+      horizon: the scenario's duration [s]: ``window_s`` lies in ``[0, horizon]`` (None:
+        the longest horizon).
     Returns:
       list of :class:`AreaSpec`, in file order.
     Raises:
@@ -289,59 +324,66 @@ def parse_areas(ctx, data: dict, base_dir, satellites) -> list[AreaSpec]:
     out, names = [], {}
     for i, (f, a) in enumerate(field_tables(ctx, data, "areas", "area")):
         a = field_table(ctx, f, a, AREA_KEYS)
-        name = field_str(ctx, f"{f}.name", a.get("name", f"area_{i + 1}"), allow_empty=False)
+        name = a.get("name", f"area_{i + 1}")
+        name = field_str(ctx, f"{f}.name", name, allow_empty=False, max_chars=MAX_NAME_CHARS)
         if name in names:
             raise ctx.error(f"{f}.name", f"duplicate area name {name!r} (also {names[name]})")
         names[name] = f
-        if ("geojson" in a) == ("lonlat_deg" in a):
-            raise ctx.error(f"{f}.geojson", "give exactly one of geojson (a file) and lonlat_deg")
-        where = ""  # the GeoJSON file, named in errors about its polygon
-        if "geojson" in a:
-            key = f"{f}.geojson"
-            path = Path(field_str(ctx, key, a["geojson"], allow_empty=False))
-            if not path.is_absolute() and base_dir is not None:
-                path = Path(base_dir) / path
-            if not path.is_file():
-                raise ctx.error(key, f"GeoJSON file not found: {path}")
-            try:
-                geom = read_geojson(path)
-            except ValueError as exc:
-                raise ctx.error(key, str(exc)) from None
-            where = f"{path.name}: "
-        else:
-            key = f"{f}.lonlat_deg"
-            geom = _ring(ctx, key, a["lonlat_deg"])
-        radius = _check_polygon(geom, lambda m, key=key, where=where: ctx.error(key, where + m))
-        value = field_number(ctx, f"{f}.priority", a.get("priority", 1.0), positive=True)
-        sensor = field_str(ctx, f"{f}.sensor", a.get("sensor", ""))
-        swath_from = ""  # the satellite whose swath the area takes
-        if "swath_km" in a:
-            swath = 1e3 * field_number(
-                ctx, f"{f}.swath_km", a["swath_km"], positive=True, hi=MAX_SWATH_KM
-            )
-        else:
-            swaths = [(s.swath, k) for k, s in enumerate(satellites) if sensor in ("", s.sensor)]
-            if not swaths:
-                raise ctx.error(
-                    f"{f}.swath_km",
-                    f"missing, and no satellite has sensor {sensor!r} to take it from",
-                )
-            swath, k = min(swaths)
-            swath_from = f"satellites[{k}].swath_km"
-        max_len = math.inf
-        if "max_length_km" in a:
-            max_len = 1e3 * field_number(
-                ctx, f"{f}.max_length_km", a["max_length_km"], positive=True
-            )
-            if max_len < MIN_STRIP_M:
-                raise ctx.error(
-                    f"{f}.max_length_km",
-                    f"must be >= {MIN_STRIP_M / 1e3:g} (the shortest strip), "
-                    f"got {a['max_length_km']!r}",
-                )
+        geom, radius = _area_polygon(ctx, f, a, base_dir)
+
+        def num(key, default=None, f=f, a=a):
+            return field_number(ctx, f"{f}.{key}", a.get(key, default), **bounds(f"areas[].{key}"))
+
+        value = num("priority", 1.0)
+        sensor = field_str(ctx, f"{f}.sensor", a.get("sensor", ""), max_chars=MAX_NAME_CHARS)
+        swath, swath_from = _area_swath(ctx, f, a, sensor, satellites)
+        max_len = 1e3 * num("max_length_km") if "max_length_km" in a else math.inf
         _check_strip_count(ctx, f, swath_from, radius, swath, max_len)
         t_lo, t_hi = -math.inf, math.inf
         if "window_s" in a:
-            t_lo, t_hi = field_pair(ctx, f"{f}.window_s", a["window_s"])
+            t_lo, t_hi = field_pair(ctx, f"{f}.window_s", a["window_s"],
+                                    **bounds("areas[].window_s", horizon))  # fmt: skip
         out.append(AreaSpec(name, geom, value, swath, max_len, sensor, t_lo, t_hi, f))
     return out
+
+
+def _area_polygon(ctx, f, a, base_dir):
+    """``(polygon, radius [deg])`` of an area table: its GeoJSON file or inline ring,
+    checked (:func:`_check_polygon`); errors name ``areas[i].geojson`` / ``.lonlat_deg``."""
+    if ("geojson" in a) == ("lonlat_deg" in a):
+        raise ctx.error(f"{f}.geojson", "give exactly one of geojson (a file) and lonlat_deg")
+    where = ""  # the GeoJSON file, named in errors about its polygon
+    if "geojson" in a:
+        key = f"{f}.geojson"
+        path = Path(field_str(ctx, key, a["geojson"], allow_empty=False))
+        if not path.is_absolute() and base_dir is not None:
+            path = Path(base_dir) / path
+        if not path.is_file():
+            raise ctx.error(key, f"GeoJSON file not found: {path}")
+        try:
+            geom = read_geojson(path)
+        except ValueError as exc:
+            raise ctx.error(key, str(exc)) from None
+        where = f"{path.name}: "
+    else:
+        key = f"{f}.lonlat_deg"
+        geom = _ring(ctx, key, a["lonlat_deg"])
+    try:
+        return geom, _check_polygon(geom, lambda m: ctx.error(key, where + m))
+    except shapely.errors.ShapelyError as exc:  # GEOS on a degenerate polygon
+        raise ctx.error(key, f"{where}not a usable polygon: {exc}") from None
+
+
+def _area_swath(ctx, f, a, sensor, satellites) -> tuple[float, str]:
+    """``(swath [m], field it came from)``: the area's ``swath_km``, or the narrowest swath
+    of the satellites whose sensor the area accepts (the field names that satellite)."""
+    if "swath_km" in a:
+        swath = field_number(ctx, f"{f}.swath_km", a["swath_km"], **bounds("areas[].swath_km"))
+        return 1e3 * swath, ""
+    swaths = [(s.swath, k) for k, s in enumerate(satellites) if sensor in ("", s.sensor)]
+    if not swaths:
+        raise ctx.error(
+            f"{f}.swath_km", f"missing, and no satellite has sensor {sensor!r} to take it from"
+        )
+    swath, k = min(swaths)
+    return swath, f"satellites[{k}].swath_km"

@@ -3,21 +3,29 @@
 Shared by :mod:`jaxspline.readers.scenario` (satellites, planner) and
 :mod:`jaxspline.readers.targets` (targets). Every reader raises ``ValueError`` as
 ``source: field (line N): message``; :class:`FieldContext` finds the TOML line of a
-field such as ``satellites[1].rate_deg_s`` when the raw text is known.
+field such as ``satellites[1].rate_deg_s`` when the raw text is known. Strings never
+hold control characters (NUL, escape, line breaks, ...: :func:`check_text`).
 :func:`read_text` reads every input file (TOML, CSV, GeoJSON, YAML) as UTF-8, a
-byte-order mark dropped, and names the file and line of bytes that are not UTF-8.
+byte-order mark dropped, and names the file and line of bytes that are not UTF-8; a
+directory, a device or pipe, an unreadable file or one over :data:`MAX_FILE_BYTES` is
+a ``ValueError`` naming the file.
 """
 
 from __future__ import annotations
 
 import math
+import os
 import re
+import stat
+import unicodedata
 from pathlib import Path
 
 __all__ = [
+    "MAX_FILE_BYTES",
     "REQUIRED",
     "FieldContext",
     "check_float",
+    "check_text",
     "field_bool",
     "field_int",
     "field_number",
@@ -29,6 +37,7 @@ __all__ = [
 ]
 
 _IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
+MAX_FILE_BYTES = 1 << 30  # largest input file read [bytes] (1 GiB: ~15 M CSV rows)
 
 
 class FieldContext:
@@ -125,9 +134,10 @@ def read_text(path, where=None) -> str:
       str.
     Raises:
       FileNotFoundError: the file is missing.
-      ValueError: the bytes are not UTF-8, naming the file and the line.
+      ValueError: the bytes are not UTF-8 (naming the file and the line), or the path
+        is not a readable regular file of at most :data:`MAX_FILE_BYTES`.
     """
-    data = Path(path).read_bytes()
+    data = _read_bytes(Path(path))
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -137,6 +147,53 @@ def read_text(path, where=None) -> str:
             f"{place}: not UTF-8 text (byte 0x{data[exc.start]:02x} at offset {exc.start}); "
             "save the file as UTF-8"
         ) from None
+
+
+def _read_bytes(path: Path) -> bytes:
+    """The bytes of a regular file; ValueError naming it when it is none or unreadable."""
+    try:
+        st = path.stat()
+        kind = stat.S_IFMT(st.st_mode)
+        data = path.read_bytes() if kind == stat.S_IFREG and st.st_size <= MAX_FILE_BYTES else None
+    except FileNotFoundError:
+        raise
+    except (OSError, ValueError) as exc:  # permissions, a NUL in the name, a loop, ...
+        why = exc.strerror if isinstance(exc, OSError) and exc.strerror else str(exc)
+        raise ValueError(f"{os.fspath(path)!r}: cannot read: {why}") from None
+    if kind == stat.S_IFDIR:
+        raise ValueError(f"{path}: is a directory, not a file")
+    if kind != stat.S_IFREG:
+        raise ValueError(f"{path}: not a regular file (a device, pipe or socket)")
+    if data is None:
+        raise ValueError(
+            f"{path}: {st.st_size / 2**20:.0f} MiB, more than the "
+            f"{MAX_FILE_BYTES / 2**20:.0f} MiB an input file may have"
+        )
+    return data
+
+
+def check_text(value: str, err, max_chars: int | None = None) -> str:
+    """``value`` if it holds no control character (and at most ``max_chars`` characters).
+
+    Control characters (Unicode category Cc: NUL, escape, tab, line breaks, ...) and
+    lone surrogates would be dropped or change meaning in the CSV, JSON and CCSDS
+    files the plan is written to, so names and sensor types never hold them.
+
+    Args:
+      value: str.
+      err: callable ``err(msg) -> Exception``.
+      max_chars: longest accepted string (None: any length).
+    Returns:
+      str, ``value``.
+    Raises:
+      Exception: ``err(msg)`` naming the first bad character and its position.
+    """
+    for i, ch in enumerate(value):
+        if unicodedata.category(ch) in ("Cc", "Cs"):
+            raise err(f"must not contain control characters, got {ch!r} at position {i}")
+    if max_chars is not None and len(value) > max_chars:
+        raise err(f"must be at most {max_chars} characters, got {len(value)}")
+    return value
 
 
 def check_float(
@@ -170,7 +227,10 @@ def check_float(
     elif isinstance(raw, bool) or not isinstance(raw, int | float):
         raise err(f"must be a number, got {raw!r}")
     else:
-        v = float(raw)
+        try:
+            v = float(raw)
+        except OverflowError:  # a TOML integer past the float range
+            raise err(f"must be finite, got {raw!r}") from None
     if not math.isfinite(v):
         raise err(f"must be finite, got {raw!r}")
     if positive and v <= 0:
@@ -181,6 +241,8 @@ def check_float(
         raise err(f"must be within [{lo:g}, {hi:g}], got {raw!r}")
     if hi is not None and lo is None and v > hi:
         raise err(f"must be <= {hi:g}, got {raw!r}")
+    if lo is not None and hi is None and v < lo:
+        raise err(f"must be >= {lo:g}, got {raw!r}")
     return v
 
 
@@ -200,14 +262,15 @@ def field_number(ctx, field, value, **kw) -> float:
     return check_float(value, lambda m: ctx.error(field, m), **kw)
 
 
-def field_int(ctx, field, value, minimum=0) -> int:
-    """``value`` as an integer >= ``minimum`` (booleans rejected).
+def field_int(ctx, field, value, minimum=0, maximum=None) -> int:
+    """``value`` as an integer in ``[minimum, maximum]`` (booleans rejected).
 
     Args:
       ctx: FieldContext of the file being read.
       field: dotted field label used in the error (``table[index].key``).
       value: the value read.
       minimum: smallest accepted value.
+      maximum: largest accepted value (None: no upper bound).
     Returns:
       int.
     Raises:
@@ -215,6 +278,8 @@ def field_int(ctx, field, value, minimum=0) -> int:
     """
     if isinstance(value, bool) or not isinstance(value, int):
         raise ctx.error(field, f"must be an integer, got {value!r}")
+    if maximum is not None and not minimum <= value <= maximum:
+        raise ctx.error(field, f"must be within [{minimum}, {maximum}], got {value!r}")
     if value < minimum:
         raise ctx.error(field, f"must be >= {minimum}, got {value!r}")
     return int(value)
@@ -237,14 +302,15 @@ def field_bool(ctx, field, value) -> bool:
     return value
 
 
-def field_str(ctx, field, value, allow_empty=True) -> str:
-    """``value`` as a string (non-blank unless ``allow_empty``).
+def field_str(ctx, field, value, allow_empty=True, max_chars=None) -> str:
+    """``value`` as a string without control characters (non-blank unless ``allow_empty``).
 
     Args:
       ctx: FieldContext of the file being read.
       field: dotted field label used in the error (``table[index].key``).
       value: the value read.
       allow_empty: accept "" and blank strings.
+      max_chars: longest accepted string (None: any length).
     Returns:
       str.
     Raises:
@@ -254,7 +320,7 @@ def field_str(ctx, field, value, allow_empty=True) -> str:
         raise ctx.error(
             field, f"must be a {'' if allow_empty else 'non-empty '}string, got {value!r}"
         )
-    return value
+    return check_text(value, lambda m: ctx.error(field, m), max_chars)
 
 
 def field_pair(ctx, field, value, **kw) -> tuple[float, float]:

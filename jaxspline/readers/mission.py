@@ -37,6 +37,7 @@ from jaxspline.screen.models import ManeuverModel, maneuver_model, model_names
 
 __all__ = [
     "DEFAULT_SWATH",
+    "MAX_EXACT_OPTIONS",
     "MODELS",
     "Area",
     "FlexMode",
@@ -52,6 +53,9 @@ __all__ = [
 
 MODELS = model_names()  # the built-in maneuver models
 DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
+# the exact search recurses once per option (Python's stack: ~1000 frames); beyond a
+# few hundred options branch and bound cannot finish anyway
+MAX_EXACT_OPTIONS = 500
 
 
 def _positive(name: str, value, allow_zero: bool = False) -> float:
@@ -458,7 +462,8 @@ class PlannerConfig:
         [rad] (None: no daylight rule).
       margins: :class:`Margins`.
       exact_max_options: instances with at most this many options are solved exactly
-        (branch and bound over the per-satellite timelines).
+        (branch and bound over the per-satellite timelines), at most
+        :data:`MAX_EXACT_OPTIONS`.
       lagrangian_share: share of the search budget for the Lagrangian / DP phase.
       bound_worker: on a machine with at least two CPUs, iterate the bound in a
         second process during the search (:class:`jaxspline.search.BoundWorker`).
@@ -489,9 +494,10 @@ class PlannerConfig:
             )
         if int(self.refine_steps) < 0:
             raise ValueError(f"planner.refine_steps must be >= 0, got {self.refine_steps!r}")
-        if int(self.exact_max_options) < 0:
+        if not 0 <= int(self.exact_max_options) <= MAX_EXACT_OPTIONS:
             raise ValueError(
-                f"planner.exact_max_options must be >= 0, got {self.exact_max_options!r}"
+                f"planner.exact_max_options must be in [0, {MAX_EXACT_OPTIONS}], got "
+                f"{self.exact_max_options!r}"
             )
         if not self.scan_speeds or any(not s > 0 for s in self.scan_speeds):
             raise ValueError(f"planner.scan_speeds must be > 0, got {self.scan_speeds!r}")

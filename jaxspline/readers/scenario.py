@@ -5,8 +5,11 @@ angles are degrees in the file and radians in the
 :class:`jaxspline.readers.mission.Scenario` it becomes; times are seconds from the epoch.
 Unknown keys are errors (typos fail loudly); every error is a ``ValueError`` naming
 the field (``satellites[1].rate_deg_s``) and, where it can be located, the TOML line.
-Only ``[scenario]``, at least one satellite and at least one target (or area) are
-required::
+Every number has a physical range (:data:`jaxspline.readers.ranges.RANGES`; times
+from the epoch lie in the horizon), every TLE is checked (columns, checksums, its epoch
+within 30 days of the horizon: :mod:`jaxspline.readers.satellites`), and names hold no
+control characters. Only ``[scenario]``, at least one satellite and at least one target
+(or area) are required::
 
     targets_csv = "cities.csv"          # top-level key (before any [table]): a CSV of
                                         # targets, path relative to this file's folder;
@@ -15,7 +18,7 @@ required::
     name = "example"                    # label (default: the file's stem)
     epoch = "2026-04-14T00:00:00Z"      # ISO-8601 UTC date-time of t = 0 (required)
     duration_h = 1.0                    # horizon [h], or duration_s [s] (one required;
-                                        # at most 30 days)
+                                        # 1 s to 30 days)
 
     [[satellites]]                      # one table per satellite; a single [satellite]
     name = "sat1"                       # table is accepted as an alias. Name defaults
@@ -114,7 +117,7 @@ required::
     gap_margin_s = 0.1                  # added to every rest-to-rest slew time [s]
     battery_margin_wh = 10.0            # battery level kept >= this [Wh]
     shadow_guard_steps = 0              # battery steps of sunlight required around a step
-    exact_max_options = 60              # solve exactly up to this many options
+    exact_max_options = 60              # solve exactly up to this many options (<= 500)
     lagrangian_share = 0.3              # search budget share of the Lagrangian phase
     bound_worker = true                 # iterate the bound on a second CPU during the search
     refine_steps = 100                  # optax steps refining per-channel start times (0 = off)
@@ -143,9 +146,6 @@ from pathlib import Path
 
 import numpy as np
 
-from jaxspline.geometry.frames import gmst, jd_split, julian_date
-from jaxspline.geometry.orbit import circular_orbit, circular_orbit_over, propagate_tle
-from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.fields import (
     FieldContext,
     field_bool,
@@ -153,21 +153,12 @@ from jaxspline.readers.fields import (
     field_number,
     field_str,
     field_table,
-    field_tables,
     read_text,
 )
-from jaxspline.readers.mission import (
-    DEFAULT_SWATH,
-    FlexMode,
-    Margins,
-    PlannerConfig,
-    Power,
-    Satellite,
-    Scenario,
-    make_targets,
-)
+from jaxspline.readers.mission import Margins, PlannerConfig, Scenario, make_targets
+from jaxspline.readers.ranges import EPOCH_RANGE, MAX_SCAN_SPEEDS, RANGES, bounds
+from jaxspline.readers.satellites import parse_satellites
 from jaxspline.readers.targets import TARGET_SECTIONS, scenario_targets
-from jaxspline.screen.models import maneuver_model
 
 __all__ = [
     "DEFAULT_SCENARIO_PATH",
@@ -181,31 +172,14 @@ __all__ = [
 DEFAULT_SCENARIO_PATH = Path(str(importlib.resources.files("jaxspline") / "data" / "default.toml"))
 
 SECONDS_PER_HOUR = 3600.0
-DEFAULT_ALTITUDE_KM = 600.0
-ALTITUDE_RANGE_KM = (150.0, 30000.0)
-DEFAULT_RATE_DEG_S = 2.0
-DEFAULT_ACCEL_DEG_S2 = 1.0
-DEFAULT_OFF_NADIR_DEG = 45.0
-MAX_OFF_NADIR_DEG = 80.0
-DEFAULT_SENSOR = "visible"
-DEFAULT_SWATH_KM = DEFAULT_SWATH / 1e3
-MAX_SWATH_KM = 5000.0  # a wider swath is a unit mistake (strip widths are km)
-MAX_DURATION_S = 30 * 86400.0  # longest horizon [s]: TLEs and plans are days, not months
+MAX_DURATION_S = RANGES["scenario.duration_s"][1]  # longest horizon [s]: TLEs are days, not months
 MAX_GRID_POINTS = 1_000_000  # longest ephemeris grid, duration / geometry_step_s
-MAX_SCAN_SPEED_KM_S = 100.0  # strip ground scan speeds beyond this are unit mistakes
+MAX_TOML_BYTES = 16 << 20  # a scenario file is a few kB; targets come in CSV files
 
-_ORBIT_KEYS = ("altitude_km", "inclination_deg", "raan_deg", "arg_lat_deg", "over")
-_SAT_MODEL_KEYS = (
-    "name tle model rate_deg_s accel_deg_s2 off_nadir_max_deg sensor settle_s flex power swath_km"
-)
 _KEYS = {
     name: frozenset(keys.split())
     for name, keys in {
         "scenario": "name epoch duration_s duration_h",
-        "satellite": " ".join(_ORBIT_KEYS) + " " + _SAT_MODEL_KEYS,
-        "over": "lat_deg lon_deg t_s descending",
-        "flex": "freq_hz damping tolerance_deg",
-        "power": "capacity_wh initial_wh idle_w imaging_w slew_w charge_w",
         "planner": "time_step_s geometry_step_s scan_speeds_km_s sun_elevation_min_deg "
         "off_nadir_margin_deg horizon_margin gap_margin_s battery_margin_wh shadow_guard_steps "
         "exact_max_options lagrangian_share bound_worker refine_steps time_limit_s",
@@ -214,158 +188,23 @@ _KEYS = {
 _TOP = frozenset("scenario satellites satellite planner areas area".split()) | TARGET_SECTIONS
 
 
-# --- satellites ---
+# --- planner ---
 
 
-def _orbit(ctx, f, sat, epoch_jd, duration):
-    if "tle" in sat:
-        clash = [k for k in _ORBIT_KEYS if k in sat]
-        if clash:
-            raise ctx.error(f"{f}.{clash[0]}", "cannot be combined with tle (a TLE is the orbit)")
-        tle = sat["tle"]
-        if not (isinstance(tle, list) and len(tle) == 2 and all(isinstance(s, str) for s in tle)):
-            raise ctx.error(f"{f}.tle", f"must be a list of the two TLE lines, got {tle!r}")
-        try:
-            err = propagate_tle(tle[0], tle[1], *jd_split(epoch_jd, 0.0))[2]
-        except ValueError as exc:
-            raise ctx.error(f"{f}.tle", str(exc)) from None
-        if int(err[0]) != 0:
-            raise ctx.error(f"{f}.tle", f"SGP4 error code {int(err[0])} at the epoch")
-        return (tle[0], tle[1])
-    alt = sat.get("altitude_km", DEFAULT_ALTITUDE_KM)
-    alt = field_number(
-        ctx, f"{f}.altitude_km", alt, lo=ALTITUDE_RANGE_KM[0], hi=ALTITUDE_RANGE_KM[1]
-    )
-    inc = sat.get("inclination_deg")
-    if inc is not None:
-        inc = math.radians(field_number(ctx, f"{f}.inclination_deg", inc, lo=0.0, hi=180.0))
-    if "over" not in sat:
-        raan = field_number(ctx, f"{f}.raan_deg", sat.get("raan_deg", 0.0))
-        u0 = field_number(ctx, f"{f}.arg_lat_deg", sat.get("arg_lat_deg", 0.0))
-        return circular_orbit(1e3 * alt, inc, math.radians(raan), math.radians(u0))
-    clash = [k for k in ("raan_deg", "arg_lat_deg") if k in sat]
-    if clash:
-        raise ctx.error(f"{f}.{clash[0]}", "cannot be combined with over (it places the orbit)")
-    ov = field_table(ctx, f"{f}.over", sat["over"], _KEYS["over"])
-    lat = field_number(ctx, f"{f}.over.lat_deg", ov.get("lat_deg", 0.0), lo=-90.0, hi=90.0)
-    lon = field_number(ctx, f"{f}.over.lon_deg", ov.get("lon_deg", 0.0), lo=-180.0, hi=180.0)
-    t_over = field_number(ctx, f"{f}.over.t_s", ov.get("t_s", duration / 2))
-    desc = field_bool(ctx, f"{f}.over.descending", ov.get("descending", True))
-    gmst0 = float(gmst(*jd_split(epoch_jd, 0.0)))
-    try:
-        return circular_orbit_over(
-            math.radians(lat), math.radians(lon), t_over, gmst0, 1e3 * alt, inc, descending=desc
-        )
-    except ValueError as exc:
-        raise ctx.error(f"{f}.over.lat_deg", str(exc)) from None
+def _int(ctx, pl, key, default) -> int:
+    lo, hi = RANGES[f"planner.{key}"]
+    return field_int(ctx, f"planner.{key}", pl.get(key, default), lo, hi)
 
 
-def _rate(ctx, field, value, maneuver):
-    if maneuver.limit_shape == ():
-        if isinstance(value, list):
-            raise ctx.error(field, f"must be one number for model {maneuver.name!r}, got {value!r}")
-        return math.radians(field_number(ctx, field, value, positive=True))
-    if isinstance(value, list):
-        if len(value) != 3:
-            raise ctx.error(field, f"must be one number or 3 (roll, pitch, yaw), got {value!r}")
-        vals = [field_number(ctx, field, v, positive=True) for v in value]
-    else:
-        vals = [field_number(ctx, field, value, positive=True)] * 3
-    return np.radians(np.asarray(vals))
+def _steps(ctx, pl, d: PlannerConfig, duration: float) -> tuple[float, float]:
+    """``(time_step_s, geometry_step_s)`` [s]: in range, the first a whole multiple of the
+    second, and at most :data:`MAX_GRID_POINTS` geometry steps over the horizon."""
 
+    def num(key, default):
+        return field_number(ctx, f"planner.{key}", pl.get(key, default), **bounds(f"planner.{key}"))
 
-def _satellite(ctx, f, sat, default_name, epoch_jd, duration) -> Satellite:
-    sat = field_table(ctx, f, sat, _KEYS["satellite"])
-    name = field_str(ctx, f"{f}.name", sat.get("name", default_name), allow_empty=False)
-    orbit = _orbit(ctx, f, sat, epoch_jd, duration)
-    model = sat.get("model", "per_channel")
-    try:
-        maneuver = maneuver_model(model)
-    except ValueError as exc:
-        raise ctx.error(f"{f}.model", str(exc).removeprefix("model ")) from None
-    rate = _rate(ctx, f"{f}.rate_deg_s", sat.get("rate_deg_s", DEFAULT_RATE_DEG_S), maneuver)
-    accel = _rate(ctx, f"{f}.accel_deg_s2", sat.get("accel_deg_s2", DEFAULT_ACCEL_DEG_S2), maneuver)
-    off = field_number(
-        ctx,
-        f"{f}.off_nadir_max_deg",
-        sat.get("off_nadir_max_deg", DEFAULT_OFF_NADIR_DEG),
-        positive=True,
-        hi=MAX_OFF_NADIR_DEG,
-    )
-    sensor = field_str(ctx, f"{f}.sensor", sat.get("sensor", DEFAULT_SENSOR), allow_empty=False)
-    settle = field_number(ctx, f"{f}.settle_s", sat.get("settle_s", 0.0), nonneg=True)
-    flex = None
-    if "flex" in sat:
-        if "flex" not in maneuver.extra_fields:
-            raise ctx.error(f"{f}.flex", f"only used by model 'flexible' (model is {model!r})")
-        fx = field_table(ctx, f"{f}.flex", sat["flex"], _KEYS["flex"])
-        freq_hz = field_number(ctx, f"{f}.flex.freq_hz", fx.get("freq_hz"), positive=True)
-        kw = {"freq": 2 * math.pi * freq_hz}
-        if "damping" in fx:
-            kw["damping"] = field_number(ctx, f"{f}.flex.damping", fx["damping"], nonneg=True)
-        if "tolerance_deg" in fx:
-            tol = field_number(ctx, f"{f}.flex.tolerance_deg", fx["tolerance_deg"], positive=True)
-            kw["tolerance"] = math.radians(tol)
-        flex = FlexMode(**kw)
-    elif "flex" in maneuver.extra_fields:
-        raise ctx.error(
-            f"{f}.model",
-            "'flexible' needs flex = { freq_hz = ..., damping = ..., tolerance_deg = ... }",
-        )
-    power = None
-    if "power" in sat:
-        pw = field_table(ctx, f"{f}.power", sat["power"], _KEYS["power"])
-        vals = {k: field_number(ctx, f"{f}.power.{k}", v, nonneg=True) for k, v in pw.items()}
-        if "capacity_wh" not in vals:
-            raise ctx.error(f"{f}.power.capacity_wh", "missing (required in a power table)")
-        vals.setdefault("initial_wh", vals["capacity_wh"])
-        try:
-            power = Power(**vals)
-        except ValueError as exc:
-            raise ctx.error(f"{f}.power", str(exc)) from None
-    swath = sat.get("swath_km", DEFAULT_SWATH_KM)
-    swath = field_number(ctx, f"{f}.swath_km", swath, positive=True, hi=MAX_SWATH_KM)
-    limits = AxisLimits(rate, accel)
-    try:
-        return Satellite(
-            name, orbit, model, limits, math.radians(off), sensor, settle, flex, power, 1e3 * swath
-        )
-    except ValueError as exc:
-        raise ctx.error(f, str(exc)) from None
-
-
-# --- planner, scenario (targets: jaxspline.readers.targets) ---
-
-
-def _planner(ctx, pl, duration: float) -> PlannerConfig:
-    pl = field_table(ctx, "planner", pl, _KEYS["planner"])
-    d, dm = PlannerConfig(), Margins()
-
-    def num(key, default, **kw):
-        return field_number(ctx, f"planner.{key}", pl.get(key, default), **kw)
-
-    speeds = pl.get("scan_speeds_km_s", [s / 1e3 for s in d.scan_speeds])
-    if not isinstance(speeds, list) or not speeds:
-        raise ctx.error("planner.scan_speeds_km_s", f"must be a non-empty list, got {speeds!r}")
-    speeds = tuple(
-        1e3
-        * field_number(ctx, "planner.scan_speeds_km_s", s, positive=True, hi=MAX_SCAN_SPEED_KM_S)
-        for s in speeds
-    )
-    sun = pl.get("sun_elevation_min_deg")
-    if sun is not None:
-        sun = math.radians(
-            field_number(ctx, "planner.sun_elevation_min_deg", sun, lo=-90.0, hi=90.0)
-        )
-    margins = Margins(
-        off_nadir=math.radians(num("off_nadir_margin_deg", dm.off_nadir, nonneg=True)),
-        horizon=num("horizon_margin", dm.horizon, lo=0.0, hi=1.0),
-        gap=num("gap_margin_s", dm.gap, nonneg=True),
-        battery_wh=num("battery_margin_wh", dm.battery_wh, nonneg=True),
-        shadow_guard=field_int(ctx, "planner.shadow_guard_steps", pl.get("shadow_guard_steps", 0)),
-    )
-    time_step = num("time_step_s", d.time_step, positive=True)
-    geometry_step = num("geometry_step_s", d.geometry_step, positive=True)
+    time_step = num("time_step_s", d.time_step)
+    geometry_step = num("geometry_step_s", d.geometry_step)
     ratio = time_step / geometry_step
     if ratio < 1.0 - 1e-9 or abs(ratio - round(ratio)) > 1e-9:
         raise ctx.error(
@@ -380,27 +219,76 @@ def _planner(ctx, pl, duration: float) -> PlannerConfig:
             f"{duration / geometry_step:.3g} grid points (at most {MAX_GRID_POINTS:g}); "
             "use a coarser step or a shorter horizon",
         )
-    try:
-        return PlannerConfig(
-            time_step=time_step,
-            geometry_step=geometry_step,
-            scan_speeds=speeds,
-            sun_elevation_min=sun,
-            margins=margins,
-            exact_max_options=field_int(
-                ctx, "planner.exact_max_options", pl.get("exact_max_options", d.exact_max_options)
-            ),
-            lagrangian_share=num("lagrangian_share", d.lagrangian_share, lo=0.0, hi=0.99),
-            bound_worker=field_bool(
-                ctx, "planner.bound_worker", pl.get("bound_worker", d.bound_worker)
-            ),
-            refine_steps=field_int(
-                ctx, "planner.refine_steps", pl.get("refine_steps", d.refine_steps)
-            ),
-            default_time_limit=num("time_limit_s", d.default_time_limit, positive=True),
+    return time_step, geometry_step
+
+
+def _speeds(ctx, pl, d: PlannerConfig) -> tuple[float, ...]:
+    """The strip scan speeds [m/s] of ``planner.scan_speeds_km_s``."""
+    key = "planner.scan_speeds_km_s"
+    speeds = pl.get("scan_speeds_km_s", [s / 1e3 for s in d.scan_speeds])
+    if not isinstance(speeds, list) or not speeds or len(speeds) > MAX_SCAN_SPEEDS:
+        raise ctx.error(
+            key, f"must be a list of 1 to {MAX_SCAN_SPEEDS} speeds [km/s], got {speeds!r}"
         )
+    return tuple(1e3 * field_number(ctx, key, s, **bounds(key)) for s in speeds)
+
+
+def _margins(ctx, pl, sats) -> Margins:
+    """The planner's margins; the off-nadir margin below every satellite's limit."""
+    dm = Margins()
+
+    def num(key, default):
+        return field_number(ctx, f"planner.{key}", pl.get(key, default), **bounds(f"planner.{key}"))
+
+    off = num("off_nadir_margin_deg", math.degrees(dm.off_nadir))
+    least = min(math.degrees(s.off_nadir_max) for s in sats)
+    if off >= least:
+        raise ctx.error(
+            "planner.off_nadir_margin_deg",
+            f"must be below every satellite's off_nadir_max_deg (the least is {least:g}), "
+            f"got {off:g}",
+        )
+    return Margins(
+        off_nadir=math.radians(off),
+        horizon=num("horizon_margin", dm.horizon),
+        gap=num("gap_margin_s", dm.gap),
+        battery_wh=num("battery_margin_wh", dm.battery_wh),
+        shadow_guard=_int(ctx, pl, "shadow_guard_steps", dm.shadow_guard),
+    )
+
+
+def _planner(ctx, pl, duration: float, sats) -> PlannerConfig:
+    pl = field_table(ctx, "planner", pl, _KEYS["planner"])
+    d = PlannerConfig()
+
+    def num(key, default):
+        return field_number(ctx, f"planner.{key}", pl.get(key, default), **bounds(f"planner.{key}"))
+
+    time_step, geometry_step = _steps(ctx, pl, d, duration)
+    sun = pl.get("sun_elevation_min_deg")
+    if sun is not None:
+        sun = math.radians(num("sun_elevation_min_deg", sun))
+    kw = {
+        "time_step": time_step,
+        "geometry_step": geometry_step,
+        "scan_speeds": _speeds(ctx, pl, d),
+        "sun_elevation_min": sun,
+        "margins": _margins(ctx, pl, sats),
+        "exact_max_options": _int(ctx, pl, "exact_max_options", d.exact_max_options),
+        "lagrangian_share": num("lagrangian_share", d.lagrangian_share),
+        "bound_worker": field_bool(
+            ctx, "planner.bound_worker", pl.get("bound_worker", d.bound_worker)
+        ),
+        "refine_steps": _int(ctx, pl, "refine_steps", d.refine_steps),
+        "default_time_limit": num("time_limit_s", d.default_time_limit),
+    }
+    try:
+        return PlannerConfig(**kw)
     except ValueError as exc:  # PlannerConfig's own checks (the fields are checked above)
         raise ctx.error("planner", str(exc)) from None
+
+
+# --- scenario header ---
 
 
 def _epoch(ctx, value) -> _dt.datetime:
@@ -412,7 +300,28 @@ def _epoch(ctx, value) -> _dt.datetime:
             pass
     if not isinstance(value, _dt.datetime):
         raise ctx.error("scenario.epoch", f"must be an ISO-8601 UTC date-time, got {value!r}")
-    return value.replace(tzinfo=_dt.UTC) if value.tzinfo is None else value.astimezone(_dt.UTC)
+    value = value.replace(tzinfo=_dt.UTC) if value.tzinfo is None else value.astimezone(_dt.UTC)
+    lo, hi = EPOCH_RANGE
+    if not lo <= value <= hi:
+        raise ctx.error(
+            "scenario.epoch",
+            f"must be within [{lo:%Y-%m-%d}, {hi:%Y-%m-%d}] (UTC), got {value.isoformat()}",
+        )
+    return value
+
+
+def _header(ctx, data, source: str) -> tuple[str, _dt.datetime, float]:
+    """``(name, epoch, duration [s])`` of the ``[scenario]`` table."""
+    if "scenario" not in data:
+        raise ctx.error("scenario", "missing section [scenario] (epoch, duration_s)")
+    sc = field_table(ctx, "scenario", data["scenario"], _KEYS["scenario"])
+    name = field_str(ctx, "scenario.name", sc.get("name", Path(source).stem), max_chars=256)
+    epoch = _epoch(ctx, sc.get("epoch"))
+    if ("duration_s" in sc) == ("duration_h" in sc):
+        raise ctx.error("scenario.duration_s", "give exactly one of duration_s, duration_h")
+    key = "duration_s" if "duration_s" in sc else "duration_h"
+    duration = field_number(ctx, f"scenario.{key}", sc[key], **bounds(f"scenario.{key}"))
+    return name, epoch, duration * (SECONDS_PER_HOUR if key == "duration_h" else 1.0)
 
 
 def parse_scenario(
@@ -436,56 +345,32 @@ def parse_scenario(
     unknown = sorted(set(data) - _TOP)
     if unknown:
         raise ctx.error(unknown[0], f"unknown section or key (allowed: {sorted(_TOP)})")
-    if "scenario" not in data:
-        raise ctx.error("scenario", "missing section [scenario] (epoch, duration_s)")
-    sc = field_table(ctx, "scenario", data["scenario"], _KEYS["scenario"])
-    name = field_str(ctx, "scenario.name", sc.get("name", Path(source).stem))
-    epoch = _epoch(ctx, sc.get("epoch"))
-    if ("duration_s" in sc) == ("duration_h" in sc):
-        raise ctx.error("scenario.duration_s", "give exactly one of duration_s, duration_h")
-    if "duration_s" in sc:
-        duration = field_number(
-            ctx, "scenario.duration_s", sc["duration_s"], positive=True, hi=MAX_DURATION_S
-        )
-    else:
-        hours = field_number(
-            ctx,
-            "scenario.duration_h",
-            sc["duration_h"],
-            positive=True,
-            hi=MAX_DURATION_S / SECONDS_PER_HOUR,
-        )
-        duration = SECONDS_PER_HOUR * hours
-    epoch_jd = julian_date(epoch)
-
-    sat_items = field_tables(ctx, data, "satellites", "satellite")
-    if not sat_items:
-        raise ctx.error("satellites", "missing: give at least one [[satellites]] table")
-    sats, names = [], {}
-    for i, (f, sat) in enumerate(sat_items):
-        s = _satellite(ctx, f, sat, f"sat{i + 1}", epoch_jd, duration)
-        if s.name in names:
-            raise ctx.error(
-                f"{f}.name", f"duplicate satellite name {s.name!r} (also {names[s.name]})"
-            )
-        names[s.name] = f
-        sats.append(s)
-
+    name, epoch, duration = _header(ctx, data, source)
+    sats = parse_satellites(ctx, data, epoch, duration)
     has_areas = "areas" in data or "area" in data
-    targets = scenario_targets(ctx, data, base_dir, required=not has_areas)
-    planner = _planner(ctx, data.get("planner", {}), duration)
+    targets = scenario_targets(ctx, data, base_dir, required=not has_areas, horizon=duration)
+    planner = _planner(ctx, data.get("planner", {}), duration, sats)
     if not has_areas:
-        return Scenario(name, epoch, duration, tuple(sats), targets, planner)
-
-    from jaxspline.readers.area_files import parse_areas
-    from jaxspline.readers.areas import cut_areas
-
-    specs = parse_areas(ctx, data, base_dir, sats)
+        return Scenario(name, epoch, duration, sats, targets, planner)
     if targets is None:
         targets = make_targets(
             np.zeros(0, np.int64), np.zeros(0), np.zeros(0), name=np.zeros(0, str)
         )
-    sc = cut_areas(Scenario(name, epoch, duration, tuple(sats), targets, planner), specs)
+    return _with_areas(ctx, data, base_dir, Scenario(name, epoch, duration, sats, targets, planner))
+
+
+def _with_areas(ctx, data, base_dir, sc: Scenario) -> Scenario:
+    """``sc`` with the ``[[areas]]`` of ``data`` cut into strip targets after its targets."""
+    import shapely
+
+    from jaxspline.readers.area_files import parse_areas
+    from jaxspline.readers.areas import cut_areas
+
+    specs = parse_areas(ctx, data, base_dir, sc.satellites, horizon=sc.duration)
+    try:
+        sc = cut_areas(sc, specs)
+    except (ValueError, shapely.errors.ShapelyError) as exc:  # a polygon GEOS cannot cut
+        raise ctx.error("areas", f"cannot cut the areas into strips: {exc}") from None
     if len(sc.targets) == 0:
         raise ctx.error(
             "areas", "no targets: no satellite passes over any area and no other targets are given"
@@ -504,17 +389,25 @@ def load_scenario(path) -> Scenario:
       Scenario.
     Raises:
       FileNotFoundError: the file is missing.
-      ValueError: invalid TOML, or bad content (naming the field / TOML line).
+      ValueError: invalid TOML, or bad content (naming the field / TOML line), or the
+        path is not a readable file (a directory, a device) of at most 16 MiB.
     """
     path = Path(path)
     try:
         text = read_text(path)  # UTF-8, a byte-order mark dropped
     except FileNotFoundError:
         raise FileNotFoundError(f"scenario file not found: {path}") from None
+    if len(text) > MAX_TOML_BYTES:
+        raise ValueError(
+            f"{path}: {len(text) / 2**20:.0f} MiB, more than the {MAX_TOML_BYTES >> 20} MiB "
+            "a scenario file may have (put targets in a CSV file)"
+        )
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
         raise ValueError(f"{path}: invalid TOML: {exc}") from None
+    except RecursionError:  # thousands of nested arrays or inline tables
+        raise ValueError(f"{path}: invalid TOML: arrays or tables nested too deeply") from None
     return parse_scenario(data, source=str(path), text=text, base_dir=path.parent)
 
 

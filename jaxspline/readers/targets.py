@@ -63,6 +63,7 @@ import numpy as np
 
 from jaxspline.readers.fields import (
     check_float,
+    check_text,
     field_bool,
     field_int,
     field_number,
@@ -73,6 +74,7 @@ from jaxspline.readers.fields import (
     read_text,
 )
 from jaxspline.readers.mission import POINT, STRIP, Targets, make_targets
+from jaxspline.readers.ranges import MAX_NAME_CHARS, RANGES, bounds
 
 __all__ = [
     "CSV_OPTIONAL",
@@ -87,11 +89,11 @@ DEFAULT_STRIP_FRACTION = 0.2
 DEFAULT_RANDOM_DURATION_S = (10.0, 30.0)
 DEFAULT_RANDOM_LENGTH_KM = (20.0, 60.0)
 DEFAULT_RANDOM_PRIORITY = (1, 10)
-LAT_RANGE_DEG = (-90.0, 90.0)
-LON_RANGE_DEG = (-180.0, 180.0)
-ALT_RANGE_M = (-12e3, 12e3)  # ground targets: the deepest trench to above the highest peak
-MAX_STRIP_KM = 10e3  # longest strip [km] (a quarter of a great circle)
-MAX_RANDOM_TARGETS = 1_000_000
+LAT_RANGE_DEG = RANGES["targets[].lat_deg"]
+LON_RANGE_DEG = RANGES["targets[].lon_deg"]
+ALT_RANGE_M = RANGES["targets[].alt_m"]  # the deepest trench to above the highest peak
+MAX_STRIP_KM = RANGES["targets[].length_km"][1]  # longest strip [km] (a quarter great circle)
+MAX_RANDOM_TARGETS = RANGES["random_targets.count"][1]
 LAND_SAMPLE_ROUNDS = 200  # rejection-sampling batches before giving up on a region
 LAND_BATCH_MIN = 1024
 LAND_PASS_POINTS = 1 << 21  # draws tested against the land mask in one read
@@ -115,9 +117,12 @@ _KEYS = {
     ),
 }
 _KINDS = {"point": POINT, "strip": STRIP}
+_TEXT_COLUMNS = ("name", "kind", "sensor")
 
 
-def scenario_targets(ctx, data: dict, base_dir=None, required: bool = True) -> Targets | None:
+def scenario_targets(
+    ctx, data: dict, base_dir=None, required: bool = True, horizon: float | None = None
+) -> Targets | None:
     """All targets of a parsed scenario table ``data``, in the order they are read.
 
     First the ``[[targets]]`` (or ``[[routes]]``) tables, then the CSV files of
@@ -128,6 +133,8 @@ def scenario_targets(ctx, data: dict, base_dir=None, required: bool = True) -> T
       data: dict, the parsed scenario TOML.
       base_dir: folder that relative CSV paths start from (None: the working directory).
       required: raise when the file gives no targets (else return None).
+      horizon: the scenario's duration [s]: times from the epoch (windows, desired
+        times) must lie in ``[0, horizon]`` (None: the longest horizon).
     Returns:
       Targets (angles in radians, lengths in metres, times in seconds from the epoch),
       or None (no targets and not ``required``).
@@ -135,10 +142,10 @@ def scenario_targets(ctx, data: dict, base_dir=None, required: bool = True) -> T
       ValueError: naming the field, also when ``required`` and the file gives no targets.
     """
     parts = []  # (Targets, origin of each target: "targets[0]", "t.csv row 5", ...)
-    explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"))
+    explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"), horizon)
     if explicit is not None:
         parts.append(explicit)
-    parts += [_read_csv(p) for p in _csv_paths(ctx, data, base_dir)]
+    parts += [_read_csv(p, horizon) for p in _csv_paths(ctx, data, base_dir)]
     if "random_targets" in data:
         tg = _random_targets(ctx, data["random_targets"])
         parts.append((tg, ["random_targets"] * len(tg)))
@@ -171,87 +178,87 @@ def _unique_names(names, origins, err) -> None:
         first[n] = k
 
 
-def _target_row(get, err, default_name, text=False) -> tuple:
+def _target_row(get, err, default_name, text=False, horizon=None) -> tuple:
     """One target from ``get(column) -> raw or None``; ``err(column)(msg)`` builds errors.
 
-    Columns as in the CSV format. Returns (name, kind, lat, lon, alt, duration, length,
-    azimuth, priority, t_lo, t_hi, mid_lo, mid_hi, min_duration, sensor) in degrees,
-    metres, seconds.
+    Columns as in the CSV format, numbers within their ranges
+    (:data:`jaxspline.readers.ranges.RANGES`, times within ``[0, horizon]`` s; None: the
+    longest horizon). Returns (name, kind, lat, lon, alt, duration, length, azimuth,
+    priority, t_lo, t_hi, mid_lo, mid_hi, min_duration, sensor) in degrees, metres,
+    seconds.
     """
 
-    def num(col, **kw):
-        return check_float(get(col), err(col), text=text, **kw)
+    def num(col, key=None, **kw):
+        rng = bounds(f"targets[].{key or col}", horizon)
+        return check_float(get(col), err(col), text=text, **rng, **kw)
 
-    def string(col, default):
-        raw = get(col)
-        if raw is None:
-            return default
-        if not isinstance(raw, str):
-            raise err(col)(f"must be a string, got {raw!r}")
-        return raw.strip()
-
-    name = string("name", default_name) or default_name
-    kind = string("kind", "point")
+    name = _string(get, err, "name", default_name) or default_name
+    kind = _string(get, err, "kind", "point")
     if kind not in _KINDS:
         raise err("kind")(f"must be 'point' or 'strip', got {kind!r}")
-    lat = num("lat_deg", lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
-    lon = num("lon_deg", lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
-    alt = num("alt_m", default=0.0, lo=ALT_RANGE_M[0], hi=ALT_RANGE_M[1])
-    prio = num("priority", default=1.0, positive=True)
-    min_dur = num("min_duration_s", default=0.0, nonneg=True)
+    lat, lon = num("lat_deg"), num("lon_deg")
+    alt, prio = num("alt_m", default=0.0), num("priority", default=1.0)
+    min_dur = num("min_duration_s", default=0.0)
+    dur, length, az = _extent(get, err, num, kind, min_dur)
+    t_lo, t_hi, mid_lo, mid_hi = _times(get, err, num, dur)
+    sensor = _string(get, err, "sensor", "")
+    return (name, _KINDS[kind], lat, lon, alt, dur, length, az, prio, t_lo, t_hi, mid_lo,
+            mid_hi, min_dur, sensor)  # fmt: skip
+
+
+def _string(get, err, col, default):
+    """The text of column ``col`` (stripped; ``default`` when empty), no control characters
+    (before stripping: Python strips some of them as white space)."""
+    raw = get(col)
+    if raw is None:
+        return default
+    if not isinstance(raw, str):
+        raise err(col)(f"must be a string, got {raw!r}")
+    check_text(raw, err(col))
+    return check_text(raw.strip(), err(col), MAX_NAME_CHARS)
+
+
+def _extent(get, err, num, kind, min_dur) -> tuple[float, float, float]:
+    """``(duration [s], length [m], azimuth [deg])`` of a point (duration) or a strip
+    (length and azimuth; the duration is length / scan speed, 0 here)."""
     if kind == "strip":
         if get("duration_s") is not None:
             raise err("duration_s")("a strip has no duration_s (it is length / scan speed)")
-        length = 1e3 * num("length_km", positive=True, hi=MAX_STRIP_KM)
-        az = num("azimuth_deg", default=0.0)
-        dur = 0.0
-    else:
-        for col in ("length_km", "azimuth_deg"):
-            if get(col) is not None:
-                raise err(col)("a point has no length_km / azimuth_deg (use kind 'strip')")
-        default_dur = max(DEFAULT_POINT_DURATION_S, min_dur)
-        dur, length, az = num("duration_s", default=default_dur, positive=True), 0, 0
-        if dur < min_dur:
-            raise err("duration_s")(f"must be >= min_duration_s = {min_dur:g}, got {dur:g}")
-    t_lo = num("window_lo_s", default=-np.inf)
-    t_hi = num("window_hi_s", default=np.inf)
+        return 0.0, 1e3 * num("length_km"), num("azimuth_deg", default=0.0)
+    for col in ("length_km", "azimuth_deg"):
+        if get(col) is not None:
+            raise err(col)("a point has no length_km / azimuth_deg (use kind 'strip')")
+    dur = num("duration_s", default=max(DEFAULT_POINT_DURATION_S, min_dur))
+    if dur < min_dur:
+        raise err("duration_s")(f"must be >= min_duration_s = {min_dur:g}, got {dur:g}")
+    return dur, 0.0, 0.0
+
+
+def _times(get, err, num, dur) -> tuple[float, float, float, float]:
+    """``(t_lo, t_hi, mid_lo, mid_hi)`` [s from the epoch] of the imaging window and the
+    desired midpoint (infinite when not given), checked against each other and the
+    imaging time ``dur`` [s]."""
+    t_lo = num("window_lo_s", "window_s", default=-np.inf)
+    t_hi = num("window_hi_s", "window_s", default=np.inf)
     if t_hi < t_lo:
         raise err("window_hi_s")(f"window needs lo <= hi, got [{t_lo:g}, {t_hi:g}]")
     if t_hi < t_lo + dur:
         raise err("window_hi_s")(
             f"window [{t_lo:g}, {t_hi:g}] s is shorter than the imaging time {dur:g} s"
         )
-    mid_lo, mid_hi = -np.inf, np.inf
     if get("tolerance_s") is not None and get("desired_s") is None:
         raise err("tolerance_s")("only with desired_s (the desired imaging time)")
-    if get("desired_s") is not None:
-        desired = num("desired_s")
-        if get("tolerance_s") is None:
-            raise err("tolerance_s")("missing (required with desired_s) [s]")
-        tol = num("tolerance_s", nonneg=True)
-        mid_lo, mid_hi = desired - tol, desired + tol
-        if mid_hi < t_lo + dur / 2 or mid_lo > t_hi - dur / 2:
-            raise err("desired_s")(
-                f"desired time {desired:g} +- {tol:g} s misses the window [{t_lo:g}, {t_hi:g}] s"
-            )
-    sensor = string("sensor", "")
-    return (
-        name,
-        _KINDS[kind],
-        lat,
-        lon,
-        alt,
-        dur,
-        length,
-        az,
-        prio,
-        t_lo,
-        t_hi,
-        mid_lo,
-        mid_hi,
-        min_dur,
-        sensor,
-    )
+    if get("desired_s") is None:
+        return t_lo, t_hi, -np.inf, np.inf
+    desired = num("desired_s")
+    if get("tolerance_s") is None:
+        raise err("tolerance_s")("missing (required with desired_s) [s]")
+    tol = num("tolerance_s")
+    if desired + tol < t_lo + dur / 2 or desired - tol > t_hi - dur / 2:
+        raise err("desired_s")(
+            f"desired time {desired:g} +- {tol:g} s misses the window [{t_lo:g}, {t_hi:g}] s"
+        )
+    return t_lo, t_hi, desired - tol, desired + tol
 
 
 def _targets_from_rows(rows) -> Targets:
@@ -277,7 +284,7 @@ def _targets_from_rows(rows) -> Targets:
     )
 
 
-def _toml_targets(ctx, items) -> tuple[Targets, list[str]] | None:
+def _toml_targets(ctx, items, horizon=None) -> tuple[Targets, list[str]] | None:
     rows, origins = [], []
     for i, (f, rt) in enumerate(items):
         rt = dict(field_table(ctx, f, rt, _KEYS["target"]))
@@ -291,7 +298,7 @@ def _toml_targets(ctx, items) -> tuple[Targets, list[str]] | None:
             key = "window_s" if col.startswith("window_") else col
             return lambda m: ctx.error(f"{f}.{key}", m)
 
-        rows.append(_target_row(rt.get, err, f"target_{i + 1}"))
+        rows.append(_target_row(rt.get, err, f"target_{i + 1}", horizon=horizon))
         origins.append(f)
     return (_targets_from_rows(rows), origins) if rows else None
 
@@ -310,8 +317,9 @@ def load_targets_csv(path) -> Targets:
     return _read_csv(path)[0]
 
 
-def _read_csv(path) -> tuple[Targets, list[str]]:
-    """:func:`load_targets_csv` and the origin (``file row N``) of each target."""
+def _read_csv(path, horizon=None) -> tuple[Targets, list[str]]:
+    """:func:`load_targets_csv` and the origin (``file row N``) of each target (times
+    within ``[0, horizon]`` s)."""
     path = Path(path)
     label = path.name
     try:
@@ -348,7 +356,11 @@ def _read_csv(path) -> tuple[Targets, list[str]]:
             def err(col, line=line):
                 return lambda m: ValueError(f"{label} row {line}, column {col!r}: {m}")
 
-            rows.append(_target_row(rec.get, err, f"row_{line}", text=True))
+            for col, cell in zip(header, cells, strict=True):  # before stripping
+                if col in _TEXT_COLUMNS:
+                    check_text(cell, err(col))
+
+            rows.append(_target_row(rec.get, err, f"row_{line}", text=True, horizon=horizon))
             origins.append(f"{label} row {line}")
     except csv.Error as exc:  # an over-long cell (an unbalanced quote), a NUL byte, ...
         raise ValueError(f"{label} row {reader.line_num}: not readable as CSV: {exc}") from None
@@ -403,28 +415,28 @@ def _land_positions(ctx, rng, count, lat, lon):
 def _random_targets(ctx, rt) -> Targets:
     f = "random_targets"
     rt = field_table(ctx, f, rt, _KEYS[f])
-    seed = field_int(ctx, f"{f}.seed", rt.get("seed", 0))
+
+    def integer(key, default):
+        return field_int(ctx, f"{f}.{key}", rt.get(key, default), *RANGES[f"{f}.{key}"])
+
+    def pair(key, default):
+        return field_pair(ctx, f"{f}.{key}", rt.get(key, list(default)), **bounds(f"{f}.{key}"))
+
+    seed = integer("seed", 0)
     if "count" not in rt:
         raise ctx.error(f"{f}.count", "missing (how many targets to generate)")
-    count = field_int(ctx, f"{f}.count", rt["count"], 1)
-    if count > MAX_RANDOM_TARGETS:
-        raise ctx.error(f"{f}.count", f"must be <= {MAX_RANDOM_TARGETS}, got {count!r}")
-
-    def pair(key, default, **kw):
-        return field_pair(ctx, f"{f}.{key}", rt.get(key, list(default)), **kw)
-
-    lat = pair("lat_deg", LAT_RANGE_DEG, lo=LAT_RANGE_DEG[0], hi=LAT_RANGE_DEG[1])
-    lon = pair("lon_deg", LON_RANGE_DEG, lo=LON_RANGE_DEG[0], hi=LON_RANGE_DEG[1])
+    count = integer("count", None)
+    lat, lon = pair("lat_deg", LAT_RANGE_DEG), pair("lon_deg", LON_RANGE_DEG)
     land = field_bool(ctx, f"{f}.land_only", rt.get("land_only", False))
     frac = rt.get("strip_fraction", DEFAULT_STRIP_FRACTION)
-    frac = field_number(ctx, f"{f}.strip_fraction", frac, lo=0.0, hi=1.0)
-    dur = pair("duration_s", DEFAULT_RANDOM_DURATION_S, positive=True)
-    length = pair("length_km", DEFAULT_RANDOM_LENGTH_KM, positive=True, hi=MAX_STRIP_KM)
+    frac = field_number(ctx, f"{f}.strip_fraction", frac, **bounds(f"{f}.strip_fraction"))
+    dur = pair("duration_s", DEFAULT_RANDOM_DURATION_S)
+    length = pair("length_km", DEFAULT_RANDOM_LENGTH_KM)
     az = pair("azimuth_deg", (0.0, 360.0))
     prio = rt.get("priority", list(DEFAULT_RANDOM_PRIORITY))
     if not isinstance(prio, list) or len(prio) != 2:
         raise ctx.error(f"{f}.priority", f"must be a list [lo, hi] of integers, got {prio!r}")
-    p_lo, p_hi = (field_int(ctx, f"{f}.priority", p, 1) for p in prio)
+    p_lo, p_hi = (field_int(ctx, f"{f}.priority", p, *RANGES[f"{f}.priority"]) for p in prio)
     if p_lo > p_hi:
         raise ctx.error(f"{f}.priority", f"needs lo <= hi, got {prio!r}")
     rng = np.random.default_rng(seed)

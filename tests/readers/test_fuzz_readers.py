@@ -20,6 +20,15 @@ one each side), and that remedy is checked to cut both halves where they are. Th
 generators live in ``_fuzz_inputs.py``; ``python tests/readers/test_fuzz_readers.py``
 prints a summary of the failing cases by kind.
 
+The schema cases (``_fuzz_schema.py``, ~900) go over every key of the schema instead of
+mutating at random: every number outside its range, of the wrong type and at both ends
+of its range, names with control characters, damaged TLEs, far epochs, degenerate
+polygons, GeoJSON positions that are not numbers. The ~760 that must be refused stop at
+validation and run by default (a few seconds); the boundary values that may be
+accepted load whole scenarios (orbits, areas) and run with the ``slow`` marker, as
+does a handful that plans through the command (a plan or a named error, never a
+traceback). An accepted scenario must also hold every number within its range.
+
 The baseline results are parsed once per test; no plan is built. The random targets
 of ``default.toml`` are drawn with ``land_only = false`` in the mutated copies (the land
 mask costs 0.5 s a read), and its CSV path is made absolute.
@@ -49,11 +58,13 @@ from _fuzz_inputs import (
     _toml_baselines,
     generated,
 )
+from _fuzz_schema import schema_cases
 
 from jaxspline.aeossp.case import Case, load_case
 from jaxspline.geometry.orbit import CircularOrbit
 from jaxspline.readers.area_files import read_geojson
 from jaxspline.readers.mission import Scenario, Targets
+from jaxspline.readers.ranges import RANGES
 from jaxspline.readers.scenario import load_scenario
 from jaxspline.readers.targets import load_targets_csv
 
@@ -357,6 +368,127 @@ def test_the_write_watch_sees_writes(tmp_path):
     assert writes and "x.txt" in writes[0]
     _, _, writes = _call((tmp_path / "x.txt").read_text)
     assert writes == []
+
+
+# --- the schema cases ---
+
+
+def _in_ranges(sc: Scenario) -> list[str]:
+    """Numbers of an accepted scenario outside their ranges (RANGES, in file units)."""
+    bad = []
+
+    def within(key, values, scale=1.0):
+        lo, hi = RANGES[key]
+        hi = sc.duration if hi == "horizon" else hi
+        v = np.asarray(values, np.float64) / scale
+        if v.size and not (np.all(v >= lo - 1e-9 * abs(lo)) and np.all(v <= hi * (1 + 1e-12))):
+            bad.append(key)
+
+    within("scenario.duration_s", sc.duration)
+    for s in sc.satellites:
+        within("satellites[].rate_deg_s", np.degrees(s.limits.rate))
+        within("satellites[].accel_deg_s2", np.degrees(s.limits.accel))
+        within("satellites[].off_nadir_max_deg", np.degrees(s.off_nadir_max))
+        within("satellites[].settle_s", s.settle)
+        within("satellites[].swath_km", s.swath, 1e3)
+    tg = sc.targets
+    within("targets[].priority", tg.value[: len(tg) - sum(a.targets.size for a in sc.areas)])
+    point = tg.kind == 0
+    within("targets[].duration_s", tg.duration[point])
+    for f in ("t_lo", "t_hi"):  # finite windows lie in the horizon
+        v = getattr(tg, f)
+        within("targets[].window_s", v[np.isfinite(v)])
+    pl = sc.planner
+    within("planner.time_step_s", pl.time_step)
+    within("planner.geometry_step_s", pl.geometry_step)
+    within("planner.time_limit_s", pl.default_time_limit)
+    within("planner.exact_max_options", pl.exact_max_options)
+    return bad
+
+
+def _judge_schema(c: Fuzz, result, exc, writes):
+    """None if a schema case behaved, else (failure kind, detail)."""
+    if exc is not None and c.expect == "either":
+        msg = str(exc)
+        if type(exc) is not ValueError:
+            return f"raised {type(exc).__name__}", msg
+        if not any(name in msg for name in c.files):
+            return "message without the file name", msg
+        return None if not writes else ("wrote to disk", str(writes[:3]))
+    bad = _judge(c, result, exc, writes, {})
+    if bad is None and exc is None:
+        out = _in_ranges(result)
+        return ("accepted a number out of range", str(out)) if out else None
+    return bad
+
+
+def run_schema(tmp: Path, cases: list[Fuzz]):
+    """[(case, (failure kind, detail))] of the schema cases that broke the contract."""
+    failures = []
+    for i, c in enumerate(cases):
+        folder = tmp / f"c{i:04d}"
+        folder.mkdir()
+        for name, data in c.files.items():
+            (folder / name).write_bytes(data)
+        result, exc, writes = _call(load_scenario, folder / c.entry)
+        bad = _judge_schema(c, result, exc, writes)
+        if bad is not None:
+            failures.append((c, bad))
+    return failures
+
+
+def test_schema_cases_cover_every_key():
+    cases = schema_cases()
+    kinds = Counter(c.expect for c in cases)
+    assert kinds["error"] >= 700 and kinds["either"] >= 100, kinds
+    covered = {c.kind.split(":")[1] for c in cases}
+    assert set(RANGES) <= covered, sorted(set(RANGES) - covered)
+
+
+def test_fuzz_schema_refusals(tmp_path, monkeypatch):
+    """Every value that must be refused is refused by name (stops at validation: fast)."""
+    monkeypatch.chdir(tmp_path)
+    cases = [c for c in schema_cases() if c.expect != "either"]
+    failures = run_schema(tmp_path, cases)
+    assert not failures, summary(failures)
+
+
+@pytest.mark.slow
+def test_fuzz_schema_boundaries(tmp_path, monkeypatch):
+    """Values at the ends of their ranges: accepted with every number in range, or refused
+    by another rule with a named error (these load whole scenarios: orbits, areas)."""
+    monkeypatch.chdir(tmp_path)
+    cases = [c for c in schema_cases() if c.expect == "either"]
+    failures = run_schema(tmp_path, cases)
+    assert not failures, summary(failures)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(
+    "kind",
+    [
+        "schema:base",
+        "schema:planner.exact_max_options:hi",
+        "schema:targets[].window_s:hi",
+        "schema:satellites[].rate_deg_s:hi",
+        "schema:planner.time_step_s:hi",
+        "schema:satellites[].over.t_s:lo",
+    ],  # fmt: skip
+)
+def test_fuzz_schema_cases_plan_or_fail_by_name(kind, tmp_path, capfd):
+    """Through the command: a plan (exit 0) or a named error (exit 2), never a traceback."""
+    from jaxspline.cli import main
+
+    (case,) = [c for c in schema_cases() if c.kind == kind]
+    for name, data in case.files.items():
+        (tmp_path / name).write_bytes(data)
+    out = tmp_path / "out"
+    argv = ["plan", str(tmp_path / "s.toml"), "-o", str(out), "--max-iters", "5", "--quiet",
+            "--no-aem", "--no-plots", "--no-html", "--time-limit", "600"]  # fmt: skip
+    code = main(argv)
+    err = capfd.readouterr().err
+    assert code in (0, 2) and "Traceback" not in err, (code, err)
+    assert (code == 0) == (out / "plan.json").exists()
 
 
 def _area_scenario(tmp_path, areas: str, name="s.toml"):

@@ -235,7 +235,7 @@ def test_imaging_time_fields_and_swath(tmp_path):
 CSV_BAD = [
     ("name,lat_deg,lon_deg,priority\nx,1,2,1\ny,95.2,2,1\n", 3, "lat_deg", "[-90, 90]", "'95.2'"),
     ("name,lat_deg,lon_deg,priority\nx,1,abc,1\n", 2, "lon_deg", "a number", "'abc'"),
-    ("name,lat_deg,lon_deg,priority\nx,1,2,0\n", 2, "priority", "> 0", "'0'"),
+    ("name,lat_deg,lon_deg,priority\nx,1,2,0\n", 2, "priority", "within [1e-06, 1e+06]", "'0'"),
     ("name,lat_deg,lon_deg,priority,kind\nx,1,2,1,blob\n", 2, "kind", "'point' or 'strip'", ""),
     ("name,lat_deg,lon_deg,priority,kind\nx,1,2,1,strip\n", 2, "length_km", "missing", ""),
     ("name,lat_deg,lon_deg,priority,colour\nx,1,2,1,red\n", 1, "colour", "unknown column", ""),
@@ -253,7 +253,7 @@ CSV_BAD = [
         "name,lat_deg,lon_deg,priority,desired_s,tolerance_s\nx,1,2,1,9,-1\n",
         2,
         "tolerance_s",
-        ">= 0",
+        "within [0, ",
         "",
     ),
     (
@@ -312,7 +312,12 @@ BAD = [
     ("[sattelite]\n" + HEAD + SAT + POINT_TARGET, "sattelite", 1, "unknown"),
     (HEAD + "colour = 'red'\n" + SAT + POINT_TARGET, "scenario.colour", 4, "unknown key"),
     (HEAD + SAT + "rate_deg_s = [1, 2]\n" + POINT_TARGET, "satellites[0].rate_deg_s", 6, ""),
-    (HEAD + SAT + "rate_deg_s = -1\n" + POINT_TARGET, "satellites[0].rate_deg_s", 6, "> 0"),
+    (
+        HEAD + SAT + "rate_deg_s = -1\n" + POINT_TARGET,
+        "satellites[0].rate_deg_s",
+        6,
+        "within [0.01, 90]",
+    ),
     (
         HEAD + "[[satellites]]\naltitude_km = 'high'\n" + POINT_TARGET,
         "satellites[0].altitude_km",
@@ -340,9 +345,9 @@ BAD = [
     ),
     (
         HEAD + SAT + "power = { capacity_wh = 10.0, initial_wh = 20.0 }\n" + POINT_TARGET,
-        "satellites[0].power",
+        "satellites[0].power.initial_wh",
         6,
-        "exceeds capacity",
+        "must be <= capacity_wh = 10, got 20",
     ),
     (HEAD + "[[satellites]]\ntle = ['1 x', '2 y']\n" + POINT_TARGET, "satellites[0].tle", 5, ""),
     (
@@ -393,7 +398,12 @@ BAD = [
         1,
         "exactly one",
     ),
-    (HEAD + SAT + "[random_targets]\ncount = 0\n", "random_targets.count", 7, ">= 1"),
+    (
+        HEAD + SAT + "[random_targets]\ncount = 0\n",
+        "random_targets.count",
+        7,
+        "within [1, 1000000]",
+    ),
     (
         HEAD + SAT + "[random_targets]\ncount = 5\nland_only = true\nlat_deg = [-5, -4]\n"
         "lon_deg = [-30, -29]\n",
@@ -407,7 +417,12 @@ BAD = [
         10,
         "multiple",
     ),
-    (HEAD + SAT + "swath_km = 0\n" + POINT_TARGET, "satellites[0].swath_km", 6, "> 0"),
+    (
+        HEAD + SAT + "swath_km = 0\n" + POINT_TARGET,
+        "satellites[0].swath_km",
+        6,
+        "within [0.01, 5000]",
+    ),
     (HEAD + SAT + POINT_TARGET + "desired_s = 100\n", "targets[0].tolerance_s", 6, "missing"),
     (
         HEAD + SAT + POINT_TARGET + "window_s = [0, 50]\ndesired_s = 100\ntolerance_s = 5\n",

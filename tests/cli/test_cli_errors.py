@@ -1,0 +1,293 @@
+"""Every failure of the ``jaxspline`` command: one line naming its cause, a documented exit code.
+
+* every flag of ``plan``, ``bound``, ``view``, ``aeossp solve|check`` is checked before
+  any work and named in the message (exit 2, within seconds, nothing written);
+* an unexpected error is one line with the exception's name and a pointer to
+  ``--debug`` (exit 70); ``--debug`` prints the traceback; no other output has one;
+* bad files: a directory as the scenario, TOML nested thousands deep, a malformed
+  ``plan.json`` for ``view`` (exit 2);
+* writing: a failure while writing the set is one line (exit 4), the previous set is
+  kept; a signal while writing is recorded in ``plan.json``;
+* the time limit: a scenario that cannot fit a tiny limit stops before the search
+  with exit 3, an estimate and the remedy, and writes nothing.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import time
+import types
+
+import pytest
+
+from jaxspline.cli import (
+    EXIT_BAD_INPUT,
+    EXIT_INTERNAL,
+    EXIT_TIME_LIMIT,
+    EXIT_WRITE,
+    build_parser,
+    main,
+)
+
+SCENARIO = """
+[scenario]
+epoch = "2026-04-14T00:00:00Z"
+duration_s = 600.0
+[[satellites]]
+altitude_km = 600.0
+[[targets]]
+lat_deg = 46.0
+lon_deg = 15.0
+"""
+
+
+@pytest.fixture
+def scen(tmp_path):
+    path = tmp_path / "s.toml"
+    path.write_text(SCENARIO, encoding="utf-8")
+    return path
+
+
+def _run(capsys, argv):
+    capsys.readouterr()
+    t0 = time.monotonic()
+    code = main(argv)
+    captured = capsys.readouterr()
+    return code, captured.err, time.monotonic() - t0
+
+
+# (extra arguments of the command, the flag its message must name)
+PLAN_FLAGS = [
+    (["--time-limit", "0"], "--time-limit: must be > 0"),
+    (["--time-limit", "-3"], "--time-limit: must be > 0"),
+    (["--time-limit", "nan"], "--time-limit: must be a finite"),
+    (["--time-limit", "inf"], "--time-limit: must be a finite"),
+    (["--time-limit", "1e12"], "--time-limit: must be <="),
+    (["--seed", "-1"], "--seed: must be within"),
+    (["--seed", str(2**40)], "--seed: must be within"),
+    (["--max-iters", "0"], "--max-iters: must be within"),
+    (["--certify", "-1"], "--certify: must be >= 0"),
+    (["--certify", "nan"], "--certify: must be a finite"),
+    (["--aem-step", "0"], "--aem-step: must be > 0, got 0"),
+    (["--aem-step", "1e-9"], "--aem-step: must be >="),
+    (["--aem-step", "1e9"], "--aem-step: must be <="),
+    (["--aem-step", "0.01"], "--aem-step: 0.01 s over the 600 s horizon"),
+    (["-o", ""], "-o/--outdir: must not be empty"),
+    (["-o", " "], "-o/--outdir: must not be empty"),
+]
+
+
+@pytest.mark.parametrize(("extra", "msg"), PLAN_FLAGS, ids=[" ".join(e) for e, _ in PLAN_FLAGS])
+def test_plan_flags_are_checked_before_any_work(tmp_path, scen, capsys, extra, msg):
+    out = tmp_path / "out"
+    argv = ["plan", str(scen), "-o", str(out), "--quiet", *extra]
+    code, err, seconds = _run(capsys, argv)
+    assert code == EXIT_BAD_INPUT, err
+    assert err.startswith("jaxspline: error: ") and msg in err, err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists() and sorted(os.listdir(tmp_path)) == ["s.toml"]
+    assert seconds < 10.0  # nothing planned (typically well under a second)
+
+
+def test_plan_refuses_a_directory_as_scenario_and_the_working_directory(
+    tmp_path, capsys, monkeypatch
+):
+    code, err, _ = _run(capsys, ["plan", str(tmp_path), "-o", str(tmp_path / "o")])
+    assert code == EXIT_BAD_INPUT and "is a directory" in err, err
+    monkeypatch.chdir(tmp_path)
+    code, err, _ = _run(capsys, ["plan", "-o", "."])
+    assert code == EXIT_BAD_INPUT and "working directory" in err, err
+
+
+BOUND_FLAGS = [
+    (["--time-limit", "0"], "--time-limit: must be > 0"),
+    (["--max-iters", "0"], "--max-iters: must be within"),
+    (["--target", "-1"], "--target: must be a finite number > 0"),
+    (["--json", ""], "--json: must not be empty"),
+    (["--plan", "PLACEHOLDER_DIR"], "--plan: "),
+    (["--plan", "p.json", "--search-time", "0"], "--search-time: must be > 0"),
+    (["--plan", "p.json", "--search-iters", "0"], "--search-iters: must be within"),
+    (["--search-time", "5"], "--search-time / --search-iters: only with --plan"),
+    (["--num-processes", "0"], "--num-processes: must be within"),
+    (["--num-processes", "2"], "--num-processes: more than one process needs --coordinator"),
+    (["--process-id", "3"], "--process-id: must be within [0, 0]"),
+    (["--coordinator", "nohostport"], "--coordinator: must be HOST:PORT"),
+    (["--coordinator", "h:70000"], "--coordinator: must be HOST:PORT"),
+    (["--json", "a.json", "--plan", "a.json"], "--json and --plan: must be two files"),
+]
+
+
+@pytest.mark.parametrize(("extra", "msg"), BOUND_FLAGS, ids=[" ".join(e) for e, _ in BOUND_FLAGS])
+def test_bound_flags_are_checked_before_any_work(tmp_path, scen, capsys, extra, msg):
+    extra = [str(tmp_path) if e == "PLACEHOLDER_DIR" else e for e in extra]
+    code, err, seconds = _run(capsys, ["bound", str(scen), *extra])
+    assert code == EXIT_BAD_INPUT and msg in err, err
+    assert "Traceback" not in err and seconds < 10.0
+
+
+def test_view_and_aeossp_flags(tmp_path, capsys):
+    plan = tmp_path / "plan.json"
+    plan.write_text("{}")
+    cases = [
+        (["view", str(plan), "-o", ""], "-o/--output: must not be empty"),
+        (["view", str(plan), "-o", str(tmp_path)], "is a directory"),
+        (["view", str(tmp_path)], "PLAN: "),
+        (["aeossp", "solve", str(tmp_path / "none"), "-o", "s.json"], "CASE_DIR: not found"),
+        (["aeossp", "solve", str(tmp_path), "-o", ""], "-o/--output: must not be empty"),
+        (["aeossp", "solve", str(tmp_path), "-o", "s.json", "--time-limit", "0"], "--time-limit"),
+        (["aeossp", "solve", str(tmp_path), "-o", "s.json", "--seed", "-2"], "--seed"),
+        (["aeossp", "check", str(plan), str(plan)], "CASE_DIR: "),
+        (["aeossp", "check", str(tmp_path), str(tmp_path / "x")], "SOLUTION: not found"),
+    ]
+    for argv, msg in cases:
+        code, err, _ = _run(capsys, argv)
+        assert code == EXIT_BAD_INPUT and msg in err, (argv, err)
+        assert "Traceback" not in err
+
+
+def test_every_subcommand_takes_debug():
+    parser = build_parser()
+    for argv in (["--debug", "view", "p.json"], ["view", "p.json", "--debug"],
+                 ["aeossp", "check", "c", "s", "--debug"], ["bound", "--debug"]):  # fmt: skip
+        assert parser.parse_args(argv).debug is True
+    assert parser.parse_args(["view", "p.json"]).debug is False
+
+
+def test_an_unexpected_error_is_one_line_and_debug_shows_the_traceback(monkeypatch, capsys):
+    def boom(args):
+        raise KeyError("surprise")
+
+    def patched():
+        parser = build_parser()
+        sub = next(a for a in parser._actions if isinstance(a.choices, dict))
+        sub.choices["view"].set_defaults(func=boom)
+        return parser
+
+    monkeypatch.setattr("jaxspline.cli.build_parser", patched)
+    code, err, _ = _run(capsys, ["view", "plan.json"])
+    assert code == EXIT_INTERNAL
+    assert err.startswith("jaxspline: internal error: KeyError: 'surprise'")
+    assert "--debug" in err and "Traceback" not in err and err.count("\n") == 1
+    code, err, _ = _run(capsys, ["--debug", "view", "plan.json"])
+    assert code == EXIT_INTERNAL and "Traceback (most recent call last)" in err
+
+
+def test_deep_toml_and_bad_plan_json_are_named(tmp_path, capsys):
+    deep = tmp_path / "deep.toml"
+    deep.write_text("x = " + "[" * 3000 + "]" * 3000 + "\n")
+    code, err, _ = _run(capsys, ["plan", str(deep), "-o", str(tmp_path / "o")])
+    assert code == EXIT_BAD_INPUT and "deep.toml: invalid TOML" in err, err
+    for doc, field in [
+        ({"summary": {}, "report": {}, "observations": 3}, "observations: must be a list"),
+        ({"summary": {}, "report": {}, "observations": [], "view": "x"}, "view: must be"),
+        ({"summary": None, "report": {}, "observations": []}, "summary: must be an object"),
+        (
+            {"summary": {}, "report": {}, "observations": [], "view": {"targets": None}},
+            "view.targets: must be an object",
+        ),  # fmt: skip
+        ([1, 2], "the document: must be an object"),
+    ]:
+        plan = tmp_path / "plan.json"
+        plan.write_text(json.dumps(doc))
+        code, err, _ = _run(capsys, ["view", str(plan), "--force"])
+        assert code == EXIT_BAD_INPUT and field in err, (doc, err)
+        assert "Traceback" not in err
+
+
+def test_the_time_limit_stops_a_scenario_too_big_for_it(tmp_path, capsys):
+    big = SCENARIO.replace(
+        "[[targets]]\nlat_deg = 46.0\nlon_deg = 15.0\n",
+        "[random_targets]\ncount = 20000\n",
+    )
+    scen = tmp_path / "big.toml"
+    scen.write_text(big, encoding="utf-8")
+    out = tmp_path / "out"
+    argv = ["plan", str(scen), "-o", str(out), "--time-limit", "0.05", "--quiet"]
+    code, err, seconds = _run(capsys, argv)
+    assert code == EXIT_TIME_LIMIT, err
+    assert err.startswith("jaxspline: time limit: time limit of 0.05 s reached before the search")
+    assert "give a time limit of" in err and "--time-limit" in err, err
+    assert not out.exists() and sorted(os.listdir(tmp_path)) == ["big.toml"]
+    assert seconds < 60.0
+
+
+def test_stage_deadline_estimate_and_compile_time(monkeypatch):
+    from jaxspline.planner import deadline as dl
+
+    clock = {"now": 100.0, "compiled": 0.0}
+    monkeypatch.setattr(dl.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(dl, "compile_seconds", lambda: clock["compiled"])
+    d = dl.StageDeadline(100.0, 10.0, "5 targets")
+    clock["now"] = 109.0
+    d.check("options", 0.5, 104.0)  # within the limit
+    clock.update(now=125.0, compiled=20.0)
+    d.check("options", 0.5, 104.0)  # 25 s, 20 s of it compiling: 5 s of work
+    clock["compiled"] = 5.0
+    with pytest.raises(dl.TimeLimitError) as exc:
+        d.check("options", 0.25, 105.0, "700 options")
+    e = exc.value
+    assert (e.stage, e.elapsed) == ("options", 25.0)
+    assert e.estimate == pytest.approx(5.0 + 20.0 / 0.25 - 5.0)  # 80 s
+    assert "give a time limit of 300 s" in str(e) and "700 options; 5 targets" in str(e)
+    assert dl.suggested_limit(4.0) == 10 and dl.suggested_limit(1e6) == 2_000_000
+
+
+class _FakeResult:
+    """Enough of a PlanResult for the write phase: a report and plan.json."""
+
+    def __init__(self):
+        self.report = {"valid": True}
+
+    def to_json(self, path, *, force=False, extra=None):
+        doc = {"report": self.report, **(extra or {})}
+        path.write_text(json.dumps(doc), encoding="utf-8")
+
+
+def test_a_signal_while_writing_is_recorded_in_plan_json(tmp_path, monkeypatch):
+    from jaxspline.cli import plan as plan_cli
+    from jaxspline.products import outputs
+    from jaxspline.products.outputs import OutputSet
+
+    def write(result, folder, **kw):
+        result.to_json(folder / "plan.json", extra={"view": {"v": 1}})
+        os.kill(os.getpid(), signal.SIGINT)  # held by the write phase until the set is whole
+        (folder / "plan.csv").write_text("rows")
+
+    monkeypatch.setattr(outputs, "write_plan_outputs", write)
+    result = _FakeResult()
+    with OutputSet(tmp_path / "out") as s:
+        plan_cli._write(result, s, plots=False, aem=False, aem_step=10.0, html=False)
+    doc = json.loads((tmp_path / "out" / "plan.json").read_text())
+    assert doc["report"]["interrupted"] == "SIGINT" and doc["view"] == {"v": 1}
+    assert sorted(os.listdir(tmp_path / "out")) == ["plan.csv", "plan.json"]
+
+
+def test_a_write_error_is_one_line_with_exit_4_and_keeps_the_previous_set(
+    tmp_path, monkeypatch, capsys
+):
+    from jaxspline.cli import plan as plan_cli
+    from jaxspline.products import outputs
+
+    out = tmp_path / "out"
+    out.mkdir()
+    (out / "plan.json").write_text("previous")
+    fake = types.SimpleNamespace(report={"valid": True}, timings={})
+
+    def fake_plan(*args, **kw):
+        return fake
+
+    def write(result, folder, **kw):
+        (folder / "plan.json").write_text("half")
+        raise outputs.OutputError("cannot write the outputs: No space left on device")
+
+    monkeypatch.setattr(plan_cli, "_plan", fake_plan)
+    monkeypatch.setattr(outputs, "write_plan_outputs", write)
+    scen = tmp_path / "s.toml"
+    scen.write_text(SCENARIO, encoding="utf-8")
+    code, err, _ = _run(capsys, ["plan", str(scen), "-o", str(out), "--force", "--no-aem"])
+    assert code == EXIT_WRITE, err
+    assert err == "jaxspline: cannot write: cannot write the outputs: No space left on device\n"
+    assert (out / "plan.json").read_text() == "previous"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "s.toml"]
