@@ -22,8 +22,6 @@ import sys
 import time
 from dataclasses import dataclass
 
-import numpy as np
-
 __all__ = ["SolveConfig", "solution_actions", "solve_case"]
 
 
@@ -168,7 +166,7 @@ def solve_case(
         "bound": bound,
         "gap": bound - best.value,
         "bound_iterations": res.iterations,
-        "min_battery_wh": float(np.min(best.low_wh)) if best.low_wh.size else None,
+        "min_battery_wh": best.min_battery(),
         "union_ratio": info.union_ratio,
         "passes": info.n_passes,
         "groups": info.n_groups,
