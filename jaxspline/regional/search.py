@@ -3,16 +3,22 @@
 * :func:`candidate_windows`: per group, the window of its non-empty slots (clipped to the
   maximum strip duration: longer groups give every max-length window, one slot apart).
 * :func:`greedy_fill`: CELF lazy greedy. A window's open gain is bounded above by prefix
-  sums of the state's per-row open gains; the top of the heap is re-evaluated exactly
+  sums of the state's per-row open gains (rows of slots under or next to a strip of the
+  same satellite count 0: no piece that fits can use them, :meth:`PlanState.open_rows`);
+  the top of the heap is re-evaluated exactly
   (after :meth:`PlanState.fit` cuts it to the satellite's free time) and taken when it
   still beats the next bound. Taken strips are trimmed to the shortest window of the same
   gain; strips with no gain are never taken (ties go to fewer actions).
-* :func:`lns`: until the deadline, destroy a few strips (random, least marginal
-  contribution, one region's, one satellite's, the strips overlapping a random one) and
-  repair with the greedy (the removed groups banned half the time); then local moves (a
-  strip's roll moved to a neighbouring group of its pass, its ends moved by one slot).
-  A trial replaces the current plan when its :meth:`PlanState.score` is not lower
-  (shortfall, coverage, fewer actions, higher battery minimum); the best is kept.
+* :func:`lns`: until the deadline, one move per iteration on a copy of the current plan:
+  re-plan the passes able to cover one open sample (:func:`reopt_related`), re-plan one
+  pass (:func:`reopt_pass`), or destroy a few strips (random, least marginal contribution,
+  one region's, one satellite's, the strips overlapping a random one) and repair with the
+  greedy (the removed groups banned half the time); every ``local_every`` iterations
+  local moves (a strip's roll moved to a neighbouring group of its pass, an end moved by
+  one slot). A trial replaces the current plan when it is not worse (:func:`better`:
+  shortfall, coverage, fewer actions, higher battery minimum); the best is kept.
+* :func:`meet_minimums`: while a region misses its minimum coverage, the same search on
+  weights raised for the regions with a minimum (:func:`boosted`).
 
 Deterministic for a given seed and for a given number of iterations (the deadline stops
 the loop between iterations).
@@ -35,12 +41,17 @@ __all__ = [
     "Windows",
     "candidate_windows",
     "greedy_fill",
+    "boosted",
     "lns",
     "local_moves",
+    "meet_minimums",
 ]
 
 #: Gains at or below this count as zero (coverage_ratio units).
 MIN_GAIN = 1e-10
+#: Extra weight (per unit of region ratio) on regions with a minimum coverage while
+#: any of them misses it.
+MIN_BOOST = 10.0
 
 
 @dataclass(frozen=True)
@@ -299,6 +310,51 @@ def local_moves(state: PlanState, passes: np.ndarray, roll_order: np.ndarray, nb
     return kept
 
 
+def boosted(prob: CoverProblem, factor: float = MIN_BOOST) -> CoverProblem:
+    """The problem with the samples of regions that have a minimum coverage weighted up.
+
+    Args:
+      prob: CoverProblem; factor: extra weight per unit of region ratio.
+    Returns:
+      CoverProblem (the same object when no region has a minimum).
+    """
+    from dataclasses import replace
+
+    has = np.isfinite(prob.region_min)
+    if not has.any():
+        return prob
+    extra = np.where(has[prob.region], factor * prob.ratio_weight, 0.0)
+    return replace(prob, weight=prob.weight + extra)
+
+
+def meet_minimums(state: PlanState, win: Windows, deadline: float, config, log=None):
+    """Search on :func:`boosted` weights until no region misses its minimum coverage.
+
+    Args:
+      state: PlanState (not modified); win: Windows; deadline: perf_counter instant;
+      config: SearchConfig; log: optional callable(str).
+    Returns:
+      PlanState on the original problem holding the strips found (the start state when
+      nothing misses its minimum).
+    """
+    if state.shortfall() <= 0:
+        return state
+    prob = state.prob
+    boost = PlanState(boosted(prob), state.tr)
+    for g, a, b in state.strips.values():
+        boost.add(g, a, b)
+    greedy_fill(boost, win, deadline)
+    if boost.shortfall() > 0:
+        boost, _ = lns(boost, win, deadline, config, log=log, stop=lambda b: b.shortfall() <= 0)
+    out = PlanState(prob, state.tr)
+    for g, a, b in boost.strips.values():
+        out.add(g, a, b)
+    greedy_fill(out, win, deadline)
+    if log is not None:
+        log(f"minimum coverage phase: shortfall {state.shortfall():.4f} -> {out.shortfall():.4f}")
+    return out if better(out, state) else state
+
+
 def _accept(trial: PlanState, cur: PlanState, temp0, t_begin, deadline, rng) -> bool:
     """Not worse (score), or worse in coverage by delta with probability exp(delta / T)."""
     if better(trial, cur, strict=False):
@@ -318,6 +374,7 @@ def lns(
     config: SearchConfig = SearchConfig(),
     log=None,
     max_iter: int | None = None,
+    stop=None,
 ) -> tuple[PlanState, dict]:
     """Improve a plan by destroy-and-repair until the deadline.
 
@@ -328,6 +385,7 @@ def lns(
       config: SearchConfig.
       log: optional callable(str) for progress lines.
       max_iter: optional iteration cap (the run is then reproducible whatever the clock).
+      stop: optional callable(best PlanState) -> bool, checked after every improvement.
     Returns:
       (best PlanState, stats dict: iterations, accepted, improved, moves by kind).
     """
@@ -380,6 +438,8 @@ def lns(
             if better(cur, best):
                 stats["improved"] += 1
                 best = cur.copy()
+                if stop is not None and stop(best):
+                    break
         if log is not None and time.perf_counter() - last_log > 10.0:
             last_log = time.perf_counter()
             log(

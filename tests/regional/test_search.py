@@ -292,3 +292,29 @@ def test_solve_cut_case_is_valid_under_the_checker():
     assert report.coverage_ratio == pytest.approx(stats["coverage_ratio"], abs=1e-9)
     assert stats["bound"] >= stats["coverage_ratio"] - 1e-12
     assert math.isfinite(stats["gap"]) and stats["total_s"] < 30.0
+
+
+def test_minimum_coverage_phase_meets_a_reachable_minimum():
+    from dataclasses import replace as dc_replace
+
+    from jaxspline.regional.search import SearchConfig, meet_minimums
+
+    prob = make_problem(8, n_sats=3, passes_per_sat=3, max_actions=3)
+    win = candidate_windows(prob)
+    # what region 0 alone can reach with the same cap (a greedy on its samples only)
+    only0 = dc_replace(prob, weight=np.where(prob.region == 0, prob.ratio_weight, 0.0))
+    st0 = PlanState(only0)
+    greedy_fill(st0, win, time.perf_counter() + 10)
+    reach0 = st0.value
+    plain = PlanState(prob)
+    greedy_fill(plain, win, time.perf_counter() + 10)
+    target = 0.98 * reach0
+    assert plain.region_cov[0] < target, "the plain greedy should miss the minimum here"
+    prob_min = dc_replace(prob, region_min=np.array([target, np.nan]))
+    st = PlanState(prob_min)
+    greedy_fill(st, win, time.perf_counter() + 10)
+    assert st.shortfall() > 0
+    out = meet_minimums(st, win, time.perf_counter() + 20, SearchConfig(seed=1))
+    assert out.shortfall() == 0.0
+    assert out.region_cov[0] >= target
+    assert out.n_actions() <= prob.max_actions
