@@ -29,7 +29,7 @@ from jaxspline.regional.problem import CoverProblem, group_passes
 __all__ = [
     "BoundResult",
     "PassLayout",
-    "bound_worker",
+    "bound_main",
     "lagrangian_bound",
     "lagrangian_value",
     "pass_layout",
@@ -326,15 +326,29 @@ def lagrangian_bound(
     return BoundResult(float(best), it + 1, best_lam, hist)
 
 
-def bound_worker(prob: CoverProblem, target: float, seconds: float, conn) -> None:
-    """Run :func:`lagrangian_bound` for ``seconds`` and send (bound, iterations) on ``conn``.
+def bound_main(argv=None) -> int:
+    """Entry point of ``python -m jaxspline.regional.bound PROBLEM.pkl SECONDS``.
 
-    For a separate process (the search keeps the main one busy).
+    Reads the pickled ``(CoverProblem, target)``, runs :func:`lagrangian_bound` for
+    SECONDS and prints ``bound iterations`` on stdout (so the search can run meanwhile in
+    the parent process).
 
     Args:
-      prob: CoverProblem; target: plan value to aim at; seconds: budget [s];
-      conn: a ``multiprocessing`` connection.
+      argv: command-line arguments (default ``sys.argv[1:]``).
+    Returns:
+      exit code 0.
     """
-    res = lagrangian_bound(prob, target, time.perf_counter() + seconds)
-    conn.send((res.bound, res.iterations))
-    conn.close()
+    import pickle
+    import sys
+
+    args = sys.argv[1:] if argv is None else argv
+    t0 = time.perf_counter()
+    with open(args[0], "rb") as fh:
+        prob, target = pickle.load(fh)
+    res = lagrangian_bound(prob, target, t0 + float(args[1]))
+    print(f"{res.bound!r} {res.iterations}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(bound_main())

@@ -406,7 +406,7 @@ def lns(
     last_log = time.perf_counter()
     t_begin = time.perf_counter()
     fails: dict = {}
-    while time.perf_counter() < deadline:
+    while time.perf_counter() < deadline and prob.n_groups:
         if max_iter is not None and stats["iterations"] >= max_iter:
             break
         it = stats["iterations"] = stats["iterations"] + 1

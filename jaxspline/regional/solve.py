@@ -10,9 +10,10 @@ Stages, each checking the clock (one budget from the call, or from ``t_start``):
 3. a final check of every satellite's timeline with the exact refined battery model
    (:func:`jaxspline.regional.constraints.battery_levels`), dropping a strip if a rule
    would fail (never expected: the search keeps margins);
-4. the Lagrangian upper bound (:mod:`jaxspline.regional.bound`), computed in a separate
-   process (``spawn``) while the search runs, capped by the coverage of all candidates
-   together; if that process gives nothing, a short in-process run instead.
+4. the Lagrangian upper bound (:mod:`jaxspline.regional.bound`), computed in a child
+   process (``python -m jaxspline.regional.bound``) while the search runs, capped by the
+   coverage of all candidates together; if that process gives nothing, a short
+   in-process run instead.
 
 The budget keeps ``reserve`` seconds back for writing and checking the solution.
 """
@@ -114,50 +115,59 @@ def final_check(state) -> int:
 
 
 def start_bound(prob, target: float, seconds: float):
-    """Start :func:`jaxspline.regional.bound.bound_worker` in a spawned process.
+    """Start ``python -m jaxspline.regional.bound`` on a pickled problem (a child process).
 
     Args:
       prob: CoverProblem; target: a plan value to aim at; seconds: its budget [s].
     Returns:
-      (process, connection), or None if it could not start.
+      (process, temporary file path), or None if it could not start.
     """
-    import multiprocessing as mp
-
-    from jaxspline.regional.bound import bound_worker
+    import os
+    import pickle
+    import subprocess
+    import tempfile
 
     try:
-        ctx = mp.get_context("spawn")
-        recv, send = ctx.Pipe(duplex=False)
-        proc = ctx.Process(target=bound_worker, args=(prob, target, max(seconds, 1.0), send))
-        proc.daemon = True
-        proc.start()
-        send.close()
-        return proc, recv
-    except (OSError, RuntimeError):
+        fd, path = tempfile.mkstemp(prefix="jaxspline-bound-", suffix=".pkl")
+        with os.fdopen(fd, "wb") as fh:
+            pickle.dump((prob, float(target)), fh, protocol=pickle.HIGHEST_PROTOCOL)
+        cmd = [sys.executable, "-m", "jaxspline.regional.bound", path, f"{max(seconds, 1.0):.3f}"]
+        env = dict(os.environ, JAX_PLATFORMS=os.environ.get("JAX_PLATFORMS", "cpu"))
+        proc = subprocess.Popen(
+            cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env
+        )
+        return proc, path
+    except (OSError, ValueError):
         return None
 
 
 def collect_bound(worker, wait_s: float):
-    """The (bound, iterations) a :func:`start_bound` process sent, or None.
+    """The (bound, iterations) a :func:`start_bound` process printed, or None.
 
     Args:
       worker: what :func:`start_bound` returned; wait_s: longest wait [s].
     Returns:
-      (bound, iterations) or None; the process is ended either way.
+      (bound, iterations) or None; the process is ended and its file removed either way.
     """
+    import os
+    import subprocess
+
     if worker is None:
         return None
-    proc, recv = worker
+    proc, path = worker
     got = None
     try:
-        if recv.poll(wait_s):
-            got = recv.recv()
-    except (EOFError, OSError):
-        got = None
-    proc.join(1.0)
-    if proc.is_alive():
-        proc.terminate()
-        proc.join(1.0)
+        out, _ = proc.communicate(timeout=wait_s)
+        bound, iters = out.split()
+        got = (float(bound), int(iters))
+    except (subprocess.TimeoutExpired, ValueError):
+        proc.kill()
+        proc.communicate()
+    finally:
+        try:
+            os.unlink(path)
+        except OSError:
+            pass
     return got
 
 

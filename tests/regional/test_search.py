@@ -318,3 +318,44 @@ def test_minimum_coverage_phase_meets_a_reachable_minimum():
     assert out.shortfall() == 0.0
     assert out.region_cov[0] >= target
     assert out.n_actions() <= prob.max_actions
+
+
+def test_no_candidates_gives_an_empty_plan_and_zero_bound():
+    from dataclasses import replace as dc_replace
+
+    from jaxspline.regional.bound import lagrangian_bound
+
+    prob = make_problem(9)
+    empty = dc_replace(
+        prob,
+        indptr=np.zeros(1, np.int64),
+        indices=np.zeros(0, np.int32),
+        group_sat=np.zeros(0, np.int32),
+        group_roll=np.zeros(0),
+        group_slot0=np.zeros(0, np.int64),
+        group_nslots=np.zeros(0, np.int64),
+        group_row0=np.zeros(0, np.int64),
+    )
+    empty.validate()
+    st = PlanState(empty)
+    win = candidate_windows(empty)
+    assert win.size == 0
+    greedy_fill(st, win, time.perf_counter() + 5)
+    best, _ = lns(st, win, time.perf_counter() + 1e9, max_iter=20)
+    assert best.n_actions() == 0 and best.value == 0.0
+    assert lagrangian_bound(empty, 0.0, time.perf_counter() + 5).bound == pytest.approx(
+        0.0, abs=1e-12
+    )
+
+
+@pytest.mark.skipif(not DATA.is_dir(), reason="training cases not available")
+def test_cli_solve_refuses_to_overwrite_without_force(tmp_path):
+    from jaxspline.cli import main
+
+    out = tmp_path / "solution.json"
+    out.write_text("keep me")
+    assert main(["regional", "solve", str(DATA / "case_0001"), "-o", str(out)]) == 2
+    assert out.read_text() == "keep me"
+    bad = ["regional", "solve", str(DATA / "case_0001"), "-o", str(tmp_path / "x.json")]
+    assert main([*bad, "--time-limit", "0"]) == 2
+    assert not (tmp_path / "x.json").exists()
