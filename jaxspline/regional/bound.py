@@ -12,8 +12,9 @@ Lagrangian: multipliers ``0 <= lam_j <= w_j`` on ``y_j <= sum_{rows covering j} 
 For fixed ``lam`` the relaxed problem splits into ``sum_j max(0, w_j - lam_j)`` plus, per
 pass, a dynamic programme over its slots (state: idle or imaging group g, runs used),
 row values ``sum_{j in row} lam_j``, and a knapsack over passes on the number of runs.
-Every ``lam`` gives a valid bound (weak duality); subgradient steps (Polyak, with the
-best known plan value as target) lower it.
+Every ``lam`` gives a valid bound (weak duality); deflected subgradient steps (Polyak,
+with a known plan value as target) lower it. Relaxation extras kept: runs last at least
+the minimum duration (states count the run length up to it).
 """
 
 from __future__ import annotations
@@ -25,10 +26,23 @@ import numpy as np
 
 from jaxspline.regional.problem import CoverProblem, group_passes
 
-__all__ = ["BoundResult", "PassLayout", "lagrangian_bound", "lagrangian_value", "pass_layout"]
+__all__ = [
+    "BoundResult",
+    "PassLayout",
+    "bound_main",
+    "lagrangian_bound",
+    "lagrangian_value",
+    "pass_layout",
+]
 
 #: Padded DP cells per block of passes (memory / speed trade-off).
 BLOCK_CELLS = 6_000_000
+#: Subgradient deflection (share of the new subgradient in the step direction).
+DEFLECT = 0.3
+#: Iterations without a better bound before the step factor halves.
+PATIENCE = 10
+#: Start multipliers as a share of the sample weights.
+LAM0_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -266,25 +280,33 @@ def lagrangian_bound(
     prob: CoverProblem,
     target: float,
     deadline: float,
-    max_iter: int = 500,
+    max_iter: int = 5000,
     lam0: np.ndarray | None = None,
+    deflect: float = DEFLECT,
+    patience: int = PATIENCE,
 ) -> BoundResult:
-    """Subgradient descent on the Lagrangian bound (Polyak steps towards ``target``).
+    """Deflected subgradient descent on the Lagrangian bound (Polyak steps to ``target``).
+
+    Direction ``D = deflect * d + (1 - deflect) * D_prev`` (d the subgradient), step
+    ``theta (L - target) / |D|^2``, ``theta`` halved after ``patience`` iterations without
+    a better bound; multipliers projected on ``[0, w]``.
 
     Args:
       prob: CoverProblem.
       target: a known plan value (lower bound) the steps aim at.
       deadline: ``time.perf_counter()`` instant to stop at (one evaluation always runs).
       max_iter: most iterations.
-      lam0: optional start multipliers (default ``weight / 2``).
+      lam0: optional start multipliers (default ``LAM0_SHARE * weight``).
+      deflect: weight of the new subgradient in the direction (1 = plain subgradient).
+      patience: iterations without improvement before ``theta`` halves.
     Returns:
       BoundResult.
     """
     lay = pass_layout(prob)
     w = prob.weight
-    lam = np.clip(0.5 * w if lam0 is None else lam0, 0.0, w)
+    lam = np.clip(LAM0_SHARE * w if lam0 is None else lam0, 0.0, w)
     best, best_lam, hist = np.inf, lam.copy(), []
-    theta, stall = 1.0, 0
+    theta, stall, direction = 1.0, 0, None
     it = 0
     for it in range(max_iter):  # noqa: B007 (reported after the loop)
         val, d = lagrangian_value(prob, lay, lam)
@@ -293,11 +315,40 @@ def lagrangian_bound(
             best, best_lam, stall = val, lam.copy(), 0
         else:
             stall += 1
-            if stall >= 5:
+            if stall >= patience:
                 theta, stall = theta * 0.5, 0
-        norm = float(d @ d)
-        if norm == 0.0 or time.perf_counter() > deadline or theta < 1e-4:
+        direction = d if direction is None else deflect * d + (1.0 - deflect) * direction
+        norm = float(direction @ direction)
+        if norm == 0.0 or time.perf_counter() > deadline or theta < 1e-6:
             break
         step = theta * max(val - target, 1e-6) / norm
-        lam = np.clip(lam - step * d, 0.0, w)
+        lam = np.clip(lam - step * direction, 0.0, w)
     return BoundResult(float(best), it + 1, best_lam, hist)
+
+
+def bound_main(argv=None) -> int:
+    """Entry point of ``python -m jaxspline.regional.bound PROBLEM.pkl SECONDS``.
+
+    Reads the pickled ``(CoverProblem, target)``, runs :func:`lagrangian_bound` for
+    SECONDS and prints ``bound iterations`` on stdout (so the search can run meanwhile in
+    the parent process).
+
+    Args:
+      argv: command-line arguments (default ``sys.argv[1:]``).
+    Returns:
+      exit code 0.
+    """
+    import pickle
+    import sys
+
+    args = sys.argv[1:] if argv is None else argv
+    t0 = time.perf_counter()
+    with open(args[0], "rb") as fh:
+        prob, target = pickle.load(fh)
+    res = lagrangian_bound(prob, target, t0 + float(args[1]))
+    print(f"{res.bound!r} {res.iterations}", flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(bound_main())

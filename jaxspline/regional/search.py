@@ -3,16 +3,22 @@
 * :func:`candidate_windows`: per group, the window of its non-empty slots (clipped to the
   maximum strip duration: longer groups give every max-length window, one slot apart).
 * :func:`greedy_fill`: CELF lazy greedy. A window's open gain is bounded above by prefix
-  sums of the state's per-row open gains; the top of the heap is re-evaluated exactly
+  sums of the state's per-row open gains (rows of slots under or next to a strip of the
+  same satellite count 0: no piece that fits can use them, :meth:`PlanState.open_rows`);
+  the top of the heap is re-evaluated exactly
   (after :meth:`PlanState.fit` cuts it to the satellite's free time) and taken when it
   still beats the next bound. Taken strips are trimmed to the shortest window of the same
   gain; strips with no gain are never taken (ties go to fewer actions).
-* :func:`lns`: until the deadline, destroy a few strips (random, least marginal
-  contribution, one region's, one satellite's, the strips overlapping a random one) and
-  repair with the greedy (the removed groups banned half the time); then local moves (a
-  strip's roll moved to a neighbouring group of its pass, its ends moved by one slot).
-  A trial replaces the current plan when its :meth:`PlanState.score` is not lower
-  (shortfall, coverage, fewer actions, higher battery minimum); the best is kept.
+* :func:`lns`: until the deadline, one move per iteration on a copy of the current plan:
+  re-plan the passes able to cover one open sample (:func:`reopt_related`), re-plan one
+  pass (:func:`reopt_pass`), or destroy a few strips (random, least marginal contribution,
+  one region's, one satellite's, the strips overlapping a random one) and repair with the
+  greedy (the removed groups banned half the time); every ``local_every`` iterations
+  local moves (a strip's roll moved to a neighbouring group of its pass, an end moved by
+  one slot). A trial replaces the current plan when it is not worse (:func:`better`:
+  shortfall, coverage, fewer actions, higher battery minimum); the best is kept.
+* :func:`meet_minimums`: while a region misses its minimum coverage, the same search on
+  weights raised for the regions with a minimum (:func:`boosted`).
 
 Deterministic for a given seed and for a given number of iterations (the deadline stops
 the loop between iterations).
@@ -26,25 +32,26 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxspline.regional.passdp import best_runs, gap_slots
+from jaxspline.regional.passmoves import PassIndex, reopt_pass, reopt_related
 from jaxspline.regional.problem import CoverProblem, group_passes, strip_rows
-from jaxspline.regional.state import PlanState
+from jaxspline.regional.state import PlanState, better
 
 __all__ = [
-    "PassIndex",
     "SearchConfig",
     "Windows",
     "candidate_windows",
     "greedy_fill",
+    "boosted",
     "lns",
     "local_moves",
-    "reopt_pass",
+    "meet_minimums",
 ]
 
 #: Gains at or below this count as zero (coverage_ratio units).
 MIN_GAIN = 1e-10
-#: Most strips the pass re-optimization puts in one pass.
-MAX_RUNS_PER_PASS = 8
+#: Extra weight (per unit of region ratio) on regions with a minimum coverage while
+#: any of them misses it.
+MIN_BOOST = 10.0
 
 
 @dataclass(frozen=True)
@@ -58,8 +65,11 @@ class SearchConfig:
       ban_prob: probability that the removed strips' groups are banned from the repair.
       local_every: iterations between rounds of local moves.
       roll_neighbours: how many groups on each side (by roll, same pass) a local move tries.
-      pass_prob: probability that an iteration re-optimizes one pass (:func:`reopt_pass`)
-        instead of destroying and repairing.
+      pass_prob: probability that an iteration re-plans one pass (:func:`reopt_pass`).
+      related_prob: probability that it re-plans the passes related to an open sample
+        (:func:`reopt_related`, at most ``related_most``); otherwise destroy and repair.
+      temp0: start temperature of the acceptance (a worse trial is taken with probability
+        ``exp(delta / T)``, ``T`` falling linearly to 0 at the deadline; 0 = only not worse).
     """
 
     seed: int = 0
@@ -68,7 +78,10 @@ class SearchConfig:
     ban_prob: float = 0.5
     local_every: int = 50
     roll_neighbours: int = 3
-    pass_prob: float = 0.5
+    pass_prob: float = 0.2
+    related_prob: float = 0.6
+    related_most: int = 3
+    temp0: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -137,7 +150,7 @@ def window_bounds(state: PlanState, win: Windows) -> np.ndarray:
 
 
 def _trim(state: PlanState, g: int, a: int, b: int, gain: float) -> tuple[int, int]:
-    need = state.prob.min_slots(int(state.prob.group_sat[g]))
+    need = state.timing.min_slots[int(state.prob.group_sat[g])]
     while b - a > need and state.gain(g, a + 1, b) >= gain - 1e-15:
         a += 1
     while b - a > need and state.gain(g, a, b - 1) >= gain - 1e-15:
@@ -151,6 +164,7 @@ def greedy_fill(
     deadline: float,
     banned: set | None = None,
     weights_bound: np.ndarray | None = None,
+    fails: dict | None = None,
 ) -> int:
     """Add strips by largest exact marginal gain until none gains or the cap is reached.
 
@@ -160,15 +174,21 @@ def greedy_fill(
       deadline: ``time.perf_counter()`` instant to stop at.
       banned: optional set of groups not to use.
       weights_bound: optional precomputed window bounds (else :func:`window_bounds`).
+      fails: optional dict window -> satellite signature at which it did not fit (shared
+        across calls: a window is skipped while its satellite's timeline is unchanged).
     Returns:
       number of strips added.
     """
     prob = state.prob
-    ub = window_bounds(state, win) if weights_bound is None else weights_bound
+    if weights_bound is None:
+        c0 = np.concatenate([[0.0], np.cumsum(state.open_rows())])
+        ub = c0[win.r1] - c0[win.r0]
+    else:
+        ub = weights_bound
     cand = np.nonzero(ub > MIN_GAIN)[0]
     heap = list(zip((-ub[cand]).tolist(), cand.tolist(), strict=True))
     heapq.heapify(heap)
-    cum = np.concatenate([[0.0], np.cumsum(state.row_gain)])
+    cum = np.concatenate([[0.0], np.cumsum(state.open_rows())])
     added = 0
     while heap and state.n_actions() < prob.max_actions:
         if time.perf_counter() > deadline:
@@ -184,8 +204,13 @@ def greedy_fill(
         if now < top - 1e-15:
             heapq.heappush(heap, (-now, i))
             continue
+        sat = int(prob.group_sat[g])
+        if fails is not None and i in fails and fails[i] == state.signature(sat):
+            continue
         fit = state.fit(g, int(win.a[i]), int(win.b[i]))
         if fit is None:
+            if fails is not None:
+                fails[i] = state.signature(sat)
             continue
         gain = state.gain(g, *fit)
         if gain <= MIN_GAIN:
@@ -198,7 +223,7 @@ def greedy_fill(
         if not ok:
             continue
         state.add(g, a, b, low=low)
-        cum = np.concatenate([[0.0], np.cumsum(state.row_gain)])
+        cum = np.concatenate([[0.0], np.cumsum(state.open_rows())])
         added += 1
     return added
 
@@ -285,100 +310,61 @@ def local_moves(state: PlanState, passes: np.ndarray, roll_order: np.ndarray, nb
     return kept
 
 
-class PassIndex:
-    """Groups of each pass, sorted by roll, with their slot span and gap matrices (lazy).
-
-    Attributes:
-      of_group: int64 [G], pass of each group.
-      groups: list of int arrays, per pass its groups by roll.
-      span: int64 [P, 2], first slot and end slot of each pass.
-    """
-
-    def __init__(self, prob: CoverProblem):
-        """Index the passes of ``prob``."""
-        self.prob = prob
-        self.of_group = group_passes(prob)
-        n = int(self.of_group.max()) + 1 if self.of_group.size else 0
-        order = np.lexsort((prob.group_roll, self.of_group))
-        cuts = np.searchsorted(self.of_group[order], np.arange(n + 1))
-        self.groups = [order[cuts[i] : cuts[i + 1]] for i in range(n)]
-        self.span = np.array(
-            [
-                [prob.group_slot0[g].min(), (prob.group_slot0[g] + prob.group_nslots[g]).max()]
-                for g in self.groups
-            ],
-            dtype=np.int64,
-        ).reshape(-1, 2)
-        self._gaps = {}
-
-    def gaps(self, p: int) -> np.ndarray:
-        """The gap matrix [slots] of pass ``p`` (cached)."""
-        if p not in self._gaps:
-            prob = self.prob
-            g = self.groups[p]
-            sat = int(prob.group_sat[g[0]])
-            self._gaps[p] = gap_slots(
-                prob.rules[sat], prob.group_roll[g], prob.slot_s, prob.margins
-            )
-        return self._gaps[p]
-
-    def open_weight(self, state: PlanState) -> np.ndarray:
-        """Per pass, the summed open weight of its rows (an upper bound of what it can add)."""
-        prob = self.prob
-        row_pass = np.repeat(self.of_group, prob.group_nslots)
-        return np.bincount(row_pass, weights=state.row_gain, minlength=len(self.groups))
-
-
-def reopt_pass(state: PlanState, index: PassIndex, p: int) -> int:
-    """Replace the strips of pass ``p`` by the best set of strips of that pass.
-
-    The pass's strips are removed, :func:`jaxspline.regional.passdp.best_runs` picks the
-    runs of best open value (at most as many as the removed ones plus the unused actions;
-    other passes' strips of the satellite block their maneuver gaps), and each run is
-    added if the satellite's duty and battery still hold.
+def boosted(prob: CoverProblem, factor: float = MIN_BOOST) -> CoverProblem:
+    """The problem with the samples of regions that have a minimum coverage weighted up.
 
     Args:
-      state: PlanState, modified in place; index: PassIndex; p: pass.
+      prob: CoverProblem; factor: extra weight per unit of region ratio.
     Returns:
-      number of strips added.
+      CoverProblem (the same object when no region has a minimum).
     """
+    from dataclasses import replace
+
+    has = np.isfinite(prob.region_min)
+    if not has.any():
+        return prob
+    extra = np.where(has[prob.region], factor * prob.ratio_weight, 0.0)
+    return replace(prob, weight=prob.weight + extra)
+
+
+def meet_minimums(state: PlanState, win: Windows, deadline: float, config, log=None):
+    """Search on :func:`boosted` weights until no region misses its minimum coverage.
+
+    Args:
+      state: PlanState (not modified); win: Windows; deadline: perf_counter instant;
+      config: SearchConfig; log: optional callable(str).
+    Returns:
+      PlanState on the original problem holding the strips found (the start state when
+      nothing misses its minimum).
+    """
+    if state.shortfall() <= 0:
+        return state
     prob = state.prob
-    groups = index.groups[p]
-    sat = int(prob.group_sat[groups[0]])
-    p0, p1 = (int(x) for x in index.span[p])
-    mine = [i for i in state.by_sat[sat] if index.of_group[state.strips[i][0]] == p]
-    for i in mine:
-        state.remove(i)
-    t_n = p1 - p0
-    vals = np.zeros((groups.size, t_n))
-    allowed = np.zeros((groups.size, t_n), dtype=bool)
-    others = bool(state.by_sat[sat])
-    for k, g in enumerate(groups):
-        s0, n, r0 = int(prob.group_slot0[g]), int(prob.group_nslots[g]), int(prob.group_row0[g])
-        vals[k, s0 - p0 : s0 - p0 + n] = state.row_gain[r0 : r0 + n]
-        if others:
-            for lo, hi in state.free_slots(int(g), lo=s0, hi=s0 + n):
-                allowed[k, max(lo, s0) - p0 : min(hi, s0 + n) - p0] = True
-        else:
-            allowed[k, s0 - p0 : s0 - p0 + n] = True
-    rmax = len(mine) + prob.max_actions - state.n_actions()
-    _, runs = best_runs(
-        vals,
-        allowed,
-        index.gaps(p),
-        prob.min_slots(sat),
-        prob.max_slots(sat),
-        min(rmax, MAX_RUNS_PER_PASS),
-        price=MIN_GAIN,
-    )
-    added = 0
-    for k, s, t in runs:
-        g = int(groups[k])
-        ok, low = state.resources_ok(g, p0 + s, p0 + t)
-        if ok and state.fit(g, p0 + s, p0 + t) == (p0 + s, p0 + t):
-            state.add(g, p0 + s, p0 + t, low=low)
-            added += 1
-    return added
+    boost = PlanState(boosted(prob), state.tr)
+    for g, a, b in state.strips.values():
+        boost.add(g, a, b)
+    greedy_fill(boost, win, deadline)
+    if boost.shortfall() > 0:
+        boost, _ = lns(boost, win, deadline, config, log=log, stop=lambda b: b.shortfall() <= 0)
+    out = PlanState(prob, state.tr)
+    for g, a, b in boost.strips.values():
+        out.add(g, a, b)
+    greedy_fill(out, win, deadline)
+    if log is not None:
+        log(f"minimum coverage phase: shortfall {state.shortfall():.4f} -> {out.shortfall():.4f}")
+    return out if better(out, state) else state
+
+
+def _accept(trial: PlanState, cur: PlanState, temp0, t_begin, deadline, rng) -> bool:
+    """Not worse (score), or worse in coverage by delta with probability exp(delta / T)."""
+    if better(trial, cur, strict=False):
+        return True
+    a, b = trial.score(), cur.score()
+    if temp0 <= 0 or a[0] < b[0]:
+        return False
+    frac = (deadline - time.perf_counter()) / max(deadline - t_begin, 1e-9)
+    temp = temp0 * max(frac, 0.0)
+    return temp > 0 and rng.random() < np.exp((trial.value - cur.value) / temp)
 
 
 def lns(
@@ -387,6 +373,8 @@ def lns(
     deadline: float,
     config: SearchConfig = SearchConfig(),
     log=None,
+    max_iter: int | None = None,
+    stop=None,
 ) -> tuple[PlanState, dict]:
     """Improve a plan by destroy-and-repair until the deadline.
 
@@ -396,8 +384,10 @@ def lns(
       deadline: ``time.perf_counter()`` instant to stop at.
       config: SearchConfig.
       log: optional callable(str) for progress lines.
+      max_iter: optional iteration cap (the run is then reproducible whatever the clock).
+      stop: optional callable(best PlanState) -> bool, checked after every improvement.
     Returns:
-      (best PlanState, stats dict: iterations, accepted, improved, local moves).
+      (best PlanState, stats dict: iterations, accepted, improved, moves by kind).
     """
     rng = np.random.default_rng(config.seed)
     prob = state.prob
@@ -405,33 +395,51 @@ def lns(
     roll_order = np.lexsort((prob.group_roll, passes))
     index = PassIndex(prob)
     cur, best = state.copy(), state.copy()
-    stats = {"iterations": 0, "accepted": 0, "improved": 0, "local_moves": 0, "pass_moves": 0}
+    stats = {
+        "iterations": 0,
+        "accepted": 0,
+        "improved": 0,
+        "local_moves": 0,
+        "pass_moves": 0,
+        "related_moves": 0,
+    }
     last_log = time.perf_counter()
-    while time.perf_counter() < deadline:
+    t_begin = time.perf_counter()
+    fails: dict = {}
+    while time.perf_counter() < deadline and prob.n_groups:
+        if max_iter is not None and stats["iterations"] >= max_iter:
+            break
         it = stats["iterations"] = stats["iterations"] + 1
         trial = cur.copy()
-        if rng.random() < config.pass_prob:
+        u = rng.random()
+        if u < config.pass_prob:
             ow = index.open_weight(trial) + 1e-9
             p = int(rng.choice(ow.size, p=ow / ow.sum()))
             reopt_pass(trial, index, p)
-            greedy_fill(trial, win, deadline)
+            greedy_fill(trial, win, deadline, fails=fails)
             stats["pass_moves"] += 1
+        elif u < config.pass_prob + config.related_prob:
+            reopt_related(trial, index, rng, config.related_most)
+            greedy_fill(trial, win, deadline, fails=fails)
+            stats["related_moves"] += 1
         else:
             removed = _destroy(trial, rng, passes)
             banned = {g for g, _, _ in removed} if rng.random() < config.ban_prob else None
-            greedy_fill(trial, win, deadline, banned=banned)
+            greedy_fill(trial, win, deadline, banned=banned, fails=fails)
             if banned:
-                greedy_fill(trial, win, deadline)
+                greedy_fill(trial, win, deadline, fails=fails)
         if it % config.local_every == 0:
             stats["local_moves"] += local_moves(trial, passes, roll_order, config.roll_neighbours)
         if it % config.refresh_every == 0:
             trial.refresh_gains()
-        if trial.score() >= cur.score():
+        if _accept(trial, cur, config.temp0, t_begin, deadline, rng):
             stats["accepted"] += 1
             cur = trial
-            if cur.score() > best.score():
+            if better(cur, best):
                 stats["improved"] += 1
                 best = cur.copy()
+                if stop is not None and stop(best):
+                    break
         if log is not None and time.perf_counter() - last_log > 10.0:
             last_log = time.perf_counter()
             log(

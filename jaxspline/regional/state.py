@@ -21,10 +21,17 @@ import math
 
 import numpy as np
 
-from jaxspline.regional.constraints import duty_ok, maneuver_scalar, timeline_ok
+from jaxspline.regional.constraints import (
+    battery_min_mesh,
+    duty_ok,
+    gaps_ok,
+    maneuver_scalar,
+    slew_time_s,
+    timeline_ok,
+)
 from jaxspline.regional.problem import CoverProblem, strip_rows
 
-__all__ = ["PlanState", "Transpose", "gather_ranges", "transpose"]
+__all__ = ["PlanState", "SatTiming", "Transpose", "better", "gather_ranges", "transpose"]
 
 
 class Transpose:
@@ -73,6 +80,72 @@ def gather_ranges(ptr: np.ndarray, items: np.ndarray) -> tuple[np.ndarray, np.nd
     return start + np.arange(total), owner
 
 
+class SatTiming:
+    """Per-problem caches of the timeline arithmetic (shared by all copies of a state).
+
+    Attributes:
+      man: list per satellite of dict ``round(|dr|, 6) -> smallest maneuver gap [s]``.
+      reach: int per satellite, slots beyond which a neighbour's gap cannot matter.
+      min_slots, max_slots: int per satellite.
+      n_total: number of slots in the horizon.
+    """
+
+    def __init__(self, prob: CoverProblem):
+        """Build the caches of ``prob``."""
+        self.prob = prob
+        self.man = [{} for _ in prob.rules]
+        self.min_slots = [prob.min_slots(s) for s in range(len(prob.rules))]
+        self.max_slots = [prob.max_slots(s) for s in range(len(prob.rules))]
+        self.n_total = int(np.floor(prob.horizon_s / prob.slot_s + 1e-9))
+        nrow = prob.group_nslots
+        group_of_row = np.repeat(np.arange(prob.n_groups), nrow)
+        within = np.arange(prob.n_rows) - np.repeat(prob.group_row0, nrow)
+        #: flat index ``sat * (n_total + 2) + slot + 1`` of every row (for busy masks)
+        self.row_key = prob.group_sat[group_of_row].astype(np.int64) * (self.n_total + 2) + (
+            prob.group_slot0[group_of_row] + within + 1
+        )
+        step = float(prob.mesh_s[1] - prob.mesh_s[0])
+        z = np.zeros(0)
+        self.idle_min = [
+            battery_min_mesh(r, step, prob.sunlit_iv[k], z, z, z, prob.margins)
+            for k, r in enumerate(prob.rules)
+        ]
+        self.reach = [
+            int(math.ceil(maneuver_scalar(r, 2.0 * r.max_edge_deg, prob.margins) / prob.slot_s)) + 2
+            for r in prob.rules
+        ]
+
+    def battery_floor(self, sat: int, starts, ends) -> float:
+        """A quick lower bound of a timeline's lowest battery level [Wh].
+
+        The idle profile's minimum minus all the extra energy the strips draw (imaging,
+        plus slew power over at most ``min(gap, slew(180 deg) + settling + margin)`` before
+        each strip): extra loads lower the clamped level by at most their running sum.
+
+        Args:
+          sat: satellite; starts, ends: the timeline [s] (sorted by start).
+        Returns:
+          float [Wh].
+        """
+        rules = self.prob.rules[sat]
+        s = np.sort(np.asarray(starts, dtype=np.float64))
+        e = np.sort(np.asarray(ends, dtype=np.float64))
+        extra = rules.imaging_w * float(np.sum(e - s))
+        if s.size > 1:
+            cap = float(slew_time_s(180.0, rules.rate_deg_s, rules.accel_deg_s2))
+            cap += rules.settle_s + self.prob.margins.gap_s
+            extra += rules.slew_w * float(np.sum(np.minimum(s[1:] - e[:-1], cap)))
+        return self.idle_min[sat] - extra / 3600.0
+
+    def maneuver(self, sat: int, delta_deg: float) -> float:
+        """Smallest gap [s] after a roll change of ``delta_deg`` on satellite ``sat``."""
+        key = round(abs(delta_deg), 6)
+        cache = self.man[sat]
+        if key not in cache:
+            cache[key] = maneuver_scalar(self.prob.rules[sat], key, self.prob.margins)
+        return cache[key]
+
+
 class PlanState:
     """A plan under construction (see the module docstring).
 
@@ -83,7 +156,10 @@ class PlanState:
       value: float, summed weight of covered samples.
       strips: dict id -> (g, a, b).
       by_sat: list per satellite of strip ids sorted by start slot.
-      low_wh: float64 [S], lowest battery level per satellite.
+      low_wh: float64 [S], lowest battery level per satellite (NaN: not computed since the
+        last change; :meth:`min_battery` fills it in).
+      busy: bool [S, n_total + 2], slot ``k`` (column ``k + 1``) taken by a strip or the
+        slot on either side of one (every neighbour needs at least one slot of gap).
     """
 
     def __init__(self, prob: CoverProblem, tr: Transpose | None = None):
@@ -95,6 +171,7 @@ class PlanState:
         """
         self.prob = prob
         self.tr = tr if tr is not None else transpose(prob)
+        self.timing = SatTiming(prob)
         self.cnt = np.zeros(prob.n_samples, dtype=np.int32)
         self.region_cov = np.zeros(len(prob.region_min), dtype=np.float64)
         self.value = 0.0
@@ -102,6 +179,7 @@ class PlanState:
         self.strip_samples: dict[int, np.ndarray] = {}
         self.by_sat: list[list[int]] = [[] for _ in prob.rules]
         self.low_wh = np.array([r.initial_wh for r in prob.rules], dtype=np.float64)
+        self.busy = np.zeros((len(prob.rules), self.timing.n_total + 2), dtype=bool)
         self._next = 0
         self.refresh_gains()
 
@@ -109,7 +187,7 @@ class PlanState:
     def copy(self) -> PlanState:
         """An independent copy (arrays and lists copied, problem shared)."""
         new = PlanState.__new__(PlanState)
-        new.prob, new.tr = self.prob, self.tr
+        new.prob, new.tr, new.timing = self.prob, self.tr, self.timing
         new.cnt = self.cnt.copy()
         new.region_cov = self.region_cov.copy()
         new.value = self.value
@@ -117,6 +195,7 @@ class PlanState:
         new.strip_samples = dict(self.strip_samples)
         new.by_sat = [list(x) for x in self.by_sat]
         new.low_wh = self.low_wh.copy()
+        new.busy = self.busy.copy()
         new.row_gain = self.row_gain.copy()
         new._next = self._next
         return new
@@ -189,8 +268,9 @@ class PlanState:
         lst.insert(int(np.searchsorted(starts, a)), sid)
         smp = self.samples(g, a, b)
         self.strip_samples[sid] = smp
+        self.busy[sat, a : b + 2] = True
         self._change(smp, +1)
-        self.low_wh[sat] = self.battery_low(sat) if low is None else low
+        self.low_wh[sat] = np.nan if low is None else low
         return sid
 
     def remove(self, sid: int) -> None:
@@ -199,7 +279,11 @@ class PlanState:
         sat = int(self.prob.group_sat[g])
         self.by_sat[sat].remove(sid)
         self._change(self.strip_samples.pop(sid), -1)
-        self.low_wh[sat] = self.battery_low(sat)
+        self.busy[sat] = False
+        for i in self.by_sat[sat]:
+            _, ai, bi = self.strips[i]
+            self.busy[sat, ai : bi + 2] = True
+        self.low_wh[sat] = np.nan
 
     # ------------------------------------------------------------------ timelines
     def timeline(self, sat: int, extra=None, skip=None):
@@ -225,8 +309,6 @@ class PlanState:
 
     def battery_low(self, sat: int, extra=None, skip=None) -> float:
         """Lowest battery level of a satellite's timeline (with ``extra``, without ``skip``)."""
-        from jaxspline.regional.constraints import battery_min_mesh
-
         p = self.prob
         s, e, r = self.timeline(sat, extra, skip)
         step = float(p.mesh_s[1] - p.mesh_s[0])
@@ -244,9 +326,15 @@ class PlanState:
         p = self.prob
         sat = int(p.group_sat[g])
         s, e, r = self.timeline(sat, (g, a, b), skip)
-        if not duty_ok(p.rules[sat], s, e, p.margins):
+        rules = p.rules[sat]
+        if not duty_ok(rules, s, e, p.margins):
             return False, float("nan")
-        return timeline_ok(p.rules[sat], p.mesh_s, p.sunlit_iv[sat], s, e, r, p.margins)
+        if not gaps_ok(rules, s, e, r, p.margins):
+            return False, float("nan")
+        quick = self.timing.battery_floor(sat, s, e)
+        if quick >= p.margins.battery_wh:
+            return True, float("nan")
+        return timeline_ok(rules, p.mesh_s, p.sunlit_iv[sat], s, e, r, p.margins)
 
     def free_slots(self, g: int, skip=None, lo: int = 0, hi: int | None = None):
         """Slot ranges ``[lo, hi)`` where a strip of group ``g`` fits between the others.
@@ -262,12 +350,13 @@ class PlanState:
           list of (lo, hi) absolute slots covering ``[lo, hi)``'s free parts.
         """
         p = self.prob
+        tm = self.timing
         sat = int(p.group_sat[g])
-        rules = p.rules[sat]
         roll = float(p.group_roll[g])
-        n_total = int(np.floor(p.horizon_s / p.slot_s + 1e-9))
+        n_total = tm.n_total
         hi = n_total if hi is None else hi
-        reach = self._reach_slots(sat)
+        reach = tm.reach[sat]
+        slot = p.slot_s
         bounds = [0.0]
         for i in self.by_sat[sat]:
             if i == skip:
@@ -275,23 +364,24 @@ class PlanState:
             gi, ai, bi = self.strips[i]
             if bi < lo - reach or ai > hi + reach:
                 continue
-            m = maneuver_scalar(rules, abs(float(p.group_roll[gi]) - roll), p.margins)
-            bounds += [ai * p.slot_s - m, bi * p.slot_s + m]
-        bounds.append(n_total * p.slot_s)
+            m = tm.maneuver(sat, float(p.group_roll[gi]) - roll)
+            bounds += [ai * slot - m, bi * slot + m]
+        bounds.append(n_total * slot)
         out = []
         for lo_s, hi_s in zip(bounds[0::2], bounds[1::2], strict=True):
-            a = int(math.ceil(lo_s / p.slot_s - 1e-9))
-            b = int(math.floor(hi_s / p.slot_s + 1e-9))
+            a = int(math.ceil(lo_s / slot - 1e-9))
+            b = int(math.floor(hi_s / slot + 1e-9))
             if b > a:
                 out.append((a, b))
         return out
 
-    def _reach_slots(self, sat: int) -> int:
-        """Slots beyond which no neighbour's maneuver can matter (largest roll change)."""
-        p = self.prob
-        rules = p.rules[sat]
-        span = 2.0 * rules.max_edge_deg
-        return int(math.ceil(maneuver_scalar(rules, span, p.margins) / p.slot_s)) + 2
+    def open_rows(self) -> np.ndarray:
+        """Row open gains with the rows of busy slots zeroed (see ``busy``)."""
+        return np.where(self.busy.ravel()[self.timing.row_key], 0.0, self.row_gain)
+
+    def signature(self, sat: int) -> tuple:
+        """The satellite's strips as a hashable value (equal iff the timelines are equal)."""
+        return tuple(self.strips[i] for i in self.by_sat[sat])
 
     def fit(self, g: int, a: int, b: int, skip=None) -> tuple[int, int] | None:
         """The best sub-window of (g, [a, b)) that the satellite's gaps admit.
@@ -310,7 +400,7 @@ class PlanState:
         sat = int(p.group_sat[g])
         lo_g = int(p.group_slot0[g])
         hi_g = lo_g + int(p.group_nslots[g])
-        need = p.min_slots(sat)
+        need = self.timing.min_slots[sat]
         best, best_gain = None, -1.0
         for lo, hi in self.free_slots(g, skip, a, b):
             pa, pb = max(a, lo), min(b, hi)
@@ -337,7 +427,32 @@ class PlanState:
         """Number of strips."""
         return len(self.strips)
 
-    def score(self) -> tuple[float, float, int, float]:
-        """Lexicographic key, larger is better: (-shortfall, value, -actions, low battery)."""
-        low = float(np.min(self.low_wh)) if self.low_wh.size else 0.0
-        return (-round(self.shortfall(), 12), round(self.value, 12), -self.n_actions(), low)
+    def min_battery(self) -> float:
+        """Lowest battery level over all satellites [Wh] (stale entries recomputed)."""
+        for sat in np.nonzero(np.isnan(self.low_wh))[0]:
+            self.low_wh[sat] = self.battery_low(int(sat))
+        return float(np.min(self.low_wh)) if self.low_wh.size else 0.0
+
+    def score(self) -> tuple[float, float, int]:
+        """Lexicographic key, larger is better: (-shortfall, value, -actions).
+
+        Ties are broken by :meth:`min_battery` (see :func:`better`).
+        """
+        return (-round(self.shortfall(), 12), round(self.value, 12), -self.n_actions())
+
+
+def better(a: PlanState, b: PlanState, strict: bool = True) -> bool:
+    """Whether plan ``a`` beats (``strict``) or equals-or-beats plan ``b``.
+
+    Order: smaller shortfall, larger coverage, fewer actions, higher lowest battery.
+
+    Args:
+      a, b: PlanState; strict: ask for a strict improvement.
+    Returns:
+      bool.
+    """
+    sa, sb = a.score(), b.score()
+    if sa != sb:
+        return sa > sb
+    la, lb = a.min_battery(), b.min_battery()
+    return la > lb + 1e-9 if strict else la >= lb - 1e-9
