@@ -5,16 +5,17 @@ at most one group per slot; two strips of one satellite leave at least one idle 
 between them (the gap needs settling > 0 and strips sit on the slot grid); a pass (the
 satellite's groups whose slots chain, :func:`jaxspline.regional.problem.group_passes`)
 holds at most ``floor((T + 1) / (min_slots + 1))`` strips; the whole plan at most
-``max_actions``. Dropped: durations, slews beyond one slot, duty, battery, the separation
-between passes.
+``max_actions``; a strip spans at least ``min_slots`` slots. Dropped: the maximum
+duration, slews beyond one slot, duty, battery, the separation between passes. A bound on
+plans over the screened candidates (the roll grid and slot rows), not on every roll.
 
 Lagrangian: multipliers ``0 <= lam_j <= w_j`` on ``y_j <= sum_{rows covering j} x_row``.
 For fixed ``lam`` the relaxed problem splits into ``sum_j max(0, w_j - lam_j)`` plus, per
-pass, a dynamic programme over its slots (state: idle or imaging group g, runs used),
-row values ``sum_{j in row} lam_j``, and a knapsack over passes on the number of runs.
-Every ``lam`` gives a valid bound (weak duality); deflected subgradient steps (Polyak,
-with a known plan value as target) lower it. Relaxation extras kept: runs last at least
-the minimum duration (states count the run length up to it).
+pass, a dynamic programme over its slots (state: idle, or imaging group g with the run
+length so far capped at ``min_slots``; runs used), row values ``sum_{j in row} lam_j``,
+and a knapsack over passes on the number of runs. Every ``lam`` gives a valid bound
+(weak duality); deflected subgradient steps (Polyak, with a known plan value as target)
+lower it.
 """
 
 from __future__ import annotations

@@ -36,6 +36,7 @@ from jaxspline.regional.problem import CoverProblem, sample_weights
 __all__ = [
     "CandidateInfo",
     "build_problem",
+    "find_groups",
     "frame_vectors",
     "pass_crossings",
     "roll_grid",

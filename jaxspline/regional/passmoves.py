@@ -17,7 +17,13 @@ from jaxspline.regional.passdp import best_runs, gap_slots
 from jaxspline.regional.problem import CoverProblem, group_passes
 from jaxspline.regional.state import PlanState, gather_ranges
 
-__all__ = ["MAX_RUNS_PER_PASS", "PassIndex", "reopt_pass", "reopt_related"]
+__all__ = [
+    "MAX_RUNS_PER_PASS",
+    "PassIndex",
+    "related_passes",
+    "reopt_pass",
+    "reopt_related",
+]
 
 #: Most strips the pass re-optimization puts in one pass.
 MAX_RUNS_PER_PASS = 8

@@ -28,6 +28,7 @@ __all__ = [
     "SolveConfig",
     "collect_bound",
     "final_check",
+    "plan_stats",
     "solution_actions",
     "solve_case",
     "start_bound",
@@ -171,6 +172,28 @@ def collect_bound(worker, wait_s: float):
     return got
 
 
+def plan_stats(case, state, bound: float) -> dict:
+    """Scores of a plan: coverage_ratio, weighted ratio, per region, actions, bound, gap.
+
+    Args:
+      case: Case; state: PlanState; bound: upper bound on coverage_ratio.
+    Returns:
+      dict.
+    """
+    covered = state.cnt > 0
+    total = float(case.grid.region_total_m2.sum())
+    return {
+        "coverage_ratio": state.value,
+        "weighted_coverage_ratio": float(case.grid.weight_m2[covered].sum()) / total,
+        "region_coverage": state.region_cov.tolist(),
+        "shortfall": state.shortfall(),
+        "actions": state.n_actions(),
+        "bound": bound,
+        "gap": bound - state.value,
+        "min_battery_wh": state.min_battery(),
+    }
+
+
 def solve_case(
     case,
     time_limit: float = 120.0,
@@ -245,18 +268,9 @@ def solve_case(
         bound = best.value
     times["bound_wait_s"] = time.perf_counter() - t_b
     actions = solution_actions(case, prob, best)
-    wm2 = case.grid.weight_m2
-    covered = best.cnt > 0
     stats = {
-        "coverage_ratio": best.value,
-        "weighted_coverage_ratio": float(wm2[covered].sum() / case.grid.region_total_m2.sum()),
-        "region_coverage": best.region_cov.tolist(),
-        "shortfall": best.shortfall(),
-        "actions": len(actions),
-        "bound": bound,
-        "gap": bound - best.value,
+        **plan_stats(case, best, bound),
         "bound_iterations": got[1],
-        "min_battery_wh": best.min_battery(),
         "union_ratio": info.union_ratio,
         "passes": info.n_passes,
         "groups": info.n_groups,
