@@ -217,7 +217,6 @@ def solve_case(
     """
     import jax
 
-    from jaxspline.regional.bound import lagrangian_bound
     from jaxspline.regional.candidates import build_problem
     from jaxspline.regional.search import (
         SearchConfig,
@@ -258,28 +257,36 @@ def solve_case(
         f"({lstats['iterations']} LNS iterations, {dropped} dropped at the final check)"
     )
     t_b = time.perf_counter()
-    got = collect_bound(worker, BOUND_WAIT_S)
-    if got is None:
-        log("bound process gave nothing: short in-process bound")
-        res = lagrangian_bound(prob, best.value, t_b + bound_s)
-        got = (res.bound, res.iterations)
-    bound = min(got[0], info.union_ratio)
-    if best.value - 1e-9 < bound < best.value:  # the union's sum rounds differently
-        bound = best.value
+    bound, bound_its = _final_bound(worker, prob, best.value, info, bound_s, log)
     times["bound_wait_s"] = time.perf_counter() - t_b
     actions = solution_actions(case, prob, best)
     stats = {
         **plan_stats(case, best, bound),
-        "bound_iterations": got[1],
+        "bound_iterations": bound_its,
         "union_ratio": info.union_ratio,
-        "passes": info.n_passes,
-        "groups": info.n_groups,
-        "rows": info.n_rows,
+        **{k: getattr(info, "n_" + k) for k in ("passes", "groups", "rows")},
         "nnz": info.nnz,
         "dropped": dropped,
         **lstats,
         **times,
         "total_s": time.perf_counter() - t0,
     }
-    log(f"bound {bound:.5f} (gap {bound - best.value:.5f}, {got[1]} iterations)")
+    log(f"bound {bound:.5f} (gap {bound - best.value:.5f}, {bound_its} iterations)")
     return {"actions": actions}, stats
+
+
+def _final_bound(worker, prob, value: float, info, bound_s: float, log):
+    """The bound of the search's plan (``value``): the bound process's result, or a short
+    in-process one when it gave nothing; capped by the union of every candidate
+    (``info.union_ratio``). Returns (bound, iterations)."""
+    from jaxspline.regional.bound import lagrangian_bound
+
+    got = collect_bound(worker, BOUND_WAIT_S)
+    if got is None:
+        log("bound process gave nothing: short in-process bound")
+        res = lagrangian_bound(prob, value, time.perf_counter() + bound_s)
+        got = (res.bound, res.iterations)
+    bound = min(got[0], info.union_ratio)
+    if value - 1e-9 < bound < value:  # the union's sum rounds differently
+        bound = value
+    return bound, got[1]
