@@ -54,10 +54,10 @@ def test_near_pairs_equal_the_host_reference(monkeypatch, far_scale):
     calls = []
     new = planner._near_pairs
 
-    def spy(sc, opp, tables, far, slack, join_filter=None):
+    def spy(sc, opp, tables, far, slack, join_filter=None, **kw):
         far = np.asarray(far) * far_scale  # a shorter window cuts through feasible pairs
         calls.append((sc, opp, tables, far, slack))
-        return new(sc, opp, tables, far, slack, join_filter)
+        return new(sc, opp, tables, far, slack, join_filter, **kw)
 
     monkeypatch.setattr(planner, "_near_pairs", spy)
     sc = _scenario(0, 20, 2, 14.0, 0)
