@@ -18,7 +18,7 @@ import json
 import math
 import os
 from dataclasses import dataclass
-from datetime import UTC, datetime, timedelta
+from datetime import datetime, timedelta
 from pathlib import Path
 from typing import Any
 
@@ -28,6 +28,8 @@ import yaml
 from jaxspline.geometry.frames import jd_split, julian_date
 from jaxspline.geometry.orbit import propagate_tle
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
+from jaxspline.readers.case_files import UniqueKeyLoader, format_time
+from jaxspline.readers.case_files import parse_time as _parse_time
 from jaxspline.readers.fields import read_text
 
 __all__ = [
@@ -41,75 +43,25 @@ __all__ = [
     "write_solution",
 ]
 
-_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
 
 #: Task altitudes [m]: ground targets, the deepest trench to above the highest peak.
 _ALTITUDE_RANGE_M = (-12e3, 12e3)
 
 
-class _UniqueKeyLoader(_Loader):
-    """The safe loader, refusing a key repeated in one mapping (YAML keeps the last)."""
-
-    def construct_mapping(self, node, deep=False):
-        if isinstance(node, yaml.MappingNode):
-            seen = set()
-            for key_node, _ in node.value:
-                key = self.construct_object(key_node, deep=deep)
-                try:
-                    again = key in seen
-                except TypeError:  # unhashable: the base class names it
-                    continue
-                if again:
-                    raise yaml.constructor.ConstructorError(
-                        None, None, f"duplicate key {key!r}", key_node.start_mark
-                    )
-                seen.add(key)
-        return super().construct_mapping(node, deep)
-
-
-def parse_time(text: str, *, where: str = "time") -> datetime:
-    """Parse an ISO 8601 UTC time (``2026-04-14T04:00:00Z``) to an aware ``datetime``.
-
-    A string without an offset is taken as UTC; an offset other than UTC is converted.
+def parse_time(text, *, where: str = "time") -> datetime:
+    """Parse an ISO 8601 UTC time (``2026-04-14T04:00:00Z``) or a ``datetime`` (YAML reads
+    unquoted times as one) to an aware UTC ``datetime``
+    (:func:`jaxspline.readers.case_files.parse_time`).
 
     Args:
-      text: the time string.
+      text: the time string or datetime.
       where: names the field in the error message.
     Returns:
       datetime in UTC.
     Raises:
       ValueError: malformed input (naming ``where``).
     """
-    if isinstance(text, datetime):
-        value = text
-    elif isinstance(text, str):
-        s = text.strip()
-        if s.endswith(("Z", "z")):
-            s = s[:-1] + "+00:00"
-        try:
-            value = datetime.fromisoformat(s)
-        except ValueError:
-            raise ValueError(f"{where}: not an ISO 8601 time: {text!r}") from None
-    else:
-        raise ValueError(f"{where}: expected an ISO 8601 time string, got {text!r}")
-    if value.tzinfo is None:
-        value = value.replace(tzinfo=UTC)
-    return value.astimezone(UTC)
-
-
-def format_time(value: datetime) -> str:
-    """Format an aware (or naive = UTC) ``datetime`` as ``YYYY-MM-DDTHH:MM:SS[.ffffff]Z``.
-
-    Args:
-      value: datetime.
-    Returns:
-      str.
-    """
-    if value.tzinfo is None:
-        value = value.replace(tzinfo=UTC)
-    value = value.astimezone(UTC)
-    fmt = "%Y-%m-%dT%H:%M:%S.%fZ" if value.microsecond else "%Y-%m-%dT%H:%M:%SZ"
-    return value.strftime(fmt)
+    return _parse_time(text, where=where, allow_datetime=True)
 
 
 @dataclass(frozen=True)
@@ -269,7 +221,7 @@ def _read_yaml(path: Path) -> Any:
         raise FileNotFoundError(f"{path}: case file not found")
     text = read_text(path)  # UTF-8 (a byte-order mark dropped), else names the line
     try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)
+        return yaml.load(text, Loader=UniqueKeyLoader)
     except yaml.YAMLError as exc:
         raise ValueError(f"{path}: not valid YAML: {exc}") from None
     except RecursionError:

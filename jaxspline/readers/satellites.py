@@ -66,7 +66,14 @@ def _num(ctx, field, value, key, horizon=None, **kw) -> float:
 # --- TLE ---
 
 
-def _checksum(line: str) -> int:
+def tle_checksum(line: str) -> int:
+    """The TLE checksum of a line: digits summed, ``-`` counts 1, modulo 10 (columns 1-68).
+
+    Args:
+      line: TLE line.
+    Returns:
+      int in 0..9.
+    """
     return sum(int(c) if c.isdigit() else c == "-" for c in line[: TLE_COLUMNS - 1]) % 10
 
 
@@ -106,11 +113,11 @@ def _tle_lines(ctx, field, tle) -> tuple[str, str]:
                 f"line {k} must have {TLE_COLUMNS} columns and start with '{k} ', "
                 f"got {len(line)} columns: {line!r}",
             )
-        if not line[-1].isdigit() or int(line[-1]) != _checksum(line):
+        if not line[-1].isdigit() or int(line[-1]) != tle_checksum(line):
             raise ctx.error(
                 field,
                 f"line {k} checksum (column 69) is {line[-1]!r}, the line's digits give "
-                f"{_checksum(line)}: a damaged or edited line",
+                f"{tle_checksum(line)}: a damaged or edited line",
             )
     if lines[0][2:7] != lines[1][2:7]:
         raise ctx.error(

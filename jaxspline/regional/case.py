@@ -23,12 +23,14 @@ import math
 import os
 import tempfile
 from dataclasses import dataclass
-from datetime import UTC, datetime, timedelta
+from datetime import datetime, timedelta
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from jaxspline.readers.case_files import format_time as format_time
+from jaxspline.readers.case_files import parse_time as parse_time
 from jaxspline.regional.case_fields import (
     check_tle,
     get_field,
@@ -48,48 +50,6 @@ SECONDS_PER_DAY = 86400.0
 DISTINCT_POINT_DEG = 1e-9
 
 # ----------------------------------------------------------------------------- time
-
-
-def parse_time(text: Any, *, where: str = "time") -> datetime:
-    """Parse an ISO 8601 time (``2025-07-17T00:00:00Z``) to an aware UTC ``datetime``.
-
-    A string without an offset is taken as UTC; another offset is converted.
-
-    Args:
-      text: the time string.
-      where: names the file and field in the error message.
-    Returns:
-      datetime in UTC.
-    Raises:
-      ValueError: not a string or not ISO 8601 (naming ``where``).
-    """
-    if not isinstance(text, str):
-        raise ValueError(f"{where}: expected an ISO 8601 time string, got {text!r}")
-    s = text.strip()
-    if s.endswith(("Z", "z")):
-        s = s[:-1] + "+00:00"
-    try:
-        value = datetime.fromisoformat(s)
-    except ValueError:
-        raise ValueError(f"{where}: not an ISO 8601 time: {text!r}") from None
-    if value.tzinfo is None:
-        value = value.replace(tzinfo=UTC)
-    return value.astimezone(UTC)
-
-
-def format_time(value: datetime) -> str:
-    """Format a datetime as ``YYYY-MM-DDTHH:MM:SSZ`` (``.ffffff`` added if it has microseconds).
-
-    Args:
-      value: aware datetime (naive = UTC).
-    Returns:
-      str.
-    """
-    if value.tzinfo is None:
-        value = value.replace(tzinfo=UTC)
-    value = value.astimezone(UTC)
-    fmt = "%Y-%m-%dT%H:%M:%S.%fZ" if value.microsecond else "%Y-%m-%dT%H:%M:%SZ"
-    return value.strftime(fmt)
 
 
 # ----------------------------------------------------------------------------- types

@@ -17,30 +17,11 @@ from typing import Any
 
 import yaml
 
+from jaxspline.readers.case_files import UniqueKeyLoader
+from jaxspline.readers.satellites import tle_checksum
+
 #: TLE line length (columns 1-69, column 69 the checksum).
 TLE_LINE_LENGTH = 69
-
-_Loader = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
-
-
-class _UniqueKeyLoader(_Loader):
-    """The safe loader, refusing a key repeated in one mapping (YAML keeps the last)."""
-
-    def construct_mapping(self, node, deep=False):
-        if isinstance(node, yaml.MappingNode):
-            seen = set()
-            for key_node, _ in node.value:
-                key = self.construct_object(key_node, deep=deep)
-                try:
-                    again = key in seen
-                except TypeError:
-                    continue
-                if again:
-                    raise yaml.constructor.ConstructorError(
-                        None, None, f"duplicate key {key!r}", key_node.start_mark
-                    )
-                seen.add(key)
-        return super().construct_mapping(node, deep)
 
 
 def read_text(path: Path) -> str:
@@ -106,7 +87,7 @@ def read_yaml(path: Path) -> Any:
     """
     text = read_text(path)
     try:
-        return yaml.load(text, Loader=_UniqueKeyLoader)
+        return yaml.load(text, Loader=UniqueKeyLoader)
     except yaml.YAMLError as exc:
         raise ValueError(f"{path.name}: not valid YAML: {exc}") from None
 
@@ -171,17 +152,6 @@ def string_field(mapping: Any, key: str, where: str) -> str:
     if not isinstance(value, str) or not value.strip():
         raise ValueError(f"{where}.{key}: expected a non-empty string, got {value!r}")
     return value
-
-
-def tle_checksum(line: str) -> int:
-    """The TLE checksum of a line: digits summed, ``-`` counts 1, modulo 10 (columns 1-68).
-
-    Args:
-      line: TLE line.
-    Returns:
-      int in 0..9.
-    """
-    return sum(int(c) if c.isdigit() else (1 if c == "-" else 0) for c in line[:68]) % 10
 
 
 def check_tle(l1: str, l2: str, where: str, start: datetime, end: datetime) -> None:

@@ -19,14 +19,12 @@ one (e.g. ``solve``) adds its parser there and may reuse :func:`check_and_print`
 
 from __future__ import annotations
 
-import os
-import tempfile
 import time
 from pathlib import Path
 
 
 def write_text_atomic(target: str, text: str) -> None:
-    """Write ``text`` to ``target`` through a temporary file and ``os.replace``.
+    """Write ``text`` to ``target`` atomically (:func:`jaxspline.planner.files.atomic_write_text`).
 
     Args:
       target: path, or ``-`` for stdout.
@@ -35,17 +33,9 @@ def write_text_atomic(target: str, text: str) -> None:
     if target == "-":
         print(text)
         return
-    path = Path(target)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent or ".")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+    from jaxspline.planner.files import atomic_write_text
+
+    atomic_write_text(target, text)
 
 
 def check_and_print(case, solution, json_out: str | None) -> int:
