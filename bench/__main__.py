@@ -14,7 +14,10 @@ measuring):
 - ``scale`` (only when named) -> ``scale.json``, ``SCALE.md``: whole plans of three
   sizes (:mod:`bench.scale`);
 - ``job`` (only when named) -> ``job.json``, ``JOB.md``: the default job with every
-  output, from an empty compilation cache and warm (:mod:`bench.job`).
+  output, from an empty compilation cache and warm (:mod:`bench.job`);
+- ``coverage`` (only when named) -> ``coverage.json``, ``COVERAGE.md``: the strip
+  coverage engine against numpy + shapely on a regional_coverage training case
+  (:mod:`bench.coverage`).
 
 Without ``--section`` the first four run.
 """

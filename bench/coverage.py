@@ -256,18 +256,27 @@ def coverage_summary(res: dict) -> str:
     return "\n".join(rows) + "\n" + note
 
 
+#: Title of ``COVERAGE.md``.
+COVERAGE_TITLE = "Strip coverage engine vs numpy + shapely"
+
+
+def coverage_lines(report: dict) -> list[str]:
+    """The body of ``COVERAGE.md`` from the section's JSON (also used by ``--render``)."""
+    return [
+        "",
+        "`python -m bench --section coverage` (see bench/coverage.py for the candidate set).",
+        "",
+        coverage_summary(report["coverage"]),
+    ]
+
+
 def write_coverage(report: dict, out: Path) -> None:
     """Write ``coverage.json`` and ``COVERAGE.md`` into ``out``."""
+    from bench.markdown import write_markdown
+
     out.mkdir(parents=True, exist_ok=True)
     (out / "coverage.json").write_text(json.dumps(report, indent=1, default=str) + "\n")
-    text = (
-        "# Strip coverage engine vs numpy + shapely\n\n"
-        "`python -m bench --section coverage` (see bench/coverage.py for the candidate set).\n\n"
-        + coverage_summary(report["coverage"])
-        + "\n"
-    )
-    (out / "COVERAGE.md").write_text(text)
-    print(f"wrote {out}/coverage.json, COVERAGE.md")
+    write_markdown(out / "COVERAGE.md", COVERAGE_TITLE, coverage_lines(report))
 
 
 if __name__ == "__main__":

@@ -1,9 +1,9 @@
 """``python -m bench --render [--out DIR]``: rewrite every result markdown from its JSON.
 
-Measures nothing: for each JSON file the bench writes (``report.json``, ``scale.json``,
-``screening.json``, ``job.json``, ``aeossp.json``) present in the output folder, the
-markdown beside it is generated again by the same code that wrote it after the
-measurement. Run it after changing how a table is written.
+Measures nothing: for each JSON file the bench writes (``report.json``,
+``scale.json``, ``screening.json``, ``job.json``, ``aeossp.json``, ``coverage.json``)
+present in the output folder, the markdown beside it is generated again by the same
+code that wrote it after the measurement. Run it after changing how a table is written.
 """
 
 from __future__ import annotations
@@ -36,6 +36,12 @@ def _job(d: dict) -> tuple[str, list[str]]:
     return "The default job", job_table(d["job"])
 
 
+def _coverage(d: dict) -> tuple[str, list[str]]:
+    from bench.coverage import COVERAGE_TITLE, coverage_lines
+
+    return COVERAGE_TITLE, coverage_lines(d)
+
+
 def _aeossp(d: dict) -> tuple[str, list[str]]:
     from bench.aeossp import aeossp_table
 
@@ -49,6 +55,7 @@ RENDERERS = {
     "screening.json": ("SCREENING.md", _screening),
     "job.json": ("JOB.md", _job),
     "aeossp.json": ("AEOSSP.md", _aeossp),
+    "coverage.json": ("COVERAGE.md", _coverage),
 }
 
 
