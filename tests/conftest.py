@@ -2,7 +2,9 @@
 
 import os
 import pathlib
+import shutil
 import sys
+import tempfile
 
 # shared helpers cross folders (``from test_screen import ...`` in tests/sequences): every
 # test folder is importable, so a file also runs alone (pytest adds only its own folder)
@@ -10,7 +12,25 @@ _HERE = pathlib.Path(__file__).parent
 sys.path[:0] = [str(d) for d in sorted(_HERE.iterdir()) if d.is_dir() and d.name[0] not in "._"]
 
 os.environ.setdefault("XLA_FLAGS", "")
-os.environ.setdefault("JAXSPLINE_CACHE_DIR", "off")  # tests never write to the user's cache
+# One persistent XLA cache for the whole run, in a temporary folder (never the user's
+# cache): made by the first process (pytest itself, or its only process without xdist),
+# inherited through the environment by the xdist workers and every ``jaxspline``
+# subprocess a test starts, and removed when the run ends. Most of the suite's time is
+# compiling the same programs again in other processes (a run of the CLI compiles ~160).
+_CACHE_ENV = "JAXSPLINE_CACHE_DIR"
+_OWN_CACHE = _CACHE_ENV not in os.environ
+if _OWN_CACHE:
+    os.environ[_CACHE_ENV] = tempfile.mkdtemp(prefix="jaxspline-test-xla-")
 import jax  # noqa: E402
 
 jax.config.update("jax_enable_x64", True)
+if os.environ[_CACHE_ENV].strip().lower() not in ("", "off", "0", "none"):
+    jax.config.update("jax_compilation_cache_dir", os.environ[_CACHE_ENV])
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+
+
+def pytest_unconfigure(config):
+    """The process that made the run's cache folder removes it."""
+    if _OWN_CACHE:
+        shutil.rmtree(os.environ[_CACHE_ENV], ignore_errors=True)

@@ -6,7 +6,7 @@
   written whole (valid JSON, CSV rows = observations, ``report.interrupted`` named,
   no temporary file left), a line on stderr says so.
 
-The processes share a compile cache in the test's tmp dir, so only the first one compiles.
+The processes share the run's compile cache (tests/conftest.py), so only the first one compiles.
 """
 
 from __future__ import annotations
@@ -30,7 +30,7 @@ def env(tmp_path_factory):
     d = tmp_path_factory.mktemp("runs")
     scen = d / "small.toml"
     scen.write_text(SMALL, encoding="utf-8")
-    e = dict(os.environ, JAXSPLINE_CACHE_DIR=str(d / "xla"), PYTHONUNBUFFERED="1")
+    e = dict(os.environ, PYTHONUNBUFFERED="1")  # the run's shared XLA cache (conftest)
     return {"scen": scen, "env": e, "dir": d}
 
 

@@ -109,7 +109,7 @@ def test_python_blocks_run(page, tmp_path):
     spec = tmp_path / "blocks.json"
     spec.write_text(json.dumps(blocks), encoding="utf-8")
     path = os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)
-    env = dict(os.environ, PYTHONPATH=path, MPLBACKEND="Agg", JAXSPLINE_CACHE_DIR="off")
+    env = dict(os.environ, PYTHONPATH=path, MPLBACKEND="Agg")
     run = subprocess.run(
         [sys.executable, "-c", DRIVER, str(spec)],
         cwd=work,

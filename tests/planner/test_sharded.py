@@ -273,7 +273,7 @@ def test_two_processes_under_jax_distributed_equal_one(
     scenario_file, built, thread_plans, tmp_path
 ):
     sc, full, _ = built
-    env = dict(os.environ, JAXSPLINE_CACHE_DIR=str(tmp_path / "xla"))
+    env = dict(os.environ)  # the run's shared XLA cache (conftest)
     one, plan_one = tmp_path / "one.json", tmp_path / "plan_one.json"
     r = subprocess.run(
         _bound_cmd(scenario_file, one, plan_one),
