@@ -26,9 +26,10 @@ from jaxspline.regional.constraints import (
     duty_ok,
     gaps_ok,
     maneuver_s,
+    maneuver_scalar,
 )
 from jaxspline.regional.search import candidate_windows, greedy_fill, lns
-from jaxspline.regional.state import PlanState
+from jaxspline.regional.state import PlanState, SatTiming
 from jaxspline.screen.models.roll_only import roll_slew_time
 
 DATA = Path("/work/shared/data/regional_coverage/train")
@@ -66,6 +67,17 @@ def test_smallest_gap_is_the_fixed_point():
 
         assert g >= need(g)
         assert g - 0.02 < need(g - 0.02)  # and (nearly) the smallest such gap
+
+
+def test_prefilled_maneuver_cache_equals_one_call_per_roll_change():
+    prob = make_problem(3, n_sats=2, passes_per_sat=3, n_rolls=6)
+    timing = SatTiming(prob)
+    for sat, rule in enumerate(prob.rules):
+        rolls = prob.group_roll[prob.group_sat == sat]
+        for r1 in rolls:
+            for r2 in rolls:
+                key = round(abs(float(r1) - float(r2)), 6)
+                assert timing.man[sat][key] == maneuver_scalar(rule, key, prob.margins)
 
 
 def random_timeline(rng, n, slot=10.0, horizon=3000.0):
