@@ -57,6 +57,9 @@ from jaxspline.geometry.pointing import off_nadir as off_nadir
 from jaxspline.geometry.pointing import off_nadir_flat as off_nadir_flat
 from jaxspline.geometry.pointing import pointing_angles as pointing_angles
 from jaxspline.geometry.pointing import pointing_state as pointing_state
+from jaxspline.geometry.pointing import roll_frame as roll_frame
+from jaxspline.geometry.pointing import roll_look_direction as roll_look_direction
+from jaxspline.geometry.pointing import roll_pointing as roll_pointing
 from jaxspline.geometry.pointing import visibility_windows as visibility_windows
 from jaxspline.geometry.routes import POINT as POINT
 from jaxspline.geometry.routes import STRIP as STRIP

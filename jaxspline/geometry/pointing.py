@@ -38,7 +38,7 @@ import numpy as np
 from jaxspline.geometry.frames import OMEGA_EARTH, earth_rotation_angle, rot_z
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.kernels._batch import batched, padded_size
-from jaxspline.kernels._validate import check_finite, check_positive
+from jaxspline.kernels._validate import check_finite, check_positive, is_concrete
 
 __all__ = [
     "Scene",
@@ -52,7 +52,13 @@ __all__ = [
     "off_nadir_flat",
     "boresight",
     "visibility_windows",
+    "roll_frame",
+    "roll_look_direction",
+    "roll_pointing",
 ]
+
+#: Largest roll of roll-only pointing (exclusive) [deg].
+RIGHT_ANGLE_DEG = 90.0
 
 
 class Scene(NamedTuple):
@@ -378,6 +384,86 @@ def boresight(roll, pitch):
     return jnp.stack(
         [jnp.cos(roll) * jnp.sin(pitch), -jnp.sin(roll), jnp.cos(roll) * jnp.cos(pitch)], -1
     )
+
+
+# ----------------------------------------------------------------------------
+# roll-only pointing (regional_coverage RULES.md geometry)
+# ----------------------------------------------------------------------------
+
+
+def roll_frame(pos, vel):
+    """The local frame of roll-only pointing at one sample (one candidate).
+
+    ``nadir = -p/|p|``, ``along = v - (v.nadir) nadir`` normalized, ``across = along x
+    nadir``, from the Earth-fixed position p and the velocity v relative to the rotating
+    Earth (regional_coverage RULES.md, "Geometry").
+
+    Args:
+      pos: float [3], Earth-fixed position p [m].
+      vel: float [3], Earth-fixed velocity v relative to the rotating Earth [m/s].
+    Returns:
+      (nadir [3], along [3], across [3]), unit vectors.
+    """
+    r = jnp.sqrt(jnp.sum(pos * pos))
+    nadir = -pos / r
+    along = vel - jnp.sum(vel * nadir) * nadir
+    along = along / jnp.sqrt(jnp.sum(along * along))
+    return nadir, along, jnp.cross(along, nadir)
+
+
+def roll_look_direction(pos, vel, look_deg):
+    """Look direction ``nadir + tan(a) across`` of a roll-only satellite (one candidate).
+
+    The pointing law of a roll-only satellite: its body stays in the local frame of
+    :func:`roll_frame` (pitch = yaw = 0) and only the roll a turns the boresight about
+    ``along``; during a strip the roll is held fixed, so the look direction at each
+    sample is this vector at that sample's state. Not normalized: its length is
+    ``sec a`` (the ray ``p + t d`` meets the ground where the caller solves for t).
+
+    Args:
+      pos: float [3], Earth-fixed position [m].
+      vel: float [3], Earth-fixed velocity relative to the rotating Earth [m/s].
+      look_deg: float [], look (roll) angle a [deg], positive towards ``across``.
+    Returns:
+      float [3], the direction (length ``sec a``).
+    """
+    nadir, _, across = roll_frame(pos, vel)
+    return nadir + jnp.tan(jnp.radians(look_deg)) * across
+
+
+def _roll_unit_kernel(pos, vel, roll_deg):
+    d = roll_look_direction(pos, vel, roll_deg)
+    return d / jnp.sqrt(jnp.sum(d * d))
+
+
+_roll_unit_batched = batched(_roll_unit_kernel, "(3),(3),()->(3)")
+
+
+def roll_pointing(pos, vel, roll_deg):
+    """Unit look directions of a roll held fixed over a strip's samples (broadcasting).
+
+    ``normalize(nadir + tan(r) across)`` at every sample (:func:`roll_look_direction`):
+    the Earth-fixed boresight turns with the local frame while the roll r stays put.
+
+    Args:
+      pos: float [..., 3], Earth-fixed positions [m].
+      vel: float [..., 3], Earth-fixed velocities relative to the rotating Earth [m/s].
+      roll_deg: float [...], roll [deg], |roll| < 90; broadcasts with the samples.
+    Returns:
+      float [..., 3], unit look directions (Earth-fixed).
+    Raises:
+      ValueError: naming ``pos`` / ``vel`` (shape [..., 3], finite) or ``roll_deg``.
+    """
+    pos, vel = jnp.asarray(pos), jnp.asarray(vel)
+    for name, x in (("pos", pos), ("vel", vel)):
+        if x.shape[-1:] != (3,):
+            raise ValueError(f"{name} must have shape [..., 3], got {x.shape}")
+        check_finite(name, x)
+    check_finite("roll_deg", roll_deg)
+    if is_concrete(roll_deg) and np.any(np.abs(np.asarray(roll_deg)) >= RIGHT_ANGLE_DEG):
+        raise ValueError(f"roll_deg must lie in (-90, 90), got {roll_deg!r}")
+    dt = jnp.result_type(pos, vel, float)
+    return _roll_unit_batched(pos.astype(dt), vel.astype(dt), jnp.asarray(roll_deg, dt))
 
 
 def visibility_windows(scene: Scene, targets_ecef, t_begin, t_end, max_off_nadir, step=10.0):

@@ -6,8 +6,9 @@ each with a small safety margin (:class:`Margins`):
 
 * rule 4, maneuver gap: consecutive strips ``i, i+1`` (by start) need
   ``gap >= slew(|r_{i+1} - r_i| + LOOK_RATE_DEG_S * gap) + settling + margin`` with the
-  bang-coast-bang rest-to-rest time :func:`slew_time_s` (the official slew angle is
-  between Earth-fixed look directions, which turn with the orbit during the gap);
+  roll-only model's bang-coast-bang rest-to-rest time
+  (:mod:`jaxspline.screen.models.roll_only`; the official slew angle is between
+  Earth-fixed look directions, which turn with the orbit during the gap);
 * rule 5, imaging duty: for every strip start or end instant ``T``, the imaging time in
   ``[T - orbit period, T]`` is at most ``limit - margin``;
 * rule 6, battery: :func:`battery_levels` evaluates the 5 s mesh refined by every strip
@@ -21,10 +22,11 @@ ten thousand pieces). An infeasible timeline is ``False``, never an exception.
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
+
+from jaxspline.screen.models.roll_only import RollLimits, roll_min_gap, roll_need
 
 __all__ = [
     "Margins",
@@ -37,8 +39,8 @@ __all__ = [
     "gaps_ok",
     "maneuver_s",
     "maneuver_scalar",
+    "roll_limits",
     "sat_rules",
-    "slew_time_s",
     "timeline_ok",
 ]
 
@@ -134,34 +136,28 @@ def sat_rules(sat) -> SatRules:
     )
 
 
-def slew_time_s(delta_deg, rate_deg_s: float, accel_deg_s2: float) -> np.ndarray:
-    """Rest-to-rest bang-coast-bang slew time over an angle (RULES.md rule 4).
-
-    ``slew(d) = 2 sqrt(d / a)`` if ``d <= w^2 / a`` (triangular profile), else
-    ``d / w + w / a`` (trapezoidal), 0 for ``d = 0``.
+def roll_limits(rules: SatRules, margins: Margins) -> RollLimits:
+    """The roll axis the search plans with: the rules' agility, settling plus the gap margin.
 
     Args:
-      delta_deg: float or array, the angle |r2 - r1| [deg] (>= 0).
-      rate_deg_s: w, maximum rate [deg/s] (> 0).
-      accel_deg_s2: a, maximum acceleration [deg/s^2] (> 0).
+      rules: SatRules; margins: Margins (``gap_s`` is added to the settling time).
     Returns:
-      float64 array of the shape of ``delta_deg`` [s].
+      :class:`jaxspline.screen.models.roll_only.RollLimits` [deg/s, deg/s^2, s].
     """
-    d = np.abs(np.asarray(delta_deg, dtype=np.float64))
-    w, a = float(rate_deg_s), float(accel_deg_s2)
-    tri = 2.0 * np.sqrt(d / a)
-    trap = d / w + w / a
-    return np.where(d <= w * w / a, tri, trap)
+    return RollLimits(rules.rate_deg_s, rules.accel_deg_s2, rules.settle_s + margins.gap_s)
 
 
 def maneuver_s(rules: SatRules, delta_deg, margins: Margins, gap_s=None) -> np.ndarray:
     """The gap one strip needs after another: slew + settling + margin [s].
 
-    The official slew angle is the angle between the Earth-fixed look directions at the
-    first strip's end and the second's start, which adds the frame's rotation over the gap
-    to the roll change; it is bounded here by ``|r2 - r1| + LOOK_RATE_DEG_S * gap``. With
-    ``gap_s`` given, the need at that gap; without, the smallest gap ``g`` with
-    ``g >= slew(|dr| + rate g) + settling + margin`` (fixed point, from below).
+    The slew is the roll-only model's (:func:`jaxspline.screen.models.roll_only.roll_need`
+    of :func:`roll_limits`). The official slew angle is the angle between the Earth-fixed
+    look directions at the first strip's end and the second's start, which adds the
+    frame's rotation over the gap to the roll change; it is bounded here by
+    ``|r2 - r1| + LOOK_RATE_DEG_S * gap``. With ``gap_s`` given, the need at that gap;
+    without, the smallest gap ``g`` with ``g >= slew(|dr| + rate g) + settling + margin``
+    (:func:`jaxspline.screen.models.roll_only.roll_min_gap`, from below, plus
+    :data:`FIXED_POINT_SLACK_S`).
 
     Args:
       rules: SatRules.
@@ -172,35 +168,21 @@ def maneuver_s(rules: SatRules, delta_deg, margins: Margins, gap_s=None) -> np.n
       float64 array [s].
     """
     d = np.abs(np.asarray(delta_deg, dtype=np.float64))
-    fixed = rules.settle_s + margins.gap_s
+    limits = roll_limits(rules, margins)
     if gap_s is not None:
-        angle = np.minimum(d + LOOK_RATE_DEG_S * np.asarray(gap_s), MAX_ANGLE_DEG)
-        return slew_time_s(angle, rules.rate_deg_s, rules.accel_deg_s2) + fixed
-    g = slew_time_s(d, rules.rate_deg_s, rules.accel_deg_s2) + fixed
-    for _ in range(FIXED_POINT_ITERATIONS):
-        g = slew_time_s(d + LOOK_RATE_DEG_S * g, rules.rate_deg_s, rules.accel_deg_s2) + fixed
-    return g + FIXED_POINT_SLACK_S
+        return roll_need(np.minimum(d + LOOK_RATE_DEG_S * np.asarray(gap_s), MAX_ANGLE_DEG), limits)
+    return roll_min_gap(d, limits, LOOK_RATE_DEG_S, FIXED_POINT_ITERATIONS) + FIXED_POINT_SLACK_S
 
 
 def maneuver_scalar(rules: SatRules, delta_deg: float, margins: Margins) -> float:
-    """:func:`maneuver_s` (smallest gap, no ``gap_s``) for one angle in plain floats [s].
+    """:func:`maneuver_s` (smallest gap, no ``gap_s``) for one angle, as a float [s].
 
     Args:
       rules: SatRules; delta_deg: |r2 - r1| [deg]; margins: Margins.
     Returns:
       float [s].
     """
-    d = abs(float(delta_deg))
-    w, a = rules.rate_deg_s, rules.accel_deg_s2
-    fixed = rules.settle_s + margins.gap_s
-
-    def slew(x):
-        return 2.0 * math.sqrt(x / a) if x <= w * w / a else x / w + w / a
-
-    g = slew(d) + fixed
-    for _ in range(FIXED_POINT_ITERATIONS):
-        g = slew(d + LOOK_RATE_DEG_S * g) + fixed
-    return g + FIXED_POINT_SLACK_S
+    return float(maneuver_s(rules, float(delta_deg), margins))
 
 
 def _sorted(starts, ends, rolls):

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from jaxspline.regional.constraints import maneuver_scalar
+from jaxspline.regional.constraints import maneuver_s
 
 __all__ = ["best_runs", "gap_slots", "run_layers", "runs_of"]
 
@@ -38,7 +38,7 @@ def gap_slots(rules, rolls: np.ndarray, slot_s: float, margins) -> np.ndarray:
     """
     r = np.asarray(rolls, dtype=np.float64)
     uniq, inv = np.unique(np.abs(r[:, None] - r[None, :]), return_inverse=True)
-    need = np.array([maneuver_scalar(rules, d, margins) for d in uniq])
+    need = maneuver_s(rules, uniq, margins)
     k = np.ceil(need / slot_s - 1e-9).astype(np.int64)
     return np.maximum(k[inv.reshape(r.size, r.size)], 1)
 

@@ -25,11 +25,12 @@ from jaxspline.regional.constraints import (
     battery_min_mesh,
     duty_ok,
     gaps_ok,
+    maneuver_s,
     maneuver_scalar,
-    slew_time_s,
     timeline_ok,
 )
 from jaxspline.regional.problem import CoverProblem, strip_rows
+from jaxspline.screen.models.roll_only import roll_slew_time
 
 __all__ = ["PlanState", "SatTiming", "Transpose", "better", "gather_ranges", "transpose"]
 
@@ -93,7 +94,7 @@ class SatTiming:
     def __init__(self, prob: CoverProblem):
         """Build the caches of ``prob``."""
         self.prob = prob
-        self.man = [{} for _ in prob.rules]
+        self.man = [self._gaps_of(k, r) for k, r in enumerate(prob.rules)]
         self.min_slots = [prob.min_slots(s) for s in range(len(prob.rules))]
         self.max_slots = [prob.max_slots(s) for s in range(len(prob.rules))]
         self.n_total = int(np.floor(prob.horizon_s / prob.slot_s + 1e-9))
@@ -115,6 +116,18 @@ class SatTiming:
             for r in prob.rules
         ]
 
+    def _gaps_of(self, sat: int, rules) -> dict:
+        """The maneuver cache of ``sat`` filled for every roll change between its groups.
+
+        One vectorized :func:`maneuver_s` call instead of one per cache miss; the keys and
+        values are the ones :meth:`maneuver` would compute.
+        """
+        rolls = np.unique(self.prob.group_roll[self.prob.group_sat == sat])
+        diffs = np.unique(np.abs(rolls[:, None] - rolls[None, :]))
+        keys = sorted({round(float(d), 6) for d in diffs})
+        gaps = maneuver_s(rules, np.array(keys, dtype=np.float64), self.prob.margins)
+        return dict(zip(keys, gaps.tolist(), strict=True))
+
     def battery_floor(self, sat: int, starts, ends) -> float:
         """A quick lower bound of a timeline's lowest battery level [Wh].
 
@@ -132,7 +145,7 @@ class SatTiming:
         e = np.sort(np.asarray(ends, dtype=np.float64))
         extra = rules.imaging_w * float(np.sum(e - s))
         if s.size > 1:
-            cap = float(slew_time_s(180.0, rules.rate_deg_s, rules.accel_deg_s2))
+            cap = float(roll_slew_time(180.0, rules.rate_deg_s, rules.accel_deg_s2))
             cap += rules.settle_s + self.prob.margins.gap_s
             extra += rules.slew_w * float(np.sum(np.minimum(s[1:] - e[:-1], cap)))
         return self.idle_min[sat] - extra / 3600.0

@@ -31,6 +31,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 
 from jaxspline.geometry.frames import R_EARTH, WGS84_E2, WGS84_F
+from jaxspline.geometry.pointing import roll_look_direction
 
 __all__ = [
     "WGS84_B",
@@ -48,8 +49,9 @@ FULL_TURN_DEG = 360.0
 def look_point(pos, vel, look_deg):
     """Ground point of the look angle ``look_deg`` at one sample (one ray).
 
-    ``d = nadir + tan(a) across``; scaled by the semi-axes (``P = p / (a, a, b)``,
-    ``D = d / (a, a, b)``) the ray meets the unit sphere where
+    ``d = nadir + tan(a) across`` (the roll-only pointing law,
+    :func:`jaxspline.geometry.pointing.roll_look_direction`); scaled by the semi-axes
+    (``P = p / (a, a, b)``, ``D = d / (a, a, b)``) the ray meets the unit sphere where
     ``|P + t D|^2 = 1``; the first root is ``t = C / (-B + sqrt(B^2 - A C))`` with
     ``A = D.D``, ``B = P.D``, ``C = P.P - 1`` (the cancellation-free form). Geodetic
     latitude of a surface point: ``atan2(z, (1 - e^2) hypot(x, y))``.
@@ -63,12 +65,7 @@ def look_point(pos, vel, look_deg):
       (lon_deg [], lat_deg [], hit bool []): geodetic longitude/latitude [deg] of the hit;
       where ``hit`` is False (the ray misses the ellipsoid) lon/lat are finite junk.
     """
-    r = jnp.sqrt(jnp.sum(pos * pos))
-    nadir = -pos / r
-    along = vel - jnp.sum(vel * nadir) * nadir
-    along = along / jnp.sqrt(jnp.sum(along * along))
-    across = jnp.cross(along, nadir)
-    d = nadir + jnp.tan(jnp.radians(look_deg)) * across
+    d = roll_look_direction(pos, vel, look_deg)
     scale = jnp.stack([1.0 / R_EARTH, 1.0 / R_EARTH, 1.0 / WGS84_B]).astype(pos.dtype)
     p_s, d_s = pos * scale, d * scale
     a = jnp.sum(d_s * d_s)

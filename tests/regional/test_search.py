@@ -26,10 +26,11 @@ from jaxspline.regional.constraints import (
     duty_ok,
     gaps_ok,
     maneuver_s,
-    slew_time_s,
+    maneuver_scalar,
 )
 from jaxspline.regional.search import candidate_windows, greedy_fill, lns
-from jaxspline.regional.state import PlanState
+from jaxspline.regional.state import PlanState, SatTiming
+from jaxspline.screen.models.roll_only import roll_slew_time
 
 DATA = Path("/work/shared/data/regional_coverage/train")
 
@@ -52,7 +53,7 @@ def brute_slew(d, w, a):
 @pytest.mark.parametrize("w,a", [(1.8, 0.7), (1.2, 0.4), (0.5, 2.0)])
 def test_slew_time_matches_bisection(w, a):
     for d in [0.0, 0.01, 0.5, w * w / a, w * w / a + 1e-6, 3.0, 17.0, 80.0]:
-        assert slew_time_s(d, w, a) == pytest.approx(brute_slew(d, w, a), abs=1e-9)
+        assert roll_slew_time(d, w, a) == pytest.approx(brute_slew(d, w, a), abs=1e-9)
 
 
 def test_smallest_gap_is_the_fixed_point():
@@ -62,10 +63,21 @@ def test_smallest_gap_is_the_fixed_point():
         g = float(maneuver_s(r, d, m))
 
         def need(x, d=d):
-            return float(slew_time_s(d + LOOK_RATE_DEG_S * x, 1.2, 0.4)) + 2.0 + m.gap_s
+            return float(roll_slew_time(d + LOOK_RATE_DEG_S * x, 1.2, 0.4)) + 2.0 + m.gap_s
 
         assert g >= need(g)
         assert g - 0.02 < need(g - 0.02)  # and (nearly) the smallest such gap
+
+
+def test_prefilled_maneuver_cache_equals_one_call_per_roll_change():
+    prob = make_problem(3, n_sats=2, passes_per_sat=3, n_rolls=6)
+    timing = SatTiming(prob)
+    for sat, rule in enumerate(prob.rules):
+        rolls = prob.group_roll[prob.group_sat == sat]
+        for r1 in rolls:
+            for r2 in rolls:
+                key = round(abs(float(r1) - float(r2)), 6)
+                assert timing.man[sat][key] == maneuver_scalar(rule, key, prob.margins)
 
 
 def random_timeline(rng, n, slot=10.0, horizon=3000.0):

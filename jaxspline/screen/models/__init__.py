@@ -9,13 +9,17 @@ name (``Satellite.maneuver`` is the same lookup). Built in:
 * ``flexible`` (:class:`Flexible`) - rest-to-rest slews that keep a flexible mode below
   its tolerance (SPEC section 2).
 
+Not registered: ``roll_only`` (:class:`RollOnly`) - one roll axis, a bang-coast-bang slew
+plus settling, with its kernels and host functions (the regional_coverage adapter's
+slew rule); the planner's observations still need pitch.
+
 A new model is one file: a class with the members of :class:`ManeuverModel` (for a
 rest-to-rest slew, a :class:`RestToRest` subclass with its ``profile_time``), passed to
 :func:`register_model`.
 
 Part of layer 2 (``screen``): ``base`` <- ``per_channel`` (screens pairs with
 :mod:`jaxspline.screen.pairs`), ``rest_to_rest`` (reads
-:mod:`jaxspline.screen.slew_table`) <- ``eigen_axis``, ``flexible``.
+:mod:`jaxspline.screen.slew_table`) <- ``eigen_axis``, ``flexible``, ``roll_only``.
 """
 
 from jaxspline.screen.models.base import (
@@ -28,6 +32,18 @@ from jaxspline.screen.models.eigen_axis import EigenAxis
 from jaxspline.screen.models.flexible import Flexible
 from jaxspline.screen.models.per_channel import PerChannel
 from jaxspline.screen.models.rest_to_rest import RestToRest
+from jaxspline.screen.models.roll_only import (
+    RollLimits,
+    RollOnly,
+    RollTransition,
+    roll_min_gap,
+    roll_need,
+    roll_profile,
+    roll_profile_kernel,
+    roll_slew_time,
+    roll_transition,
+    roll_transition_kernel,
+)
 
 __all__ = [
     "EigenAxis",
@@ -35,9 +51,19 @@ __all__ = [
     "ManeuverModel",
     "PerChannel",
     "RestToRest",
+    "RollLimits",
+    "RollOnly",
+    "RollTransition",
     "maneuver_model",
     "model_names",
     "register_model",
+    "roll_min_gap",
+    "roll_need",
+    "roll_profile",
+    "roll_profile_kernel",
+    "roll_slew_time",
+    "roll_transition",
+    "roll_transition_kernel",
 ]
 
 for _model in (PerChannel(), EigenAxis(), Flexible()):
