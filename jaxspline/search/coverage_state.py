@@ -21,7 +21,8 @@ import math
 
 import numpy as np
 
-from jaxspline.regional.constraints import (
+from jaxspline.search.coverage_problem import CoverProblem, strip_rows
+from jaxspline.search.coverage_rules import (
     battery_min_mesh,
     duty_ok,
     gaps_ok,
@@ -29,7 +30,6 @@ from jaxspline.regional.constraints import (
     slew_time_s,
     timeline_ok,
 )
-from jaxspline.regional.problem import CoverProblem, strip_rows
 
 __all__ = ["PlanState", "SatTiming", "Transpose", "better", "gather_ranges", "transpose"]
 

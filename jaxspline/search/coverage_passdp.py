@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from jaxspline.regional.constraints import maneuver_scalar
+from jaxspline.search.coverage_rules import maneuver_scalar
 
 __all__ = ["best_runs", "gap_slots", "run_layers", "runs_of"]
 
