@@ -13,11 +13,12 @@ twice:
    track of the passes, :mod:`jaxspline.readers.areas`), centre lines on a cross-track
    grid of :data:`OFFSET_PER_SWATH` of the swath (free offsets, not a tiling); along each
    line the samples within half a swath form runs (split at gaps of more than
-   :data:`RUN_GAP_CELLS` grid cells and into equal pieces no longer than
-   ``max_length_km``), and each run is a candidate strip from its first to its last
-   sample, half a cell longer at each end. A candidate covers the samples of its run:
-   gnomonic distances are never shorter than ground distances, so they lie within half
-   a swath of the strip's great circle on the ground as well.
+   :data:`RUN_GAP_CELLS` grid cells and into equal pieces that, half a cell longer at
+   each end, are no longer than ``max_length_km``), and each run is a candidate strip
+   from its first to its last sample, half a cell longer at each end. A candidate
+   covers the samples of its run: gnomonic distances are never shorter than ground
+   distances, so they lie within half a swath of the strip's great circle on the
+   ground as well.
 3. **Selection** (:func:`lazy_greedy`): CELF lazy greedy by marginal covered weight,
    strips with a gain below :data:`MIN_GAIN` of the area left out. Each chosen strip
    becomes a strip target whose value is the area's priority times its marginal gain
@@ -189,8 +190,9 @@ def candidate_strips(grid: AreaGrid, azimuth: float, swath: float, max_length: f
         c = 0.5 * (c_lo + c_hi) + (k - 0.5 * (n - 1)) * step
         idx = np.flatnonzero(np.abs(cross - c) <= swath / 2 + _EDGE_M)
         idx = idx[np.argsort(along[idx], kind="stable")]
-        for lo, hi in _runs(along[idx], RUN_GAP_CELLS * grid.spacing, max_length):
-            pad = 0.5 * grid.spacing
+        piece = max_length - grid.spacing if max_length > 2.0 * grid.spacing else max_length
+        for lo, hi in _runs(along[idx], RUN_GAP_CELLS * grid.spacing, piece):
+            pad = max(0.0, min(0.5 * grid.spacing, 0.5 * (max_length - (hi - lo))))
             a0, a1 = lo - pad, hi + pad
             if a1 - a0 < MIN_STRIP_M:
                 mid = 0.5 * (a0 + a1)
