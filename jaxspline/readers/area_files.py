@@ -70,8 +70,9 @@ AREA_KEYS = frozenset(
     "grid_km".split()
 )
 #: Values of ``areas[].objective``: ``coverage`` (strips chosen by unique coverage of a
-#: sample grid, :mod:`jaxspline.readers.area_coverage`) or ``strips`` (fixed cut strips).
+#: sample grid, :mod:`jaxspline.readers.coverage_strips`) or ``strips`` (fixed cut strips).
 AREA_OBJECTIVES = ("coverage", "strips")
+#: The objective of an area that names none (docs/areas.md says why).
 DEFAULT_OBJECTIVE = "coverage"
 #: Most grid samples one area may have (a finer ``grid_km`` is refused).
 MAX_AREA_SAMPLES = 200_000

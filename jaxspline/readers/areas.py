@@ -8,7 +8,7 @@ planning which fraction of each polygon the planned strips cover.
 
 An area's ``objective`` picks how its strips are chosen: ``"coverage"`` (the default)
 by unique coverage of a sample grid over the cuttings' directions
-(:mod:`jaxspline.readers.area_coverage`, each strip worth its marginal covered share),
+(:mod:`jaxspline.readers.coverage_strips`, each strip worth its marginal covered share),
 ``"strips"`` by the cutting below. Both share steps 1 and 2.
 
 Cutting (numpy + shapely, at load time):
@@ -82,8 +82,8 @@ from jaxspline.geometry.ground import (
     unit_vectors,
 )
 from jaxspline.geometry.windows import visibility_windows_all
-from jaxspline.readers.area_coverage import area_grid, covered_samples, select_strips
 from jaxspline.readers.area_files import DENSIFY_DEG, MIN_STRIP_M, AreaSpec, polygon_center
+from jaxspline.readers.coverage_strips import area_grid, covered_samples, select_strips
 from jaxspline.readers.mission import STRIP, Area, Scenario, Targets, make_targets, orbit_scene
 
 __all__ = [
@@ -449,7 +449,7 @@ def sample_cover(result, a) -> np.ndarray:
       a: one of ``result.scenario.areas`` (``objective = "coverage"``).
     Returns:
       bool [N], per sample of ``a.sample_lonlat``
-      (:func:`jaxspline.readers.area_coverage.covered_samples` on the area's planned
+      (:func:`jaxspline.readers.coverage_strips.covered_samples` on the area's planned
       strips, each with its imaging satellite's swath).
     """
     sc, obs = result.scenario, result.observations

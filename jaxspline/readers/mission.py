@@ -393,7 +393,7 @@ class Area:
       passes: int [C], satellite passes over the area whose ground track gave each
         cutting.
       objective: ``"strips"`` (cut strips) or ``"coverage"`` (``share``: each strip's
-        marginal covered share, :mod:`jaxspline.readers.area_coverage`).
+        marginal covered share, :mod:`jaxspline.readers.coverage_strips`).
       sample_lonlat, sample_weight, candidates, union: (coverage only) samples (lon, lat)
         [deg] [N, 2], their area shares [N], strips screened, share all cover (a bound).
     """

@@ -1,4 +1,4 @@
-"""Areas planned by unique coverage (``objective = "coverage"``, jaxspline.readers.area_coverage).
+"""Areas planned by unique coverage (``objective = "coverage"``, jaxspline.readers.coverage_strips).
 
 * the lazy (CELF) greedy takes the same sets with the same gains as the plain greedy
   (brute force over every set at every step), on random instances;
@@ -27,8 +27,8 @@ from shapely.geometry import Polygon
 from test_areas import HEAD, RING, _write  # same folder
 
 from jaxspline.geometry.ground import equal_area, strip_footprint, surface_point
-from jaxspline.readers.area_coverage import area_grid, covered_samples, lazy_greedy
 from jaxspline.readers.area_files import polygon_center
+from jaxspline.readers.coverage_strips import area_grid, covered_samples, lazy_greedy
 from jaxspline.readers.scenario import load_scenario
 
 COVER = (
