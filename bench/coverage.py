@@ -99,8 +99,8 @@ def pass_candidates(case, tr, roll_step_deg=ROLL_STEP_DEG, start_every_s=START_E
 
 
 def _setup(case_dir):
+    from jaxspline.geometry.coverage_tracks import build_tracks
     from jaxspline.regional.case import load_case
-    from jaxspline.regional.tracks import build_tracks
 
     case = load_case(case_dir)
     t0 = time.perf_counter()

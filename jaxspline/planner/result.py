@@ -134,7 +134,20 @@ class PlanResult:
                     "scan_speed_m_s": float(o.speed[i]),
                 }
             )
+        if sc.areas:  # which area a strip serves and the area's covered fraction
+            self._area_columns(out)
         return out
+
+    def _area_columns(self, rows: list[dict]) -> None:
+        """Add ``area`` (the area a strip serves, "" for other targets) and
+        ``area_covered_fraction`` (that area's covered fraction, ``report["areas"]``,
+        empty before the outputs computed it) to each row of :meth:`rows`."""
+        of = {int(t): a.name for a in self.scenario.areas for t in a.targets}
+        frac = {a["area"]: a["covered_fraction"] for a in self.report.get("areas", [])}
+        for row, r in zip(rows, self.observations.target, strict=True):
+            name = of.get(int(r), "")
+            row["area"] = name
+            row["area_covered_fraction"] = round(frac[name], 6) if name in frac else ""
 
     def summary(self) -> dict:
         """Headline figures (JSON-ready).

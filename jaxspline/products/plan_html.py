@@ -11,7 +11,9 @@ scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
   ``data-key`` attribute);
 * ``map`` (equirectangular, pan / zoom): land and coastlines from the package's
   offline land data (:func:`jaxspline.readers.land.land_fraction`, contoured at land
-  fraction 0.5), area polygons (``areas``), strip centrelines (``strips``), ground
+  fraction 0.5), area polygons (``areas``), the coverage grid of ``objective =
+  "coverage"`` areas (``area_samples_covered`` green, ``area_samples_uncovered`` red),
+  strip centrelines (``strips``), ground
   tracks (``tracks``), sensor footprints of the observations (``footprints``), targets
   not imaged (``targets_not_imaged``, grey) and one glyph per observation at its
   target in the satellite's colour (``targets_imaged``); hovering a target shows its
@@ -54,6 +56,8 @@ NOT_IMAGED_COLOR = "#999999"
 STRIP_COLOR = "#555555"
 MANEUVER_COLOR = "#333333"
 AREA_COLOR = "#ffd700"
+COVERED_COLOR = "#2ca02c"  # coverage samples the plan covers
+UNCOVERED_COLOR = "#d62728"  # coverage samples no planned strip covers
 MAP_WIDTH = 1200  # [px]; the map is 2:1 (360 x 180 deg)
 CONTROLS_WIDTH = 190  # [px]
 TIMELINE_ROW_PX = 34
@@ -141,6 +145,7 @@ def _map(doc, sats, obs):
     view = doc.get("view") or {}
     fig = _world_figure()
     _add_areas(fig, doc)
+    _add_area_samples(fig, view.get("areas") or [])
     _add_strips(fig, view.get("strips") or [])
     filt = _add_tracks_and_footprints(fig, doc, sats, obs)
     if view.get("targets"):
@@ -206,6 +211,28 @@ def _add_areas(fig, doc) -> None:
             tooltips=[("area", "@name"), ("priority", "@priority"), ("covered", "@covered")],
         )
     )
+
+
+def _add_area_samples(fig, areas) -> None:
+    """The coverage grid of ``objective = "coverage"`` areas: covered samples in
+    :data:`COVERED_COLOR`, uncovered ones in :data:`UNCOVERED_COLOR` (hover: the area)."""
+    from bokeh.models import ColumnDataSource, HoverTool
+
+    for covered, color in ((1, COVERED_COLOR), (0, UNCOVERED_COLOR)):
+        cols = columns.sample_columns(areas, covered)
+        if not cols["x"]:
+            continue
+        r = fig.scatter(
+            x="x",
+            y="y",
+            source=ColumnDataSource(cols),
+            size=4,
+            color=color,
+            alpha=0.8,
+            name=f"area_samples_{'covered' if covered else 'uncovered'}",
+        )
+        what = "covered" if covered else "not covered"
+        fig.add_tools(HoverTool(renderers=[r], tooltips=[("area", "@area"), ("sample", what)]))
 
 
 def _add_strips(fig, strips) -> None:

@@ -20,6 +20,7 @@ from jaxspline.products.czml import SATELLITE_COLORS
 __all__ = [
     "MS",
     "area_columns",
+    "sample_columns",
     "coast",
     "epoch_ms",
     "fmt",
@@ -186,6 +187,28 @@ def footprint_columns(doc, obs) -> dict:
     cols = {k: [v[i] for i in keep] for k, v in obs.items() if k not in ("x", "y")}
     cols = {k: np.asarray(v) if isinstance(obs[k], np.ndarray) else v for k, v in cols.items()}
     return {"xs": xs, "ys": ys, **cols}
+
+
+def sample_columns(areas, covered: int) -> dict:
+    """Columns of the coverage samples (view ``areas[].samples``) whose flag is ``covered``.
+
+    Args:
+      areas: the view's ``areas`` list.
+      covered: 1 for the covered samples, 0 for the others.
+    Returns:
+      dict of lists ``x`` (lon [deg]), ``y`` (lat [deg]), ``area`` (name).
+    """
+    cols = {"x": [], "y": [], "area": []}
+    for area in areas:
+        smp = area.get("samples")
+        if not smp:
+            continue
+        for x, y, c in zip(smp["lon_deg"], smp["lat_deg"], smp["covered"], strict=True):
+            if int(c) == covered:
+                cols["x"].append(x)
+                cols["y"].append(y)
+                cols["area"].append(area["name"])
+    return cols
 
 
 def area_columns(doc) -> dict:

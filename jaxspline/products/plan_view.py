@@ -44,7 +44,7 @@ from jaxspline.geometry.frames import (
 from jaxspline.geometry.ground import strip_centerline
 from jaxspline.geometry.orbit import orbit_position, tabulate_orbits
 from jaxspline.products.czml import SATELLITE_COLORS, satellite_tracks
-from jaxspline.readers.areas import FOOTPRINT_STEP_M, footprint_lonlat
+from jaxspline.readers.areas import FOOTPRINT_STEP_M, footprint_lonlat, sample_cover
 from jaxspline.readers.mission import STRIP
 
 __all__ = ["disc", "view_data"]
@@ -212,11 +212,23 @@ def view_data(result) -> dict:
             "off_nadir_deg": _round(_off_nadir_deg(sc, obs), VALUE_DECIMALS),
             "footprint": _footprints(sc, obs),
         },
-        "areas": [
-            {"name": a.name, "value": float(a.value), "geometry": a.geometry} for a in sc.areas
-        ],
+        "areas": [_area_view(result, a) for a in sc.areas],
         "battery": {
             name: {"t_s": _round(t, TIME_DECIMALS), "level_wh": _round(level, VALUE_DECIMALS)}
             for name, (t, level) in (result.battery or {}).items()
         },
     }
+
+
+def _area_view(result, a) -> dict:
+    """An area of the view: name, priority, polygon and, for ``objective = "coverage"``,
+    its grid samples (``lon_deg``, ``lat_deg``, ``covered`` 0/1 by the plan)."""
+    out = {"name": a.name, "value": float(a.value), "geometry": a.geometry}
+    if a.objective == "coverage":
+        lonlat = np.asarray(a.sample_lonlat, np.float64)
+        out["samples"] = {
+            "lon_deg": _round(lonlat[:, 0], DEG_DECIMALS),
+            "lat_deg": _round(lonlat[:, 1], DEG_DECIMALS),
+            "covered": [int(c) for c in sample_cover(result, a)],
+        }
+    return out

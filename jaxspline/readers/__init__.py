@@ -6,12 +6,17 @@
 number of a scenario file; ``land`` the land mask; ``satellites`` the satellite tables
 (TLE checks); ``targets`` the target tables (CSV and TOML); ``area_files`` the
 GeoJSON/TOML areas; ``areas`` cuts areas into strip targets along the ground tracks and
-reports their coverage; ``scenario`` the TOML scenario reader (the full schema is its
-docstring).
+reports their coverage; ``coverage_strips`` the sample grid, free candidate strips and
+lazy greedy of ``objective = "coverage"`` areas; ``scenario`` the TOML scenario reader
+(the full schema is its docstring).
 """
 
 from jaxspline.readers.area_files import AREA_KEYS as AREA_KEYS
+from jaxspline.readers.area_files import AREA_OBJECTIVES as AREA_OBJECTIVES
+from jaxspline.readers.area_files import DEFAULT_OBJECTIVE as DEFAULT_OBJECTIVE
 from jaxspline.readers.area_files import DENSIFY_DEG as DENSIFY_DEG
+from jaxspline.readers.area_files import GRID_PER_SWATH as GRID_PER_SWATH
+from jaxspline.readers.area_files import MAX_AREA_SAMPLES as MAX_AREA_SAMPLES
 from jaxspline.readers.area_files import MAX_AREA_STRIPS as MAX_AREA_STRIPS
 from jaxspline.readers.area_files import MAX_RADIUS_DEG as MAX_RADIUS_DEG
 from jaxspline.readers.area_files import MAX_SWATH_KM as MAX_SWATH_KM
@@ -26,6 +31,17 @@ from jaxspline.readers.areas import area_coverage as area_coverage
 from jaxspline.readers.areas import coverage_line as coverage_line
 from jaxspline.readers.areas import cut_areas as cut_areas
 from jaxspline.readers.areas import footprint_lonlat as footprint_lonlat
+from jaxspline.readers.areas import sample_cover as sample_cover
+from jaxspline.readers.coverage_strips import MIN_GAIN as MIN_GAIN
+from jaxspline.readers.coverage_strips import OFFSET_PER_SWATH as OFFSET_PER_SWATH
+from jaxspline.readers.coverage_strips import RUN_GAP_CELLS as RUN_GAP_CELLS
+from jaxspline.readers.coverage_strips import AreaGrid as AreaGrid
+from jaxspline.readers.coverage_strips import CoverageStrips as CoverageStrips
+from jaxspline.readers.coverage_strips import area_grid as area_grid
+from jaxspline.readers.coverage_strips import candidate_strips as candidate_strips
+from jaxspline.readers.coverage_strips import covered_samples as covered_samples
+from jaxspline.readers.coverage_strips import lazy_greedy as lazy_greedy
+from jaxspline.readers.coverage_strips import select_strips as select_strips
 from jaxspline.readers.mission import DEFAULT_SWATH as DEFAULT_SWATH
 from jaxspline.readers.mission import MAX_EXACT_OPTIONS as MAX_EXACT_OPTIONS
 from jaxspline.readers.mission import MODELS as MODELS

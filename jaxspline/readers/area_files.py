@@ -49,6 +49,10 @@ from jaxspline.readers.ranges import MAX_NAME_CHARS, RANGES, bounds
 
 __all__ = [
     "AREA_KEYS",
+    "AREA_OBJECTIVES",
+    "DEFAULT_OBJECTIVE",
+    "GRID_PER_SWATH",
+    "MAX_AREA_SAMPLES",
     "DENSIFY_DEG",
     "MAX_AREA_STRIPS",
     "MAX_RADIUS_DEG",
@@ -62,8 +66,18 @@ __all__ = [
 
 #: Keys of an ``[[areas]]`` table.
 AREA_KEYS = frozenset(
-    "name geojson lonlat_deg priority swath_km max_length_km sensor window_s".split()
+    "name geojson lonlat_deg priority swath_km max_length_km sensor window_s objective "
+    "grid_km".split()
 )
+#: Values of ``areas[].objective``: ``coverage`` (strips chosen by unique coverage of a
+#: sample grid, :mod:`jaxspline.readers.coverage_strips`) or ``strips`` (fixed cut strips).
+AREA_OBJECTIVES = ("coverage", "strips")
+#: The objective of an area that names none (docs/areas.md says why).
+DEFAULT_OBJECTIVE = "coverage"
+#: Most grid samples one area may have (a finer ``grid_km`` is refused).
+MAX_AREA_SAMPLES = 200_000
+#: Default sample spacing as a share of the area's swath (3 samples across a strip).
+GRID_PER_SWATH = 1.0 / 3.0
 MAX_RADIUS_DEG = 10.0  # largest central angle from an area's centre to a vertex [deg]
 DENSIFY_DEG = 0.05  # polygon edges are split into pieces at most this long [deg]
 MIN_STRIP_M = 1000.0  # shorter strips are lengthened about their middle to this [m]
@@ -89,6 +103,9 @@ class AreaSpec:
       sensor: required sensor type ("" = any).
       t_lo, t_hi: imaging window of every strip [s from the epoch] (-inf/+inf: free).
       field: label of the table in error messages (``areas[0]``).
+      objective: ``"coverage"`` (strips chosen by unique coverage of a sample grid) or
+        ``"strips"`` (fixed cut strips, each worth its share of the area).
+      grid: sample spacing of the coverage grid [m] (> 0; used by ``coverage``).
     """
 
     name: str
@@ -100,6 +117,8 @@ class AreaSpec:
     t_lo: float = -math.inf
     t_hi: float = math.inf
     field: str = "areas[0]"
+    objective: str = DEFAULT_OBJECTIVE
+    grid: float = 1000.0
 
 
 def _polygonal(geom, where: str):
@@ -343,8 +362,35 @@ def parse_areas(ctx, data: dict, base_dir, satellites, horizon=None) -> list[Are
         if "window_s" in a:
             t_lo, t_hi = field_pair(ctx, f"{f}.window_s", a["window_s"],
                                     **bounds("areas[].window_s", horizon))  # fmt: skip
-        out.append(AreaSpec(name, geom, value, swath, max_len, sensor, t_lo, t_hi, f))
+        objective, grid = _area_objective(ctx, f, a, radius, swath)
+        out.append(
+            AreaSpec(name, geom, value, swath, max_len, sensor, t_lo, t_hi, f, objective, grid)
+        )
     return out
+
+
+def _area_objective(ctx, f, a, radius: float, swath: float) -> tuple[str, float]:
+    """``(objective, grid spacing [m])`` of an area table: ``objective`` one of
+    :data:`AREA_OBJECTIVES`, ``grid_km`` in its range (default :data:`GRID_PER_SWATH` of
+    the swath) and not so fine that the area gets over :data:`MAX_AREA_SAMPLES` samples."""
+    objective = field_str(ctx, f"{f}.objective", a.get("objective", DEFAULT_OBJECTIVE))
+    if objective not in AREA_OBJECTIVES:
+        raise ctx.error(
+            f"{f}.objective", f"must be one of {', '.join(AREA_OBJECTIVES)}, got {objective!r}"
+        )
+    if "grid_km" in a:
+        grid = 1e3 * field_number(ctx, f"{f}.grid_km", a["grid_km"], **bounds("areas[].grid_km"))
+    else:
+        grid = swath * GRID_PER_SWATH
+    if objective == "coverage":
+        across = 2.0 * radius * _KM_PER_DEG * 1e3  # the area's size bound [m]
+        if (across / grid) ** 2 > MAX_AREA_SAMPLES:
+            raise ctx.error(
+                f"{f}.grid_km",
+                f"{grid / 1e3:g} km is too fine: the area, up to {across / 1e3:.4g} km across, "
+                f"would get ~{(across / grid) ** 2:.3g} samples (at most {MAX_AREA_SAMPLES})",
+            )
+    return objective, grid
 
 
 def _area_polygon(ctx, f, a, base_dir):

@@ -6,6 +6,11 @@ strip targets, so the planner, the
 checker and every output handle them unchanged, and :func:`area_coverage` reports after
 planning which fraction of each polygon the planned strips cover.
 
+An area's ``objective`` picks how its strips are chosen: ``"coverage"`` (the default)
+by unique coverage of a sample grid over the cuttings' directions
+(:mod:`jaxspline.readers.coverage_strips`, each strip worth its marginal covered share),
+``"strips"`` by the cutting below. Both share steps 1 and 2.
+
 Cutting (numpy + shapely, at load time):
 
 1. **Passes.** The satellites whose sensor the area accepts are tabulated as the planner
@@ -78,6 +83,7 @@ from jaxspline.geometry.ground import (
 )
 from jaxspline.geometry.windows import visibility_windows_all
 from jaxspline.readers.area_files import DENSIFY_DEG, MIN_STRIP_M, AreaSpec, polygon_center
+from jaxspline.readers.coverage_strips import area_grid, covered_samples, select_strips
 from jaxspline.readers.mission import STRIP, Area, Scenario, Targets, make_targets, orbit_scene
 
 __all__ = [
@@ -87,6 +93,7 @@ __all__ = [
     "coverage_line",
     "cut_areas",
     "footprint_lonlat",
+    "sample_cover",
 ]
 
 MERGE_DEG = 5.0  # passes whose track axes differ by at most this share a cutting [deg]
@@ -249,6 +256,29 @@ def _cut(spec: AreaSpec, center, azimuth: float):
     return np.stack([lat, lon, az, length, s[:, 3]], -1)
 
 
+def _area_strips(spec: AreaSpec, center, cuts):
+    """Strips of one area: (rows [K, 5] = lat, lon, azimuth [rad], length [m], share;
+    cutting [K]; names [K]; extra :class:`Area` fields), by its objective."""
+    if spec.objective == "coverage":
+        grid = area_grid(spec.polygon, center, spec.grid)
+        chosen = select_strips(grid, center, [a for a, _ in cuts], spec.swath, spec.max_length)
+        rows = np.column_stack([chosen.strips, chosen.gain]).reshape(-1, 5)
+        names = [f"{spec.name}/d{c}/c{k}" for k, c in enumerate(chosen.cutting)]
+        extra = {
+            "objective": "coverage",
+            "sample_lonlat": np.column_stack([grid.lon_deg, grid.lat_deg]),
+            "sample_weight": grid.weight,
+            "candidates": chosen.candidates,
+            "union": chosen.union,
+        }
+        return rows, chosen.cutting, names, extra
+    parts = [(c, _cut(spec, center, az)) for c, (az, _) in enumerate(cuts)]
+    rows = np.concatenate([st for _, st in parts] + [np.zeros((0, 5))], 0)
+    cutting = np.concatenate([np.full(len(st), c, np.int64) for c, st in parts] + [[]])
+    names = [f"{spec.name}/d{c}/s{k}" for c, st in parts for k in range(len(st))]
+    return rows, cutting.astype(np.int64), names, {}
+
+
 def cut_areas(sc: Scenario, specs) -> Scenario:
     """The scenario with every area cut into strip targets (appended) and its :class:`Area`.
 
@@ -279,16 +309,8 @@ def cut_areas(sc: Scenario, specs) -> Scenario:
             t_c = u_dot[s, k] - (u_dot[s, k] @ center) * center
             axes.append(math.atan2(float(t_c @ e_ax), float(t_c @ n_ax)))
         cuts = _cuttings(np.asarray(axes))
-        rows = [(c, _cut(spec, center, az)) for c, (az, _) in enumerate(cuts)]
-        lat, lon, az, length, share, cutting, names = [], [], [], [], [], [], []
-        for c, st in rows:
-            lat += list(st[:, 0])
-            lon += list(st[:, 1])
-            az += list(st[:, 2])
-            length += list(st[:, 3])
-            share += list(st[:, 4])
-            cutting += [c] * len(st)
-            names += [f"{spec.name}/d{c}/s{k}" for k in range(len(st))]
+        st, cutting, names, extra = _area_strips(spec, center, cuts)
+        lat, lon, az, length, share = (st[:, i] for i in range(5))
         k = len(lat)
         if k:
             new = make_targets(
@@ -316,6 +338,7 @@ def cut_areas(sc: Scenario, specs) -> Scenario:
                 cutting=np.asarray(cutting, np.int64),
                 azimuth=np.asarray([a for a, _ in cuts], np.float64),
                 passes=np.asarray([p for _, p in cuts], np.int64),
+                **extra,
             )
         )
         n0 += k
@@ -394,11 +417,13 @@ def area_coverage(result) -> list[dict]:
         out.append(
             {
                 "area": a.name,
+                "objective": a.objective,
                 "priority": float(a.value),
                 "swath_km": a.swath / 1e3,
                 "area_km2": poly.area / 1e6,
                 "covered_km2": covered / 1e6,
                 "covered_fraction": covered / poly.area,
+                **_sample_coverage(result, a, covered / poly.area),
                 "strips": int(idx.size),
                 "strips_planned": int(planned.sum()),
                 "value_planned": float(np.sum(tg.value[idx[planned]])),
@@ -414,6 +439,47 @@ def area_coverage(result) -> list[dict]:
             }
         )
     return out
+
+
+def sample_cover(result, a) -> np.ndarray:
+    """Which coverage samples of area ``a`` the plan covers.
+
+    Args:
+      result: :class:`jaxspline.planner.result.PlanResult`.
+      a: one of ``result.scenario.areas`` (``objective = "coverage"``).
+    Returns:
+      bool [N], per sample of ``a.sample_lonlat``
+      (:func:`jaxspline.readers.coverage_strips.covered_samples` on the area's planned
+      strips, each with its imaging satellite's swath).
+    """
+    sc, obs = result.scenario, result.observations
+    sat_of = {int(t): int(s) for t, s in zip(obs.target, obs.sat, strict=True)}
+    planned = np.array([int(r) for r in a.targets if int(r) in sat_of], np.int64)
+    tg = sc.targets
+    strips = np.stack([getattr(tg, f)[planned] for f in ("lat", "lon", "azimuth", "length")], -1)
+    swaths = np.array([sc.satellites[sat_of[int(r)]].swath for r in planned], np.float64)
+    lonlat = np.radians(np.asarray(a.sample_lonlat, np.float64))
+    unit = unit_vectors(geodetic_to_ecef(lonlat[:, 1], lonlat[:, 0], 0.0))
+    return covered_samples(unit, strips.reshape(-1, 4), swaths)
+
+
+def _sample_coverage(result, a, polygon_fraction) -> dict:
+    """The coverage report of an ``objective = "coverage"`` area ({} for cut strips):
+    ``samples``, ``samples_covered``, ``covered_fraction`` (weighted share of the grid
+    covered, :func:`sample_cover`; it replaces the polygon fraction),
+    ``polygon_fraction`` (the polygon method's), ``bound`` (share covered by all
+    candidates together) and ``candidates``."""
+    if a.objective != "coverage":
+        return {}
+    hit = sample_cover(result, a)
+    return {
+        "samples": int(hit.size),
+        "samples_covered": int(hit.sum()),
+        "covered_fraction": float(np.sum(np.asarray(a.sample_weight)[hit])),
+        "polygon_fraction": polygon_fraction,
+        "bound": float(a.union),
+        "candidates": int(a.candidates),
+    }
 
 
 def coverage_line(areas: list[dict], limit: int = 6) -> str:

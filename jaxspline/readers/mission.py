@@ -392,6 +392,10 @@ class Area:
         clockwise from north [rad], in [0, pi) (a strip is scanned either way).
       passes: int [C], satellite passes over the area whose ground track gave each
         cutting.
+      objective: ``"strips"`` (cut strips) or ``"coverage"`` (``share``: each strip's
+        marginal covered share, :mod:`jaxspline.readers.coverage_strips`).
+      sample_lonlat, sample_weight, candidates, union: (coverage only) samples (lon, lat)
+        [deg] [N, 2], their area shares [N], strips screened, share all cover (a bound).
     """
 
     name: str
@@ -403,6 +407,11 @@ class Area:
     cutting: np.ndarray
     azimuth: np.ndarray
     passes: np.ndarray
+    objective: str = "strips"
+    sample_lonlat: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 2)))
+    sample_weight: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    candidates: int = 0
+    union: float = math.nan
 
     def __post_init__(self):
         who = f"area {self.name!r}"
@@ -415,18 +424,19 @@ class Area:
         _positive(f"{who}: swath", self.swath)
         k = np.shape(self.targets)
         for f in ("share", "cutting"):
-            if np.shape(getattr(self, f)) != k:
-                raise ValueError(
-                    f"{who}: {f} must have shape {k}, got {np.shape(getattr(self, f))}"
-                )
-        c = np.shape(self.azimuth)
-        if np.shape(self.passes) != c or len(c) != 1:
-            raise ValueError(
-                f"{who}: azimuth and passes must be [C], got {c}, {np.shape(self.passes)}"
-            )
+            if (got := np.shape(getattr(self, f))) != k:
+                raise ValueError(f"{who}: {f} must have shape {k}, got {got}")
+        c, p = np.shape(self.azimuth), np.shape(self.passes)
+        if p != c or len(c) != 1:
+            raise ValueError(f"{who}: azimuth and passes must be [C], got {c}, {p}")
         cut = np.asarray(self.cutting)
         if cut.size and (cut.min() < 0 or cut.max() >= c[0]):
             raise ValueError(f"{who}: cutting must be in [0, {c[0]}), got {cut.tolist()}")
+        if self.objective not in ("strips", "coverage"):
+            raise ValueError(f"{who}: objective must be strips or coverage, got {self.objective!r}")
+        n, w = np.shape(self.sample_lonlat), np.shape(self.sample_weight)
+        if len(n) != 2 or n[1] != 2 or w != n[:1]:
+            raise ValueError(f"{who}: sample_lonlat, sample_weight must be [N, 2], [N]: {n}, {w}")
 
 
 @dataclasses.dataclass(frozen=True)

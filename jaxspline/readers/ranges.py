@@ -88,6 +88,7 @@ RANGES: dict[str, tuple] = {
     "areas[].swath_km": (0.01, 5000.0),
     "areas[].max_length_km": (1.0, 10000.0),
     "areas[].window_s": (0.0, HORIZON),
+    "areas[].grid_km": (0.01, 1000.0),
     "random_targets.seed": (0, 2**63 - 1),
     "random_targets.count": (1, 1_000_000),
     "random_targets.lat_deg": (-90.0, 90.0),

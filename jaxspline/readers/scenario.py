@@ -75,8 +75,8 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
                                         # speed >= it; points: duration_s defaults to
                                         # max(10, min_duration_s) and must reach it
 
-    [[areas]]                           # polygon area targets (jaxspline.readers.areas), cut into
-                                        # strips along the ground tracks of the passes
+    [[areas]]                           # polygon area targets (jaxspline.readers.areas): strips
+                                        # along the ground tracks of the passes
     name = "karst"                      # default "area_1", "area_2", ... (unique)
     geojson = "karst.geojson"           # GeoJSON file (relative to this file's folder):
                                         # Polygon / MultiPolygon, Feature or
@@ -84,12 +84,18 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
     lonlat_deg = [[13.6, 45.6], [14.2, 45.6], [14.2, 45.9], [13.6, 45.9]]
                                         # or one ring of [lon, lat] [deg] (not both)
     priority = 20.0                     # value of the whole area (> 0, default 1), split
-                                        # over the strips of a cutting by area share
+                                        # over the strips by covered share
     swath_km = 15.0                     # strip width [km]; default: the narrowest swath_km
                                         # of the satellites whose sensor the area accepts
     max_length_km = 60.0                # longer strips are split [km] (default: no limit)
     sensor = ""                         # required sensor type ("" = any)
     window_s = [0.0, 3600.0]            # imaging window of every strip [s from the epoch]
+    objective = "coverage"              # "coverage" (default: strips chosen by unique
+                                        # coverage of a sample grid, each strip worth its
+                                        # marginal covered share) or "strips" (fixed cut
+                                        # strips, each worth its share of the area)
+    grid_km = 4.0                       # coverage sample spacing [km] (0.01-1000; default a
+                                        # third of swath_km; at most 200000 samples)
 
     [targets_file]                      # alternative to targets_csv
     path = "more_targets.csv"

@@ -4,7 +4,10 @@ sample grid.
 
 ``case`` reads and validates case files and reads / writes solutions; ``check`` (with
 ``check_geometry``) is an independent checker of every rule, sharing no code with the
-solver but the case reader; ``cli`` registers ``jaxspline regional ...``.
+solver but the case reader; ``solve`` plans a case with the coverage machinery of the
+layers below (:mod:`jaxspline.geometry.coverage_tracks`, :mod:`jaxspline.screen.coverage`,
+:mod:`jaxspline.planner.coverage_candidates`, ``jaxspline.search.coverage_*``); ``cli``
+registers ``jaxspline regional ...``.
 """
 
 from .case import Case as Case

@@ -2,16 +2,16 @@
 
 Stages, each checking the clock (one budget from the call, or from ``t_start``):
 
-1. candidates (:func:`jaxspline.regional.candidates.build_problem`): SGP4 tracks, passes,
+1. candidates (:func:`jaxspline.planner.coverage_candidates.build_problem`): SGP4 tracks, passes,
    roll grid, 10 s slices and their covered samples (JAX coverage engine, compile
    included);
 2. lazy greedy, then LNS until the search deadline
-   (:mod:`jaxspline.regional.search`);
+   (:mod:`jaxspline.search.coverage_search`);
 3. a final check of every satellite's timeline with the exact refined battery model
-   (:func:`jaxspline.regional.constraints.battery_levels`), dropping a strip if a rule
+   (:func:`jaxspline.search.coverage_rules.battery_levels`), dropping a strip if a rule
    would fail (never expected: the search keeps margins);
-4. the Lagrangian upper bound (:mod:`jaxspline.regional.bound`), computed in a child
-   process (``python -m jaxspline.regional.bound``) while the search runs, capped by the
+4. the Lagrangian upper bound (:mod:`jaxspline.search.coverage_bound`), computed in a child
+   process (``python -m jaxspline.search.coverage_bound``) while the search runs, capped by the
    coverage of all candidates together; if that process gives nothing, a short
    in-process run instead.
 
@@ -93,7 +93,7 @@ def final_check(state) -> int:
     Returns:
       number of strips removed.
     """
-    from jaxspline.regional.constraints import battery_levels, duty_ok, gaps_ok
+    from jaxspline.search.coverage_rules import battery_levels, duty_ok, gaps_ok
 
     prob = state.prob
     dropped = 0
@@ -116,7 +116,7 @@ def final_check(state) -> int:
 
 
 def start_bound(prob, target: float, seconds: float):
-    """Start ``python -m jaxspline.regional.bound`` on a pickled problem (a child process).
+    """Start ``python -m jaxspline.search.coverage_bound`` on a pickled problem (a child process).
 
     Args:
       prob: CoverProblem; target: a plan value to aim at; seconds: its budget [s].
@@ -132,7 +132,13 @@ def start_bound(prob, target: float, seconds: float):
         fd, path = tempfile.mkstemp(prefix="jaxspline-bound-", suffix=".pkl")
         with os.fdopen(fd, "wb") as fh:
             pickle.dump((prob, float(target)), fh, protocol=pickle.HIGHEST_PROTOCOL)
-        cmd = [sys.executable, "-m", "jaxspline.regional.bound", path, f"{max(seconds, 1.0):.3f}"]
+        cmd = [
+            sys.executable,
+            "-m",
+            "jaxspline.search.coverage_bound",
+            path,
+            f"{max(seconds, 1.0):.3f}",
+        ]
         env = dict(os.environ, JAX_PLATFORMS=os.environ.get("JAX_PLATFORMS", "cpu"))
         proc = subprocess.Popen(
             cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env
@@ -217,15 +223,15 @@ def solve_case(
     """
     import jax
 
-    from jaxspline.regional.candidates import build_problem
-    from jaxspline.regional.search import (
+    from jaxspline.planner.coverage_candidates import build_problem
+    from jaxspline.search.coverage_search import (
         SearchConfig,
         candidate_windows,
         greedy_fill,
         lns,
         meet_minimums,
     )
-    from jaxspline.regional.state import PlanState
+    from jaxspline.search.coverage_state import PlanState
 
     if not time_limit > 0:
         raise ValueError(f"time_limit: must be > 0, got {time_limit!r}")
@@ -279,7 +285,7 @@ def _final_bound(worker, prob, value: float, info, bound_s: float, log):
     """The bound of the search's plan (``value``): the bound process's result, or a short
     in-process one when it gave nothing; capped by the union of every candidate
     (``info.union_ratio``). Returns (bound, iterations)."""
-    from jaxspline.regional.bound import lagrangian_bound
+    from jaxspline.search.coverage_bound import lagrangian_bound
 
     got = collect_bound(worker, BOUND_WAIT_S)
     if got is None:

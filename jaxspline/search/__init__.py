@@ -9,6 +9,13 @@ source; ``construct`` is the one greedy strategy (``greedy_pass``), used by ``ti
 ``lns`` and :mod:`jaxspline.sequences.sequencer`; ``status`` (:class:`BoundStatus`) is how
 every bound ended. The search speaks of *targets* (what may be imaged once) and
 *options* (one way to image a target: satellite, start).
+
+The ``coverage_*`` modules are the unique-coverage search (strips that cover samples,
+each sample counted once): ``coverage_rules`` -> ``coverage_problem`` ->
+``coverage_state`` -> ``coverage_passdp`` / ``coverage_passmoves`` -> ``coverage_search``
+(CELF greedy + LNS) and ``coverage_bound`` (Lagrangian bound), on the roll-only rules
+of the regional_coverage benchmark (:mod:`jaxspline.regional` is their adapter).
+Imported by module (``jaxspline.search.coverage_search``), not re-exported here.
 """
 
 from jaxspline.search import clock as clock

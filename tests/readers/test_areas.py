@@ -55,7 +55,10 @@ time_limit_s = 10.0
 """
 # a pentagon ~75 x 60 km over the Karst: one pass cannot take all its strips
 RING = [[13.5, 45.5], [14.5, 45.55], [14.45, 46.1], [13.9, 46.0], [13.55, 46.05]]
-AREA = f'[[areas]]\nname = "karst"\nlonlat_deg = {json.dumps(RING)}\npriority = 20.0\n'
+AREA = (  # the cut-strip mode (the coverage mode: tests/readers/test_area_coverage.py)
+    f'[[areas]]\nname = "karst"\nlonlat_deg = {json.dumps(RING)}\npriority = 20.0\n'
+    'objective = "strips"\n'
+)
 R_TEST = 6371e3  # sphere of the reference projection [m]
 COVERAGE_TOL = 0.01  # target: covered fraction to 1 %
 
@@ -382,7 +385,9 @@ def test_example_scenario_file():
     )
     for a in sc.areas:
         assert a.passes.tolist() == [1, 1] and a.swath == 12e3  # a descending, an ascending pass
-        for c in range(2):
-            m = a.cutting == c
-            np.testing.assert_allclose(tg.value[a.targets[m]].sum(), a.value, rtol=1e-12)
+        assert a.objective == "coverage" and set(a.cutting.tolist()) == {0, 1}
+        # marginal gains: together worth what they cover, never more than the priority
+        total = tg.value[a.targets].sum()
+        np.testing.assert_allclose(total, a.value * a.share.sum(), rtol=1e-12)
+        assert a.value * 0.99 <= total <= a.value * (1 + 1e-12) and a.union == pytest.approx(1.0)
         assert np.all(tg.length[a.targets] <= (20e3 if a.name == "karst" else np.inf) + 1e-6)

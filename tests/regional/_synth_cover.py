@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxspline.regional.constraints import Margins, SatRules
-from jaxspline.regional.problem import CoverProblem, sample_weights
+from jaxspline.search.coverage_problem import CoverProblem, sample_weights
+from jaxspline.search.coverage_rules import Margins, SatRules
 
 SLOT_S = 10.0
 MESH_S = 5.0

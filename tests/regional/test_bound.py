@@ -16,10 +16,10 @@ import pytest
 from _synth_cover import make_problem, rules
 from scipy.optimize import Bounds, LinearConstraint, milp
 
-from jaxspline.regional.bound import lagrangian_bound, lagrangian_value, pass_layout
-from jaxspline.regional.constraints import maneuver_scalar
-from jaxspline.regional.passdp import best_runs, gap_slots
-from jaxspline.regional.state import PlanState
+from jaxspline.search.coverage_bound import lagrangian_bound, lagrangian_value, pass_layout
+from jaxspline.search.coverage_passdp import best_runs, gap_slots
+from jaxspline.search.coverage_rules import maneuver_scalar
+from jaxspline.search.coverage_state import PlanState
 
 
 def all_strips(prob):

@@ -34,8 +34,8 @@ needs_case = pytest.mark.skipif(not CASE.is_dir(), reason="benchmark data not pr
 
 @functools.lru_cache(maxsize=1)
 def _case_and_tracks():
+    from jaxspline.geometry.coverage_tracks import build_tracks
     from jaxspline.regional.case import load_case
-    from jaxspline.regional.tracks import build_tracks
 
     case = load_case(CASE)
     return case, build_tracks(case)
@@ -341,7 +341,7 @@ def test_tracks_equal_scalar_sgp4_and_gstime():
 def test_sunlit_flags_agree_with_the_aeossp_shadow_model():
     """Against the checkers' Sun/GCRF/cylinder model: only single samples at transitions."""
     from jaxspline.aeossp import check_frames as cf
-    from jaxspline.regional.tracks import propagate_teme, sunlit_at
+    from jaxspline.geometry.coverage_tracks import propagate_teme, sunlit_at
 
     case, tr = _case_and_tracks()
     tles = [(s.tle1, s.tle2) for s in case.satellites]

@@ -18,7 +18,8 @@ import numpy as np
 import pytest
 from _synth_cover import make_problem, rules
 
-from jaxspline.regional.constraints import (
+from jaxspline.screen.models.roll_only import roll_slew_time
+from jaxspline.search.coverage_rules import (
     LOOK_RATE_DEG_S,
     Margins,
     battery_levels,
@@ -28,9 +29,8 @@ from jaxspline.regional.constraints import (
     maneuver_s,
     maneuver_scalar,
 )
-from jaxspline.regional.search import candidate_windows, greedy_fill, lns
-from jaxspline.regional.state import PlanState, SatTiming
-from jaxspline.screen.models.roll_only import roll_slew_time
+from jaxspline.search.coverage_search import candidate_windows, greedy_fill, lns
+from jaxspline.search.coverage_state import PlanState, SatTiming
 
 DATA = Path("/work/shared/data/regional_coverage/train")
 
@@ -273,7 +273,7 @@ def test_lns_never_worse_never_over_cap_and_deterministic():
     win = candidate_windows(prob)
     st = PlanState(prob)
     greedy_fill(st, win, time.perf_counter() + 10)
-    from jaxspline.regional.search import SearchConfig
+    from jaxspline.search.coverage_search import SearchConfig
 
     runs = []
     for _ in range(2):
@@ -309,7 +309,7 @@ def test_solve_cut_case_is_valid_under_the_checker():
 def test_minimum_coverage_phase_meets_a_reachable_minimum():
     from dataclasses import replace as dc_replace
 
-    from jaxspline.regional.search import SearchConfig, meet_minimums
+    from jaxspline.search.coverage_search import SearchConfig, meet_minimums
 
     prob = make_problem(8, n_sats=3, passes_per_sat=3, max_actions=3)
     win = candidate_windows(prob)
@@ -335,7 +335,7 @@ def test_minimum_coverage_phase_meets_a_reachable_minimum():
 def test_no_candidates_gives_an_empty_plan_and_zero_bound():
     from dataclasses import replace as dc_replace
 
-    from jaxspline.regional.bound import lagrangian_bound
+    from jaxspline.search.coverage_bound import lagrangian_bound
 
     prob = make_problem(9)
     empty = dc_replace(

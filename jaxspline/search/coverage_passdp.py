@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from jaxspline.regional.constraints import maneuver_s
+from jaxspline.search.coverage_rules import maneuver_s
 
 __all__ = ["best_runs", "gap_slots", "run_layers", "runs_of"]
 

@@ -3,7 +3,7 @@
 Relaxation (every plan of strips from the groups is feasible for it): a satellite images
 at most one group per slot; two strips of one satellite leave at least one idle slot
 between them (the gap needs settling > 0 and strips sit on the slot grid); a pass (the
-satellite's groups whose slots chain, :func:`jaxspline.regional.problem.group_passes`)
+satellite's groups whose slots chain, :func:`jaxspline.search.coverage_problem.group_passes`)
 holds at most ``floor((T + 1) / (min_slots + 1))`` strips; the whole plan at most
 ``max_actions``; a strip spans at least ``min_slots`` slots. Dropped: the maximum
 duration, slews beyond one slot, duty, battery, the separation between passes. A bound on
@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxspline.regional.problem import CoverProblem, group_passes
+from jaxspline.search.coverage_problem import CoverProblem, group_passes
 
 __all__ = [
     "BoundResult",
@@ -328,7 +328,7 @@ def lagrangian_bound(
 
 
 def bound_main(argv=None) -> int:
-    """Entry point of ``python -m jaxspline.regional.bound PROBLEM.pkl SECONDS``.
+    """Entry point of ``python -m jaxspline.search.coverage_bound PROBLEM.pkl SECONDS``.
 
     Reads the pickled ``(CoverProblem, target)``, runs :func:`lagrangian_bound` for
     SECONDS and prints ``bound iterations`` on stdout (so the search can run meanwhile in

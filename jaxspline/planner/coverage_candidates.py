@@ -19,7 +19,7 @@
 4. **Coverage.** Each slot of each group is one 10 s candidate of R2's engine
    (:func:`jaxspline.screen.coverage.coverage_slices`, exact quad geometry); a strip over
    slots ``[a, b)`` covers the union of its slots' rows (see
-   :mod:`jaxspline.regional.problem`).
+   :mod:`jaxspline.search.coverage_problem`).
 """
 
 from __future__ import annotations
@@ -30,8 +30,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from jaxspline.geometry.frames import geodetic_to_ecef
-from jaxspline.regional.constraints import Margins, conservative_sunlit, sat_rules
-from jaxspline.regional.problem import CoverProblem, sample_weights
+from jaxspline.search.coverage_problem import CoverProblem, sample_weights
+from jaxspline.search.coverage_rules import Margins, conservative_sunlit, sat_rules
 
 __all__ = [
     "CandidateInfo",
@@ -208,7 +208,7 @@ def find_groups(case, tracks, grid_xyz, step_deg=ROLL_STEP_DEG):
     """All groups (sat, roll, slot_lo, slot_hi) of a case, and the number of passes.
 
     Args:
-      case: Case; tracks: Tracks (R2's :func:`jaxspline.regional.tracks.build_tracks`).
+      case: Case; tracks: Tracks (R2's :func:`jaxspline.geometry.coverage_tracks.build_tracks`).
       grid_xyz: float [N, 3] Earth-fixed sample positions [m].
       step_deg: roll grid step [deg].
     Returns:
@@ -301,7 +301,7 @@ def build_problem(case, tracks=None, step_deg=ROLL_STEP_DEG, margins=None, log=N
     Returns:
       (CoverProblem, CandidateInfo).
     """
-    from jaxspline.regional.tracks import build_tracks
+    from jaxspline.geometry.coverage_tracks import build_tracks
 
     margins = Margins() if margins is None else margins
     secs = {}

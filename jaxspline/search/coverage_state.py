@@ -21,7 +21,9 @@ import math
 
 import numpy as np
 
-from jaxspline.regional.constraints import (
+from jaxspline.screen.models.roll_only import roll_slew_time
+from jaxspline.search.coverage_problem import CoverProblem, strip_rows
+from jaxspline.search.coverage_rules import (
     battery_min_mesh,
     duty_ok,
     gaps_ok,
@@ -29,8 +31,6 @@ from jaxspline.regional.constraints import (
     maneuver_scalar,
     timeline_ok,
 )
-from jaxspline.regional.problem import CoverProblem, strip_rows
-from jaxspline.screen.models.roll_only import roll_slew_time
 
 __all__ = ["PlanState", "SatTiming", "Transpose", "better", "gather_ranges", "transpose"]
 

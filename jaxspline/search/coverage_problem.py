@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxspline.regional.constraints import Margins
+from jaxspline.search.coverage_rules import Margins
 
 __all__ = ["CoverProblem", "group_passes", "sample_weights", "strip_rows"]
 

@@ -32,9 +32,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxspline.regional.passmoves import PassIndex, reopt_pass, reopt_related
-from jaxspline.regional.problem import CoverProblem, group_passes, strip_rows
-from jaxspline.regional.state import PlanState, better
+from jaxspline.search.coverage_passmoves import PassIndex, reopt_pass, reopt_related
+from jaxspline.search.coverage_problem import CoverProblem, group_passes, strip_rows
+from jaxspline.search.coverage_state import PlanState, better
 
 __all__ = [
     "SearchConfig",

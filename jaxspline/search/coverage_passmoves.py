@@ -2,7 +2,7 @@
 
 * :class:`PassIndex`: the groups of each pass (by roll), its slot span, gap matrices.
 * :func:`reopt_pass`: remove a pass's strips and put back the best set of strips of that
-  pass given everything else (:func:`jaxspline.regional.passdp.best_runs` on the rows'
+  pass given everything else (:func:`jaxspline.search.coverage_passdp.best_runs` on the rows'
   open weights, which within one pass add up almost exactly).
 * :func:`reopt_related`: the passes able to cover one still-open sample (drawn by weight)
   are cleared together and re-planned one after the other in random order, then once
@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxspline.regional.passdp import best_runs, gap_slots
-from jaxspline.regional.problem import CoverProblem, group_passes
-from jaxspline.regional.state import PlanState, gather_ranges
+from jaxspline.search.coverage_passdp import best_runs, gap_slots
+from jaxspline.search.coverage_problem import CoverProblem, group_passes
+from jaxspline.search.coverage_state import PlanState, gather_ranges
 
 __all__ = [
     "MAX_RUNS_PER_PASS",
@@ -78,7 +78,7 @@ class PassIndex:
 def reopt_pass(state: PlanState, index: PassIndex, p: int) -> int:
     """Replace the strips of pass ``p`` by the best set of strips of that pass.
 
-    The pass's strips are removed, :func:`jaxspline.regional.passdp.best_runs` picks the
+    The pass's strips are removed, :func:`jaxspline.search.coverage_passdp.best_runs` picks the
     runs of best open value (at most the actions left once they are removed;
     other passes' strips of the satellite block their maneuver gaps), and each run is
     added if the satellite's duty and battery still hold.
