@@ -51,7 +51,8 @@ from typing import NamedTuple
 import numpy as np
 
 from jaxspline.search import Timeline, clock, greedy, lns, solve
-from jaxspline.search.lagrangian import BoundResult, Prices, dp_paths
+from jaxspline.search.dp import dp_paths
+from jaxspline.search.lagrangian import BoundResult, Prices
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 from jaxspline.search.store import NearPairs
