@@ -58,6 +58,10 @@ class DPData:
       base_order: float [N], ``0`` where ``order[i]`` may be first, else ``-inf``.
       ready: float [N], ``end + far[sat]`` of each option: from then on it is a far
         predecessor of every option of its satellite [s].
+      target: int [N], target of each option.
+      repeat_pos, repeat_dst: positions (``pb.pairs`` order, ascending) and destinations
+        of the near pairs joining two options of one target (a repeat);
+        repeat_at: int [B + 1], block b's repeats are ``repeat_pos[repeat_at[b]:repeat_at[b + 1]]``.
       absorb_sats, absorb_cuts: per block the satellites of its absorbed options and
         where each satellite's run starts (``absorb`` is by satellite within a block).
       rows_at: per block the first pair of each row up to its last row with pairs
@@ -76,6 +80,10 @@ class DPData:
     sat_order: np.ndarray | None = None
     base_order: np.ndarray | None = None
     ready: np.ndarray | None = None
+    target: np.ndarray | None = None
+    repeat_pos: np.ndarray | None = None
+    repeat_dst: np.ndarray | None = None
+    repeat_at: np.ndarray | None = None
     absorb_sats: list | None = None
     absorb_cuts: list | None = None
     rows_at: list | None = None
@@ -122,8 +130,9 @@ def dp_prepare(pb: Problem) -> DPData:
     blk = np.repeat(np.arange(len(groups)), np.diff(absorb_at))
     ab[: absorb_at[-1]] = ab[: absorb_at[-1]][np.lexsort((sat[ab[: absorb_at[-1]]], blk))]
     absorb_t = rt[ab]
-    absorb_sats, absorb_cuts, rows_at, rows_pen = [], [], [], []
-    ptr = pb.pairs.ptr
+    absorb_sats, absorb_cuts, rows_at, rows_pen, rep = [], [], [], [], []
+    ptr, src = pb.pairs.ptr, pb.pairs.src
+    tg = np.asarray(pb.option_target, np.int64)
     for b, (ga, gb) in enumerate(groups):
         ks = sat[ab[absorb_at[b] : absorb_at[b + 1]]]
         cut = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]]) if ks.size else ks
@@ -133,6 +142,10 @@ def dp_prepare(pb: Problem) -> DPData:
         m = int(np.flatnonzero(cnt)[-1]) + 1 if cnt.any() else 0  # rows to the last with pairs
         rows_at.append(ptr[ga : ga + m] - ptr[ga])
         rows_pen.append(np.where(cnt[:m] == 0, -np.inf, 0.0))
+        dst = np.repeat(order[ga:gb], cnt)  # one block's pairs at a time (memory)
+        rep.append(np.flatnonzero(tg[src[ptr[ga] : ptr[gb]]] == tg[dst]) + ptr[ga])
+    repeat_pos = np.concatenate(rep) if rep else np.zeros(0, np.int64)
+    repeat_at = np.r_[0, np.cumsum([r.size for r in rep])].astype(np.int64)
     return DPData(
         order=order,
         sat=sat,
@@ -145,6 +158,10 @@ def dp_prepare(pb: Problem) -> DPData:
         sat_order=sat[order],
         base_order=np.where(first_ok, 0.0, -np.inf)[order],
         ready=rt,
+        target=tg,
+        repeat_pos=repeat_pos,
+        repeat_dst=pb.pairs.rows[np.searchsorted(ptr, repeat_pos, side="right") - 1],
+        repeat_at=repeat_at,
         absorb_sats=absorb_sats,
         absorb_cuts=absorb_cuts,
         rows_at=rows_at,
@@ -152,7 +169,9 @@ def dp_prepare(pb: Problem) -> DPData:
     )
 
 
-def dp_forward(pb: Problem, d: DPData, w: np.ndarray, arc=None) -> np.ndarray:
+def dp_forward(
+    pb: Problem, d: DPData, w: np.ndarray, arc=None, merge_repeats: bool = False
+) -> np.ndarray:
     """The DP values ``best`` (float [N]) of every option for option values ``w``.
 
     Args:
@@ -160,6 +179,9 @@ def dp_forward(pb: Problem, d: DPData, w: np.ndarray, arc=None) -> np.ndarray:
       d: its :func:`dp_prepare`.
       w: float [N], option values.
       arc: optional float [P], the cost of each near pair (``pb.pairs`` order).
+      merge_repeats: an option reached from an option of its own target through a near
+        pair adds nothing (its value ``w`` is that pair's cost): consecutive repeats of
+        a target count once (see :mod:`jaxspline.search.lagrangian`).
     Returns:
       float [N]: the best value of a sequence ending with each option (``-inf``: none).
     """
@@ -181,6 +203,9 @@ def dp_forward(pb: Problem, d: DPData, w: np.ndarray, arc=None) -> np.ndarray:
             pv = best[src[pa:pz]]
             if arc is not None:
                 pv -= arc[pa:pz]
+            ra, rz = d.repeat_at[b], d.repeat_at[b + 1]
+            if merge_repeats and rz > ra:
+                pv[d.repeat_pos[ra:rz] - pa] -= w[d.repeat_dst[ra:rz]]
             near = np.maximum.reduceat(pv, d.rows_at[b])
             near += d.rows_pen[b]  # rows without pairs: -inf
             vm = v[: near.size]
@@ -199,14 +224,14 @@ def _far_predecessor(pb: Problem, d: DPData, best, j: int, rest) -> int:
     return int(hit[0]) if hit.size else -1
 
 
-def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None):
+def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeats=False):
     """Each satellite's optimal sequence from the DP values ``best`` of :func:`dp_forward`.
 
     Walks back from each satellite's best option: the first near predecessor (lowest
     id) that provides the value, else the first far one, until a first observation.
 
     Args:
-      w, arc: as :func:`dp_forward`; best: its result.
+      w, arc, merge_repeats: as :func:`dp_forward`; best: its result.
       used: optional list; the near-pair positions of the paths are appended to it.
     Returns:
       ``(paths, values)``: per satellite the option ids of an optimal sequence (time
@@ -234,6 +259,8 @@ def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None):
                 cv = best[src[q0:q1]]
                 if arc is not None:
                     cv -= arc[q0:q1]
+                if merge_repeats:
+                    cv[d.target[src[q0:q1]] == d.target[j]] -= w[j]
                 ok = cv >= rest - _PATH_TOL
                 q = int(ok.argmax())
                 q = q if ok[q] else -1
@@ -250,7 +277,7 @@ def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None):
     return paths, values
 
 
-def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
+def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None, merge_repeats=False):
     """Exact per-satellite maximum-value sequences for option values ``w``.
 
     Args:
@@ -261,8 +288,9 @@ def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
         first observations cost nothing).
       used: optional list; the near-pair positions (``pb.pairs`` order) of the
         returned paths are appended to it.
+      merge_repeats: as :func:`dp_forward`.
     Returns ``(paths, values)``: per satellite the option ids of an optimal sequence
     (time order) and its value (0 for the empty sequence). Battery not modelled.
     """
-    best = dp_forward(pb, d, w, arc)
-    return backtrack(pb, d, w, best, arc, used)
+    best = dp_forward(pb, d, w, arc, merge_repeats)
+    return backtrack(pb, d, w, best, arc, used, merge_repeats)

@@ -56,16 +56,17 @@ class JaxDP:
             )
             self._order = put(np.r_[d.order, np.full(bm, n)].astype(np.int32))
             self._sat = put(np.r_[d.sat, n_s].astype(np.int32))
+            self._tg = put(np.r_[d.target, -1].astype(np.int32))
             self._sat_o = put(np.r_[d.sat_order, np.full(bm, n_s)].astype(np.int32))
             self._base_o = put(np.r_[d.base_order, np.full(bm, -np.inf)])
             self._absorb = put(np.r_[d.absorb, np.full(am, n)].astype(np.int32))
             self._src = put(np.r_[pb.pairs.src, np.zeros(pm, np.int32)].astype(np.int32))
             self._ptr = put(np.r_[ptr, np.full(bm + 1, ptr[-1])].astype(np.int64))
             self._n, self._n_s = n, n_s
-            self._fwd = jax.jit(self._scan)
+            self._fwd = jax.jit(self._scan, static_argnums=2)
         self.device = device
 
-    def _scan(self, w, arc):
+    def _scan(self, w, arc, merge_repeats):
         """best [N] (dummy slot dropped) for option values ``w`` [N] and pair costs ``arc``."""
         n, n_s = self._n, self._n_s
         bm, pm, am = self.b_max, self.p_max, self.a_max
@@ -89,6 +90,9 @@ class JaxDP:
             pv = jnp.where(io_p < npp, best[src] - ds(arc_pad, (pa,), (pm,)), -jnp.inf)
             rowptr = ds(self._ptr, (ga,), (bm + 1,)) - pa
             seg = jnp.clip(jnp.searchsorted(rowptr, io_p, side="right") - 1, 0, bm - 1)
+            if merge_repeats:  # a repeat adds nothing: its pair costs the option's value
+                dst = j_ids[seg]
+                pv = pv - jnp.where(self._tg[src] == self._tg[dst], w_pad[dst], 0.0)
             near = jax.ops.segment_max(pv, seg, num_segments=bm, indices_are_sorted=True)
             v = jnp.maximum(v, near)
             j_at = jnp.where(j_ok, j_ids, n)
@@ -99,12 +103,13 @@ class JaxDP:
         (best, _), _ = jax.lax.scan(step, init, self._xs)
         return best[:n]
 
-    def forward(self, w, arc=None) -> np.ndarray:
+    def forward(self, w, arc=None, merge_repeats: bool = False) -> np.ndarray:
         """The DP values (float64 [N]) as :func:`jaxspline.search.dp.dp_forward` gives them.
 
         Args:
           w: float [N], option values.
           arc: optional float [P], near-pair costs (``pb.pairs`` order).
+          merge_repeats: as :func:`jaxspline.search.dp.dp_forward`.
         Returns:
           float64 numpy [N].
         """
@@ -112,10 +117,11 @@ class JaxDP:
             w = jax.device_put(np.asarray(w, np.float64), self.device)
             p = len(self.pb.pairs)
             a = np.zeros(p) if arc is None else np.asarray(arc, np.float64)
-            return np.asarray(self._fwd(w, jax.device_put(a, self.device)))
+            return np.asarray(self._fwd(w, jax.device_put(a, self.device), bool(merge_repeats)))
 
-    def paths(self, w, arc=None, used=None):
+    def paths(self, w, arc=None, used=None, merge_repeats: bool = False):
         """``(paths, values)`` as :func:`jaxspline.search.dp.dp_paths` (forward on the device,
         back-tracking on the host)."""
-        best = self.forward(w, arc)
-        return backtrack(self.pb, self.d, np.asarray(w, np.float64), best, arc, used)
+        best = self.forward(w, arc, merge_repeats)
+        w = np.asarray(w, np.float64)
+        return backtrack(self.pb, self.d, w, best, arc, used, merge_repeats)

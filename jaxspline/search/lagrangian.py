@@ -19,6 +19,22 @@ each term is ``>= w_t`` if ``n_t >= 1`` and ``>= 0`` otherwise: UB >= the plan's
 Prices are therefore kept in ``[0, w_t]`` (projected subgradient), which makes UB an
 upper bound of every plan of the option model, repeats included.
 
+Repeats in a row count once (the strengthened relaxation, ``merge_repeats``). Within
+one pass a satellite can often image a target twice in a row (two of its options a few
+seconds apart, joined by a near pair); the plain DP credits both (``2 (w_t - lam_t)``)
+and the prices alone cannot take this back, since lowering it needs ``lam_t -> w_t``,
+which makes the target worthless to every other satellite. With ``merge_repeats`` a
+near pair between two options of one target costs the second option's value, so a run
+of consecutive options of one target on one path is credited once. The argument above
+holds with ``n_t`` the number of such runs (>= 1 when t is imaged; a plan's path takes
+every near pair it uses, and a DP that does not merge a run, e.g. through a far
+transition, only overestimates): the bound stays valid for every plan, repeats
+included. On the 0.5 h slice of the 12 x 12 h preset it closes most of the integrality
+gap (docs/scale.md); the DP's cost is one extra subtraction per repeat pair. The
+search's Lagrangian phase iterates the plain relaxation (its DP paths seed its repaired
+plans, which stay as they were); :func:`upper_bound`, the bound worker and the sharded
+bound iterate the strengthened one.
+
 Every :data:`_REPAIR_EVERY`-th iteration also repairs the DP paths into a feasible
 plan (each target once, heaviest first, re-checked insertion incl. battery, then greedy
 fill); its value sets the step size.
@@ -92,8 +108,9 @@ class Prices:
     restart from the best ones seen.
     """
 
-    def __init__(self, pb: Problem, energy: bool = False):
+    def __init__(self, pb: Problem, energy: bool = False, merge_repeats: bool = False):
         self.pb = pb
+        self.merge = bool(merge_repeats)
         self.d = dp_prepare(pb)
         self.target_value = np.asarray(pb.target_value, np.float64)
         self.option_target = np.asarray(pb.option_target, np.int64)
@@ -124,7 +141,7 @@ class Prices:
         if self.en is not None:
             node_pen, arc_pen = self.en.penalties(self.lam[n_tg:])
             w, arc, self.used = w - node_pen, arc_pen, []
-        paths, vals = dp_paths(self.pb, self.d, w, arc, self.used)
+        paths, vals = dp_paths(self.pb, self.d, w, arc, self.used, self.merge)
         self._record(vals, paths)
         return paths
 
@@ -141,7 +158,10 @@ class Prices:
         """Number of paths taking each target (float [T])."""
         cnt = np.zeros(self.target_value.size)
         for p in paths:
-            np.add.at(cnt, self.option_target[p], 1.0)
+            t = self.option_target[p]
+            if self.merge and t.size:  # a run of one target is one credited visit
+                t = t[np.r_[True, t[1:] != t[:-1]]]
+            np.add.at(cnt, t, 1.0)
         return cnt
 
     def _subgradient(self) -> np.ndarray:
@@ -213,7 +233,12 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
 
 
 def upper_bound(
-    pb: Problem, plan_value: float, deadline: float, max_iters=None, energy: bool = False
+    pb: Problem,
+    plan_value: float,
+    deadline: float,
+    max_iters=None,
+    energy: bool = False,
+    merge_repeats: bool = True,
 ) -> BoundResult:
     """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
 
@@ -227,12 +252,15 @@ def upper_bound(
       max_iters: cap on the iterations (None: the deadline alone).
       energy: price the battery budgets of :mod:`jaxspline.search.energy` too
         (off: the battery is dropped).
+      merge_repeats: the strengthened relaxation (module docstring): consecutive
+        options of one target joined by a near pair are credited once. False: the
+        plain relaxation, as the search's Lagrangian phase iterates it.
     Returns:
       BoundResult with status ``CONVERGED`` or ``TIME`` (cap / deadline reached).
     """
     if pb.n_options == 0:
         return BoundResult([], 0.0, 0, BoundStatus.OPTIMAL)
-    pr = Prices(pb, energy=energy)
+    pr = Prices(pb, energy=energy, merge_repeats=merge_repeats)
     status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         pr.solve_dp()
