@@ -37,12 +37,12 @@ _GRACE_S = 30.0  # [s] the parent waits this long past the deadline for the last
 
 
 def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters):
-    """Child: iterate the bound, send (bound, iterations, status)."""
+    """Child: iterate the bound, send (bound, iterations, status, seconds)."""
     gc.disable()  # never finalize the parent's (JAX) objects in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     res = upper_bound(pb, plan_value, deadline, max_iters, energy=False, merge_repeats=True)
-    conn.send((float(res.bound), int(res.iterations), res.status.value))
+    conn.send((float(res.bound), int(res.iterations), res.status.value, float(res.seconds)))
     conn.close()
 
 
@@ -88,8 +88,8 @@ class BoundWorker:
         out = None
         try:
             if self._conn.poll(timeout):
-                bound, its, status = self._conn.recv()
-                out = BoundResult([], bound, its, BoundStatus(status))
+                bound, its, status, seconds = self._conn.recv()
+                out = BoundResult([], bound, its, BoundStatus(status), seconds)
         except (EOFError, OSError):  # the child died: no bound from it
             out = None
         self.stop()

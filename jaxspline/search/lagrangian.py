@@ -43,6 +43,7 @@ fill); its value sets the step size.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
@@ -89,12 +90,14 @@ class BoundResult:
       status: :class:`BoundStatus`: ``OPTIMAL`` (bound met by a plan), ``CONVERGED``
         (zero subgradient or the step fell below its floor) or ``TIME`` (stopped by
         the deadline / cap).
+      seconds: wall time of the iteration [s] (0 where not measured).
     """
 
     best: list
     bound: float
     iterations: int
     status: BoundStatus
+    seconds: float = 0.0
 
 
 class Prices:
@@ -260,6 +263,7 @@ def upper_bound(
     """
     if pb.n_options == 0:
         return BoundResult([], 0.0, 0, BoundStatus.OPTIMAL)
+    t0 = time.monotonic()
     pr = Prices(pb, energy=energy, merge_repeats=merge_repeats)
     status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
@@ -267,4 +271,4 @@ def upper_bound(
         if not pr.step(plan_value):
             status = BoundStatus.CONVERGED
             break
-    return BoundResult([], pr.ub, pr.it, status)
+    return BoundResult([], pr.ub, pr.it, status, time.monotonic() - t0)
