@@ -17,7 +17,10 @@ measuring):
   output, from an empty compilation cache and warm (:mod:`bench.job`);
 - ``coverage`` (only when named) -> ``coverage.json``, ``COVERAGE.md``: the strip
   coverage engine against numpy + shapely on a regional_coverage training case
-  (:mod:`bench.coverage`).
+  (:mod:`bench.coverage`);
+- ``bound`` (only when named) -> ``bound.json``, ``BOUND.md``: the bound's DP
+  iterations/s, numpy and JAX on the default device, and the plain vs strengthened
+  bound (:mod:`bench.bound`).
 
 Without ``--section`` the first four run.
 """
@@ -50,8 +53,18 @@ def _parse(argv):
     p.add_argument(
         "--section",
         action="append",
-        choices=["bandwidth", "kernels", "threads", "screening", "scale", "job", "coverage"],
-        help="run only these sections (repeatable; scale, job and coverage run only when named)",
+        choices=[
+            "bandwidth",
+            "kernels",
+            "threads",
+            "screening",
+            "scale",
+            "job",
+            "coverage",
+            "bound",
+        ],
+        help="run only these sections (repeatable; scale, job, coverage and bound run only when "
+        "named)",
     )
     p.add_argument(
         "--only",
@@ -92,6 +105,17 @@ def _parse(argv):
     )
     p.add_argument(
         "--scale-dir", help="scale section: keep scenarios and plans here (default: a temp dir)"
+    )
+    p.add_argument(
+        "--bound-hours",
+        default="0.5,3",
+        help="bound section: comma-separated horizons [h] of the 12x12h preset (default 0.5,3)",
+    )
+    p.add_argument(
+        "--bound-seconds",
+        type=float,
+        default=5.0,
+        help="bound section: seconds per iterations/s measurement (default 5)",
     )
     p.add_argument(
         "--job-runs", type=int, default=2, help="job section: runs, the first cold (default 2)"
@@ -371,11 +395,12 @@ def _child_or_error(spec: dict, tag: dict) -> dict:
 # ------------------------------------------------------------------ driver
 #: Sections with files of their own (``scale.json`` / ``SCALE.md``, ...); the others
 #: share ``report.json`` / ``RESULTS.md``.
-OWN_FILES = ("screening", "scale", "job", "coverage")
+OWN_FILES = ("screening", "scale", "job", "coverage", "bound")
 
 
 def _write(report: dict, sections: set, out: Path) -> None:
     """Write each measured section's files: the common ones and those of its own."""
+    from bench.bound import write_bound
     from bench.coverage import write_coverage
     from bench.job import write_job
     from bench.report import write_outputs, write_screening
@@ -388,6 +413,7 @@ def _write(report: dict, sections: set, out: Path) -> None:
         "scale": write_scale,
         "job": write_job,
         "coverage": write_coverage,
+        "bound": write_bound,
     }
     for name in OWN_FILES:
         if name in sections:
@@ -460,6 +486,11 @@ def main(argv=None) -> int:
         from bench.coverage import bench_coverage
 
         report["coverage"] = bench_coverage(reps=max(1, args.reps // 2))
+    if "bound" in sections:
+        from bench.bound import bench_bound
+
+        hours = [float(h) for h in args.bound_hours.split(",") if h.strip()]
+        report["bound"] = bench_bound(hours, args.bound_seconds)
     report["total_s"] = time.perf_counter() - t_all
     _write(report, sections, out)
     return 0

@@ -49,6 +49,10 @@ RUN_FORMATS = {
     "bound_status": "{}",
     "gap_pct": "{:.2f}",
     "valid": "{}",
+    "plain_bound": "{:.6g}",
+    "strengthened_bound": "{:.6g}",
+    "worker_status": "{}",
+    "dp_per_s": "{:.1f}",
 }
 
 

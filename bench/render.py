@@ -1,9 +1,10 @@
 """``python -m bench --render [--out DIR]``: rewrite every result markdown from its JSON.
 
 Measures nothing: for each JSON file the bench writes (``report.json``,
-``scale.json``, ``screening.json``, ``job.json``, ``aeossp.json``, ``coverage.json``)
-present in the output folder, the markdown beside it is generated again by the same
-code that wrote it after the measurement. Run it after changing how a table is written.
+``scale.json``, ``screening.json``, ``job.json``, ``aeossp.json``, ``coverage.json``,
+``bound.json``) present in the output folder, the markdown beside it is generated
+again by the same code that wrote it after the measurement. Run it after changing how
+a table is written.
 """
 
 from __future__ import annotations
@@ -48,6 +49,12 @@ def _aeossp(d: dict) -> tuple[str, list[str]]:
     return "aeossp_standard training cases", aeossp_table(d)
 
 
+def _bound(d: dict) -> tuple[str, list[str]]:
+    from bench.bound import bound_table
+
+    return "Bound: DP speed and strength", bound_table(d["bound"])
+
+
 #: JSON file -> (markdown file, the function giving its title and lines).
 RENDERERS = {
     "report.json": ("RESULTS.md", _report),
@@ -56,6 +63,7 @@ RENDERERS = {
     "job.json": ("JOB.md", _job),
     "aeossp.json": ("AEOSSP.md", _aeossp),
     "coverage.json": ("COVERAGE.md", _coverage),
+    "bound.json": ("BOUND.md", _bound),
 }
 
 

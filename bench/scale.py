@@ -52,7 +52,8 @@ TIME_BIN = "/usr/bin/time"
 #: Columns of the summary table of ``SCALE.md``, one run a row.
 RUN_COLUMNS = (
     "size|sats|targets|limit s|exit|wall s|peak RSS MB|windows|options|near pairs|bytes/pair|"
-    "store MB|Lagr. it.|worker it.|LNS it.|value|bound|bound status|gap %|valid|load"
+    "store MB|Lagr. it.|worker it.|LNS it.|value|bound|bound status|gap %|valid|load|"
+    "plain bound|strengthened bound|worker status|DP it/s"
 ).split("|")
 _STAGE_LINE = re.compile(r"\[plan [^\]]*\] (\w+)\s")
 
@@ -267,6 +268,10 @@ def parse_plan_json(path: Path) -> dict:
         "lagrangian_iterations": _get(doc, "stats.lagrangian_iterations"),
         "worker_iterations": _get(doc, "stats.worker_iterations"),
         "lns_iterations": _get(doc, "stats.lns_iterations"),
+        "plain_bound": _get(doc, "stats.lagrangian_bound"),
+        "strengthened_bound": _get(doc, "stats.worker_bound"),
+        "worker_status": _get(doc, "stats.worker_status"),
+        "dp_per_s": _get(doc, "stats.worker_dp_per_s"),
         "valid": _get(doc, "summary.valid", "report.valid"),
         "dropped": _get(doc, "report.dropped", default={}),
         "repair_rounds": _get(doc, "report.repair_rounds"),
@@ -397,6 +402,7 @@ def _run_row(r: dict, report: dict) -> str:
             cell(None if store is None else store / 1e6, "{:.1f}"),
             *run_cells(r, "lagrangian_iterations worker_iterations lns_iterations"),
             *run_cells(r, "value bound bound_status gap_pct valid load_avg_before"),
+            *run_cells(r, "plain_bound strengthened_bound worker_status dp_per_s"),
         ]
     )
 
@@ -425,7 +431,10 @@ def scale_table(report: dict) -> list[str]:
         f"subprocess each, guard {report.get('max_rss_gb', 0):g} GB RSS. *Lagr. it.* are "
         "the search's own bound iterations, *worker it.* those of the bound worker on the "
         "second CPU, *LNS it.* the search's; *load* is the machine's load average when the "
-        "run started.",
+        "run started. *plain bound*: the search's own Lagrangian phase (per-satellite "
+        "path relaxation, its share of the budget); *strengthened bound*: the worker's "
+        "(a run of one target's options credited once), *worker status* whether it "
+        "converged, *DP it/s* its iterations per second.",
         *header(*RUN_COLUMNS),
         *(_run_row(r, report) for r in runs),
     ]

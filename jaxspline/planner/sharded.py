@@ -51,7 +51,8 @@ from typing import NamedTuple
 import numpy as np
 
 from jaxspline.search import Timeline, clock, greedy, lns, solve
-from jaxspline.search.lagrangian import BoundResult, Prices, dp_paths
+from jaxspline.search.dp import dp_paths
+from jaxspline.search.lagrangian import BoundResult, Prices
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 from jaxspline.search.store import NearPairs
@@ -113,7 +114,7 @@ class _ShardPrices(Prices):
     """:class:`Prices` whose DP covers the owned satellites and whose totals are gathered."""
 
     def __init__(self, pb: Problem, sat_ids, n_sats: int, allgather):
-        super().__init__(pb, energy=False)
+        super().__init__(pb, energy=False, merge_repeats=True)
         self.sat_ids = np.asarray(sat_ids, np.int64)
         self.n_sats = int(n_sats)
         self.allgather = allgather
@@ -123,7 +124,7 @@ class _ShardPrices(Prices):
         self.it += 1
         n_tg = self.target_value.size
         w = self.target_value[self.option_target] - self.lam[self.option_target]
-        paths, vals = dp_paths(self.pb, self.d, w)
+        paths, vals = dp_paths(self.pb, self.d, w, merge_repeats=True)
         local = np.zeros(self.n_sats + n_tg + 1)
         local[self.sat_ids] = vals
         local[self.n_sats : -1] = self._takers(paths)

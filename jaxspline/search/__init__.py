@@ -2,7 +2,7 @@
 
 Its input is a :class:`Problem` of plain arrays (built by :mod:`jaxspline.planner`), so
 it imports nothing of the package outside this folder. Inside, imports point one way:
-``store`` / ``battery`` -> ``problem`` -> ``timeline`` / ``energy`` / ``mip`` ->
+``store`` / ``battery`` -> ``problem`` -> ``dp`` / ``timeline`` / ``energy`` / ``mip`` ->
 ``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` -> ``bound_worker`` -> ``solve``
 (:func:`solve`, the stages run until a deadline). ``clock`` is the search's one time
 source; ``construct`` is the one greedy strategy (``greedy_pass``), used by ``timeline``,
@@ -22,11 +22,13 @@ from jaxspline.search import clock as clock
 from jaxspline.search.battery import BatteryModel as BatteryModel
 from jaxspline.search.battery import Levels as Levels
 from jaxspline.search.bound_worker import BoundWorker as BoundWorker
+from jaxspline.search.dp import DPData as DPData
+from jaxspline.search.dp import backtrack as backtrack
+from jaxspline.search.dp import dp_forward as dp_forward
+from jaxspline.search.dp import dp_paths as dp_paths
+from jaxspline.search.dp import dp_prepare as dp_prepare
 from jaxspline.search.exact import exact_search as exact_search
 from jaxspline.search.lagrangian import BoundResult as BoundResult
-from jaxspline.search.lagrangian import DPData as DPData
-from jaxspline.search.lagrangian import dp_paths as dp_paths
-from jaxspline.search.lagrangian import dp_prepare as dp_prepare
 from jaxspline.search.lagrangian import lagrangian as lagrangian
 from jaxspline.search.lagrangian import upper_bound as upper_bound
 from jaxspline.search.lns import earliest_pass as earliest_pass

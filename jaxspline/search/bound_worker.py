@@ -6,7 +6,9 @@ that iterates :func:`jaxspline.search.lagrangian.upper_bound` over the same
 :class:`Problem` until the search's deadline, and hands back its bound. The worker
 relaxes the battery (the search's own Lagrangian phase prices its budgets): the
 per-pair energy terms would be derived anew in every iteration, and the relaxed bound is
-the looser one by little (docs/scale.md). The fork shares the problem's arrays copy-on-write
+the looser one by little (docs/scale.md). It credits a run of consecutive options of
+one target once (``merge_repeats``, the strengthened relaxation of
+:mod:`jaxspline.search.lagrangian`). The fork shares the problem's arrays copy-on-write
 (nothing is pickled on the way in); the child only runs numpy code (no JAX) and sends
 three numbers back. Any bound is an upper bound of every plan, so the search reports the
 smaller of its own and the worker's; the plan itself is never touched, and with an
@@ -35,12 +37,12 @@ _GRACE_S = 30.0  # [s] the parent waits this long past the deadline for the last
 
 
 def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters):
-    """Child: iterate the bound, send (bound, iterations, status)."""
+    """Child: iterate the bound, send (bound, iterations, status, seconds)."""
     gc.disable()  # never finalize the parent's (JAX) objects in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    res = upper_bound(pb, plan_value, deadline, max_iters, energy=False)
-    conn.send((float(res.bound), int(res.iterations), res.status.value))
+    res = upper_bound(pb, plan_value, deadline, max_iters, energy=False, merge_repeats=True)
+    conn.send((float(res.bound), int(res.iterations), res.status.value, float(res.seconds)))
     conn.close()
 
 
@@ -86,8 +88,8 @@ class BoundWorker:
         out = None
         try:
             if self._conn.poll(timeout):
-                bound, its, status = self._conn.recv()
-                out = BoundResult([], bound, its, BoundStatus(status))
+                bound, its, status, seconds = self._conn.recv()
+                out = BoundResult([], bound, its, BoundStatus(status), seconds)
         except (EOFError, OSError):  # the child died: no bound from it
             out = None
         self.stop()

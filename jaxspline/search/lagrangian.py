@@ -19,6 +19,22 @@ each term is ``>= w_t`` if ``n_t >= 1`` and ``>= 0`` otherwise: UB >= the plan's
 Prices are therefore kept in ``[0, w_t]`` (projected subgradient), which makes UB an
 upper bound of every plan of the option model, repeats included.
 
+Repeats in a row count once (the strengthened relaxation, ``merge_repeats``). Within
+one pass a satellite can often image a target twice in a row (two of its options a few
+seconds apart, joined by a near pair); the plain DP credits both (``2 (w_t - lam_t)``)
+and the prices alone cannot take this back, since lowering it needs ``lam_t -> w_t``,
+which makes the target worthless to every other satellite. With ``merge_repeats`` a
+near pair between two options of one target costs the second option's value, so a run
+of consecutive options of one target on one path is credited once. The argument above
+holds with ``n_t`` the number of such runs (>= 1 when t is imaged; a plan's path takes
+every near pair it uses, and a DP that does not merge a run, e.g. through a far
+transition, only overestimates): the bound stays valid for every plan, repeats
+included. On the 0.5 h slice of the 12 x 12 h preset it closes most of the integrality
+gap (docs/scale.md); the DP's cost is one extra subtraction per repeat pair. The
+search's Lagrangian phase iterates the plain relaxation (its DP paths seed its repaired
+plans, which stay as they were); :func:`upper_bound`, the bound worker and the sharded
+bound iterate the strengthened one.
+
 Every :data:`_REPAIR_EVERY`-th iteration also repairs the DP paths into a feasible
 plan (each target once, heaviest first, re-checked insertion incl. battery, then greedy
 fill); its value sets the step size.
@@ -27,159 +43,25 @@ fill); its value sets the step size.
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from jaxspline.search import clock
+from jaxspline.search.dp import dp_paths, dp_prepare
 from jaxspline.search.energy import EnergyBudgets
 from jaxspline.search.lns import greedy
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 from jaxspline.search.timeline import Timeline
 
-__all__ = ["BoundResult", "DPData", "dp_paths", "dp_prepare", "lagrangian", "upper_bound"]
+__all__ = ["BoundResult", "lagrangian", "upper_bound"]
 
 _STALL_ITERS = 4  # iterations without a better bound before the step halves
 _MU_MIN = 1e-4  # the iteration stops (stalled) below this step factor
 _GAP_TOL = 1e-9  # bound - best plan below this: optimal
-_PATH_TOL = 1e-9  # tolerance of the path back-tracking
 _REPAIR_EVERY = 4  # DP iterations per repaired plan (a repair costs ~2 block DPs)
-
-
-@dataclass
-class DPData:
-    """Structure of the per-satellite longest-path DP (see :func:`dp_paths`).
-
-    Options are processed in start order (``order``, the row order of ``pb.pairs``)
-    in blocks of starts at most ``width`` apart (``groups``: slices of ``order``, so a
-    block's near predecessors are one contiguous range of ``pb.pairs``). With
-    ``width`` <= the shortest observation, a predecessor of any option of a block
-    starts before the block, so a block is one vectorized step; with
-    ``width`` <= ``near_slack``, a far predecessor that only becomes far inside the
-    block (``end + far`` between the block's first start and the option's start) is
-    among the near pairs. ``absorb`` lists options by ``end + far[sat]``, the time
-    from which they are far predecessors of everything.
-
-    Attributes:
-      order: int [N], option ids sorted by start (then satellite).
-      sat: int [N], satellite of each option.
-      start: float [N], start time of each option [s].
-      groups: list of ``(ga, gb)``: block ``order[ga:gb]``.
-      first_ok: bool [N], the option may be its satellite's first observation.
-      absorb: int [N], option ids sorted by ``end + far[sat]``.
-      absorb_t: float [N], those times [s].
-    """
-
-    order: np.ndarray
-    sat: np.ndarray
-    start: np.ndarray
-    groups: list
-    first_ok: np.ndarray
-    absorb: np.ndarray
-    absorb_t: np.ndarray
-
-
-def dp_prepare(pb: Problem) -> DPData:
-    """Group the options in start-order blocks for :func:`dp_paths`.
-
-    Args:
-      pb: Problem.
-    Returns:
-      DPData.
-    """
-    n = pb.n_options
-    s = np.asarray(pb.option_start)
-    e = np.asarray(pb.option_end)
-    sat = np.asarray(pb.option_sat, np.int64)
-    far = np.asarray(pb.far)
-    order = pb.pairs.rows  # start order (Problem keeps the pair rows so)
-    so = s[order]
-    width = min(float(np.min(e - s)), pb.near_slack) if n else 0.0
-    bounds = [0]
-    while bounds[-1] < n:
-        b0 = bounds[-1]
-        b1 = int(np.searchsorted(so, so[b0] + width, side="right"))
-        bounds.append(max(b1, int(np.searchsorted(so, so[b0], side="right"))))
-    groups = list(zip(bounds[:-1], bounds[1:], strict=True))
-    rt = e + far[sat] if n else np.zeros(0)
-    ab = np.argsort(rt, kind="stable")
-    first_ok = np.asarray(pb.option_first) <= s
-    return DPData(order, sat, s, groups, first_ok, ab, rt[ab])
-
-
-def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None):
-    """Exact per-satellite maximum-value sequences for option values ``w``.
-
-    Args:
-      arc: optional cost of each near pair, in ``pb.pairs`` order (far transitions and
-        first observations cost nothing).
-      used: optional list; the near-pair positions (``pb.pairs`` order) of the
-        returned paths are appended to it.
-    Returns ``(paths, values)``: per satellite the option ids of an optimal sequence
-    (time order) and its value (0 for the empty sequence). Battery not modelled.
-    """
-    n = len(w)
-    n_s = pb.n_sats
-    pairs = pb.pairs
-    src, ptr = pairs.src, pairs.ptr
-    best = np.full(n, -np.inf)
-    run = np.full(n_s, -np.inf)
-    base = np.where(d.first_ok, 0.0, -np.inf)
-    order, sat = d.order, d.sat
-    ap = 0
-    s_order = d.start[order]
-    for ga, gb in d.groups:
-        aq = int(np.searchsorted(d.absorb_t, s_order[ga], side="right"))
-        if aq > ap:
-            sl = d.absorb[ap:aq]
-            np.maximum.at(run, sat[sl], best[sl])
-            ap = aq
-        J = order[ga:gb]
-        v = np.maximum(base[J], run[sat[J]])
-        pa, pz = int(ptr[ga]), int(ptr[gb])
-        if pz > pa:
-            pv = best[src[pa:pz]]
-            if arc is not None:
-                pv = pv - arc[pa:pz]
-            at = ptr[ga:gb] - pa
-            has = ptr[ga + 1 : gb + 1] > ptr[ga:gb]
-            v[has] = np.maximum(v[has], np.maximum.reduceat(pv, at[has]))
-        best[J] = w[J] + v
-    ends = np.asarray(pb.option_end)
-    far = np.asarray(pb.far)
-    paths, values = [], []
-    for k in range(n_s):
-        lo, hi = pb.sat_lo[k], pb.sat_hi[k]
-        if hi <= lo or not best[lo:hi].max() > 0.0:
-            paths.append([])
-            values.append(0.0)
-            continue
-        j = lo + int(np.argmax(best[lo:hi]))
-        values.append(float(best[j]))
-        path = [j]
-        ids = np.arange(lo, hi)
-        while True:
-            rest = best[j] - w[j]  # the value the predecessor (or the start) provides
-            if d.first_ok[j] and rest <= _PATH_TOL:
-                break
-            row = pairs.row(j)
-            q0, q1 = row.start, row.stop
-            preds = src[q0:q1]
-            cv = best[preds] if arc is None else best[preds] - arc[q0:q1]
-            ok = np.flatnonzero(cv >= rest - _PATH_TOL)
-            hit = preds[ok]
-            if hit.size and used is not None:
-                used.append(q0 + int(ok[0]))
-            if hit.size == 0:
-                fp = ids[ends[ids] + far[k] <= d.start[j]]
-                hit = fp[best[fp] >= rest - _PATH_TOL]
-            if hit.size == 0:  # cannot happen; stop defensively
-                break
-            j = int(hit[0])
-            path.append(j)
-        paths.append(path[::-1])
-    return paths, values
 
 
 def _plan_from_paths(tl: Timeline, paths, order_fill, deadline: float):
@@ -208,12 +90,14 @@ class BoundResult:
       status: :class:`BoundStatus`: ``OPTIMAL`` (bound met by a plan), ``CONVERGED``
         (zero subgradient or the step fell below its floor) or ``TIME`` (stopped by
         the deadline / cap).
+      seconds: wall time of the iteration [s] (0 where not measured).
     """
 
     best: list
     bound: float
     iterations: int
     status: BoundStatus
+    seconds: float = 0.0
 
 
 class Prices:
@@ -227,8 +111,9 @@ class Prices:
     restart from the best ones seen.
     """
 
-    def __init__(self, pb: Problem, energy: bool = False):
+    def __init__(self, pb: Problem, energy: bool = False, merge_repeats: bool = False):
         self.pb = pb
+        self.merge = bool(merge_repeats)
         self.d = dp_prepare(pb)
         self.target_value = np.asarray(pb.target_value, np.float64)
         self.option_target = np.asarray(pb.option_target, np.int64)
@@ -259,7 +144,7 @@ class Prices:
         if self.en is not None:
             node_pen, arc_pen = self.en.penalties(self.lam[n_tg:])
             w, arc, self.used = w - node_pen, arc_pen, []
-        paths, vals = dp_paths(self.pb, self.d, w, arc, self.used)
+        paths, vals = dp_paths(self.pb, self.d, w, arc, self.used, self.merge)
         self._record(vals, paths)
         return paths
 
@@ -276,7 +161,10 @@ class Prices:
         """Number of paths taking each target (float [T])."""
         cnt = np.zeros(self.target_value.size)
         for p in paths:
-            np.add.at(cnt, self.option_target[p], 1.0)
+            t = self.option_target[p]
+            if self.merge and t.size:  # a run of one target is one credited visit
+                t = t[np.r_[True, t[1:] != t[:-1]]]
+            np.add.at(cnt, t, 1.0)
         return cnt
 
     def _subgradient(self) -> np.ndarray:
@@ -348,7 +236,12 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
 
 
 def upper_bound(
-    pb: Problem, plan_value: float, deadline: float, max_iters=None, energy: bool = False
+    pb: Problem,
+    plan_value: float,
+    deadline: float,
+    max_iters=None,
+    energy: bool = False,
+    merge_repeats: bool = True,
 ) -> BoundResult:
     """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
 
@@ -362,16 +255,20 @@ def upper_bound(
       max_iters: cap on the iterations (None: the deadline alone).
       energy: price the battery budgets of :mod:`jaxspline.search.energy` too
         (off: the battery is dropped).
+      merge_repeats: the strengthened relaxation (module docstring): consecutive
+        options of one target joined by a near pair are credited once. False: the
+        plain relaxation, as the search's Lagrangian phase iterates it.
     Returns:
       BoundResult with status ``CONVERGED`` or ``TIME`` (cap / deadline reached).
     """
     if pb.n_options == 0:
         return BoundResult([], 0.0, 0, BoundStatus.OPTIMAL)
-    pr = Prices(pb, energy=energy)
+    t0 = time.monotonic()
+    pr = Prices(pb, energy=energy, merge_repeats=merge_repeats)
     status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         pr.solve_dp()
         if not pr.step(plan_value):
             status = BoundStatus.CONVERGED
             break
-    return BoundResult([], pr.ub, pr.it, status)
+    return BoundResult([], pr.ub, pr.it, status, time.monotonic() - t0)

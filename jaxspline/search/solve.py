@@ -144,7 +144,11 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
         max_iters=cap,
         report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
     )
-    stats.update(lagrangian_value=tl.value, lagrangian_iterations=res.iterations)
+    stats.update(
+        lagrangian_value=tl.value,
+        lagrangian_iterations=res.iterations,
+        lagrangian_bound=res.bound,
+    )
     exact = False
     if pb.n_options <= exact_max_options:
         start = list(tl.assigned)
@@ -174,7 +178,12 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
     if worker is not None:
         wr = worker.result(wait=not clock.stop_requested())
         if wr is not None:
-            stats.update(worker_bound=wr.bound, worker_iterations=wr.iterations)
+            stats.update(
+                worker_bound=wr.bound,
+                worker_iterations=wr.iterations,
+                worker_status=wr.status.value,
+                worker_dp_per_s=wr.iterations / wr.seconds if wr.seconds > 0 else None,
+            )
             if wr.bound < bound:
                 bound, status = wr.bound, wr.status
                 if bound - tl.value <= _OPTIMAL_TOL * max(1.0, bound):

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import dataclasses
 import datetime as dt
+import importlib.util
 import itertools
 import math
 import time
@@ -41,7 +42,15 @@ from jaxspline.readers.mission import (
     Scenario,
     make_targets,
 )
-from jaxspline.search import BatteryModel, BoundStatus, dp_paths, dp_prepare, mip_bound, upper_bound
+from jaxspline.search import (
+    BatteryModel,
+    BoundStatus,
+    dp_forward,
+    dp_paths,
+    dp_prepare,
+    mip_bound,
+    upper_bound,
+)
 
 DATA = Path("/work/shared/data/aeossp_standard/train/case_0001")
 needs_data = pytest.mark.skipif(not DATA.is_dir(), reason="aeossp training data not available")
@@ -524,3 +533,52 @@ def test_energy_priced_bound_covers_the_battery_optimum():
         assert with_energy <= without + 1e-9
         tighter += with_energy < without - 1e-6
     assert tighter >= 2
+
+
+def _lagrangian_value(pb, lam, merge_repeats):
+    """UB(lam) = sum of the satellites' DP values + sum of the prices."""
+    w = np.asarray(pb.target_value)[np.asarray(pb.option_target)] - lam[pb.option_target]
+    _, vals = dp_paths(pb, dp_prepare(pb), w, merge_repeats=merge_repeats)
+    return sum(vals) + lam.sum()
+
+
+@pytest.mark.parametrize(
+    "make, seed",
+    [(_bridge_scenario, s) for s in range(3)] + [(_random_scenario, s) for s in range(8)],
+)
+def test_merged_repeats_bound_covers_the_optimum(make, seed):
+    """The strengthened relaxation (a run of one target's options credited once) at ANY
+    prices in [0, w] >= the best plan with repeats (enumerated; == the HiGHS optimum,
+    see above), and never above the plain relaxation at the same prices; iterated, it
+    stays between the optimum and the plain bound."""
+    pb = build_problem(make(seed)).problem
+    with_rep, _ = _enumerate_plans(pb)
+    rng = np.random.default_rng(seed)
+    tv = np.asarray(pb.target_value)
+    for lam in [np.zeros_like(tv), tv, *(tv * rng.uniform(0, 1, tv.size) for _ in range(20))]:
+        strong = _lagrangian_value(pb, lam, True)
+        assert strong >= with_rep - 1e-9
+        assert strong <= _lagrangian_value(pb, lam, False) + 1e-9
+    kw = dict(plan_value=with_rep, deadline=math.inf, max_iters=300)
+    strong = upper_bound(pb, merge_repeats=True, **kw).bound
+    assert with_rep - 1e-9 <= strong <= upper_bound(pb, merge_repeats=False, **kw).bound + 1e-9
+    if importlib.util.find_spec("scipy") is not None:
+        assert strong >= mip_bound(pb, time_limit=60.0, rel_gap=0.0).value - 1e-6
+
+
+@pytest.mark.parametrize("make, seed", [(_bridge_scenario, 0), (_random_scenario, 1)])
+@pytest.mark.parametrize("merge_repeats", [False, True])
+def test_jax_dp_forward_equals_numpy(make, seed, merge_repeats):
+    """The lax.scan forward pass == the numpy one bit for bit (values, arc costs, paths)."""
+    from jaxspline.search.dp_jax import JaxDP
+
+    pb = build_problem(make(seed)).problem
+    d = dp_prepare(pb)
+    rng = np.random.default_rng(seed)
+    w = np.asarray(pb.target_value)[np.asarray(pb.option_target)] * rng.uniform(0, 1, pb.n_options)
+    arc = rng.uniform(0.0, 0.5, len(pb.pairs))
+    jd = JaxDP(pb, d)
+    for a in (None, arc):
+        ref = dp_forward(pb, d, w, a, merge_repeats)
+        assert np.array_equal(jd.forward(w, a, merge_repeats), ref)
+        assert jd.paths(w, a, None, merge_repeats) == dp_paths(pb, d, w, a, None, merge_repeats)

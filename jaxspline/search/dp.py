@@ -1,0 +1,296 @@
+"""The per-satellite longest-path DP of the bound, every satellite in one pass over start blocks.
+
+Relaxing "each target is imaged at most once" with prices splits the problem into one
+longest-path problem per satellite over its options in start order:
+``best[j] = w_j + max(base_j, far predecessors, near compatible predecessors)`` with
+``base_j = 0`` where j may be its satellite's first observation (else ``-inf``), far
+predecessors (gap >= ``far[sat]``, always compatible) through a running maximum per
+satellite, and near ones through the screened feasible pairs (:class:`NearPairs`).
+
+All satellites advance together: options are cut into blocks of starts at most
+``width`` apart (:func:`dp_prepare`); a block's predecessors all start before it, so
+one block is one vectorized step (:func:`dp_forward`, numpy; :mod:`jaxspline.search.dp_jax`
+holds the same recursion as one ``jax.lax.scan``). The block layout (absorbed options,
+pair ranges, rows with pairs) is computed once per problem, so a step is a handful of
+numpy calls on slices. :func:`backtrack` recovers each satellite's optimal sequence from
+``best``; :func:`dp_paths` is forward + backtrack.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from jaxspline.search.problem import Problem
+
+__all__ = ["DPData", "backtrack", "dp_forward", "dp_paths", "dp_prepare"]
+
+_PATH_TOL = 1e-9  # tolerance of the path back-tracking
+
+
+@dataclass
+class DPData:
+    """Structure of the per-satellite longest-path DP (module docstring).
+
+    Options are processed in start order (``order``, the row order of ``pb.pairs``)
+    in blocks of starts at most ``width`` apart (``groups``: slices of ``order``, so a
+    block's near predecessors are one contiguous range of ``pb.pairs``). With
+    ``width`` <= the shortest observation, a predecessor of any option of a block
+    starts before the block, so a block is one vectorized step; with
+    ``width`` <= ``near_slack``, a far predecessor that only becomes far inside the
+    block (``end + far`` between the block's first start and the option's start) is
+    among the near pairs. ``absorb`` lists options by ``end + far[sat]``, the time
+    from which they are far predecessors of everything.
+
+    Attributes:
+      order: int [N], option ids sorted by start (then satellite).
+      sat: int [N], satellite of each option.
+      start: float [N], start time of each option [s].
+      groups: list of ``(ga, gb)``: block ``order[ga:gb]``.
+      first_ok: bool [N], the option may be its satellite's first observation.
+      absorb: int [N], option ids sorted by ``end + far[sat]``.
+      absorb_t: float [N], those times [s] (sorted across blocks; within the range a
+        block absorbs, ``absorb`` is by satellite).
+      absorb_at: int [B + 1], block b absorbs ``absorb[absorb_at[b]:absorb_at[b + 1]]``
+        into the running maxima before its step.
+      sat_order: int [N], ``sat[order]``.
+      base_order: float [N], ``0`` where ``order[i]`` may be first, else ``-inf``.
+      ready: float [N], ``end + far[sat]`` of each option: from then on it is a far
+        predecessor of every option of its satellite [s].
+      target: int [N], target of each option.
+      repeat_pos, repeat_dst: positions (``pb.pairs`` order, ascending) and destinations
+        of the near pairs joining two options of one target (a repeat);
+        repeat_at: int [B + 1], block b's repeats are ``repeat_pos[repeat_at[b]:repeat_at[b + 1]]``.
+      absorb_sats, absorb_cuts: per block the satellites of its absorbed options and
+        where each satellite's run starts (``absorb`` is by satellite within a block).
+      rows_at: per block the first pair of each row up to its last row with pairs
+        (0-based in the block's pair range); rows_pen: per such row ``-inf`` if it
+        has no pair, else 0.
+    """
+
+    order: np.ndarray
+    sat: np.ndarray
+    start: np.ndarray
+    groups: list
+    first_ok: np.ndarray
+    absorb: np.ndarray
+    absorb_t: np.ndarray
+    absorb_at: np.ndarray | None = None
+    sat_order: np.ndarray | None = None
+    base_order: np.ndarray | None = None
+    ready: np.ndarray | None = None
+    target: np.ndarray | None = None
+    repeat_pos: np.ndarray | None = None
+    repeat_dst: np.ndarray | None = None
+    repeat_at: np.ndarray | None = None
+    absorb_sats: list | None = None
+    absorb_cuts: list | None = None
+    rows_at: list | None = None
+    rows_pen: list | None = None
+
+
+def _block_bounds(so: np.ndarray, width: float) -> list:
+    """Block limits over sorted starts ``so``: each block spans at most ``width`` [s]."""
+    n = so.size
+    bounds = [0]
+    while bounds[-1] < n:
+        b0 = bounds[-1]
+        b1 = int(np.searchsorted(so, so[b0] + width, side="right"))
+        bounds.append(max(b1, int(np.searchsorted(so, so[b0], side="right"))))
+    return bounds
+
+
+def dp_prepare(pb: Problem) -> DPData:
+    """Group the options in start-order blocks for :func:`dp_forward` (computed once).
+
+    Args:
+      pb: Problem.
+    Returns:
+      DPData.
+    """
+    n = pb.n_options
+    s = np.asarray(pb.option_start, np.float64)
+    e = np.asarray(pb.option_end, np.float64)
+    sat = np.asarray(pb.option_sat, np.int64)
+    far = np.asarray(pb.far, np.float64)
+    order = pb.pairs.rows  # start order (Problem keeps the pair rows so)
+    so = s[order]
+    width = min(float(np.min(e - s)), pb.near_slack) if n else 0.0
+    bounds = _block_bounds(so, width)
+    groups = list(zip(bounds[:-1], bounds[1:], strict=True))
+    rt = e + far[sat] if n else np.zeros(0)
+    ab = np.argsort(rt, kind="stable")
+    first_ok = np.asarray(pb.option_first, np.float64) <= s
+    absorb_t = rt[ab]
+    # block b absorbs every option far (end + far <= its first start) by then
+    absorb_at = np.r_[0, np.searchsorted(absorb_t, so[bounds[:-1]], side="right")]
+    absorb_at = np.maximum.accumulate(absorb_at).astype(np.int64)
+    # within each block's absorbed range, options by satellite (one reduceat a block)
+    blk = np.repeat(np.arange(len(groups)), np.diff(absorb_at))
+    ab[: absorb_at[-1]] = ab[: absorb_at[-1]][np.lexsort((sat[ab[: absorb_at[-1]]], blk))]
+    absorb_t = rt[ab]
+    absorb_sats, absorb_cuts, rows_at, rows_pen, rep = [], [], [], [], []
+    ptr, src = pb.pairs.ptr, pb.pairs.src
+    tg = np.asarray(pb.option_target, np.int64)
+    for b, (ga, gb) in enumerate(groups):
+        ks = sat[ab[absorb_at[b] : absorb_at[b + 1]]]
+        cut = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]]) if ks.size else ks
+        absorb_sats.append(ks[cut])
+        absorb_cuts.append(cut)
+        cnt = np.diff(ptr[ga : gb + 1])
+        m = int(np.flatnonzero(cnt)[-1]) + 1 if cnt.any() else 0  # rows to the last with pairs
+        rows_at.append(ptr[ga : ga + m] - ptr[ga])
+        rows_pen.append(np.where(cnt[:m] == 0, -np.inf, 0.0))
+        dst = np.repeat(order[ga:gb], cnt)  # one block's pairs at a time (memory)
+        rep.append(np.flatnonzero(tg[src[ptr[ga] : ptr[gb]]] == tg[dst]) + ptr[ga])
+    repeat_pos = np.concatenate(rep) if rep else np.zeros(0, np.int64)
+    repeat_at = np.r_[0, np.cumsum([r.size for r in rep])].astype(np.int64)
+    return DPData(
+        order=order,
+        sat=sat,
+        start=s,
+        groups=groups,
+        first_ok=first_ok,
+        absorb=ab,
+        absorb_t=absorb_t,
+        absorb_at=absorb_at,
+        sat_order=sat[order],
+        base_order=np.where(first_ok, 0.0, -np.inf)[order],
+        ready=rt,
+        target=tg,
+        repeat_pos=repeat_pos,
+        repeat_dst=pb.pairs.rows[np.searchsorted(ptr, repeat_pos, side="right") - 1],
+        repeat_at=repeat_at,
+        absorb_sats=absorb_sats,
+        absorb_cuts=absorb_cuts,
+        rows_at=rows_at,
+        rows_pen=rows_pen,
+    )
+
+
+def dp_forward(
+    pb: Problem, d: DPData, w: np.ndarray, arc=None, merge_repeats: bool = False
+) -> np.ndarray:
+    """The DP values ``best`` (float [N]) of every option for option values ``w``.
+
+    Args:
+      pb: Problem.
+      d: its :func:`dp_prepare`.
+      w: float [N], option values.
+      arc: optional float [P], the cost of each near pair (``pb.pairs`` order).
+      merge_repeats: an option reached from an option of its own target through a near
+        pair adds nothing (its value ``w`` is that pair's cost): consecutive repeats of
+        a target count once (see :mod:`jaxspline.search.lagrangian`).
+    Returns:
+      float [N]: the best value of a sequence ending with each option (``-inf``: none).
+    """
+    n_s = pb.n_sats
+    src, ptr = pb.pairs.src, pb.pairs.ptr
+    best = np.full(len(w), -np.inf)
+    run = np.full(n_s, -np.inf)
+    order, sat_o, base_o = d.order, d.sat_order, d.base_order
+    absorb, absorb_at = d.absorb, d.absorb_at
+    for b, (ga, gb) in enumerate(d.groups):
+        aa, az = absorb_at[b], absorb_at[b + 1]
+        if az > aa:  # options far from here on: into their satellites' running maxima
+            u = d.absorb_sats[b]
+            red = np.maximum.reduceat(best[absorb[aa:az]], d.absorb_cuts[b])
+            run[u] = np.maximum(run[u], red)
+        v = np.maximum(base_o[ga:gb], run[sat_o[ga:gb]])
+        pa, pz = ptr[ga], ptr[gb]
+        if pz > pa:
+            pv = best[src[pa:pz]]
+            if arc is not None:
+                pv -= arc[pa:pz]
+            ra, rz = d.repeat_at[b], d.repeat_at[b + 1]
+            if merge_repeats and rz > ra:
+                pv[d.repeat_pos[ra:rz] - pa] -= w[d.repeat_dst[ra:rz]]
+            near = np.maximum.reduceat(pv, d.rows_at[b])
+            near += d.rows_pen[b]  # rows without pairs: -inf
+            vm = v[: near.size]
+            np.maximum(vm, near, out=vm)
+        J = order[ga:gb]
+        v += w[J]
+        best[J] = v
+    return best
+
+
+def _far_predecessor(pb: Problem, d: DPData, best, j: int, rest) -> int:
+    """Lowest-id far predecessor of option j providing ``rest`` (-1: none)."""
+    lo = pb.sat_lo[d.sat[j]]
+    fp = lo + np.flatnonzero(d.ready[lo:j] <= d.start[j])  # ids below j start earlier
+    hit = fp[best[fp] >= rest - _PATH_TOL]
+    return int(hit[0]) if hit.size else -1
+
+
+def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeats=False):
+    """Each satellite's optimal sequence from the DP values ``best`` of :func:`dp_forward`.
+
+    Walks back from each satellite's best option: the first near predecessor (lowest
+    id) that provides the value, else the first far one, until a first observation.
+
+    Args:
+      w, arc, merge_repeats: as :func:`dp_forward`; best: its result.
+      used: optional list; the near-pair positions of the paths are appended to it.
+    Returns:
+      ``(paths, values)``: per satellite the option ids of an optimal sequence (time
+      order) and its value (0 for the empty sequence).
+    """
+    src, ptr, row_of = pb.pairs.src, pb.pairs.ptr, pb.pairs.row_of
+    paths, values = [], []
+    for k in range(pb.n_sats):
+        lo, hi = pb.sat_lo[k], pb.sat_hi[k]
+        if hi <= lo or not best[lo:hi].max() > 0.0:
+            paths.append([])
+            values.append(0.0)
+            continue
+        j = lo + int(np.argmax(best[lo:hi]))
+        values.append(float(best[j]))
+        path = [j]
+        while True:
+            rest = best[j] - w[j]  # the value the predecessor (or the start) provides
+            if d.first_ok[j] and rest <= _PATH_TOL:
+                break
+            r = row_of[j]
+            q0, q1 = int(ptr[r]), int(ptr[r + 1])
+            q = -1
+            if q1 > q0:
+                cv = best[src[q0:q1]]
+                if arc is not None:
+                    cv -= arc[q0:q1]
+                if merge_repeats:
+                    cv[d.target[src[q0:q1]] == d.target[j]] -= w[j]
+                ok = cv >= rest - _PATH_TOL
+                q = int(ok.argmax())
+                q = q if ok[q] else -1
+            if q >= 0:
+                if used is not None:
+                    used.append(q0 + q)
+                j = int(src[q0 + q])
+            else:
+                j = _far_predecessor(pb, d, best, j, rest)
+                if j < 0:  # cannot happen; stop defensively
+                    break
+            path.append(j)
+        paths.append(path[::-1])
+    return paths, values
+
+
+def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None, merge_repeats=False):
+    """Exact per-satellite maximum-value sequences for option values ``w``.
+
+    Args:
+      pb: Problem.
+      d: its :func:`dp_prepare`.
+      w: float [N], option values.
+      arc: optional cost of each near pair, in ``pb.pairs`` order (far transitions and
+        first observations cost nothing).
+      used: optional list; the near-pair positions (``pb.pairs`` order) of the
+        returned paths are appended to it.
+      merge_repeats: as :func:`dp_forward`.
+    Returns ``(paths, values)``: per satellite the option ids of an optimal sequence
+    (time order) and its value (0 for the empty sequence). Battery not modelled.
+    """
+    best = dp_forward(pb, d, w, arc, merge_repeats)
+    return backtrack(pb, d, w, best, arc, used, merge_repeats)
