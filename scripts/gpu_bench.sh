@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Accelerator bench, one prepared run (< 8 min wall): the bound's DP (numpy vs JAX on the
+# Accelerator bench, one prepared run (< 6 min wall): the bound's DP (numpy vs JAX on the
 # default device) and the screening engine, results into $OUT (default bench/results/gpu).
 #
 #   OUT=/some/dir bash scripts/gpu_bench.sh          # from the repository root
@@ -20,11 +20,11 @@ export PYTHONPATH="$PWD${PYTHONPATH:+:$PYTHONPATH}"
 } > "$OUT/devices.txt" 2>&1
 cat "$OUT/devices.txt"
 # 1. the bound's DP: 12x12h preset cut to 0.5 h and 3 h (problem build + rates + bounds)
-timeout 210 python -m bench --section bound --bound-hours 0.5,3 --bound-seconds 3 \
+timeout 150 python -m bench --section bound --bound-hours 0.5,3 --bound-seconds 3 \
   --out "$OUT" 2>&1 | tee "$OUT/bound.log"
 echo "bound section exit ${PIPESTATUS[0]}"
 # 2. the screening engine, two sizes (speed, memory, streaming)
-timeout 240 python -m bench --section screening --routes 1000 --routes 2000 --reps 3 \
+timeout 180 python -m bench --section screening --routes 1000 --routes 2000 --reps 3 \
   --out "$OUT" 2>&1 | tee "$OUT/screening.log"
 echo "screening section exit ${PIPESTATUS[0]}"
 ls -la "$OUT"
