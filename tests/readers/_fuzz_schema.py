@@ -61,7 +61,7 @@ BASE = {
     "areas": [
         {"name": "ring", "lonlat_deg": [[14.0, 45.9], [14.3, 45.9], [14.3, 46.1], [14.0, 46.1]],
          "priority": 10.0, "swath_km": 12.0, "max_length_km": 30.0, "sensor": "",
-         "window_s": [0.0, DURATION_S]},
+         "window_s": [0.0, DURATION_S], "grid_km": 4.0},
         {"name": "file", "geojson": "a.geojson", "priority": 4.0},
     ],
     "planner": {"time_step_s": 10.0, "geometry_step_s": 5.0, "scan_speeds_km_s": [5.0, 7.0],

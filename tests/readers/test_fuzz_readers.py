@@ -79,8 +79,15 @@ _WRITE_EVENTS = frozenset(
 _HOOKED = False
 
 
+#: The test run's XLA cache (tests/conftest.py): JAX's own files, not a reader's.
+_XLA_CACHE = os.environ.get("JAXSPLINE_CACHE_DIR", "")
+_XLA_CACHE = _XLA_CACHE if os.path.isabs(_XLA_CACHE) else None
+
+
 def _audit(event, args):
     if _WRITES is None:
+        return
+    if _XLA_CACHE and any(str(a).startswith(_XLA_CACHE) for a in args[:2]):
         return
     if event == "open":
         path, mode, flags = (tuple(args) + (None, None))[:3]
