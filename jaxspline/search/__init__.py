@@ -27,6 +27,7 @@ from jaxspline.search.dp import backtrack as backtrack
 from jaxspline.search.dp import dp_forward as dp_forward
 from jaxspline.search.dp import dp_paths as dp_paths
 from jaxspline.search.dp import dp_prepare as dp_prepare
+from jaxspline.search.dp_jax import JaxDP as JaxDP
 from jaxspline.search.exact import exact_search as exact_search
 from jaxspline.search.lagrangian import BoundResult as BoundResult
 from jaxspline.search.lagrangian import lagrangian as lagrangian

@@ -231,8 +231,12 @@ def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeat
     id) that provides the value, else the first far one, until a first observation.
 
     Args:
-      w, arc, merge_repeats: as :func:`dp_forward`; best: its result.
+      pb: the problem; d: its :class:`DPData`.
+      w: option values, as :func:`dp_forward`.
+      best: the result of :func:`dp_forward`.
+      arc: optional per-pair costs, as :func:`dp_forward`.
       used: optional list; the near-pair positions of the paths are appended to it.
+      merge_repeats: as :func:`dp_forward`.
     Returns:
       ``(paths, values)``: per satellite the option ids of an optimal sequence (time
       order) and its value (0 for the empty sequence).

@@ -70,7 +70,8 @@ def _start_until(env, out, marker: bytes, *extra):
 def _plan_json(out):
     data = json.loads((out / "plan.json").read_text())
     data.pop("timings_s")
-    data["stats"].pop("peak_rss_mb")  # measurements, not the plan
+    for measured in ("peak_rss_mb", "worker_dp_per_s"):  # measurements, not the plan
+        data["stats"].pop(measured, None)
     return data
 
 
