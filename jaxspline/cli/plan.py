@@ -240,30 +240,41 @@ def run_plan(
     limit = sc.planner.default_time_limit if time_limit is None else time_limit
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
     names += (HTML_FILE,) * html + ((ATTITUDE_FIGURE,) * plots + aems if aem else ())
+    deadline = _deadline(sc, limit, t_start, plots=plots, html=html, aem=aem, aem_step=aem_step)
     with outputs:  # locked, staged and probed: planning starts only now
-        result = _plan(sc, limit, t_start, seed, max_iters, certify, progress, aem)
-        page, t_write = _write(result, outputs, plots, aem, aem_step, html)
+        result = _plan(sc, deadline, seed, max_iters, certify, progress, aem)
+        page, t_write = _write(result, outputs, plots, aem, aem_step, html, deadline)
+    names = tuple(n for n in names if (Path(outdir) / n).exists())
     _print_summary(result, Path(outdir), names, page)
     _say_late(result, limit, time.monotonic() - t_start, t_write)
     return result
 
 
-def _plan(sc, limit, t_start, seed, max_iters, certify, progress, aem):
-    """:func:`jaxspline.plan` with what is left of ``limit`` after loading the scenario,
-    its stages before the search bound by the limit from ``t_start`` on."""
+def _deadline(sc, limit, t_start, **asked):
+    """The run's :class:`jaxspline.planner.deadline.StageDeadline` from ``t_start`` on,
+    with the estimated time of the asked outputs (``asked``: plots, html, aem, aem_step)
+    kept out of the search."""
     from jaxspline.planner.deadline import StageDeadline
-    from jaxspline.planner.pipeline import plan
+    from jaxspline.products.output_budget import output_seconds
 
     size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
-    deadline = StageDeadline(t_start, limit, size)
+    after = sum(output_seconds(sc, **asked).values())
+    return StageDeadline(t_start, limit, size, after_s=after)
+
+
+def _plan(sc, deadline, seed, max_iters, certify, progress, aem):
+    """:func:`jaxspline.plan` with what is left of the limit after loading the scenario,
+    every stage bound by ``deadline``."""
+    from jaxspline.planner.pipeline import plan
+
     deadline.check("loading", 1.0)
-    left = max(limit - (time.monotonic() - t_start), 1e-3)  # the search's share (may be none)
+    left = max(deadline.end - time.monotonic(), 1e-3)  # the search's share (may be none)
     # with --aem the flown joins are checked: the AEM files never exceed a limit
     return plan(sc, time_limit=left, seed=seed, progress=progress, max_iters=max_iters,
                 certify=certify, flown_joins=aem, deadline=deadline)  # fmt: skip
 
 
-def _write(result, outputs, plots, aem, aem_step, html):
+def _write(result, outputs, plots, aem, aem_step, html, deadline):
     """Write the set into the staging folder and publish it, signals held until it is
     whole; a signal during writing is recorded in plan.json. Returns (page, seconds)."""
     from jaxspline.products.outputs import rewrite_plan_json, write_plan_outputs
@@ -276,7 +287,7 @@ def _write(result, outputs, plots, aem, aem_step, html):
     with catch_signals(late):  # signals wait: the set is written whole
         before = result.report.get("interrupted")
         page = write_plan_outputs(result, outputs.staging, plots=plots, aem=aem,
-                                  aem_step=aem_step, html=html)  # fmt: skip
+                                  aem_step=aem_step, html=html, deadline=deadline)  # fmt: skip
         if result.report.get("interrupted") != before:
             rewrite_plan_json(result, outputs.staging)
         before = result.report.get("interrupted")
@@ -293,7 +304,12 @@ def _write(result, outputs, plots, aem, aem_step, html):
 
 
 def _say_late(result, limit: float, elapsed: float, t_write: float) -> None:
-    """A line on stderr when the run ended past its time limit (never silently)."""
+    """Lines on stderr naming what the time limit left out, and when the run ended past
+    it (never silently)."""
+    skipped = result.report.get("time_limit", {}).get("skipped", [])
+    if skipped:
+        left_out = "; ".join(f"{s['what']} ({s['remedy']})" for s in skipped)
+        print(f"jaxspline: note: left out for the time limit: {left_out}", file=sys.stderr)
     if elapsed <= limit:
         return
     after = {k: v for k, v in result.timings.items() if k in _AFTER_SEARCH}

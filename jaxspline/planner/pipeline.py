@@ -35,7 +35,6 @@ import os
 import resource
 import sys
 import time
-from typing import NamedTuple
 
 import jax
 import numpy as np
@@ -43,6 +42,7 @@ import numpy as np
 from jaxspline.geometry.frames import in_shadow, jd_split, sun_direction
 from jaxspline.geometry.windows import visibility_windows_all
 from jaxspline.planner.assemble import assemble_result
+from jaxspline.planner.budget import Budget, deadline_budget, default_budget, refine_steps
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.deadline import StageDeadline
 from jaxspline.planner.join_screen import (
@@ -63,11 +63,6 @@ from jaxspline.search.store import PairsBuilder, start_order
 
 __all__ = ["build_problem", "plan"]
 
-_RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
-_RESERVE_MIN = 1.0  # [s]
-_REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
-_REFINE_MAX_S = 10.0  # [s] ... at most (warm: ~1-3 s a round; a cold compile 6-12 s)
-_REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
@@ -474,9 +469,13 @@ def _plan(
     then search and repair under the signal guard, the optional HiGHS certificate, and
     the result."""
     clock = _Clock(sc.name, progress)
-    budget = _budget(sc, limit, clock.t0)
+    budget = default_budget(sc, limit, clock.t0)
     ctx = build_problem(sc, joins=flown_joins, deadline=deadline, _clock=clock)
+    if deadline is not None:
+        budget = deadline_budget(ctx, deadline, flown_joins=flown_joins, refill_s=_REFILL_S)
     res, rep, interrupted = _search_and_repair(ctx, budget, seed, max_iters, flown_joins, clock)
+    for what in rep.skipped if deadline is not None else ():
+        deadline.skip("repair", what, "give a longer --time-limit (or planner.time_limit_s)")
     clock.lap(
         "repair",
         f"{len(rep.chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
@@ -486,7 +485,7 @@ def _plan(
     if certify > 0:
         mip = mip_bound(ctx.problem, certify)
         clock.lap("certify", f"HiGHS bound {mip.bound:.6g} ({mip.status})")
-    return assemble_result(
+    result = assemble_result(
         ctx,
         res,
         rep,
@@ -496,33 +495,15 @@ def _plan(
         timings=clock.timings,
         peak_rss_mb=clock.peak_rss_mb,
     )
+    if deadline is not None:  # the caller adds what its outputs leave out
+        result.report["time_limit"] = deadline.record()
+    return result
 
 
-class _Budget(NamedTuple):
-    """The clock of one :func:`plan` call: its ``deadline`` (``time.monotonic`` [s]), the
-    ``reserve`` [s] the search leaves before it (final check and output, and start-time
-    refinement when ``refining``: the scenario has refine steps and a per-channel
-    satellite)."""
-
-    deadline: float
-    reserve: float
-    refining: bool
-
-
-def _budget(sc: Scenario, limit: float, t0: float) -> _Budget:
-    """The budget of a call started at ``t0`` (monotonic [s]) with ``limit`` seconds: a
-    share of the limit (at least ``_RESERVE_MIN``) kept for the check and output, plus
-    one for start-time refinement (at most ``_REFINE_MAX_S``) when it runs."""
-    pc = sc.planner
-    refining = pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sc.satellites)
-    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
-    reserve += refining * min(_REFINE_SHARE * limit, _REFINE_MAX_S)
-    return _Budget(t0 + limit, reserve, refining)
-
-
-def _search_and_repair(ctx: PlanContext, budget: _Budget, seed, max_iters, flown_joins, clock):
+def _search_and_repair(ctx: PlanContext, budget: Budget, seed, max_iters, flown_joins, clock):
     """Stages 5-6 under the signal guard: the first Ctrl-C or SIGTERM stops the search
-    and the best plan so far goes through the repair. Returns (search result,
+    and the best plan so far goes through the repair, whose optional steps end by
+    ``budget.repair_end`` in time-bound runs. Returns (search result,
     :class:`jaxspline.planner.repair.Repaired`, the signal's name or None)."""
     pc = ctx.scenario.planner
     search_clock.clear_stop()
@@ -536,29 +517,23 @@ def _search_and_repair(ctx: PlanContext, budget: _Budget, seed, max_iters, flown
         )
 
     with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
-        res = _search(ctx.problem, budget.deadline - budget.reserve, seed, max_iters, pc, clock)
+        res = _search(ctx.problem, budget.search_end, seed, max_iters, pc, clock)
         tl = res.timeline
         clock.lap("search", f"value {tl.value:.6g}, bound {res.bound:.6g} ({res.bound_status})")
+        steps = refine_steps(pc, budget, max_iters, clock.say)
+        capped = max_iters is not None
         rep = repair(
             ctx,
             [c for c in tl.assigned if c >= 0],
-            refine_steps=_refine_steps(pc, budget, max_iters, clock),
+            refine_steps=steps,
             flown_joins=flown_joins,
-            refill_s=math.inf if max_iters is not None else _REFILL_S,
-            refill_iters=_REFILL_ITERS if max_iters is not None else None,
+            refill_s=math.inf if capped else _REFILL_S,
+            refill_iters=_REFILL_ITERS if capped else None,
             seed=seed,
             report=clock.say,
+            deadline=None if capped else budget.repair_end,
         )
+        if budget.refining and not steps:
+            rep = rep._replace(skipped=("start-time refinement", *rep.skipped))
     search_clock.clear_stop()
     return res, rep, stop["signal"]
-
-
-def _refine_steps(pc, budget: _Budget, max_iters, clock) -> int:
-    """The start-time refinement steps of the repair: the scenario's when refining, none
-    when a time-limited run has less than ``_REFINE_MIN_S`` left (said on the clock)."""
-    steps = int(pc.refine_steps) if budget.refining else 0
-    left = budget.deadline - time.monotonic()
-    if steps and max_iters is None and left < _REFINE_MIN_S:
-        steps = 0
-        clock.say("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
-    return steps
