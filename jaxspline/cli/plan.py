@@ -26,13 +26,16 @@ files are written into a staging directory beside it and moved into place at onc
 a failure leaves the previous set or none. An earlier set is replaced only with
 ``--force``. Every flag is checked before any work (:mod:`jaxspline.cli.flags`).
 
-Time limit: ``--time-limit`` (default: the scenario's ``planner.time_limit_s``) counts
-from the start of the command: loading the scenario, the stages before the search
-(which stop the run with exit 3, an estimate and the remedy when it runs out there;
-up to 20 s of compiling are not counted: :mod:`jaxspline.planner.deadline`), the
-search (which ends at the limit less a reserve for the check and the outputs). The
-repair, the flown-join check (its first compilation), the attitude history and the
-files follow the search; a run that ends past its limit says so on stderr.
+Time limit: ``--time-limit`` (default: the scenario's ``planner.time_limit_s``) bounds
+the whole command, from the start of its process: the stages before the search stop
+the run with exit 3, an estimate and the remedy when it runs out there (up to 20 s of
+compiling are not counted: :mod:`jaxspline.planner.deadline`); the search ends at the
+limit less a reserve estimated for the repair and the asked outputs
+(:mod:`jaxspline.planner.budget`, :mod:`jaxspline.products.output_budget`); past the
+limit the repair leaves out its refills and refinements (never a check) and the
+outputs the optional files that no longer fit (``plan.json`` and ``plan.csv`` are
+always written). What was left out is said on stderr and recorded in ``plan.json``
+(``report.time_limit``); a run that ends past its limit says so on stderr.
 """
 
 from __future__ import annotations
@@ -144,6 +147,7 @@ def _main(args) -> int:
         progress=not args.quiet,
         aem=args.aem,
         aem_step=args.aem_step,
+        t_start=getattr(args, "started", None),
     )
     if result.report.get("interrupted"):
         return EXIT_INTERRUPTED
@@ -200,6 +204,7 @@ def run_plan(
     progress: bool = True,
     aem: bool = True,
     aem_step: float = AEM_STEP_S,
+    t_start: float | None = None,
 ):
     """Load ``scenario``, plan it, write the outputs as one set (module docstring).
 
@@ -219,6 +224,8 @@ def run_plan(
       progress: show progress bars.
       aem: write one CCSDS AEM per satellite (and check the flown joins).
       aem_step: sampling step of the AEM files [s].
+      t_start: when the time limit starts [s, ``time.monotonic``] (the command passes
+        its process's start); None: now.
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
@@ -231,7 +238,7 @@ def run_plan(
     from jaxspline.products.outputs import OutputSet
     from jaxspline.readers.scenario import scenario_from
 
-    t_start = time.monotonic()
+    t_start = time.monotonic() if t_start is None else t_start
     _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step)
     outputs = OutputSet(outdir, force=force)
     outputs.check()  # fail before loading, nothing written
@@ -274,7 +281,7 @@ def _plan(sc, deadline, seed, max_iters, certify, progress, aem):
                 certify=certify, flown_joins=aem, deadline=deadline)  # fmt: skip
 
 
-def _write(result, outputs, plots, aem, aem_step, html, deadline):
+def _write(result, outputs, plots, aem, aem_step, html, deadline=None):
     """Write the set into the staging folder and publish it, signals held until it is
     whole; a signal during writing is recorded in plan.json. Returns (page, seconds)."""
     from jaxspline.products.outputs import rewrite_plan_json, write_plan_outputs

@@ -181,5 +181,5 @@ def refine_steps(pc, budget: Budget, max_iters, say) -> int:
     left = budget.repair_end - time.monotonic()
     if steps and max_iters is None and left < REFINE_MIN_S:
         steps = 0
-        say("refine", f"skipped: {left:.1f} s left < {REFINE_MIN_S:.0f} s")
+        say("refine", f"skipped: {max(left, 0.0):.1f} s left < {REFINE_MIN_S:.0f} s")
     return steps

@@ -23,7 +23,9 @@ through the repair and is returned with ``report["interrupted"]`` set. Given a
 ``deadline`` (``jaxspline plan`` passes one), stages 1-4 check it
 (:mod:`jaxspline.planner.deadline`): when it passes there, the call stops with
 :class:`jaxspline.planner.deadline.TimeLimitError` (what was done, an estimate of the
-time needed, the remedy) instead of searching past it.
+time needed, the remedy) instead of searching past it; the search then leaves a
+reserve for stage 6 and the caller's outputs, and stage 6 leaves out its optional
+steps past the limit (:mod:`jaxspline.planner.budget`).
 """
 
 from __future__ import annotations
@@ -158,12 +160,15 @@ def plan(
         so the plan is flyable as :func:`jaxspline.products.attitude_history.attitude_history`
         exports it; off by default: the satellites' maneuver models alone decide (as the
         aeossp rules). The transitions are then also screened with the joins
-        (:mod:`jaxspline.planner.join_screen`). The check's time (first call:
-        compilation of the join kernels) is not part of ``time_limit``.
+        (:mod:`jaxspline.planner.join_screen`).
       deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` (``jaxspline
         plan`` passes one): the stages before the search check it and stop with
-        :class:`jaxspline.planner.deadline.TimeLimitError` once it has passed. Without
-        it (the default) only the search is bound by ``time_limit``.
+        :class:`jaxspline.planner.deadline.TimeLimitError` once it has passed; the
+        search leaves a reserve estimated for the repair and the caller's outputs
+        (:func:`jaxspline.planner.budget.deadline_budget`); the result's
+        ``report["time_limit"]`` records the split and what was left out. Without it
+        (the default) the search leaves a fixed share of ``time_limit``
+        (:func:`jaxspline.planner.budget.default_budget`).
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
@@ -313,16 +318,17 @@ def build_problem(
         opp = build_opportunities(sc, scene, table.usable, windows, tick=check("options", 0))
         clock.lap("options", f"{len(opp)} options")
         tick = check("screening", 0, f"{len(opp)} options")
+        beat = tick or _no_tick  # between the steps before the near pairs (each may be long)
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
+        beat(0.0)
         omega = nadir_rate(scene)
-        far, first = _far_and_first(sats, opp, tables, omega)
+        far, first = _far_and_first(sats, opp, tables, omega, beat)
         slack = _near_slack(opp, reduce_slack)
         lookup = join_filter = None
         if joins and len(opp):
-            far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega)
+            far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega, beat)
             lookup = np.ones(len(sats), bool)
-        if tick is not None:
-            tick(0.0)  # the far gaps and the join screens may take a while
+        beat(0.0)
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )
@@ -373,10 +379,15 @@ def _windows(sc: Scenario, scene, table, tick=None):
     )
 
 
-def _far_and_first(sats, opp, tables, omega):
+def _no_tick(share: float) -> None:
+    """The stage clock of a call without a deadline: nothing to check."""
+
+
+def _far_and_first(sats, opp, tables, omega, tick=_no_tick):
     """Per satellite, through its maneuver model and screening table: the always-feasible
     gap ``far`` [S] [s] (``omega`` [S]: nadir turn rates [rad/s]) and, per option, the
-    time ``first`` [N] [s] a first observation needs from rest (inf: never first)."""
+    time ``first`` [N] [s] a first observation needs from rest (inf: never first);
+    ``tick(0)`` after each satellite."""
     o = opp.options
     far = np.zeros(len(sats))
     first = np.full(len(opp), np.inf)
@@ -384,6 +395,7 @@ def _far_and_first(sats, opp, tables, omega):
         ids = np.flatnonzero(o.sat == k)
         far[k] = s.maneuver.far_gap(s, o, ids, float(omega[k]), tables[k])
         first[ids] = s.maneuver.first_requirements(s, o, ids, tables[k])
+        tick(0.0)
     return far, first
 
 
@@ -397,14 +409,16 @@ def _near_slack(opp, reduce_slack) -> float:
     return slack if math.isfinite(slack) else 0.0
 
 
-def _join_screens(sats, scene, opp, far, first, omega):
+def _join_screens(sats, scene, opp, far, first, omega, tick=_no_tick):
     """The flown-join screens (:mod:`jaxspline.planner.join_screen`): the far gaps
     widened to the joins' (``far`` [S] [s], ``omega`` [S] nadir turn rates), the first
     requirements ``first`` [N] with options whose join from nadir fails set to inf, and
-    the pair filter ``(src, dst) -> bool`` of the near-pair screen. Returns
-    ``(far, first, join_filter)``."""
+    the pair filter ``(src, dst) -> bool`` of the near-pair screen (``tick(0)`` between
+    the steps). Returns ``(far, first, join_filter)``."""
     states = channel_states(scene, sats, opp)
+    tick(0.0)
     far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
+    tick(0.0)
     first = first.copy()
     first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
     return far, first, functools.partial(screen_joins, sats, opp, states)
