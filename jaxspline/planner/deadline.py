@@ -192,15 +192,16 @@ class StageDeadline:
         end = self.end if end is None else end
         return time.monotonic() + seconds * self.pace() <= end
 
-    def skip(self, stage: str, what: str, remedy: str) -> None:
+    def skip(self, stage: str, what: str, remedy: str, at: float | None = None) -> None:
         """Record that ``what`` was left out of ``stage`` because of the limit.
 
         Args:
           stage: ``"repair"`` or ``"outputs"``.
           what: what was left out (``"plan.czml"``, ``"refill"``).
           remedy: how to get it (``"give a longer --time-limit"``).
+          at: when it was left out [s, monotonic] (default: now).
         """
-        at = round(time.monotonic() - self.t0, 2)
+        at = round((time.monotonic() if at is None else at) - self.t0, 2)
         self.skipped.append({"stage": stage, "what": what, "at_s": at, "remedy": remedy})
 
     def record(self) -> dict:

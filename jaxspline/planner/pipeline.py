@@ -488,8 +488,8 @@ def _plan(
     if deadline is not None:
         budget = deadline_budget(ctx, deadline, flown_joins=flown_joins, refill_s=_REFILL_S)
     res, rep, interrupted = _search_and_repair(ctx, budget, seed, max_iters, flown_joins, clock)
-    for what in rep.skipped if deadline is not None else ():
-        deadline.skip("repair", what, "give a longer --time-limit (or planner.time_limit_s)")
+    for what, at in rep.skipped if deadline is not None else ():
+        deadline.skip("repair", what, "give a longer --time-limit (or planner.time_limit_s)", at)
     clock.lap(
         "repair",
         f"{len(rep.chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
@@ -534,7 +534,7 @@ def _search_and_repair(ctx: PlanContext, budget: Budget, seed, max_iters, flown_
         res = _search(ctx.problem, budget.search_end, seed, max_iters, pc, clock)
         tl = res.timeline
         clock.lap("search", f"value {tl.value:.6g}, bound {res.bound:.6g} ({res.bound_status})")
-        steps = refine_steps(pc, budget, max_iters, clock.say)
+        steps, t_steps = refine_steps(pc, budget, max_iters, clock.say), time.monotonic()
         capped = max_iters is not None
         rep = repair(
             ctx,
@@ -548,6 +548,7 @@ def _search_and_repair(ctx: PlanContext, budget: Budget, seed, max_iters, flown_
             deadline=None if capped else budget.repair_end,
         )
         if budget.refining and not steps:
-            rep = rep._replace(skipped=("start-time refinement", *rep.skipped))
+            first = ("start-time refinement", t_steps)
+            rep = rep._replace(skipped=(first, *rep.skipped))
     search_clock.clear_stop()
     return res, rep, stop["signal"]

@@ -78,8 +78,9 @@ class Repaired(NamedTuple):
       withdrawn: bool [N], the options withdrawn from the search for good (their joins
         failed); a later re-search of the problem passes it to
         :class:`jaxspline.search.Timeline`.
-      skipped: the optional steps left out because the deadline had passed
-        (``"refill"``, ``"start-time refinement after a refill"``).
+      skipped: ``(step, when [s, time.monotonic])`` of each optional step left out
+        because the deadline had passed (``"refill"``, ``"start-time refinement after
+        a refill"``).
     """
 
     chosen: list
@@ -254,5 +255,5 @@ def repair(
 
 def _skip(skipped: list, say, what: str) -> None:
     """Record (and say) that ``what`` was left out: the deadline has passed."""
-    skipped.append(what)
+    skipped.append((what, time.monotonic()))
     say("repair", f"{what} left out: the time limit has passed")
