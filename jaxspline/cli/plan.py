@@ -265,8 +265,10 @@ def _deadline(sc, limit, t_start, **asked):
     from jaxspline.products.output_budget import output_seconds
 
     size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
-    after = sum(output_seconds(sc, **asked).values())
-    return StageDeadline(t_start, limit, size, after_s=after)
+    cost = output_seconds(sc, **asked)
+    return StageDeadline(
+        t_start, limit, size, after_s=sum(cost.values()), must_s=cost["plan files"]
+    )
 
 
 def _plan(sc, deadline, seed, max_iters, certify, progress, aem):

@@ -19,6 +19,13 @@ the only stage that can stop at any time, so it gets what the others leave:
   does not fit (the repair its refinement and refills, the outputs their optional
   files), they never leave out a check.
 
+One more check before the search starts: when the stages before it have used the
+limit up (their compile allowance lets them run past it), the checks the repair can
+never leave out (:func:`mandatory_seconds`, at the pace) would end the run more than
+:data:`LATE_MAX_S` past the limit; a time-bound call then stops with
+:class:`jaxspline.planner.deadline.TimeLimitError` (exit 3 of ``jaxspline plan``, with
+the estimate and the remedy) rather than plan that late.
+
 The repair's optional steps (refinement, refills) end by :attr:`Budget.repair_end`,
 the limit less the outputs' share; ``None`` there (iteration-capped runs) lets them
 run whatever the clock says, so such runs stay reproducible.
@@ -32,12 +39,13 @@ from typing import NamedTuple
 import numpy as np
 
 from jaxspline.planner.context import PlanContext
-from jaxspline.planner.deadline import StageDeadline
+from jaxspline.planner.deadline import StageDeadline, TimeLimitError, suggested_limit
 
 __all__ = [
     "CHECK_S_PER_TARGET",
     "JOINS_FIRST_S",
     "JOINS_S_PER_TARGET",
+    "LATE_MAX_S",
     "REFINE_FIRST_S",
     "REFINE_MAX_S",
     "REFINE_MIN_S",
@@ -50,6 +58,7 @@ __all__ = [
     "Budget",
     "deadline_budget",
     "default_budget",
+    "mandatory_seconds",
     "refine_steps",
     "repair_seconds",
 ]
@@ -60,6 +69,7 @@ REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (i
 REFINE_MAX_S = 10.0  # [s] ... at most (warm: ~1-3 s a round; a cold compile 6-12 s)
 REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
 SEARCH_MIN_SHARE = 0.25  # share of the time left at its start the search always gets
+LATE_MAX_S = 20.0  # [s] past the limit the checks after the search may end, at most
 
 # CPU seconds of the repair's steps, per target that has an option (the plan's size is
 # not known before the search; the default job plans ~half of its 950 such targets),
@@ -71,6 +81,7 @@ REFINE_S_PER_TARGET = 1.1e-3  # one start-time refinement, per round
 REFINE_FIRST_S = 2.5  # its first call
 REFILL_OVERHEAD_S = 0.5  # a refill's greedy pass and restore, besides its budget
 _ROUNDS_WITH_JOINS = 3  # repair rounds with the flown joins (two refills, the last check)
+_MANDATORY_ROUNDS = 2  # check and join rounds with no refill: a rejection, then the last
 
 
 class Budget(NamedTuple):
@@ -135,8 +146,51 @@ def repair_seconds(ctx: PlanContext, flown_joins: bool, refining: bool, refill_s
     return need
 
 
+def mandatory_seconds(ctx: PlanContext, flown_joins: bool, after_s: float = 0.0) -> float:
+    """Estimated CPU seconds of what follows the search and is never left out: the
+    independent check and the flown-join check (two rounds each), plus ``after_s``.
+
+    Args:
+      ctx: PlanContext (stages 1-4).
+      flown_joins: the flown joins are checked.
+      after_s: the caller's part that is never left out [s] (``plan.json``, ``plan.csv``).
+    Returns:
+      float [s].
+    """
+    n = int(np.unique(ctx.opportunities.options.route).size)
+    need = _MANDATORY_ROUNDS * CHECK_S_PER_TARGET * n + after_s
+    if flown_joins:
+        need += JOINS_FIRST_S + _MANDATORY_ROUNDS * JOINS_S_PER_TARGET * n
+    return need
+
+
+def _refuse_late(deadline: StageDeadline, need: float) -> None:
+    """Raise TimeLimitError when ``need`` seconds from now end past the limit by more than
+    :data:`LATE_MAX_S`."""
+    elapsed = time.monotonic() - deadline.t0
+    late = elapsed + need - deadline.limit
+    if late <= LATE_MAX_S:
+        return
+    raise TimeLimitError(
+        f"time limit of {deadline.limit:.4g} s: the stages before the search took "
+        f"{elapsed:.1f} s and the checks after it (~{need:.0f} s at this pace) would end "
+        f"{late:.0f} s past the limit{'; ' + deadline.scale if deadline.scale else ''}: give a "
+        f"time limit of {suggested_limit(elapsed + need)} s or more (--time-limit or "
+        "planner.time_limit_s), or plan fewer targets or satellites, a shorter horizon, "
+        "or a coarser planner.time_step_s",
+        "search",
+        elapsed,
+        elapsed + need,
+    )
+
+
 def deadline_budget(
-    ctx: PlanContext, deadline: StageDeadline, *, flown_joins: bool, refill_s: float
+    ctx: PlanContext,
+    deadline: StageDeadline,
+    *,
+    flown_joins: bool,
+    refill_s: float,
+    capped: bool = False,
 ) -> Budget:
     """The budget of a call with a deadline, once its problem is built (module docstring).
 
@@ -146,12 +200,19 @@ def deadline_budget(
         ``split`` is set here.
       flown_joins: the flown joins are checked.
       refill_s: the budget of one refill [s].
+      capped: an iteration-capped run (its search and repair run whole whatever the
+        clock says, so it is not refused for :data:`LATE_MAX_S` either).
     Returns:
       Budget.
+    Raises:
+      TimeLimitError: the checks after the search would end more than
+        :data:`LATE_MAX_S` past the limit (module docstring).
     """
     refining = _refining(ctx.scenario)
     pace = deadline.pace()
     repair = repair_seconds(ctx, flown_joins, refining, refill_s) * pace
+    if not capped:
+        _refuse_late(deadline, pace * mandatory_seconds(ctx, flown_joins, deadline.must_s))
     outputs = deadline.after_s * pace
     now = time.monotonic()
     left = max(deadline.end - now, 0.0)

@@ -141,6 +141,7 @@ class StageDeadline:
       allowance: compile time not counted [s] (default :data:`COMPILE_ALLOWANCE_S`).
       after_s: estimated seconds the caller needs after :func:`jaxspline.plan` returns
         (on an idle machine; the outputs of ``jaxspline plan``), kept out of the search.
+      must_s: the part of ``after_s`` that is never left out (``plan.json``, ``plan.csv``).
 
     Attributes:
       t0: as given.
@@ -148,14 +149,15 @@ class StageDeadline:
       scale: as given.
       allowance: as given.
       after_s: as given.
+      must_s: as given.
       compiled0: :func:`compile_seconds` when the deadline was made.
       skipped: what was left out because of the limit (:meth:`skip`).
       split: how the limit was split (:meth:`record`; set by the planner).
     """
 
-    def __init__(self, t0, limit, scale="", allowance=COMPILE_ALLOWANCE_S, after_s=0.0):
+    def __init__(self, t0, limit, scale="", allowance=COMPILE_ALLOWANCE_S, after_s=0.0, must_s=0.0):
         self.t0, self.limit, self.scale, self.allowance = t0, limit, scale, allowance
-        self.after_s = float(after_s)
+        self.after_s, self.must_s = float(after_s), float(must_s)
         self.compiled0 = compile_seconds()
         self._wall0, self._cpu0 = time.monotonic(), time.process_time()
         self.skipped: list[dict] = []

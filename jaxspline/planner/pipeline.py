@@ -486,7 +486,9 @@ def _plan(
     budget = default_budget(sc, limit, clock.t0)
     ctx = build_problem(sc, joins=flown_joins, deadline=deadline, _clock=clock)
     if deadline is not None:
-        budget = deadline_budget(ctx, deadline, flown_joins=flown_joins, refill_s=_REFILL_S)
+        budget = deadline_budget(
+            ctx, deadline, flown_joins=flown_joins, refill_s=_REFILL_S, capped=max_iters is not None
+        )
     res, rep, interrupted = _search_and_repair(ctx, budget, seed, max_iters, flown_joins, clock)
     for what, at in rep.skipped if deadline is not None else ():
         deadline.skip("repair", what, "give a longer --time-limit (or planner.time_limit_s)", at)

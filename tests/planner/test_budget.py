@@ -161,3 +161,22 @@ def test_repair_leaves_out_its_refills_past_the_deadline_never_its_checks(monkey
         assert rep.chosen == chosen[1:]
     else:
         assert len(refills) == 1 and refills[0] == pytest.approx(0.2) and rep.skipped == ()
+
+
+def test_a_call_whose_checks_would_end_far_past_the_limit_stops_before_the_search(monkeypatch):
+    clock = _Clock(monkeypatch)
+    d = dl.StageDeadline(clock.wall, 10.0, "3 targets", after_s=1.0, must_s=0.5)
+    clock.wall += 25.0  # the compile allowance let the stages before the search run late
+    clock.cpu += 25.0
+    ctx = _ctx(2000, refining=False)
+    need = bd.mandatory_seconds(ctx, True, 0.5)
+    assert need == pytest.approx(
+        2 * (bd.CHECK_S_PER_TARGET + bd.JOINS_S_PER_TARGET) * 2000 + bd.JOINS_FIRST_S + 0.5
+    )
+    assert 25.0 + need - 10.0 > bd.LATE_MAX_S
+    with pytest.raises(dl.TimeLimitError, match="would end .* past the limit; 3 targets") as e:
+        bd.deadline_budget(ctx, d, flown_joins=True, refill_s=2.0)
+    assert e.value.stage == "search" and e.value.estimate == pytest.approx(25.0 + need)
+    b = bd.deadline_budget(ctx, d, flown_joins=True, refill_s=2.0, capped=True)  # reproducible
+    assert b.search_end == pytest.approx(clock.wall)  # nothing left: a quarter of nothing
+    assert bd.deadline_budget(_ctx(10, False), d, flown_joins=True, refill_s=2.0)  # small: late
