@@ -329,6 +329,7 @@ def build_problem(
             far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega, beat)
             lookup = np.ones(len(sats), bool)
         beat(0.0)
+        tick = check("screening", 0, f"{len(opp)} options", since=time.monotonic())
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )
@@ -341,16 +342,19 @@ def build_problem(
 
 
 def _stage_check(deadline: StageDeadline | None, clock):
-    """``check(stage, done=1, what="")``: with ``done`` = 1 it checks the deadline at the
-    end of a stage; with ``done`` = 0 it returns the stage's ``tick(share)`` (None
-    without a deadline). A stage starts at the clock's last lap."""
+    """``check(stage, done=1, what="", since=None)``: with ``done`` = 1 it checks the
+    deadline at the end of a stage; with ``done`` = 0 it returns the stage's
+    ``tick(share)`` (None without a deadline). A stage starts at the clock's last lap;
+    ``since`` starts the part of it the shares measure (its time before counts whole in
+    the estimate: the near pairs after the far gaps and join screens)."""
 
-    def check(stage, done=1.0, what=""):
+    def check(stage, done=1.0, what="", since=None):
         if deadline is None:
             return None
         if done >= 1.0:
             return deadline.check(stage, 1.0, clock.last, what)
-        return lambda share: deadline.check(stage, share, clock.last, what)
+        start = clock.last if since is None else since
+        return lambda share: deadline.check(stage, share, start, what)
 
     return check
 
