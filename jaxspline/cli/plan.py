@@ -34,7 +34,9 @@ limit less a reserve estimated for the repair and the asked outputs
 (:mod:`jaxspline.planner.budget`, :mod:`jaxspline.products.output_budget`); past the
 limit the repair leaves out its refills and refinements (never a check) and the
 outputs the optional files that no longer fit (``plan.json`` and ``plan.csv`` are
-always written). What was left out is said on stderr and recorded in ``plan.json``
+always written). With ``--max-iters`` the work is fixed: the search, the repair and
+the outputs run whole (the same plan and the same files on every run). What was
+left out is said on stderr and recorded in ``plan.json``
 (``report.time_limit``); a run that ends past its limit says so on stderr.
 """
 
@@ -250,7 +252,9 @@ def run_plan(
     deadline = _deadline(sc, limit, t_start, plots=plots, html=html, aem=aem, aem_step=aem_step)
     with outputs:  # locked, staged and probed: planning starts only now
         result = _plan(sc, deadline, seed, max_iters, certify, progress, aem)
-        page, t_write = _write(result, outputs, plots, aem, aem_step, html, deadline)
+        # --max-iters: fixed work, the whole set is written whatever the clock says
+        timed = deadline if max_iters is None else None
+        page, t_write = _write(result, outputs, plots, aem, aem_step, html, timed)
     names = tuple(n for n in names if (Path(outdir) / n).exists())
     _print_summary(result, Path(outdir), names, page)
     _say_late(result, limit, time.monotonic() - t_start, t_write)
