@@ -321,7 +321,7 @@ def _say_late(result, limit: float, elapsed: float, t_write: float) -> None:
     it (never silently)."""
     skipped = result.report.get("time_limit", {}).get("skipped", [])
     if skipped:
-        left_out = "; ".join(f"{s['what']} ({s['remedy']})" for s in skipped)
+        left_out = "; ".join(f"{s['what']} [{s['remedy']}]" for s in skipped)
         print(f"jaxspline: note: left out for the time limit: {left_out}", file=sys.stderr)
     if elapsed <= limit:
         return
