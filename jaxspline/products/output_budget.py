@@ -3,7 +3,9 @@
 ``plan.json`` and ``plan.csv`` are always written: they are the plan. The other files
 are optional products; :func:`output_seconds` estimates each from the scenario's size
 (CPU seconds per item, measured on the default job: 6 satellites, 6 h, 1,700 targets,
-about 500 observations, 12,960 attitude states on a 2-core machine), so the planner
+about 500 observations, 12,960 attitude states on a 2-core machine: 0.5 s for
+``plan.json``/``plan.csv``, 1.3 s the page, 1.6 s the CZML, 7 s the attitude history
+and AEM files, 4 s the figures and 2 s attitude.png), so the planner
 can keep their time out of the search (:attr:`jaxspline.planner.deadline.StageDeadline.after_s`).
 When the time left is short all the same (a loaded machine, a search that was given
 its minimum share), :func:`jaxspline.products.outputs.write_plan_outputs` writes them
@@ -47,8 +49,8 @@ PAGE_FIXED_S = 0.5  # plan.html [s]
 PAGE_S_PER_TARGET = 4.5e-4  # ... per target [s]
 CZML_S_PER_TARGET = 3e-4  # plan.czml, per target [s]
 CZML_S_PER_SAT_HOUR = 0.03  # ... per satellite and hour of the horizon [s]
-AEM_S_PER_STATE = 7e-4  # attitude history and its AEM files, per attitude state [s]
-PLOTS_FIXED_S = 4.0  # the PNG figures (the world map's coastlines) [s]
+AEM_S_PER_STATE = 5.5e-4  # attitude history and its AEM files, per attitude state [s]
+PLOTS_FIXED_S = 3.0  # the PNG figures (the world map's coastlines) [s]
 PLOTS_S_PER_SAT_HOUR = 0.02  # ... per satellite and hour [s]
 ATTITUDE_PLOT_S_PER_STATE = 1.7e-4  # attitude.png, per attitude state [s]
 
