@@ -32,6 +32,7 @@ import os
 import signal
 import sys
 import threading
+import time
 import traceback
 from pathlib import Path
 
@@ -145,8 +146,13 @@ def main(argv: list[str] | None = None) -> int:
     Returns:
       int, the exit code (module docstring).
     """
+    from jaxspline.planner.deadline import process_start
+
+    # called as the process (argv None): a time limit counts from the process's start
+    started = process_start() if argv is None else time.monotonic()
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.started = started
     debug = bool(getattr(args, "debug", False))
     old_term = signal.getsignal(signal.SIGTERM)
     if threading.current_thread() is threading.main_thread():

@@ -26,13 +26,18 @@ files are written into a staging directory beside it and moved into place at onc
 a failure leaves the previous set or none. An earlier set is replaced only with
 ``--force``. Every flag is checked before any work (:mod:`jaxspline.cli.flags`).
 
-Time limit: ``--time-limit`` (default: the scenario's ``planner.time_limit_s``) counts
-from the start of the command: loading the scenario, the stages before the search
-(which stop the run with exit 3, an estimate and the remedy when it runs out there;
-up to 20 s of compiling are not counted: :mod:`jaxspline.planner.deadline`), the
-search (which ends at the limit less a reserve for the check and the outputs). The
-repair, the flown-join check (its first compilation), the attitude history and the
-files follow the search; a run that ends past its limit says so on stderr.
+Time limit: ``--time-limit`` (default: the scenario's ``planner.time_limit_s``) bounds
+the whole command, from the start of its process: the stages before the search stop
+the run with exit 3, an estimate and the remedy when it runs out there (up to 20 s of
+compiling are not counted: :mod:`jaxspline.planner.deadline`); the search ends at the
+limit less a reserve estimated for the repair and the asked outputs
+(:mod:`jaxspline.planner.budget`, :mod:`jaxspline.products.output_budget`); past the
+limit the repair leaves out its refills and refinements (never a check) and the
+outputs the optional files that no longer fit (``plan.json`` and ``plan.csv`` are
+always written). With ``--max-iters`` the work is fixed: the search, the repair and
+the outputs run whole (the same plan and the same files on every run). What was
+left out is said on stderr and recorded in ``plan.json``
+(``report.time_limit``); a run that ends past its limit says so on stderr.
 """
 
 from __future__ import annotations
@@ -144,6 +149,7 @@ def _main(args) -> int:
         progress=not args.quiet,
         aem=args.aem,
         aem_step=args.aem_step,
+        t_start=getattr(args, "started", None),
     )
     if result.report.get("interrupted"):
         return EXIT_INTERRUPTED
@@ -200,6 +206,7 @@ def run_plan(
     progress: bool = True,
     aem: bool = True,
     aem_step: float = AEM_STEP_S,
+    t_start: float | None = None,
 ):
     """Load ``scenario``, plan it, write the outputs as one set (module docstring).
 
@@ -219,6 +226,8 @@ def run_plan(
       progress: show progress bars.
       aem: write one CCSDS AEM per satellite (and check the flown joins).
       aem_step: sampling step of the AEM files [s].
+      t_start: when the time limit starts [s, ``time.monotonic``] (the command passes
+        its process's start); None: now.
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
@@ -231,7 +240,7 @@ def run_plan(
     from jaxspline.products.outputs import OutputSet
     from jaxspline.readers.scenario import scenario_from
 
-    t_start = time.monotonic()
+    t_start = time.monotonic() if t_start is None else t_start
     _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step)
     outputs = OutputSet(outdir, force=force)
     outputs.check()  # fail before loading, nothing written
@@ -240,30 +249,45 @@ def run_plan(
     limit = sc.planner.default_time_limit if time_limit is None else time_limit
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
     names += (HTML_FILE,) * html + ((ATTITUDE_FIGURE,) * plots + aems if aem else ())
+    deadline = _deadline(sc, limit, t_start, plots=plots, html=html, aem=aem, aem_step=aem_step)
     with outputs:  # locked, staged and probed: planning starts only now
-        result = _plan(sc, limit, t_start, seed, max_iters, certify, progress, aem)
-        page, t_write = _write(result, outputs, plots, aem, aem_step, html)
+        result = _plan(sc, deadline, seed, max_iters, certify, progress, aem)
+        # --max-iters: fixed work, the whole set is written whatever the clock says
+        timed = deadline if max_iters is None else None
+        page, t_write = _write(result, outputs, plots, aem, aem_step, html, timed)
+    names = tuple(n for n in names if (Path(outdir) / n).exists())
     _print_summary(result, Path(outdir), names, page)
     _say_late(result, limit, time.monotonic() - t_start, t_write)
     return result
 
 
-def _plan(sc, limit, t_start, seed, max_iters, certify, progress, aem):
-    """:func:`jaxspline.plan` with what is left of ``limit`` after loading the scenario,
-    its stages before the search bound by the limit from ``t_start`` on."""
+def _deadline(sc, limit, t_start, **asked):
+    """The run's :class:`jaxspline.planner.deadline.StageDeadline` from ``t_start`` on,
+    with the estimated time of the asked outputs (``asked``: plots, html, aem, aem_step)
+    kept out of the search."""
     from jaxspline.planner.deadline import StageDeadline
-    from jaxspline.planner.pipeline import plan
+    from jaxspline.products.output_budget import output_seconds
 
     size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
-    deadline = StageDeadline(t_start, limit, size)
+    cost = output_seconds(sc, **asked)
+    return StageDeadline(
+        t_start, limit, size, after_s=sum(cost.values()), must_s=cost["plan files"]
+    )
+
+
+def _plan(sc, deadline, seed, max_iters, certify, progress, aem):
+    """:func:`jaxspline.plan` with what is left of the limit after loading the scenario,
+    every stage bound by ``deadline``."""
+    from jaxspline.planner.pipeline import plan
+
     deadline.check("loading", 1.0)
-    left = max(limit - (time.monotonic() - t_start), 1e-3)  # the search's share (may be none)
+    left = max(deadline.end - time.monotonic(), 1e-3)  # the search's share (may be none)
     # with --aem the flown joins are checked: the AEM files never exceed a limit
     return plan(sc, time_limit=left, seed=seed, progress=progress, max_iters=max_iters,
                 certify=certify, flown_joins=aem, deadline=deadline)  # fmt: skip
 
 
-def _write(result, outputs, plots, aem, aem_step, html):
+def _write(result, outputs, plots, aem, aem_step, html, deadline=None):
     """Write the set into the staging folder and publish it, signals held until it is
     whole; a signal during writing is recorded in plan.json. Returns (page, seconds)."""
     from jaxspline.products.outputs import rewrite_plan_json, write_plan_outputs
@@ -276,7 +300,7 @@ def _write(result, outputs, plots, aem, aem_step, html):
     with catch_signals(late):  # signals wait: the set is written whole
         before = result.report.get("interrupted")
         page = write_plan_outputs(result, outputs.staging, plots=plots, aem=aem,
-                                  aem_step=aem_step, html=html)  # fmt: skip
+                                  aem_step=aem_step, html=html, deadline=deadline)  # fmt: skip
         if result.report.get("interrupted") != before:
             rewrite_plan_json(result, outputs.staging)
         before = result.report.get("interrupted")
@@ -293,7 +317,12 @@ def _write(result, outputs, plots, aem, aem_step, html):
 
 
 def _say_late(result, limit: float, elapsed: float, t_write: float) -> None:
-    """A line on stderr when the run ended past its time limit (never silently)."""
+    """Lines on stderr naming what the time limit left out, and when the run ended past
+    it (never silently)."""
+    skipped = result.report.get("time_limit", {}).get("skipped", [])
+    if skipped:
+        left_out = "; ".join(f"{s['what']} [{s['remedy']}]" for s in skipped)
+        print(f"jaxspline: note: left out for the time limit: {left_out}", file=sys.stderr)
     if elapsed <= limit:
         return
     after = {k: v for k, v in result.timings.items() if k in _AFTER_SEARCH}

@@ -9,7 +9,8 @@ those joins) -> ``context`` (:class:`PlanContext`, what the stages share) -> ``p
 ``refine_starts`` -> ``plan_check`` (the independent re-check) -> ``assemble`` /
 ``result`` (the :class:`PlanResult`). ``sharded`` runs the plan over
 several hosts; ``bound`` the bound alone; ``files`` the atomic file writes every writer
-uses; ``deadline`` the time limit of the stages before the search.
+uses; ``deadline`` the clock of a call's time limit; ``budget`` its split between the
+search and the stages after it.
 """
 
 from jaxspline.planner.bound import SEARCH_TIME_S as SEARCH_TIME_S

@@ -13,24 +13,39 @@ against the limit here, up to :data:`COMPILE_ALLOWANCE_S`: a first run on an emp
 cache compiles for 10-40 s, which the next runs do not pay, and a small scenario should
 not be refused for it. Compile time past the allowance counts, so the stages before the
 search never run longer than the limit plus the allowance (plus one block of work).
+
+After the search the same clock serves the stages that follow it
+(:mod:`jaxspline.planner.budget`): :attr:`StageDeadline.after_s` is what the caller
+needs once :func:`jaxspline.plan` returns (the outputs of ``jaxspline plan``),
+:meth:`StageDeadline.pace` how much slower than its CPU time the call runs (a loaded
+machine), :meth:`StageDeadline.fits` whether an estimated step still fits before the
+limit, and :meth:`StageDeadline.skip` records what was left out because it did not
+(:meth:`StageDeadline.record`: the ``"time_limit"`` section of ``plan.json``).
 """
 
 from __future__ import annotations
 
 import math
+import os
 import threading
 import time
+from pathlib import Path
 
 __all__ = [
     "COMPILE_ALLOWANCE_S",
+    "PACE_MAX",
     "StageDeadline",
     "TimeLimitError",
     "compile_seconds",
+    "process_start",
     "suggested_limit",
 ]
 
 #: Compile time [s] not counted against the limit (the rest counts).
 COMPILE_ALLOWANCE_S = 20.0
+#: Largest pace (wall time over CPU time) the estimates of the later stages are scaled by.
+PACE_MAX = 3.0
+_PACE_MIN_WALL_S = 1.0  # [s] of wall time before the pace is measured (1 until then)
 
 _COMPILE_EVENTS = frozenset(
     (
@@ -66,6 +81,26 @@ def compile_seconds() -> float:
     return _compiled[0]
 
 
+def process_start() -> float:
+    """When this process started, on the ``time.monotonic`` clock [s].
+
+    A command's time limit counts from here, so starting Python and importing JAX
+    (2-7 s) count too. Reads ``/proc/self/stat`` (Linux); elsewhere, or when that
+    fails, the current time.
+
+    Returns:
+      float [s], at most ``time.monotonic()``.
+    """
+    try:
+        fields = Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()
+        started = int(fields[_STAT_STARTTIME]) / os.sysconf("SC_CLK_TCK")  # since boot
+        since = time.clock_gettime(time.CLOCK_BOOTTIME) - started
+    except (OSError, ValueError, IndexError, AttributeError):
+        return time.monotonic()
+    return time.monotonic() - max(since, 0.0)
+
+
+_STAT_STARTTIME = 19  # field 22 of /proc/PID/stat (starttime), counted after "(comm) "
 _NICE_LIMITS = (10, 20, 30, 60, 120, 300, 600, 1200, 1800, 3600, 7200, 14400, 28800, 86400)
 
 
@@ -104,18 +139,87 @@ class StageDeadline:
       limit: its time limit [s].
       scale: a line naming the scenario's size (in the error message).
       allowance: compile time not counted [s] (default :data:`COMPILE_ALLOWANCE_S`).
+      after_s: estimated seconds the caller needs after :func:`jaxspline.plan` returns
+        (on an idle machine; the outputs of ``jaxspline plan``), kept out of the search.
+      must_s: the part of ``after_s`` that is never left out (``plan.json``, ``plan.csv``).
 
     Attributes:
       t0: as given.
       limit: as given.
       scale: as given.
       allowance: as given.
+      after_s: as given.
+      must_s: as given.
       compiled0: :func:`compile_seconds` when the deadline was made.
+      skipped: what was left out because of the limit (:meth:`skip`).
+      split: how the limit was split (:meth:`record`; set by the planner).
     """
 
-    def __init__(self, t0, limit, scale="", allowance=COMPILE_ALLOWANCE_S):
+    def __init__(self, t0, limit, scale="", allowance=COMPILE_ALLOWANCE_S, after_s=0.0, must_s=0.0):
         self.t0, self.limit, self.scale, self.allowance = t0, limit, scale, allowance
+        self.after_s, self.must_s = float(after_s), float(must_s)
         self.compiled0 = compile_seconds()
+        self._wall0, self._cpu0 = time.monotonic(), time.process_time()
+        self.skipped: list[dict] = []
+        self.split: dict = {}
+
+    @property
+    def end(self) -> float:
+        """The limit's end [s, ``time.monotonic``]: ``t0 + limit``."""
+        return self.t0 + self.limit
+
+    def pace(self) -> float:
+        """Wall time over this process's CPU time since the deadline was made.
+
+        Returns:
+          float in [1, :data:`PACE_MAX`]: 1 on an idle machine (or within the first
+          second), about 2.5 when the process gets 40 % of a core; the estimates of
+          the later stages (CPU seconds) are multiplied by it.
+        """
+        wall = time.monotonic() - self._wall0
+        cpu = time.process_time() - self._cpu0
+        if wall < _PACE_MIN_WALL_S or cpu <= 0.0:
+            return 1.0
+        return min(max(wall / cpu, 1.0), PACE_MAX)
+
+    def fits(self, seconds: float, end: float | None = None) -> bool:
+        """Whether a step estimated at ``seconds`` (idle) ends by ``end`` at the current pace.
+
+        Args:
+          seconds: the step's estimate [s of CPU time].
+          end: its end [s, monotonic] (default: :attr:`end`).
+        Returns:
+          bool.
+        """
+        end = self.end if end is None else end
+        return time.monotonic() + seconds * self.pace() <= end
+
+    def skip(self, stage: str, what: str, remedy: str, at: float | None = None) -> None:
+        """Record that ``what`` was left out of ``stage`` because of the limit.
+
+        Args:
+          stage: ``"repair"`` or ``"outputs"``.
+          what: what was left out (``"plan.czml"``, ``"refill"``).
+          remedy: how to get it (``"give a longer --time-limit"``).
+          at: when it was left out [s, monotonic] (default: now).
+        """
+        at = round((time.monotonic() if at is None else at) - self.t0, 2)
+        self.skipped.append({"stage": stage, "what": what, "at_s": at, "remedy": remedy})
+
+    def record(self) -> dict:
+        """The ``"time_limit"`` section of ``plan.json``: the limit, its split, the pace
+        and what was left out.
+
+        Returns:
+          dict, JSON-ready.
+        """
+        return {
+            "limit_s": self.limit,
+            **self.split,
+            "pace": round(self.pace(), 3),
+            "elapsed_s": round(time.monotonic() - self.t0, 2),
+            "skipped": list(self.skipped),
+        }
 
     def check(self, stage: str, done: float = 1.0, stage_t0: float | None = None, what=""):
         """Raise :class:`TimeLimitError` when the limit has passed (compile time aside).

@@ -23,7 +23,9 @@ through the repair and is returned with ``report["interrupted"]`` set. Given a
 ``deadline`` (``jaxspline plan`` passes one), stages 1-4 check it
 (:mod:`jaxspline.planner.deadline`): when it passes there, the call stops with
 :class:`jaxspline.planner.deadline.TimeLimitError` (what was done, an estimate of the
-time needed, the remedy) instead of searching past it.
+time needed, the remedy) instead of searching past it; the search then leaves a
+reserve for stage 6 and the caller's outputs, and stage 6 leaves out its optional
+steps past the limit (:mod:`jaxspline.planner.budget`).
 """
 
 from __future__ import annotations
@@ -35,7 +37,6 @@ import os
 import resource
 import sys
 import time
-from typing import NamedTuple
 
 import jax
 import numpy as np
@@ -43,6 +44,7 @@ import numpy as np
 from jaxspline.geometry.frames import in_shadow, jd_split, sun_direction
 from jaxspline.geometry.windows import visibility_windows_all
 from jaxspline.planner.assemble import assemble_result
+from jaxspline.planner.budget import Budget, deadline_budget, default_budget, refine_steps
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.deadline import StageDeadline
 from jaxspline.planner.join_screen import (
@@ -63,11 +65,6 @@ from jaxspline.search.store import PairsBuilder, start_order
 
 __all__ = ["build_problem", "plan"]
 
-_RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
-_RESERVE_MIN = 1.0  # [s]
-_REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
-_REFINE_MAX_S = 10.0  # [s] ... at most (warm: ~1-3 s a round; a cold compile 6-12 s)
-_REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
@@ -163,12 +160,15 @@ def plan(
         so the plan is flyable as :func:`jaxspline.products.attitude_history.attitude_history`
         exports it; off by default: the satellites' maneuver models alone decide (as the
         aeossp rules). The transitions are then also screened with the joins
-        (:mod:`jaxspline.planner.join_screen`). The check's time (first call:
-        compilation of the join kernels) is not part of ``time_limit``.
+        (:mod:`jaxspline.planner.join_screen`).
       deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` (``jaxspline
         plan`` passes one): the stages before the search check it and stop with
-        :class:`jaxspline.planner.deadline.TimeLimitError` once it has passed. Without
-        it (the default) only the search is bound by ``time_limit``.
+        :class:`jaxspline.planner.deadline.TimeLimitError` once it has passed; the
+        search leaves a reserve estimated for the repair and the caller's outputs
+        (:func:`jaxspline.planner.budget.deadline_budget`); the result's
+        ``report["time_limit"]`` records the split and what was left out. Without it
+        (the default) the search leaves a fixed share of ``time_limit``
+        (:func:`jaxspline.planner.budget.default_budget`).
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
@@ -318,16 +318,18 @@ def build_problem(
         opp = build_opportunities(sc, scene, table.usable, windows, tick=check("options", 0))
         clock.lap("options", f"{len(opp)} options")
         tick = check("screening", 0, f"{len(opp)} options")
+        beat = tick or _no_tick  # between the steps before the near pairs (each may be long)
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
+        beat(0.0)
         omega = nadir_rate(scene)
-        far, first = _far_and_first(sats, opp, tables, omega)
+        far, first = _far_and_first(sats, opp, tables, omega, beat)
         slack = _near_slack(opp, reduce_slack)
         lookup = join_filter = None
         if joins and len(opp):
-            far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega)
+            far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega, beat)
             lookup = np.ones(len(sats), bool)
-        if tick is not None:
-            tick(0.0)  # the far gaps and the join screens may take a while
+        beat(0.0)
+        tick = check("screening", 0, f"{len(opp)} options", since=time.monotonic())
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )
@@ -340,16 +342,19 @@ def build_problem(
 
 
 def _stage_check(deadline: StageDeadline | None, clock):
-    """``check(stage, done=1, what="")``: with ``done`` = 1 it checks the deadline at the
-    end of a stage; with ``done`` = 0 it returns the stage's ``tick(share)`` (None
-    without a deadline). A stage starts at the clock's last lap."""
+    """``check(stage, done=1, what="", since=None)``: with ``done`` = 1 it checks the
+    deadline at the end of a stage; with ``done`` = 0 it returns the stage's
+    ``tick(share)`` (None without a deadline). A stage starts at the clock's last lap;
+    ``since`` starts the part of it the shares measure (its time before counts whole in
+    the estimate: the near pairs after the far gaps and join screens)."""
 
-    def check(stage, done=1.0, what=""):
+    def check(stage, done=1.0, what="", since=None):
         if deadline is None:
             return None
         if done >= 1.0:
             return deadline.check(stage, 1.0, clock.last, what)
-        return lambda share: deadline.check(stage, share, clock.last, what)
+        start = clock.last if since is None else since
+        return lambda share: deadline.check(stage, share, start, what)
 
     return check
 
@@ -378,10 +383,15 @@ def _windows(sc: Scenario, scene, table, tick=None):
     )
 
 
-def _far_and_first(sats, opp, tables, omega):
+def _no_tick(share: float) -> None:
+    """The stage clock of a call without a deadline: nothing to check."""
+
+
+def _far_and_first(sats, opp, tables, omega, tick=_no_tick):
     """Per satellite, through its maneuver model and screening table: the always-feasible
     gap ``far`` [S] [s] (``omega`` [S]: nadir turn rates [rad/s]) and, per option, the
-    time ``first`` [N] [s] a first observation needs from rest (inf: never first)."""
+    time ``first`` [N] [s] a first observation needs from rest (inf: never first);
+    ``tick(0)`` after each satellite."""
     o = opp.options
     far = np.zeros(len(sats))
     first = np.full(len(opp), np.inf)
@@ -389,6 +399,7 @@ def _far_and_first(sats, opp, tables, omega):
         ids = np.flatnonzero(o.sat == k)
         far[k] = s.maneuver.far_gap(s, o, ids, float(omega[k]), tables[k])
         first[ids] = s.maneuver.first_requirements(s, o, ids, tables[k])
+        tick(0.0)
     return far, first
 
 
@@ -402,14 +413,16 @@ def _near_slack(opp, reduce_slack) -> float:
     return slack if math.isfinite(slack) else 0.0
 
 
-def _join_screens(sats, scene, opp, far, first, omega):
+def _join_screens(sats, scene, opp, far, first, omega, tick=_no_tick):
     """The flown-join screens (:mod:`jaxspline.planner.join_screen`): the far gaps
     widened to the joins' (``far`` [S] [s], ``omega`` [S] nadir turn rates), the first
     requirements ``first`` [N] with options whose join from nadir fails set to inf, and
-    the pair filter ``(src, dst) -> bool`` of the near-pair screen. Returns
-    ``(far, first, join_filter)``."""
+    the pair filter ``(src, dst) -> bool`` of the near-pair screen (``tick(0)`` between
+    the steps). Returns ``(far, first, join_filter)``."""
     states = channel_states(scene, sats, opp)
+    tick(0.0)
     far = np.array([join_far_gap(*x) for x in zip(sats, far, omega, strict=True)])
+    tick(0.0)
     first = first.copy()
     first[~screen_first_joins(sats, opp, states, np.arange(len(opp)))] = np.inf
     return far, first, functools.partial(screen_joins, sats, opp, states)
@@ -474,9 +487,15 @@ def _plan(
     then search and repair under the signal guard, the optional HiGHS certificate, and
     the result."""
     clock = _Clock(sc.name, progress)
-    budget = _budget(sc, limit, clock.t0)
+    budget = default_budget(sc, limit, clock.t0)
     ctx = build_problem(sc, joins=flown_joins, deadline=deadline, _clock=clock)
+    if deadline is not None:
+        budget = deadline_budget(
+            ctx, deadline, flown_joins=flown_joins, refill_s=_REFILL_S, capped=max_iters is not None
+        )
     res, rep, interrupted = _search_and_repair(ctx, budget, seed, max_iters, flown_joins, clock)
+    for what, at in rep.skipped if deadline is not None else ():
+        deadline.skip("repair", what, "give a longer --time-limit (or planner.time_limit_s)", at)
     clock.lap(
         "repair",
         f"{len(rep.chosen)} observations valid, dropped {dropped_line(rep.dropped)}"
@@ -486,7 +505,7 @@ def _plan(
     if certify > 0:
         mip = mip_bound(ctx.problem, certify)
         clock.lap("certify", f"HiGHS bound {mip.bound:.6g} ({mip.status})")
-    return assemble_result(
+    result = assemble_result(
         ctx,
         res,
         rep,
@@ -496,33 +515,15 @@ def _plan(
         timings=clock.timings,
         peak_rss_mb=clock.peak_rss_mb,
     )
+    if deadline is not None:  # the caller adds what its outputs leave out
+        result.report["time_limit"] = deadline.record()
+    return result
 
 
-class _Budget(NamedTuple):
-    """The clock of one :func:`plan` call: its ``deadline`` (``time.monotonic`` [s]), the
-    ``reserve`` [s] the search leaves before it (final check and output, and start-time
-    refinement when ``refining``: the scenario has refine steps and a per-channel
-    satellite)."""
-
-    deadline: float
-    reserve: float
-    refining: bool
-
-
-def _budget(sc: Scenario, limit: float, t0: float) -> _Budget:
-    """The budget of a call started at ``t0`` (monotonic [s]) with ``limit`` seconds: a
-    share of the limit (at least ``_RESERVE_MIN``) kept for the check and output, plus
-    one for start-time refinement (at most ``_REFINE_MAX_S``) when it runs."""
-    pc = sc.planner
-    refining = pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sc.satellites)
-    reserve = max(_RESERVE_MIN, _RESERVE_SHARE * limit)
-    reserve += refining * min(_REFINE_SHARE * limit, _REFINE_MAX_S)
-    return _Budget(t0 + limit, reserve, refining)
-
-
-def _search_and_repair(ctx: PlanContext, budget: _Budget, seed, max_iters, flown_joins, clock):
+def _search_and_repair(ctx: PlanContext, budget: Budget, seed, max_iters, flown_joins, clock):
     """Stages 5-6 under the signal guard: the first Ctrl-C or SIGTERM stops the search
-    and the best plan so far goes through the repair. Returns (search result,
+    and the best plan so far goes through the repair, whose optional steps end by
+    ``budget.repair_end`` in time-bound runs. Returns (search result,
     :class:`jaxspline.planner.repair.Repaired`, the signal's name or None)."""
     pc = ctx.scenario.planner
     search_clock.clear_stop()
@@ -536,29 +537,24 @@ def _search_and_repair(ctx: PlanContext, budget: _Budget, seed, max_iters, flown
         )
 
     with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
-        res = _search(ctx.problem, budget.deadline - budget.reserve, seed, max_iters, pc, clock)
+        res = _search(ctx.problem, budget.search_end, seed, max_iters, pc, clock)
         tl = res.timeline
         clock.lap("search", f"value {tl.value:.6g}, bound {res.bound:.6g} ({res.bound_status})")
+        steps, t_steps = refine_steps(pc, budget, max_iters, clock.say), time.monotonic()
+        capped = max_iters is not None
         rep = repair(
             ctx,
             [c for c in tl.assigned if c >= 0],
-            refine_steps=_refine_steps(pc, budget, max_iters, clock),
+            refine_steps=steps,
             flown_joins=flown_joins,
-            refill_s=math.inf if max_iters is not None else _REFILL_S,
-            refill_iters=_REFILL_ITERS if max_iters is not None else None,
+            refill_s=math.inf if capped else _REFILL_S,
+            refill_iters=_REFILL_ITERS if capped else None,
             seed=seed,
             report=clock.say,
+            deadline=None if capped else budget.repair_end,
         )
+        if budget.refining and not steps:
+            first = ("start-time refinement", t_steps)
+            rep = rep._replace(skipped=(first, *rep.skipped))
     search_clock.clear_stop()
     return res, rep, stop["signal"]
-
-
-def _refine_steps(pc, budget: _Budget, max_iters, clock) -> int:
-    """The start-time refinement steps of the repair: the scenario's when refining, none
-    when a time-limited run has less than ``_REFINE_MIN_S`` left (said on the clock)."""
-    steps = int(pc.refine_steps) if budget.refining else 0
-    left = budget.deadline - time.monotonic()
-    if steps and max_iters is None and left < _REFINE_MIN_S:
-        steps = 0
-        clock.say("refine", f"skipped: {left:.1f} s left < {_REFINE_MIN_S:.0f} s")
-    return steps

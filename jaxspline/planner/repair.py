@@ -33,6 +33,11 @@ Invariants:
 
 The loop terminates: a round either adds observations (at most ``_REFILL_ROUNDS``
 times) or only removes them.
+
+Given a ``deadline``, the optional steps stop there: past it no refill starts (a
+refill's budget ends at it) and a refinement due after a refill is left out (the
+table in force stays, as after Ctrl-C); the checks and the join rejections always
+run, so the plan stays valid. :attr:`Repaired.skipped` names what was left out.
 """
 
 from __future__ import annotations
@@ -73,6 +78,9 @@ class Repaired(NamedTuple):
       withdrawn: bool [N], the options withdrawn from the search for good (their joins
         failed); a later re-search of the problem passes it to
         :class:`jaxspline.search.Timeline`.
+      skipped: ``(step, when [s, time.monotonic])`` of each optional step left out
+        because the deadline had passed (``"refill"``, ``"start-time refinement after
+        a refill"``).
     """
 
     chosen: list
@@ -85,6 +93,7 @@ class Repaired(NamedTuple):
     refilled: int
     rounds: int
     withdrawn: np.ndarray
+    skipped: tuple = ()
 
 
 def dropped_line(dropped: dict) -> str:
@@ -175,6 +184,7 @@ def repair(
     refill_iters: int | None = None,
     seed: int = 0,
     report=None,
+    deadline: float | None = None,
 ) -> Repaired:
     """Run the repair loop (module docstring) on the search's plan.
 
@@ -188,10 +198,14 @@ def repair(
         number with ``refill_s = inf`` for reproducible runs).
       seed: seed of the refills' LNS.
       report: callable ``report(stage, message)`` or None.
+      deadline: when the optional steps (refills, refinements after a refill) must end
+        [s, ``time.monotonic``]; None: no end (module docstring).
     Returns:
       Repaired.
     """
     say = report or (lambda stage, msg: None)
+    end = np.inf if deadline is None else deadline
+    skipped = []
     chosen = list(chosen)
     withdrawn = np.zeros(ctx.problem.n_options, bool)
     dropped = dict.fromkeys(DROP_REASONS, 0)
@@ -201,7 +215,9 @@ def repair(
     refills_left = _REFILL_ROUNDS
     while True:
         rounds += 1
-        if refine and not clock.stop_requested():
+        if refine and rounds > 1 and time.monotonic() >= end:
+            _skip(skipped, say, "start-time refinement after a refill")
+        elif refine and not clock.stop_requested():
             (opp, det), refined = _refine(ctx, chosen, int(refine_steps))
             kept = opp is not ctx.opportunities
             say("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
@@ -219,12 +235,25 @@ def repair(
         gone = set(bad)
         chosen = [c for c in chosen if c not in gone]
         det = None
+        if refills_left > 0 and time.monotonic() >= end:
+            refills_left = 0
+            _skip(skipped, say, "refill")
         if refills_left > 0 and not clock.stop_requested():
             refills_left -= 1
             # LNS in the first refill only: a later one would pack new joins that the
             # last round can only drop
             iters = refill_iters if refills_left == _REFILL_ROUNDS - 1 else 0
-            chosen, gain = _refill(ctx.problem, chosen, withdrawn, refill_s, iters, seed + rounds)
+            seconds = min(refill_s, end - time.monotonic())
+            chosen, gain = _refill(ctx.problem, chosen, withdrawn, seconds, iters, seed + rounds)
             refilled += gain
             refine = refine_steps > 0 and gain > 0  # refined times follow the new set
-    return Repaired(chosen, opp, det, dropped, found, refined, joins, refilled, rounds, withdrawn)
+    return Repaired(
+        chosen, opp, det, dropped, found, refined, joins, refilled, rounds, withdrawn,
+        tuple(skipped),
+    )  # fmt: skip
+
+
+def _skip(skipped: list, say, what: str) -> None:
+    """Record (and say) that ``what`` was left out: the deadline has passed."""
+    skipped.append((what, time.monotonic()))
+    say("repair", f"{what} left out: the time limit has passed")

@@ -3,8 +3,9 @@
 ``attitude_history`` (the flown attitude of a plan) -> ``aem`` (CCSDS attitude
 ephemerides); ``czml`` (Cesium); ``plot`` -> ``plot_plan`` / ``plot_attitude`` (PNG
 figures); ``plan_view`` -> ``plan_html_columns`` -> ``plan_html_header`` -> ``plan_html``
-(the self-contained web page); ``outputs`` writes them as one set (checked before
-planning, locked, published at once).
+(the self-contained web page); ``output_budget`` (what each costs, which still fit
+in the time limit) -> ``outputs`` writes them as one set (checked before planning,
+locked, published at once).
 """
 
 from jaxspline.products.aem import aem_file_name as aem_file_name

@@ -344,11 +344,17 @@ def _swap(new: Path, target: Path) -> Path:
     return old
 
 
-def write_plan_outputs(result, folder, *, plots=True, aem=True, aem_step=10.0, html=True):
+def write_plan_outputs(
+    result, folder, *, plots=True, aem=True, aem_step=10.0, html=True, deadline=None
+):
     """Write the files of a plan into ``folder`` (the staging directory of an :class:`OutputSet`).
 
     Adds the covered fraction of every area to ``result.report["areas"]`` and the
-    times of the attitude history and coverage to ``result.timings``.
+    times of the attitude history and coverage to ``result.timings``. Given a
+    ``deadline``, the optional products (:data:`jaxspline.products.output_budget.PRODUCTS`)
+    are written only while their estimate fits before its limit; each one left out
+    is recorded (``result.report["time_limit"]["skipped"]``). ``plan.json`` and
+    ``plan.csv`` are always written, ``plan.json`` last (it records what was left out).
 
     Args:
       result: :class:`jaxspline.planner.result.PlanResult`.
@@ -357,18 +363,19 @@ def write_plan_outputs(result, folder, *, plots=True, aem=True, aem_step=10.0, h
       aem: one CCSDS AEM per satellite (sampled every ``aem_step`` [s]) and attitude.png.
       aem_step: AEM sample step [s].
       html: the web page ``plan.html``.
+      deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` of the run.
     Returns:
       ``(page size [bytes], seconds)`` of the page, or None without it.
     Raises:
       OutputError: a file could not be written (naming it; the folder is left as is).
     """
     try:
-        return _write_all(result, Path(folder), plots, aem, aem_step, html)
+        return _write_all(result, Path(folder), plots, aem, aem_step, html, deadline)
     except OSError as exc:
         raise _fail("cannot write the outputs", exc) from None
 
 
-def _write_all(result, out: Path, plots, aem, aem_step, html):
+def _write_all(result, out: Path, plots, aem, aem_step, html, deadline):
     from jaxspline.products.plan_view import view_data
 
     if result.scenario.areas:  # covered fraction per area, into plan.json's report
@@ -377,25 +384,43 @@ def _write_all(result, out: Path, plots, aem, aem_step, html):
         t0 = time.monotonic()
         result.report["areas"] = area_coverage(result)
         result.timings["coverage"] = round(time.monotonic() - t0, 3)
-    attitude = None
-    if aem:
-        from jaxspline.products.aem import write_aems
-        from jaxspline.products.attitude_history import attitude_history
-
-        t0 = time.monotonic()
-        attitude = attitude_history(result, aem_step)
-        write_aems(result, attitude, out, force=True)
-        result.timings["attitude"] = round(time.monotonic() - t0, 3)
+    fits = _fits(result, deadline, plots=plots, html=html, aem=aem, aem_step=aem_step)
     view = {"view": view_data(result)}  # what plan.html draws: `jaxspline view` rebuilds it
-    result.to_json(out / "plan.json", force=True, extra=view)
     result.to_csv(out / "plan.csv", force=True)
-    from jaxspline.products.czml import write_czml
+    page = _page(result, out, view) if fits("plan.html") else None
+    if fits("plan.czml"):
+        from jaxspline.products.czml import write_czml
 
-    write_czml(result, out / "plan.czml", force=True)
-    if plots:
-        _plots(result, attitude, out)
-    if not html:
-        return None
+        write_czml(result, out / "plan.czml", force=True)
+    attitude = _aems(result, out, aem_step) if fits("AEM files") else None
+    if fits("figures"):
+        _plots(result, attitude, out, deadline if aem else None)
+    if deadline is not None:
+        result.report["time_limit"] = deadline.record()
+    result.to_json(out / "plan.json", force=True, extra=view)
+    return page
+
+
+def _fits(result, deadline, **asked):
+    """``fits(product) -> bool``: asked for and (given a ``deadline``) its estimate fits
+    before the limit; a product that does not is recorded as skipped."""
+    from jaxspline.products.output_budget import REMEDIES, output_seconds
+
+    cost = output_seconds(result.scenario, **asked)
+
+    def fits(name: str) -> bool:
+        if name not in cost:
+            return False
+        if deadline is None or deadline.fits(cost[name]):
+            return True
+        deadline.skip("outputs", name, REMEDIES[name])
+        return False
+
+    return fits
+
+
+def _page(result, out: Path, view):
+    """plan.html; returns ``(size [bytes], seconds)``."""
     from jaxspline.products.plan_html import write_plan_html
 
     t0 = time.monotonic()
@@ -403,7 +428,21 @@ def _write_all(result, out: Path, plots, aem, aem_step, html):
     return path.stat().st_size, time.monotonic() - t0
 
 
-def _plots(result, attitude, out: Path) -> None:
+def _aems(result, out: Path, aem_step: float):
+    """The attitude history and one AEM file per satellite; returns the history."""
+    from jaxspline.products.aem import write_aems
+    from jaxspline.products.attitude_history import attitude_history
+
+    t0 = time.monotonic()
+    attitude = attitude_history(result, aem_step)
+    write_aems(result, attitude, out, force=True)
+    result.timings["attitude"] = round(time.monotonic() - t0, 3)
+    return attitude
+
+
+def _plots(result, attitude, out: Path, deadline) -> None:
+    """The PNG figures; attitude.png only with an attitude history (``deadline``: the
+    run's StageDeadline when the AEM files were asked for, to record its absence)."""
     from jaxspline.products.plot_plan import (
         plot_plan_ground_tracks,
         plot_plan_slack,
@@ -417,6 +456,8 @@ def _plots(result, attitude, out: Path) -> None:
         from jaxspline.products.plot_attitude import plot_attitude_profile
 
         plot_attitude_profile(result, attitude, out / ATTITUDE_FIGURE)
+    elif deadline is not None:  # the AEM files (and their attitude history) were left out
+        deadline.skip("outputs", ATTITUDE_FIGURE, "comes with the AEM files")
 
 
 def rewrite_plan_json(result, folder) -> None:

@@ -288,3 +288,29 @@ def test_compile_cache_directory_from_the_environment(monkeypatch, tmp_path):
     monkeypatch.delenv(CACHE_ENV)
     monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path))
     assert cache_dir() == tmp_path / "jaxspline" / "xla"
+
+
+def test_a_time_bound_run_leaves_out_what_does_not_fit_and_says_so(
+    runs, tmp_path, monkeypatch, capsys
+):
+    """The optional outputs would take hours: a time-bound run writes the plan files
+    alone, valid, records what it left out in plan.json and says so on stderr."""
+    from jaxspline.products import output_budget as ob
+
+    real = ob.output_seconds
+
+    def slow(sc, **asked):
+        return {k: v if k == "plan files" else 1e4 for k, v in real(sc, **asked).items()}
+
+    monkeypatch.setattr(ob, "output_seconds", slow)
+    out = tmp_path / "late"
+    assert main(["plan", str(runs["scen"]), "-o", str(out), "--time-limit", "8", "--quiet"]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["plan.csv", "plan.json"]
+    doc = json.loads((out / "plan.json").read_text())
+    tl = doc["report"]["time_limit"]
+    assert [s["what"] for s in tl["skipped"] if s["stage"] == "outputs"] == list(ob.PRODUCTS)
+    assert tl["limit_s"] == 8.0 and tl["reserve_s"]["outputs"] >= 1e4
+    assert doc["summary"]["valid"] is True and doc["report"]["violations"] == []
+    err = capsys.readouterr().err
+    assert "note: left out for the time limit: " in err
+    assert "; plan.html [run `jaxspline view plan.json` to build it]; " in err

@@ -1,0 +1,246 @@
+"""How a call's time limit is split between the search and the stages after it.
+
+:func:`jaxspline.plan` runs the stages before the search, the search, then the repair
+(:mod:`jaxspline.planner.repair`: start-time refinement, the independent check, the
+flown-join check, refills); ``jaxspline plan`` then writes its outputs. The search is
+the only stage that can stop at any time, so it gets what the others leave:
+
+* without a :class:`jaxspline.planner.deadline.StageDeadline` (a library call):
+  :func:`default_budget`, a share of the limit (:data:`RESERVE_SHARE`, at least
+  :data:`RESERVE_MIN_S`) kept for the check and the output, plus one for the
+  refinement (:data:`REFINE_SHARE`, at most :data:`REFINE_MAX_S`);
+* with one (``jaxspline plan``): :func:`deadline_budget`, once the problem is built.
+  The repair is estimated from the problem's size (:func:`repair_seconds`: CPU
+  seconds per target that has an option, measured on the default job), the outputs
+  by the caller (:attr:`StageDeadline.after_s`); both are scaled by the pace of the
+  call so far (:meth:`StageDeadline.pace`: a loaded machine runs them slower). The
+  search ends that long before the limit, but gets at least :data:`SEARCH_MIN_SHARE`
+  of the time left: when the estimates do not fit, the later stages leave out what
+  does not fit (the repair its refinement and refills, the outputs their optional
+  files), they never leave out a check.
+
+One more check before the search starts: when the stages before it have used the
+limit up (their compile allowance lets them run past it), the checks the repair can
+never leave out (:func:`mandatory_seconds`, at the pace) would end the run more than
+:data:`LATE_MAX_S` past the limit; a time-bound call then stops with
+:class:`jaxspline.planner.deadline.TimeLimitError` (exit 3 of ``jaxspline plan``, with
+the estimate and the remedy) rather than plan that late.
+
+The repair's optional steps (refinement, refills) end by :attr:`Budget.repair_end`,
+the limit less the outputs' share; ``None`` there (iteration-capped runs) lets them
+run whatever the clock says, so such runs stay reproducible.
+"""
+
+from __future__ import annotations
+
+import time
+from typing import NamedTuple
+
+import numpy as np
+
+from jaxspline.planner.context import PlanContext
+from jaxspline.planner.deadline import StageDeadline, TimeLimitError, suggested_limit
+
+__all__ = [
+    "CHECK_S_PER_TARGET",
+    "JOINS_FIRST_S",
+    "JOINS_S_PER_TARGET",
+    "LATE_MAX_S",
+    "REFINE_FIRST_S",
+    "REFINE_MAX_S",
+    "REFINE_MIN_S",
+    "REFINE_SHARE",
+    "REFINE_S_PER_TARGET",
+    "REFILL_OVERHEAD_S",
+    "RESERVE_MIN_S",
+    "RESERVE_SHARE",
+    "SEARCH_MIN_SHARE",
+    "Budget",
+    "deadline_budget",
+    "default_budget",
+    "mandatory_seconds",
+    "refine_steps",
+    "repair_seconds",
+]
+
+RESERVE_SHARE = 0.12  # share of the time limit kept for the final check and output
+RESERVE_MIN_S = 1.0  # [s]
+REFINE_SHARE = 0.25  # share of the time limit kept for start-time refinement (if it runs)
+REFINE_MAX_S = 10.0  # [s] ... at most (warm: ~1-3 s a round; a cold compile 6-12 s)
+REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
+SEARCH_MIN_SHARE = 0.25  # share of the time left at its start the search always gets
+LATE_MAX_S = 20.0  # [s] past the limit the checks after the search may end, at most
+
+# CPU seconds of the repair's steps, per target that has an option (the plan's size is
+# not known before the search; the default job plans ~half of its 950 such targets),
+# measured on the default job (2-core machine, compiled programs in the cache):
+CHECK_S_PER_TARGET = 0.9e-3  # one independent check (plan_check), per round
+JOINS_S_PER_TARGET = 1.2e-3  # one flown-join check (reject_unflyable), per round
+JOINS_FIRST_S = 2.0  # its first call (loading its programs)
+REFINE_S_PER_TARGET = 1.1e-3  # one start-time refinement, per round
+REFINE_FIRST_S = 2.5  # its first call
+REFILL_OVERHEAD_S = 0.5  # a refill's greedy pass and restore, besides its budget
+_ROUNDS_WITH_JOINS = 3  # repair rounds with the flown joins (two refills, the last check)
+_MANDATORY_ROUNDS = 2  # check and join rounds with no refill: a rejection, then the last
+
+
+class Budget(NamedTuple):
+    """The clock of one :func:`jaxspline.plan` call after the stages before the search.
+
+    Attributes:
+      search_end: when the search stops [s, ``time.monotonic``].
+      repair_end: when the repair's optional steps (refinement, refills) must end
+        [s, monotonic]; None: they run whatever the clock says (iteration-capped runs
+        set this when they pass it on).
+      refining: the start-time refinement runs (refine steps and a per-channel satellite).
+      split: the split, for ``plan.json`` (empty without a deadline).
+    """
+
+    search_end: float
+    repair_end: float | None
+    refining: bool
+    split: dict
+
+
+def _refining(sc) -> bool:
+    pc = sc.planner
+    return pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sc.satellites)
+
+
+def default_budget(sc, limit: float, t0: float) -> Budget:
+    """The budget of a call started at ``t0`` (monotonic [s]) with ``limit`` seconds and
+    no deadline: a share of the limit (at least :data:`RESERVE_MIN_S`) kept for the check
+    and output, plus one for start-time refinement (at most :data:`REFINE_MAX_S`).
+
+    Args:
+      sc: the Scenario.
+      limit: the time limit [s].
+      t0: the call's start [s, monotonic].
+    Returns:
+      Budget.
+    """
+    refining = _refining(sc)
+    reserve = max(RESERVE_MIN_S, RESERVE_SHARE * limit)
+    reserve += refining * min(REFINE_SHARE * limit, REFINE_MAX_S)
+    return Budget(t0 + limit - reserve, t0 + limit, refining, {})
+
+
+def repair_seconds(ctx: PlanContext, flown_joins: bool, refining: bool, refill_s: float) -> float:
+    """Estimated CPU seconds of the repair (module docstring) for the problem of ``ctx``.
+
+    Args:
+      ctx: PlanContext (stages 1-4).
+      flown_joins: the flown joins are checked (three rounds, two refills).
+      refining: the start-time refinement runs (each round with the joins).
+      refill_s: the budget of one refill [s].
+    Returns:
+      float [s].
+    """
+    n = int(np.unique(ctx.opportunities.options.route).size)
+    rounds = _ROUNDS_WITH_JOINS if flown_joins else 1
+    need = rounds * CHECK_S_PER_TARGET * n
+    if flown_joins:
+        need += JOINS_FIRST_S + rounds * JOINS_S_PER_TARGET * n + refill_s + REFILL_OVERHEAD_S
+    if refining:
+        need += REFINE_FIRST_S + rounds * REFINE_S_PER_TARGET * n
+    return need
+
+
+def mandatory_seconds(ctx: PlanContext, flown_joins: bool, after_s: float = 0.0) -> float:
+    """Estimated CPU seconds of what follows the search and is never left out: the
+    independent check and the flown-join check (two rounds each), plus ``after_s``.
+
+    Args:
+      ctx: PlanContext (stages 1-4).
+      flown_joins: the flown joins are checked.
+      after_s: the caller's part that is never left out [s] (``plan.json``, ``plan.csv``).
+    Returns:
+      float [s].
+    """
+    n = int(np.unique(ctx.opportunities.options.route).size)
+    need = _MANDATORY_ROUNDS * CHECK_S_PER_TARGET * n + after_s
+    if flown_joins:
+        need += JOINS_FIRST_S + _MANDATORY_ROUNDS * JOINS_S_PER_TARGET * n
+    return need
+
+
+def _refuse_late(deadline: StageDeadline, need: float) -> None:
+    """Raise TimeLimitError when ``need`` seconds from now end past the limit by more than
+    :data:`LATE_MAX_S`."""
+    elapsed = time.monotonic() - deadline.t0
+    late = elapsed + need - deadline.limit
+    if late <= LATE_MAX_S:
+        return
+    raise TimeLimitError(
+        f"time limit of {deadline.limit:.4g} s: the stages before the search took "
+        f"{elapsed:.1f} s and the checks after it (~{need:.0f} s at this pace) would end "
+        f"{late:.0f} s past the limit{'; ' + deadline.scale if deadline.scale else ''}: give a "
+        f"time limit of {suggested_limit(elapsed + need)} s or more (--time-limit or "
+        "planner.time_limit_s), or plan fewer targets or satellites, a shorter horizon, "
+        "or a coarser planner.time_step_s",
+        "search",
+        elapsed,
+        elapsed + need,
+    )
+
+
+def deadline_budget(
+    ctx: PlanContext,
+    deadline: StageDeadline,
+    *,
+    flown_joins: bool,
+    refill_s: float,
+    capped: bool = False,
+) -> Budget:
+    """The budget of a call with a deadline, once its problem is built (module docstring).
+
+    Args:
+      ctx: PlanContext (stages 1-4).
+      deadline: the call's StageDeadline (its ``after_s``: the caller's outputs); its
+        ``split`` is set here.
+      flown_joins: the flown joins are checked.
+      refill_s: the budget of one refill [s].
+      capped: an iteration-capped run (its search and repair run whole whatever the
+        clock says, so it is not refused for :data:`LATE_MAX_S` either).
+    Returns:
+      Budget.
+    Raises:
+      TimeLimitError: the checks after the search would end more than
+        :data:`LATE_MAX_S` past the limit (module docstring).
+    """
+    refining = _refining(ctx.scenario)
+    pace = deadline.pace()
+    repair = repair_seconds(ctx, flown_joins, refining, refill_s) * pace
+    if not capped:
+        _refuse_late(deadline, pace * mandatory_seconds(ctx, flown_joins, deadline.must_s))
+    outputs = deadline.after_s * pace
+    now = time.monotonic()
+    left = max(deadline.end - now, 0.0)
+    search = max(left - repair - outputs, SEARCH_MIN_SHARE * left)
+    deadline.split = {
+        "before_search_s": round(now - deadline.t0, 2),
+        "search_s": round(search, 2),
+        "reserve_s": {"repair": round(repair, 2), "outputs": round(outputs, 2)},
+    }
+    return Budget(now + search, deadline.end - outputs, refining, deadline.split)
+
+
+def refine_steps(pc, budget: Budget, max_iters, say) -> int:
+    """The start-time refinement steps of the repair: the scenario's when refining, none
+    when a time-limited run has less than :data:`REFINE_MIN_S` left before
+    :attr:`Budget.repair_end` (said through ``say(stage, message)``).
+
+    Args:
+      pc: the scenario's planner settings.
+      budget: Budget.
+      max_iters: the search's iteration cap (None: time-bound).
+      say: callable ``say(stage, message)``.
+    Returns:
+      int.
+    """
+    steps = int(pc.refine_steps) if budget.refining else 0
+    left = budget.repair_end - time.monotonic()
+    if steps and max_iters is None and left < REFINE_MIN_S:
+        steps = 0
+        say("refine", f"skipped: {max(left, 0.0):.1f} s left < {REFINE_MIN_S:.0f} s")
+    return steps

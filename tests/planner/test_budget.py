@@ -1,0 +1,182 @@
+"""The time limit after the search: the run's clock, the search's reserve, the repair's deadline.
+
+No long runs: the clock is faked (``time.monotonic`` / ``time.process_time`` patched) or
+the deadline is given in the past, and the repair runs on the small scenarios of
+``test_repair`` with the flown-join check replaced by a stub that rejects one
+observation (so the refill path runs without compiling the join kernels).
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+from test_repair import _check, _searched
+
+from jaxspline.planner import budget as bd
+from jaxspline.planner import deadline as dl
+from jaxspline.planner import repair as rp
+
+
+class _Clock:
+    """A fake clock: ``wall`` and ``cpu`` seconds, moved by hand."""
+
+    def __init__(self, monkeypatch, wall=1000.0, cpu=10.0):
+        self.wall, self.cpu = wall, cpu
+        monkeypatch.setattr(dl.time, "monotonic", lambda: self.wall)
+        monkeypatch.setattr(dl.time, "process_time", lambda: self.cpu)
+        monkeypatch.setattr(bd.time, "monotonic", lambda: self.wall)
+
+
+def test_pace_is_wall_over_cpu_within_its_bounds(monkeypatch):
+    clock = _Clock(monkeypatch)
+    d = dl.StageDeadline(clock.wall, 35.0)
+    assert d.pace() == 1.0  # too early to tell
+    clock.wall += 10.0
+    clock.cpu += 4.0  # 40 % of a core: a loaded machine
+    assert d.pace() == pytest.approx(2.5)
+    clock.cpu += 100.0  # threads: more CPU than wall time
+    assert d.pace() == 1.0
+    clock.wall += 1000.0
+    assert d.pace() == dl.PACE_MAX
+
+
+def test_fits_skip_and_record(monkeypatch):
+    clock = _Clock(monkeypatch)
+    d = dl.StageDeadline(clock.wall, 30.0, after_s=4.0)
+    assert d.end == clock.wall + 30.0 and d.after_s == 4.0
+    clock.wall += 20.0
+    clock.cpu += 10.0  # pace 2
+    assert d.fits(5.0) and not d.fits(5.1)
+    assert d.fits(1.0, end=clock.wall + 2.0) and not d.fits(1.1, end=clock.wall + 2.0)
+    d.skip("outputs", "plan.czml", "give a longer --time-limit")
+    rec = d.record()
+    assert rec["limit_s"] == 30.0 and rec["pace"] == 2.0 and rec["elapsed_s"] == 20.0
+    assert rec["skipped"] == [
+        {
+            "stage": "outputs",
+            "what": "plan.czml",
+            "at_s": 20.0,
+            "remedy": "give a longer --time-limit",
+        }
+    ]
+
+
+def test_process_start_is_before_now():
+    start = dl.process_start()
+    assert 0.0 <= time.monotonic() - start < 86400.0 * 365
+
+
+def _ctx(n_targets, refining, duration=3600.0):
+    """The fields of a PlanContext the budget reads."""
+    per_channel = SimpleNamespace(maneuver=SimpleNamespace(rest_to_rest=not refining))
+    sc = SimpleNamespace(planner=SimpleNamespace(refine_steps=50), satellites=[per_channel])
+    opts = SimpleNamespace(route=np.repeat(np.arange(n_targets), 3))
+    return SimpleNamespace(scenario=sc, opportunities=SimpleNamespace(options=opts))
+
+
+def test_repair_estimate_grows_with_the_steps_that_run():
+    ctx = _ctx(1000, refining=True)
+    plain = bd.repair_seconds(ctx, False, False, 2.0)
+    assert plain == pytest.approx(bd.CHECK_S_PER_TARGET * 1000)
+    joins = bd.repair_seconds(ctx, True, False, 2.0)
+    assert joins > plain + bd.JOINS_FIRST_S + 2.0
+    assert bd.repair_seconds(ctx, True, True, 2.0) > joins + bd.REFINE_FIRST_S
+    assert bd.repair_seconds(_ctx(2000, True), True, True, 2.0) > bd.repair_seconds(
+        ctx, True, True, 2.0
+    )
+
+
+def test_search_leaves_the_reserve_scaled_by_the_pace(monkeypatch):
+    clock = _Clock(monkeypatch)
+    d = dl.StageDeadline(clock.wall, 60.0, after_s=5.0)
+    clock.wall += 10.0
+    clock.cpu += 5.0  # pace 2
+    ctx = _ctx(1000, refining=False)
+    b = bd.deadline_budget(ctx, d, flown_joins=False, refill_s=2.0)
+    repair = 2.0 * bd.repair_seconds(ctx, False, False, 2.0)
+    assert b.search_end == pytest.approx(d.end - repair - 10.0)
+    assert b.repair_end == pytest.approx(d.end - 10.0)  # the outputs' share is kept
+    assert b.split["reserve_s"] == {"repair": round(repair, 2), "outputs": 10.0}
+    assert b.split["before_search_s"] == 10.0 and d.split is b.split
+    assert not b.refining
+
+
+def test_search_gets_its_minimum_share_when_the_reserve_does_not_fit(monkeypatch):
+    clock = _Clock(monkeypatch)
+    d = dl.StageDeadline(clock.wall, 20.0, after_s=100.0)
+    clock.wall += 12.0
+    clock.cpu += 12.0
+    b = bd.deadline_budget(_ctx(5000, True), d, flown_joins=True, refill_s=2.0)
+    assert b.search_end == pytest.approx(clock.wall + bd.SEARCH_MIN_SHARE * 8.0)
+    assert b.refining and b.repair_end < clock.wall  # no time for the optional steps
+    pc, said = SimpleNamespace(refine_steps=50), []
+    assert bd.refine_steps(pc, b, None, lambda *a: said.append(a)) == 0
+    assert [stage for stage, _ in said] == ["refine"]
+    assert bd.refine_steps(pc, b, 200, lambda *a: said.append(a)) == 50  # capped: no clock
+
+
+def test_default_budget_keeps_the_fixed_shares():
+    sc = _ctx(10, refining=True).scenario
+    b = bd.default_budget(sc, 40.0, 100.0)
+    reserve = max(bd.RESERVE_MIN_S, bd.RESERVE_SHARE * 40.0) + bd.REFINE_MAX_S
+    assert b.search_end == pytest.approx(140.0 - reserve) and b.repair_end == 140.0
+    assert b.refining and b.split == {}
+
+
+@functools.cache
+def _searched_once(seed):
+    return _searched(seed)
+
+
+def _reject_once(calls):
+    """A flown-join check that rejects the first observation once, then passes."""
+
+    def reject(sc, scene, opp, chosen):
+        calls.append(len(chosen))
+        return ([chosen[0]] if len(calls) == 1 else []), {"joins": len(chosen)}
+
+    return reject
+
+
+@pytest.mark.parametrize("late", [False, True])
+def test_repair_leaves_out_its_refills_past_the_deadline_never_its_checks(monkeypatch, late):
+    sc, prep, tl = _searched_once(0)
+    chosen = [c for c in tl.assigned if c >= 0]
+    calls, refills = [], []
+    monkeypatch.setattr(rp, "reject_unflyable", _reject_once(calls))
+    real_refill = rp._refill
+    monkeypatch.setattr(rp, "_refill", lambda *a: refills.append(a[3]) or real_refill(*a))
+    deadline = time.monotonic() + (-1.0 if late else 3600.0)
+    rep = rp.repair(prep, chosen, flown_joins=True, refill_s=0.2, deadline=deadline)
+    assert len(calls) == 2  # the join check ran again on the final plan
+    assert rep.dropped["joins"] == 1
+    assert _check(sc, prep, rep.opp, rep.chosen)[0] == []  # valid either way
+    if late:
+        assert refills == [] and [w for w, _ in rep.skipped] == ["refill"]
+        assert rep.refilled == 0
+        assert rep.chosen == chosen[1:]
+    else:
+        assert len(refills) == 1 and refills[0] == pytest.approx(0.2) and rep.skipped == ()
+
+
+def test_a_call_whose_checks_would_end_far_past_the_limit_stops_before_the_search(monkeypatch):
+    clock = _Clock(monkeypatch)
+    d = dl.StageDeadline(clock.wall, 10.0, "3 targets", after_s=1.0, must_s=0.5)
+    clock.wall += 25.0  # the compile allowance let the stages before the search run late
+    clock.cpu += 25.0
+    ctx = _ctx(2000, refining=False)
+    need = bd.mandatory_seconds(ctx, True, 0.5)
+    assert need == pytest.approx(
+        2 * (bd.CHECK_S_PER_TARGET + bd.JOINS_S_PER_TARGET) * 2000 + bd.JOINS_FIRST_S + 0.5
+    )
+    assert 25.0 + need - 10.0 > bd.LATE_MAX_S
+    with pytest.raises(dl.TimeLimitError, match="would end .* past the limit; 3 targets") as e:
+        bd.deadline_budget(ctx, d, flown_joins=True, refill_s=2.0)
+    assert e.value.stage == "search" and e.value.estimate == pytest.approx(25.0 + need)
+    b = bd.deadline_budget(ctx, d, flown_joins=True, refill_s=2.0, capped=True)  # reproducible
+    assert b.search_end == pytest.approx(clock.wall)  # nothing left: a quarter of nothing
+    assert bd.deadline_budget(_ctx(10, False), d, flown_joins=True, refill_s=2.0)  # small: late
