@@ -74,9 +74,14 @@ def instance(seed):
     return opt, tr
 
 
+#: Random instances of the ratio test (each ~5 s, compilation mostly); seeds 2-5 are
+#: ones where a width-1 beam misses the optimum.
+N_RATIO_INSTANCES = 6
+
+
 def test_exact_equals_brute_force_and_heuristics_ratio(reach_kernels):  # noqa: F811
     ratios_g, ratios_b, ratios_b1 = [], [], []
-    for seed in range(15):
+    for seed in range(N_RATIO_INSTANCES):
         opt, tr = instance(seed)
         ex = sequence.exact_plan(opt, tr)
         bf = brute_force(opt, tr)
