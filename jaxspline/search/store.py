@@ -25,7 +25,7 @@ import numpy as np
 
 from jaxspline.search.memory import trim_heap
 
-__all__ = ["PIECE_PAIRS", "NearPairs", "PairsBuilder", "start_order"]
+__all__ = ["PIECE_PAIRS", "TRIM_PAIRS", "NearPairs", "PairsBuilder", "start_order"]
 
 _INDEX = np.int32  # option ids of the stored pairs (< 2**31 options)
 _NEED = np.float32  # stored required times [s], rounded up
@@ -33,6 +33,8 @@ _SRC_BITS = 32  # a pair's sort key while building: (row << _SRC_BITS) | source
 _SRC_MASK = (1 << _SRC_BITS) - 1
 #: Pairs of one sorted piece kept by :class:`PairsBuilder` (2 MB of int32 + float32).
 PIECE_PAIRS = 1 << 18
+#: Pairs placed by :meth:`PairsBuilder.build` between two heap trims (64 MB of pieces).
+TRIM_PAIRS = 1 << 23
 
 
 def start_order(start, sat) -> np.ndarray:
@@ -167,9 +169,11 @@ class PairsBuilder:
     Call :meth:`add` with the chunks of one satellite (any order), then :meth:`close`
     before the next one: a closed satellite's pairs are sorted by (row, source) and
     kept compact (8 bytes a pair) in pieces of :data:`PIECE_PAIRS` pairs. :meth:`build`
-    places the pieces of all satellites in row order and frees each once placed, so the
-    final table fills as the pieces go (peak: 8 bytes a pair plus a few pieces, where
-    moving whole satellites would hold 16).
+    places the pieces of all satellites in row order and frees each once placed, the
+    freed heap pages handed back to the OS every :data:`TRIM_PAIRS` pairs
+    (:func:`jaxspline.search.memory.trim_heap`), so the final table fills as the pieces
+    go (peak: 8 bytes a pair plus about 64 MB, where moving whole satellites would
+    hold 16 bytes a pair).
     """
 
     def __init__(self, n: int, rows):
@@ -221,6 +225,7 @@ class PairsBuilder:
         pieces = sorted(self._pieces, key=lambda pc: int(pc[0][0]))
         pieces.reverse()  # popped from the end: first rows ascending, ties in order
         self._pieces = []
+        placed = 0
         while pieces:  # place and free one piece at a time
             rows, counts, s, w = pieces.pop()
             first = np.cumsum(counts) - counts
@@ -228,6 +233,10 @@ class PairsBuilder:
             fill[rows] += counts
             src[at] = s
             need[at] = w
+            placed += s.size
             del s, w, at
-        trim_heap()  # the sort's temporaries leave free heap pages: give them back
+            if placed >= TRIM_PAIRS:  # freed pieces stay on the heap: hand them back
+                trim_heap()
+                placed = 0
+        trim_heap()  # and the sort's temporaries
         return NearPairs(ptr, src, need, self.rows)
