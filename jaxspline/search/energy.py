@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 
 __all__ = ["EnergyBudgets"]
@@ -36,7 +37,7 @@ __all__ = ["EnergyBudgets"]
 _SLEW_TOL = 0.1  # [s] taken off each required slew time (covers the gap margin)
 _CACHE_PAIRS = 1 << 25  # up to this many near pairs, each battery satellite's per-pair
 # terms are kept between iterations (~28 bytes a pair); above, derived each time
-_ARC_BLOCK = 1 << 20  # near pairs whose per-pair terms are derived at once (~70 MB)
+_ARC_BLOCK = 1 << 18  # near pairs whose per-pair terms are derived at once (~18 MB)
 _WH = 1.0 / 3600.0  # [Wh / J]
 
 
@@ -173,6 +174,7 @@ class EnergyBudgets:
           (node float64 [N], arc float32 [P]) prices (arcs rounded down: a cheaper arc
           can only raise the DP's optimum, so the bound stays an upper bound).
         """
+        trim_heap()  # the last iteration's freed blocks: not resident beside the new arcs
         node = np.zeros(self.n_options)
         arc = np.zeros(self.n_near, np.float32)  # 4 bytes a pair, rounded down below
         for sk in self.sats:

@@ -29,6 +29,7 @@ from jaxspline.search.lagrangian import (
 )
 from jaxspline.search.lns import earliest_pass, greedy, greedy_order, lns
 from jaxspline.search.lns_energy import EnergyRank
+from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 from jaxspline.search.timeline import Timeline
@@ -149,6 +150,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
         lagrangian_iterations=res.iterations,
         lagrangian_bound=res.bound,
     )
+    trim_heap()  # the bound phase's freed arrays: the LNS runs without them resident
     exact = False
     if pb.n_options <= exact_max_options:
         start = list(tl.assigned)
