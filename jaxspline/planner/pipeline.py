@@ -73,7 +73,6 @@ _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-fea
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
 _JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
-_RELEASE_PAIRS = 1 << 24  # near pairs from which the compiled programs go after screening
 _REFILL_S = 2.0  # [s] budget of one refill after join rejections
 _REFILL_ITERS = 2000  # LNS iterations of one refill in iteration-capped runs
 _WORKER_MIN_CPUS = 2  # the bound worker runs only with a second CPU
@@ -334,8 +333,6 @@ def build_problem(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )
         release_programs()  # the screen's compiled chunk programs are done with
-        if len(near) >= _RELEASE_PAIRS:  # and on a large problem every compiled program:
-            jax.clear_caches()  # ~150 MB the search would hold (later stages recompile)
         clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
         check("screening")
         battery = _battery(sc, sunlit)
