@@ -57,6 +57,7 @@ from jaxspline.planner.opportunities import build_opportunities, nadir_rate, ref
 from jaxspline.planner.repair import dropped_line, repair
 from jaxspline.planner.result import PlanResult
 from jaxspline.readers.mission import Scenario, orbit_scene
+from jaxspline.screen.fused import release_programs
 from jaxspline.screen.options import take_options
 from jaxspline.screen.pairs import screen_chunks
 from jaxspline.search import BatteryModel, Problem, mip_bound, solve
@@ -333,6 +334,7 @@ def build_problem(
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )
+        release_programs()  # the screen's compiled chunk programs are done with
         clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
         check("screening")
         battery = _battery(sc, sunlit)

@@ -37,7 +37,7 @@ from jaxspline.screen.transitions import (
     top_k_score,
 )
 
-__all__ = ["fused_chunks", "screen_transitions_fused"]
+__all__ = ["fused_chunks", "release_programs", "screen_transitions_fused"]
 
 #: Row widths tried for the [rows, width] candidate layout, widest first.
 _WIDTHS = (256, 128, 64, 32, 16, 8, 4, 2, 1)
@@ -45,6 +45,14 @@ _WIDTHS = (256, 128, 64, 32, 16, 8, 4, 2, 1)
 _EXTRACT_MAX_K = 32
 #: Smallest padded option table (~1 MB for 3 channels): small tables share programs.
 _MIN_TABLE = 1 << 14
+
+
+def release_programs() -> None:
+    """Drop the compiled chunk programs (:func:`fused_chunks` compiles them again when
+    called anew): their executables hold ~100-200 MB of a large screen, which a caller
+    that screens once (the planner) does not need afterwards."""
+    for program in (_fused_program, _compact_program, _topk_program):
+        program.cache_clear()
 
 
 def _row_width(counts: np.ndarray, chunk_size: int) -> int:

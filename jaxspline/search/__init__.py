@@ -4,7 +4,8 @@ Its input is a :class:`Problem` of plain arrays (built by :mod:`jaxspline.planne
 it imports nothing of the package outside this folder. Inside, imports point one way:
 ``store`` / ``battery`` -> ``problem`` -> ``dp`` / ``timeline`` / ``energy`` / ``mip`` ->
 ``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` -> ``bound_worker`` -> ``solve``
-(:func:`solve`, the stages run until a deadline). ``clock`` is the search's one time
+(:func:`solve`, the stages run until a deadline); ``memory`` (the heap trim) comes
+first. ``clock`` is the search's one time
 source; ``construct`` is the one greedy strategy (``greedy_pass``), used by ``timeline``,
 ``lns`` and :mod:`jaxspline.sequences.sequencer`; ``status`` (:class:`BoundStatus`) is how
 every bound ended. The search speaks of *targets* (what may be imaged once) and

@@ -28,6 +28,7 @@ import time
 import warnings
 
 from jaxspline.search.lagrangian import BoundResult, upper_bound
+from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 
@@ -63,6 +64,7 @@ class BoundWorker:
         self._proc = ctx.Process(
             target=_run, args=(child, pb, plan_value, deadline, max_iters), daemon=True
         )
+        trim_heap()  # the child maps the parent's resident pages: no free ones among them
         with warnings.catch_warnings():  # JAX warns of any fork; the child runs no JAX
             warnings.filterwarnings("ignore", message=r"os\.fork\(\) was called")
             self._proc.start()

@@ -29,6 +29,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 
 __all__ = ["EnergyBudgets"]
@@ -36,6 +37,7 @@ __all__ = ["EnergyBudgets"]
 _SLEW_TOL = 0.1  # [s] taken off each required slew time (covers the gap margin)
 _CACHE_PAIRS = 1 << 25  # up to this many near pairs, each battery satellite's per-pair
 # terms are kept between iterations (~28 bytes a pair); above, derived each time
+_ARC_BLOCK = 1 << 18  # near pairs whose per-pair terms are derived at once (~18 MB)
 _WH = 1.0 / 3600.0  # [Wh / J]
 
 
@@ -92,7 +94,7 @@ class EnergyBudgets:
                 "pairs": pairs,
             }
             if self.n_near <= _CACHE_PAIRS:
-                sk["arcs"] = self._arcs(sk)
+                sk["arcs"] = self._arc_terms(sk, lo, hi)
             inside = self._usage(sk, np.ones(hi - lo, bool))
             kept = (a_t[:, None] < b_t[None, :]) & (budget > 0.0)
             kept &= (inside > budget) & (span > budget)
@@ -114,17 +116,11 @@ class EnergyBudgets:
         self.m = m
 
     @staticmethod
-    def _arcs(sk, chosen=None):
-        """(positions, ia, ib, energy [Wh]) of the satellite's near pairs (those where the
-        bool [P] ``chosen`` holds, default all): kept ones, else from the pair table."""
-        if "arcs" in sk:
-            idx, ia, ib, ea = sk["arcs"]
-            if chosen is None:
-                return idx, ia, ib, ea
-            m = chosen[idx]
-            return idx[m], ia[m], ib[m], ea[m]
+    def _arc_terms(sk, a: int, b: int, chosen=None):
+        """(positions, ia, ib, energy [Wh]) of the near pairs into options ``a..b-1`` of
+        the satellite (those where the bool [P] ``chosen`` holds, default all)."""
         pairs, lo = sk["pairs"], sk["lo"]
-        idx, dst = pairs.gather(np.arange(lo, sk["hi"]))
+        idx, dst = pairs.gather(np.arange(a, b))
         if chosen is not None:
             m = chosen[idx]
             idx, dst = idx[m], dst[m]
@@ -137,14 +133,35 @@ class EnergyBudgets:
         return idx, ia, ib, sk["slew_wh"] * slew
 
     @classmethod
+    def _arcs(cls, sk, chosen=None):
+        """The satellite's :meth:`_arc_terms` (where ``chosen`` holds, default all):
+        the kept ones, else derived from the pair table in blocks of about
+        :data:`_ARC_BLOCK` pairs (an iterator of such tuples)."""
+        if "arcs" in sk:
+            idx, ia, ib, ea = sk["arcs"]
+            if chosen is None:
+                yield idx, ia, ib, ea
+            else:
+                m = chosen[idx]
+                yield idx[m], ia[m], ib[m], ea[m]
+            return
+        pairs, lo, hi = sk["pairs"], sk["lo"], sk["hi"]
+        r = pairs.row_of[lo:hi]
+        upto = np.cumsum(pairs.ptr[r + 1] - pairs.ptr[r])  # pairs into options lo..j
+        marks = np.arange(_ARC_BLOCK, int(upto[-1]) if upto.size else 0, _ARC_BLOCK)
+        cuts = np.unique(np.r_[0, np.searchsorted(upto, marks, side="right"), hi - lo])
+        for a, b in zip(cuts[:-1], cuts[1:], strict=True):
+            yield cls._arc_terms(sk, lo + int(a), lo + int(b), chosen)
+
+    @classmethod
     def _usage(cls, sk, nodes, arcs=None):
         """[A, E] energy inside each interval of the chosen options / near pairs (masks;
         ``arcs`` None: every near pair)."""
         a_n, e_n = sk["shape"]
         h = np.zeros((a_n + 1, e_n + 1))
         np.add.at(h, (sk["ia"][nodes], sk["ib"][nodes]), sk["e"][nodes])
-        _, ia, ib, ea = cls._arcs(sk, arcs)
-        np.add.at(h, (ia, ib), ea)
+        for _, ia, ib, ea in cls._arcs(sk, arcs):  # in pair order, block by block
+            np.add.at(h, (ia, ib), ea)
         r = np.cumsum(np.cumsum(h[::-1], axis=0)[::-1], axis=1)  # sum over x >= a, y <= b
         return r[1:, :e_n]
 
@@ -157,6 +174,7 @@ class EnergyBudgets:
           (node float64 [N], arc float32 [P]) prices (arcs rounded down: a cheaper arc
           can only raise the DP's optimum, so the bound stays an upper bound).
         """
+        trim_heap()  # the last iteration's freed blocks: not resident beside the new arcs
         node = np.zeros(self.n_options)
         arc = np.zeros(self.n_near, np.float32)  # 4 bytes a pair, rounded down below
         for sk in self.sats:
@@ -166,8 +184,8 @@ class EnergyBudgets:
             sp = np.zeros((a_n + 1, e_n + 1))  # sum over a < x, b >= y
             sp[1:, :e_n] = np.cumsum(np.cumsum(v[:, ::-1], axis=1)[:, ::-1], axis=0)
             node[sk["lo"] : sk["hi"]] = sk["e"] * sp[sk["ia"], sk["ib"]]
-            idx, ia, ib, ea = self._arcs(sk)
-            arc[idx] = _round_down32(ea * sp[ia, ib])
+            for idx, ia, ib, ea in self._arcs(sk):
+                arc[idx] = _round_down32(ea * sp[ia, ib])
         return node, arc
 
     def usage(self, nodes: np.ndarray, arcs: np.ndarray) -> np.ndarray:

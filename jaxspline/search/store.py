@@ -12,7 +12,8 @@ row).
 
 :class:`PairsBuilder` fills the table chunk by chunk as the screen streams its rows:
 one satellite's rows are held compactly (12 bytes a pair) until the satellite is done,
-then sorted into rows; finished satellites are copied once into the final arrays.
+then sorted into rows and kept in pieces; the pieces are copied once into the final
+arrays, each freed once placed.
 """
 
 from __future__ import annotations
@@ -22,10 +23,18 @@ import math
 
 import numpy as np
 
-__all__ = ["NearPairs", "PairsBuilder", "start_order"]
+from jaxspline.search.memory import trim_heap
+
+__all__ = ["PIECE_PAIRS", "TRIM_PAIRS", "NearPairs", "PairsBuilder", "start_order"]
 
 _INDEX = np.int32  # option ids of the stored pairs (< 2**31 options)
 _NEED = np.float32  # stored required times [s], rounded up
+_SRC_BITS = 32  # a pair's sort key while building: (row << _SRC_BITS) | source
+_SRC_MASK = (1 << _SRC_BITS) - 1
+#: Pairs of one sorted piece kept by :class:`PairsBuilder` (2 MB of int32 + float32).
+PIECE_PAIRS = 1 << 18
+#: Pairs placed by :meth:`PairsBuilder.build` between two heap trims (64 MB of pieces).
+TRIM_PAIRS = 1 << 23
 
 
 def start_order(start, sat) -> np.ndarray:
@@ -159,8 +168,12 @@ class PairsBuilder:
 
     Call :meth:`add` with the chunks of one satellite (any order), then :meth:`close`
     before the next one: a closed satellite's pairs are sorted by (row, source) and
-    kept compact (8 bytes a pair) until :meth:`build` places them (peak: 16 bytes a
-    pair, while the last satellites move into the final table).
+    kept compact (8 bytes a pair) in pieces of :data:`PIECE_PAIRS` pairs. :meth:`build`
+    places the pieces of all satellites in row order and frees each once placed, the
+    freed heap pages handed back to the OS every :data:`TRIM_PAIRS` pairs
+    (:func:`jaxspline.search.memory.trim_heap`), so the final table fills as the pieces
+    go (peak: 8 bytes a pair plus about 64 MB, where moving whole satellites would
+    hold 16 bytes a pair).
     """
 
     def __init__(self, n: int, rows):
@@ -169,7 +182,7 @@ class PairsBuilder:
         self.row_of = np.empty(self.n, np.int64)
         self.row_of[self.rows] = np.arange(self.n)
         self._open = []  # the open satellite's (src, dst, need) compact chunks
-        self._done = []  # closed satellites: (rows, pairs per row, src, need) by row
+        self._pieces = []  # closed pairs: (rows, pairs per row, src, need), each by row
         self.counts = np.zeros(self.n, np.int64)  # pairs per row
 
     def add(self, src, dst, need) -> None:
@@ -181,15 +194,24 @@ class PairsBuilder:
         """Sort the open satellite's pairs by (row, source) and keep them compact."""
         if not self._open:
             return
-        src = np.concatenate([c[0] for c in self._open])
-        row = self.row_of[np.concatenate([c[1] for c in self._open])]
-        need = np.concatenate([c[2] for c in self._open])
-        self._open = []
-        order = np.lexsort((src, row))
-        rows, counts = np.unique(row, return_counts=True)  # sorted rows of this satellite
-        del row
-        self.counts[rows] += counts
-        self._done.append((rows, counts, src[order], need[order]))
+        # one int64 key a pair, (row << 32) | source, built chunk by chunk (chunks freed)
+        keys, needs = [], []
+        while self._open:
+            s, d, w = self._open.pop(0)
+            keys.append((self.row_of[d] << _SRC_BITS) | s.astype(np.int64))
+            needs.append(w)
+        key, need = np.concatenate(keys), np.concatenate(needs)
+        del keys, needs
+        order = np.argsort(key, kind="stable")  # the order of lexsort((src, row))
+        for a in range(0, order.size, PIECE_PAIRS):
+            part = order[a : a + PIECE_PAIRS]
+            k = key[part]
+            row = k >> _SRC_BITS
+            cut = np.flatnonzero(np.r_[True, row[1:] != row[:-1]])
+            rows, counts = row[cut], np.diff(np.r_[cut, row.size])
+            self.counts[rows] += counts
+            src = (k & _SRC_MASK).astype(_INDEX)
+            self._pieces.append((rows, counts, src, need[part]))
 
     def build(self) -> NearPairs:
         """The table (closes the open satellite); the builder is emptied."""
@@ -198,12 +220,23 @@ class PairsBuilder:
         np.cumsum(self.counts, out=ptr[1:])
         src = np.empty(int(ptr[-1]), _INDEX)
         need = np.empty(int(ptr[-1]), _NEED)
-        while self._done:  # place and free one satellite at a time
-            rows, counts, s, w = self._done.pop(0)
-            # a satellite's pairs are sorted by row: those of row r go to ptr[r] onwards
+        fill = ptr[:-1].copy()  # next free position of each row
+        # pieces by first row (stable: a row split over pieces fills in their order)
+        pieces = sorted(self._pieces, key=lambda pc: int(pc[0][0]))
+        pieces.reverse()  # popped from the end: first rows ascending, ties in order
+        self._pieces = []
+        placed = 0
+        while pieces:  # place and free one piece at a time
+            rows, counts, s, w = pieces.pop()
             first = np.cumsum(counts) - counts
-            at = np.repeat(ptr[rows] - first, counts) + np.arange(s.size)
+            at = np.repeat(fill[rows] - first, counts) + np.arange(s.size)
+            fill[rows] += counts
             src[at] = s
             need[at] = w
+            placed += s.size
             del s, w, at
+            if placed >= TRIM_PAIRS:  # freed pieces stay on the heap: hand them back
+                trim_heap()
+                placed = 0
+        trim_heap()  # and the sort's temporaries
         return NearPairs(ptr, src, need, self.rows)

@@ -33,7 +33,7 @@ from jaxspline.search.problem import Problem
 
 __all__ = ["Timeline"]
 
-_CACHE_LIMIT = 3_000_000  # memoized transition times before the cache is cleared
+_CACHE_LIMIT = 1_000_000  # memoized transition times before the cache is cleared (~100 B each)
 _TURNAROUND_WEIGHT = 0.02  # tie-break weight of the end time in insertion costs
 _INSERT_NOISE = 0.3  # relative noise of randomized insertion costs
 

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+from jaxspline.search import store
 from jaxspline.search.store import NearPairs, PairsBuilder, start_order
 
 
@@ -23,8 +24,10 @@ def _random_pairs(rng, n_sats=3, per_sat=60, density=0.3):
     return sat, start, ref
 
 
-@pytest.mark.parametrize("seed", [0, 1])
-def test_streamed_table_answers_like_a_dict(seed):
+@pytest.mark.parametrize("seed, piece", [(0, None), (1, None), (2, 7), (3, 1)])
+def test_streamed_table_answers_like_a_dict(seed, piece, monkeypatch):
+    if piece is not None:  # pieces smaller than a row: rows split over several pieces
+        monkeypatch.setattr(store, "PIECE_PAIRS", piece)
     rng = np.random.default_rng(seed)
     sat, start, ref = _random_pairs(rng)
     n = sat.size
