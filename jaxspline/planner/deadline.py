@@ -33,11 +33,14 @@ from pathlib import Path
 
 __all__ = [
     "COMPILE_ALLOWANCE_S",
+    "EXEC_WAIT_FACTOR",
+    "EXEC_WAIT_SLACK_S",
     "PACE_MAX",
     "StageDeadline",
     "TimeLimitError",
     "compile_seconds",
     "process_start",
+    "startup_seconds",
     "suggested_limit",
 ]
 
@@ -45,6 +48,14 @@ __all__ = [
 COMPILE_ALLOWANCE_S = 20.0
 #: Largest pace (wall time over CPU time) the estimates of the later stages are scaled by.
 PACE_MAX = 3.0
+#: A process older than this many times its own CPU time, plus :data:`EXEC_WAIT_SLACK_S`,
+#: was created before Python started: a shell ran other commands, then exec'd this one
+#: (``bash -c 'pip install ... && jaxspline plan ...'`` execs its last command, which
+#: keeps the shell's start time). Python's start-up is CPU-bound, so its CPU time is
+#: then the measure of it.
+EXEC_WAIT_FACTOR = 3.0
+#: [s] added to :data:`EXEC_WAIT_FACTOR` times the CPU time (a slow disk, a loaded machine).
+EXEC_WAIT_SLACK_S = 5.0
 _PACE_MIN_WALL_S = 1.0  # [s] of wall time before the pace is measured (1 until then)
 
 _COMPILE_EVENTS = frozenset(
@@ -85,8 +96,9 @@ def process_start() -> float:
     """When this process started, on the ``time.monotonic`` clock [s].
 
     A command's time limit counts from here, so starting Python and importing JAX
-    (2-7 s) count too. Reads ``/proc/self/stat`` (Linux); elsewhere, or when that
-    fails, the current time.
+    (2-7 s) count too. Reads the process's age from ``/proc/self/stat`` (Linux),
+    corrected by :func:`startup_seconds` for a process that a shell exec'd after other
+    work; elsewhere, or when that fails, the current time.
 
     Returns:
       float [s], at most ``time.monotonic()``.
@@ -94,10 +106,30 @@ def process_start() -> float:
     try:
         fields = Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()
         started = int(fields[_STAT_STARTTIME]) / os.sysconf("SC_CLK_TCK")  # since boot
-        since = time.clock_gettime(time.CLOCK_BOOTTIME) - started
+        age = time.clock_gettime(time.CLOCK_BOOTTIME) - started
     except (OSError, ValueError, IndexError, AttributeError):
         return time.monotonic()
-    return time.monotonic() - max(since, 0.0)
+    return time.monotonic() - startup_seconds(age, time.process_time())
+
+
+def startup_seconds(age_s: float, cpu_s: float) -> float:
+    """How long ago this Python process started, from its age and its CPU time [s].
+
+    The age counts from the process's creation, which for a command a shell exec'd is
+    the shell's start (:data:`EXEC_WAIT_FACTOR`): an age far above the CPU time used
+    means the process waited before Python ran, and the CPU time stands for the
+    start-up then.
+
+    Args:
+      age_s: seconds since the process was created (``/proc/self/stat``).
+      cpu_s: its CPU time so far (``time.process_time()``).
+    Returns:
+      float >= 0 [s].
+    """
+    age_s, cpu_s = max(float(age_s), 0.0), max(float(cpu_s), 0.0)
+    if age_s > EXEC_WAIT_FACTOR * cpu_s + EXEC_WAIT_SLACK_S:
+        return min(cpu_s, age_s)
+    return age_s
 
 
 _STAT_STARTTIME = 19  # field 22 of /proc/PID/stat (starttime), counted after "(comm) "

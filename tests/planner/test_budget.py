@@ -9,6 +9,8 @@ observation (so the refill path runs without compiling the join kernels).
 from __future__ import annotations
 
 import functools
+import subprocess
+import sys
 import time
 from types import SimpleNamespace
 
@@ -63,6 +65,30 @@ def test_fits_skip_and_record(monkeypatch):
             "remedy": "give a longer --time-limit",
         }
     ]
+
+
+def test_startup_ignores_the_wait_of_a_shell_that_execs_the_command():
+    # bash -c 'pip install ... && jaxspline plan' execs jaxspline in the shell's process:
+    # its age counts pip's minute, its CPU time only Python's own start-up
+    assert dl.startup_seconds(64.6, 4.0) == 4.0
+    assert dl.startup_seconds(6.0, 4.0) == 6.0  # a plain start: the age (waits on disk)
+    assert dl.startup_seconds(14.0, 4.0) == 14.0  # a loaded machine: pace 3.5 still counts
+    assert dl.startup_seconds(-1.0, 0.5) == 0.0
+
+
+def test_process_start_counts_python_not_the_shell_before_it():
+    # the module alone (standard library only): Python starts in well under a second
+    code = (
+        "import importlib.util as u, time; "
+        f"s = u.spec_from_file_location('d', {dl.__file__!r}); m = u.module_from_spec(s); "
+        "s.loader.exec_module(m); print(time.monotonic() - m.process_start())"
+    )
+    wait_s = 8.0  # > EXEC_WAIT_SLACK_S + EXEC_WAIT_FACTOR x Python's CPU time
+    shell = f'sleep {wait_s} && exec {sys.executable} -c "{code}"'
+    t0 = time.monotonic()
+    out = subprocess.run(["bash", "-c", shell], capture_output=True, text=True, check=True)
+    started_ago = float(out.stdout.split()[-1])
+    assert started_ago <= time.monotonic() - t0 - wait_s + 0.5
 
 
 def test_process_start_is_before_now():
