@@ -39,6 +39,7 @@ from jaxspline.search.lns import greedy_order as greedy_order
 from jaxspline.search.lns import lns as lns
 from jaxspline.search.lns_energy import EnergyRank as EnergyRank
 from jaxspline.search.lns_energy import make_room as make_room
+from jaxspline.search.memory import trim_heap as trim_heap
 from jaxspline.search.mip import MipBound as MipBound
 from jaxspline.search.mip import mip_bound as mip_bound
 from jaxspline.search.problem import Problem as Problem
