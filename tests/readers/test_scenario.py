@@ -62,7 +62,7 @@ def test_default_scenario_satellites(default):
     assert np.degrees(fl.off_nadir_max) == pytest.approx(25.0)
     pl = default.planner
     assert (pl.time_step, pl.geometry_step, pl.scan_speeds) == (10.0, 10.0, (7000.0,))
-    assert pl.default_time_limit == 60.0 and pl.margins.battery_wh == 10.0
+    assert pl.default_time_limit == 90.0 and pl.margins.battery_wh == 10.0
 
 
 def test_default_scenario_orbits_propagate(default):
