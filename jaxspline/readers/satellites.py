@@ -21,6 +21,7 @@ import numpy as np
 
 from jaxspline.geometry.frames import gmst, jd_split, julian_date
 from jaxspline.geometry.orbit import circular_orbit, circular_orbit_over, propagate_tle
+from jaxspline.kernels.flex import mode_suppressible
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.fields import (
     field_bool,
@@ -278,6 +279,16 @@ def _satellite(ctx, f, sat, default_name, epoch, duration) -> Satellite:
     power = _power(ctx, f, sat)
     swath = _num(ctx, f"{f}.swath_km", sat.get("swath_km", DEFAULT_SWATH_KM), "swath_km")
     limits = AxisLimits(rate, accel)
+    if flex is not None and not mode_suppressible(
+        flex.tolerance, flex.freq, flex.damping, rate, accel
+    ):
+        raise ctx.error(
+            f"{f}.flex",
+            f"no slew profile holds a {flex.freq / (2 * math.pi):g} Hz mode (damping "
+            f"{flex.damping:g}) to tolerance_deg = {math.degrees(flex.tolerance):g} at "
+            f"rate_deg_s = {math.degrees(rate):g}, accel_deg_s2 = {math.degrees(accel):g}: "
+            "give a larger tolerance_deg or freq_hz, or a smaller accel_deg_s2",
+        )
     try:
         return Satellite(
             name, orbit, model, limits, math.radians(off), sensor, settle, flex, power, 1e3 * swath

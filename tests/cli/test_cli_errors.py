@@ -291,3 +291,37 @@ def test_a_write_error_is_one_line_with_exit_4_and_keeps_the_previous_set(
     assert err == "jaxspline: cannot write: cannot write the outputs: No space left on device\n"
     assert (out / "plan.json").read_text() == "previous"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "s.toml"]
+
+
+def test_output_file_flags_are_checked_before_any_work(tmp_path, scen, capsys):
+    """Every command's output file (--json, --plan, -o) is checked before it works: its
+    folder must exist, a file there must not block it, and the message names the flag."""
+    (tmp_path / "f").write_text("a file")
+    (tmp_path / "e.json").write_text('{"actions": []}')
+    (tmp_path / "case").mkdir()
+    missing, under_file = str(tmp_path / "no" / "x.json"), str(tmp_path / "f" / "x.json")
+    case, sol = str(tmp_path / "case"), str(tmp_path / "e.json")
+    cases = [
+        (["bound", str(scen), "--json", missing], "--json: the folder of"),
+        (["bound", str(scen), "--plan", under_file], "--plan: the folder of"),
+        (["bound", str(scen), "--json", sol], "--json: "),
+        (["view", sol, "-o", missing], "-o/--output: the folder of"),
+        (["aeossp", "solve", case, "-o", missing], "-o/--output: the folder"),
+        (["aeossp", "check", case, sol, "--json", under_file], "--json: "),
+        (
+            ["regional", "solve", case, "-o", "s.json", "--time-limit", "inf"],
+            "--time-limit: must be a finite",
+        ),
+        (["regional", "solve", case, "-o", "s.json", "--seed", "-1"], "--seed"),
+        (["regional", "solve", case, "-o", ""], "-o/--output: must not be"),
+        (["regional", "solve", case, "-o", str(tmp_path)], "-o/--output: "),
+        (["regional", "solve", case, "-o", sol], "-o/--output: "),
+        (["regional", "solve", str(tmp_path / "nocase"), "-o", "s.json"], "CASE_DIR: not found"),
+        (["regional", "check", case, sol, "--json", ""], "--json: must"),
+        (["regional", "check", case, sol, "--json", missing], "--json: "),
+    ]
+    for argv, msg in cases:
+        code, err, seconds = _run(capsys, argv)
+        assert code == EXIT_BAD_INPUT and msg in err, (argv, err)
+        assert err.count("\n") == 1 and "Traceback" not in err and seconds < 10.0
+    assert sorted(os.listdir(tmp_path)) == ["case", "e.json", "f", "s.toml"]

@@ -337,6 +337,13 @@ BAD = [
         6,
         "only used by model 'flexible'",
     ),
+    (  # valid ranges, but no ramp time holds this mode: refused when read, not when planning
+        HEAD + SAT + "model = 'flexible'\nrate_deg_s = 2.0\naccel_deg_s2 = 1.0\n"
+        "flex = { freq_hz = 0.5, tolerance_deg = 1e-4 }\n" + POINT_TARGET,
+        "satellites[0].flex",
+        9,
+        "no slew profile holds a 0.5 Hz mode",
+    ),
     (
         HEAD + SAT + "model = 'flexible'\nflex = { damping = 0.1 }\n" + POINT_TARGET,
         "satellites[0].flex.freq_hz",
