@@ -446,6 +446,20 @@ BAD = [
 ]
 
 
+def test_tle_angles_are_checked(tmp_path):
+    """SGP4 propagates an inclination of 200 deg without a word: the reader refuses it."""
+    from jaxspline.readers.satellites import tle_checksum
+
+    line2 = TLE[1][:8] + "200.0448" + TLE[1][16:68]
+    line2 += str(tle_checksum(line2))
+    text = (
+        '[scenario]\nepoch = "2026-04-14T12:00:00Z"\nduration_s = 600.0\n[[satellites]]\n'
+        f"tle = [{TLE[0]!r}, {line2!r}]\n" + POINT_TARGET
+    )
+    with pytest.raises(ValueError, match=r"satellites\[0\].tle .*inclination .* got 200"):
+        load_scenario(_write(tmp_path, text))
+
+
 @pytest.mark.parametrize(("text", "field", "line", "why"), BAD)
 def test_bad_files_name_the_field_and_line(tmp_path, text, field, line, why):
     with pytest.raises(ValueError) as err:
