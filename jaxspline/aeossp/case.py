@@ -31,6 +31,7 @@ from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 from jaxspline.readers.case_files import UniqueKeyLoader, format_time
 from jaxspline.readers.case_files import parse_time as _parse_time
 from jaxspline.readers.fields import read_text
+from jaxspline.readers.satellites import tle_line_problem
 
 __all__ = [
     "Case",
@@ -285,10 +286,10 @@ def _load_satellite(raw: Any, where: str, start: datetime) -> Satellite:
     if isinstance(norad, bool) or not isinstance(norad, int):
         raise ValueError(f"{where}.norad_catalog_id: expected an integer, got {norad!r}")
     l1, l2 = _str(raw, "tle_line1", where), _str(raw, "tle_line2", where)
-    if not l1.startswith("1 ") or len(l1) < 69:
-        raise ValueError(f"{where}.tle_line1: not a TLE line 1: {l1!r}")
-    if not l2.startswith("2 ") or len(l2) < 69:
-        raise ValueError(f"{where}.tle_line2: not a TLE line 2: {l2!r}")
+    for num, line in ((1, l1), (2, l2)):
+        problem = tle_line_problem(line.rstrip(), num)
+        if problem:
+            raise ValueError(f"{where}.tle_line{num}: {problem}")
     _check_tle(l1, l2, where, start)
     sensor = _get(raw, "sensor", where)
     att = _get(raw, "attitude_model", where)

@@ -14,7 +14,7 @@ import sys
 import time
 from pathlib import Path
 
-from jaxspline.cli.flags import MAX_SEED, check_int, check_path, check_seconds
+from jaxspline.cli.flags import MAX_SEED, check_int, check_output_file, check_path, check_seconds
 
 __all__ = ["register"]
 
@@ -43,7 +43,7 @@ def _check_and_print(case, solution: dict, json_out: str | None) -> int:
 def _check_paths(args) -> None:
     """The path flags of both sub-commands, each by its name (ValueError)."""
     check_path("CASE_DIR", args.case_dir, kind="dir", exists=True)
-    check_path("--json", None if args.json in (None, "-") else args.json, kind="file")
+    check_output_file("--json", args.json)
 
 
 def _cmd_check(args) -> int:
@@ -61,11 +61,9 @@ def _cmd_solve(args) -> int:
 
     check_seconds("--time-limit", args.time_limit)
     check_int("--seed", args.seed, 0, MAX_SEED)
-    check_path("-o/--output", args.output, kind="file")
+    check_output_file("-o/--output", args.output, force=args.force)
     _check_paths(args)
     out = Path(args.output)
-    if out.exists() and not args.force:
-        raise FileExistsError(f"{out}: exists (use --force to overwrite)")
     case = load_case(args.case_dir)
     from jaxspline.aeossp.adapter import solve_case
 

@@ -28,6 +28,7 @@ script ``jaxspline = "jaxspline.cli:main"`` and ``python -m jaxspline.cli``
 from __future__ import annotations
 
 import argparse
+import functools
 import os
 import signal
 import sys
@@ -154,9 +155,13 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.started = started
     debug = bool(getattr(args, "debug", False))
-    old_term = signal.getsignal(signal.SIGTERM)
-    if threading.current_thread() is threading.main_thread():
-        signal.signal(signal.SIGTERM, _terminate)  # like Ctrl-C: clean-up runs
+    main_thread = threading.current_thread() is threading.main_thread()
+    old = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)}
+    old_hook = sys.unraisablehook
+    if main_thread:
+        for s in old:  # SIGTERM like Ctrl-C (clean-up runs); both remembered if swallowed
+            signal.signal(s, _terminate)
+        sys.unraisablehook = functools.partial(_unraisable, old_hook)
     try:
         _enable_compile_cache()
         return int(args.func(args) or 0)
@@ -169,12 +174,12 @@ def main(argv: list[str] | None = None) -> int:
     except Exception as exc:  # noqa: BLE001 - every error ends in one line and a code
         return _report(exc, debug)
     finally:
-        if threading.current_thread() is threading.main_thread():
+        if main_thread:
             # called as the process (argv None): the work is done, later signals only
-            # race the exit; called from Python: hand the handler back
-            signal.signal(signal.SIGTERM, signal.SIG_IGN if argv is None else old_term)
-            if argv is None:
-                signal.signal(signal.SIGINT, signal.SIG_IGN)
+            # race the exit; called from Python: hand the handlers back
+            for s, h in old.items():
+                signal.signal(s, signal.SIG_IGN if argv is None else h)
+            sys.unraisablehook = old_hook
 
 
 def _report(exc: Exception, debug: bool) -> int:
@@ -213,4 +218,17 @@ def _classify(exc, time_limit, busy, output) -> tuple[int, str]:
 
 
 def _terminate(signum, frame):
+    """Ctrl-C and SIGTERM: ``KeyboardInterrupt``, and the signal remembered in case the
+    exception lands in a finalizer that drops it (:func:`jaxspline.search.clock.note_signal`)."""
+    from jaxspline.search.clock import note_signal
+
+    note_signal(signal.Signals(signum).name)
     raise KeyboardInterrupt
+
+
+def _unraisable(previous, unraisable) -> None:
+    """``sys.unraisablehook`` of a command: a ``KeyboardInterrupt`` that a finalizer or
+    garbage-collector callback dropped is not printed (it was remembered and is raised
+    again at the next check); anything else as Python prints it."""
+    if not isinstance(unraisable.exc_value, KeyboardInterrupt):
+        previous(unraisable)

@@ -33,6 +33,7 @@ from jaxspline.cli.flags import (
     MAX_SEED,
     check_host_port,
     check_int,
+    check_output_file,
     check_path,
     check_seconds,
     check_value,
@@ -103,8 +104,8 @@ def check_bound_flags(args) -> None:
     check_seconds("--time-limit", args.time_limit)
     check_int("--max-iters", args.max_iters, 1, MAX_ITERS)
     check_value("--target", args.target)
-    check_path("--json", args.json, kind="file")
-    check_path("--plan", args.plan, kind="file")
+    check_output_file("--json", args.json, force=args.force)
+    check_output_file("--plan", args.plan, force=args.force)
     check_seconds("--search-time", args.search_time)
     check_int("--search-iters", args.search_iters, 1, MAX_ITERS)
     check_int("--seed", args.seed, 0, MAX_SEED)

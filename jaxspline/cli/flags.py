@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import os
 import re
+import tempfile
 
 __all__ = [
     "MAX_ITERS",
@@ -18,6 +19,7 @@ __all__ = [
     "MAX_SEED",
     "check_host_port",
     "check_int",
+    "check_output_file",
     "check_path",
     "check_seconds",
     "check_value",
@@ -114,6 +116,40 @@ def check_path(flag: str, value, *, kind: str | None = None, exists: bool = Fals
         raise ValueError(f"{flag}: {value} is a directory, not a file")
     if kind == "dir" and os.path.exists(value) and not os.path.isdir(value):
         raise ValueError(f"{flag}: {value} is not a directory")
+    return value
+
+
+def check_output_file(flag: str, value, *, force: bool = True):
+    """An output file flag, checked before any work: a usable path (:func:`check_path`),
+    in an existing folder where a new file can be created; an existing file only with
+    ``force``. ``None`` and ``-`` (stdout) pass.
+
+    Args:
+      flag: the flag's name (``--json``).
+      value: str or None.
+      force: an existing file may be replaced.
+    Returns:
+      the value.
+    Raises:
+      ValueError: naming the flag: empty, a directory, or its folder is missing or a file.
+      FileExistsError: the file exists and ``force`` is false.
+      OSError: naming the flag: a new file cannot be created in the folder (read-only or
+        full disk, no permission).
+    """
+    if value is None or value == "-":
+        return value
+    check_path(flag, value, kind="file")
+    folder = os.path.dirname(os.path.abspath(value))
+    if not os.path.isdir(folder):
+        raise ValueError(f"{flag}: the folder of {value} is missing or not a directory")
+    if os.path.lexists(value) and not force:
+        raise FileExistsError(f"{flag}: {value} exists (use --force to overwrite)")
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".write-check.", dir=folder)
+        os.close(fd)
+        os.unlink(tmp)
+    except OSError as exc:
+        raise OSError(f"{flag}: cannot write in {folder}: {exc.strerror or exc}") from None
     return value
 
 

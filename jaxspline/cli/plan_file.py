@@ -6,13 +6,18 @@
 file edited by hand or by another program may hold anything, so :func:`check_plan_doc`
 checks the types of what the page reads and raises ``ValueError`` naming the file and
 the first bad field (``plan.json: view.targets.lon_deg[3]: must be a number or null,
-got 'x'``). Numbers may be ``null`` where the plan writes ``null`` (non-finite values).
+got 'x'``). Numbers may be ``null`` where the plan writes ``null`` (non-finite values);
+a number is finite (``plan.json`` never holds ``NaN`` or ``Infinity``), and an
+observation's ``start_s <= end_s`` lie within the longest horizon
+(``scenario.duration_s``'s range).
 """
 
 from __future__ import annotations
 
 import datetime as _dt
 import math
+
+from jaxspline.readers.ranges import RANGES
 
 __all__ = ["check_plan_doc"]
 
@@ -22,12 +27,13 @@ STR = "string"
 BOOL = "true or false"
 OPT_STR = "string or null"
 UTC_FORMAT = "%Y-%m-%dT%H:%M:%S.%fZ"  # as plan.json writes instants
+MAX_HORIZON_S = RANGES["scenario.duration_s"][1]  # the longest horizon [s]
 
 
 def _ok(kind: str, x) -> bool:
     if kind in (NUM, OPT):
         return (x is None and kind == OPT) or (
-            isinstance(x, int | float) and not isinstance(x, bool)
+            isinstance(x, int | float) and not isinstance(x, bool) and math.isfinite(x)
         )
     if kind in (STR, OPT_STR):
         return isinstance(x, str) or (x is None and kind == OPT_STR)
@@ -108,6 +114,13 @@ def _observation(c, where, x):
               "end_utc": _utc, "start_s": NUM, "end_s": NUM, "value": OPT, "maneuver_s": OPT,
               "slack_s": OPT, "scan_speed_m_s": OPT}  # fmt: skip
     c.table(where, x, fields, ("satellite", "target", "start_s", "end_s"))
+    start, end = x["start_s"], x["end_s"]
+    if not 0.0 <= start <= end <= MAX_HORIZON_S:
+        c.fail(
+            where,
+            f"must have 0 <= start_s <= end_s <= {MAX_HORIZON_S:g} s, got start_s "
+            f"{_show(start)}, end_s {_show(end)}",
+        )
 
 
 def _tracks(c, where, x):

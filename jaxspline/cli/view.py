@@ -13,7 +13,7 @@ import json
 import sys
 from pathlib import Path
 
-from jaxspline.cli.flags import check_path
+from jaxspline.cli.flags import check_output_file, check_path
 
 __all__ = ["read_plan_file", "register", "run_view"]
 
@@ -91,6 +91,7 @@ def run_view(plan, output=None, *, force: bool = False) -> Path:
     check_path("-o/--output", None if output is None else str(output), kind="file")
     plan = Path(plan)
     out = plan.parent / HTML_FILE if output is None else Path(output)
+    check_output_file("-o/--output", str(out), force=force)
     doc = read_plan_file(plan)
     try:
         return write_plan_html(doc, out, force=force)

@@ -41,6 +41,8 @@ Units: radians, seconds; frequencies are circular [rad/s] (2 Hz = 4 pi rad/s).
 
 from __future__ import annotations
 
+import math
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -60,6 +62,7 @@ __all__ = [
     "initial_amplitude",
     "residual_amplitude",
     "min_mode_frequency",
+    "mode_suppressible",
     "tau_for_tolerance",
     "tau_for_tolerance_kernel",
     "mode_rate_kernel",
@@ -193,6 +196,32 @@ def tau_for_tolerance_kernel(tolerance, freq, damping, rate, accel, iters: int =
 
 
 _tau_batched = batched(tau_for_tolerance_kernel)
+
+
+def mode_suppressible(
+    tolerance: float, freq: float, damping: float, rate: float, accel: float
+) -> bool:
+    """Whether some ramp time tau <= omega/eps holds the mode to its tolerance (eq. 7).
+
+    The existence test of :func:`tau_for_tolerance_kernel` (``h`` at the top of the
+    bracket is >= 0) for one satellite, in plain floats: no JAX program, so a scenario
+    reader can refuse an unsuppressible mode at once, before any planning. Where it is
+    false, :func:`tau_for_tolerance` returns ``+inf``.
+
+    Args:
+      tolerance: admissible residual amplitude A(t_k) [rad], > 0.
+      freq: circular mode frequency nu [rad/s], > 0.
+      damping: damping ratio zeta, >= 0.
+      rate: rate bound omega [rad/s], > 0.
+      accel: acceleration bound eps [rad/s^2], > 0.
+    Returns:
+      bool.
+    """
+    b = rate / accel
+    c = damping * freq / (2.0 * math.pi)
+    k = math.log(accel / (tolerance * freq**3)) - 2.0 * c * b
+    hi = 1.0 / c if c * b > 1.0 else b
+    return math.log(hi) - c * hi - k >= 0.0
 
 
 def tau_for_tolerance(tolerance, freq, damping, rate, accel):

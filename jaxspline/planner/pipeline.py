@@ -351,6 +351,7 @@ def _stage_check(deadline: StageDeadline | None, clock):
     the estimate: the near pairs after the far gaps and join screens)."""
 
     def check(stage, done=1.0, what="", since=None):
+        search_clock.raise_pending_signal()  # a Ctrl-C / SIGTERM a finalizer swallowed
         if deadline is None:
             return None
         if done >= 1.0:

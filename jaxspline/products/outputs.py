@@ -369,13 +369,15 @@ def write_plan_outputs(
     Raises:
       OutputError: a file could not be written (naming it; the folder is left as is).
     """
+    doing = []  # the product being written, for a message (ENOSPC names no file)
     try:
-        return _write_all(result, Path(folder), plots, aem, aem_step, html, deadline)
+        return _write_all(result, Path(folder), plots, aem, aem_step, html, deadline, doing)
     except OSError as exc:
-        raise _fail("cannot write the outputs", exc) from None
+        what = doing[-1] if doing and not exc.filename else "the outputs"
+        raise _fail(f"cannot write {what}", exc) from None
 
 
-def _write_all(result, out: Path, plots, aem, aem_step, html, deadline):
+def _write_all(result, out: Path, plots, aem, aem_step, html, deadline, doing: list):
     from jaxspline.products.plan_view import view_data
 
     if result.scenario.areas:  # covered fraction per area, into plan.json's report
@@ -386,17 +388,23 @@ def _write_all(result, out: Path, plots, aem, aem_step, html, deadline):
         result.timings["coverage"] = round(time.monotonic() - t0, 3)
     fits = _fits(result, deadline, plots=plots, html=html, aem=aem, aem_step=aem_step)
     view = {"view": view_data(result)}  # what plan.html draws: `jaxspline view` rebuilds it
+    doing.append("plan.csv")
     result.to_csv(out / "plan.csv", force=True)
+    doing.append(HTML_FILE)
     page = _page(result, out, view) if fits("plan.html") else None
     if fits("plan.czml"):
         from jaxspline.products.czml import write_czml
 
+        doing.append("plan.czml")
         write_czml(result, out / "plan.czml", force=True)
+    doing.append("the AEM files")
     attitude = _aems(result, out, aem_step) if fits("AEM files") else None
     if fits("figures"):
+        doing.append("the figures")
         _plots(result, attitude, out, deadline if aem else None)
     if deadline is not None:
         result.report["time_limit"] = deadline.record()
+    doing.append("plan.json")
     result.to_json(out / "plan.json", force=True, extra=view)
     return page
 

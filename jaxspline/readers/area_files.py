@@ -151,9 +151,10 @@ def _shape(geometry, where: str):
     """The shapely geometry of a GeoJSON geometry object whose positions are numbers."""
     if not isinstance(geometry, dict):
         raise ValueError(f"{where}: must be a GeoJSON geometry object, got {geometry!r}")
-    depth = _POSITION_DEPTH.get(geometry.get("type"))
-    if depth is not None:
-        _positions(geometry.get("coordinates"), depth, f"{where} coordinates")
+    kind = geometry.get("type")
+    if kind not in _POSITION_DEPTH:  # GeoJSON types are case-sensitive (RFC 7946)
+        raise ValueError(f"{where}: type {kind!r} is not an area (Polygon or MultiPolygon)")
+    _positions(geometry.get("coordinates"), _POSITION_DEPTH[kind], f"{where} coordinates")
     return _polygonal(shape(geometry), where)
 
 

@@ -21,6 +21,7 @@ import numpy as np
 
 from jaxspline.geometry.frames import gmst, jd_split, julian_date
 from jaxspline.geometry.orbit import circular_orbit, circular_orbit_over, propagate_tle
+from jaxspline.kernels.flex import mode_suppressible
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.fields import (
     field_bool,
@@ -33,7 +34,7 @@ from jaxspline.readers.mission import DEFAULT_SWATH, FlexMode, Power, Satellite
 from jaxspline.readers.ranges import MAX_NAME_CHARS, MAX_TLE_AGE_DAYS, bounds
 from jaxspline.screen.models import maneuver_model
 
-__all__ = ["SATELLITE_KEYS", "parse_satellites", "tle_epoch"]
+__all__ = ["SATELLITE_KEYS", "parse_satellites", "tle_epoch", "tle_line_problem"]
 
 DEFAULT_ALTITUDE_KM = 600.0
 DEFAULT_RATE_DEG_S = 2.0
@@ -44,6 +45,13 @@ DEFAULT_SWATH_KM = DEFAULT_SWATH / 1e3
 TLE_COLUMNS = 69
 _SECONDS_PER_DAY = 86400.0
 
+#: Angles of TLE line 2: (name, first column index, end index, upper end [deg]).
+_TLE_ANGLES = (
+    ("inclination", 8, 16, 180.0),
+    ("right ascension of the node", 17, 25, 360.0),
+    ("argument of perigee", 34, 42, 360.0),
+    ("mean anomaly", 43, 51, 360.0),
+)
 _ORBIT_KEYS = ("altitude_km", "inclination_deg", "raan_deg", "arg_lat_deg", "over")
 #: Keys of a ``[[satellites]]`` table and of its inline tables.
 SATELLITE_KEYS = {
@@ -77,6 +85,39 @@ def tle_checksum(line: str) -> int:
     return sum(int(c) if c.isdigit() else c == "-" for c in line[: TLE_COLUMNS - 1]) % 10
 
 
+def tle_line_problem(line: str, num: int) -> str | None:
+    """What is wrong with one TLE line, or None: its columns, its line number, its
+    checksum and, on line 2, its angles (inclination in [0, 180] deg, the node, perigee
+    and mean anomaly in [0, 360] deg; SGP4 takes other values without a word).
+
+    Args:
+      line: the line, trailing blanks removed.
+      num: 1 or 2.
+    Returns:
+      str (a message without the field's name) or None.
+    """
+    if len(line) != TLE_COLUMNS or line[:2] != f"{num} ":
+        return (
+            f"line {num} must have {TLE_COLUMNS} columns and start with '{num} ', "
+            f"got {len(line)} columns: {line!r}"
+        )
+    if not line[-1].isdigit() or int(line[-1]) != tle_checksum(line):
+        return (
+            f"line {num} checksum (column 69) is {line[-1]!r}, the line's digits give "
+            f"{tle_checksum(line)}: a damaged or edited line"
+        )
+    for name, a, b, hi in _TLE_ANGLES if num == 2 else ():
+        try:
+            value = float(line[a:b])
+        except ValueError:
+            return f"line 2 {name} (columns {a + 1}-{b}) is not a number: {line[a:b]!r}"
+        if not 0.0 <= value <= hi:
+            return (
+                f"line 2 {name} (columns {a + 1}-{b}) must be within [0, {hi:g}] deg, got {value:g}"
+            )
+    return None
+
+
 def tle_epoch(line1: str) -> _dt.datetime:
     """The epoch of a TLE (line 1, columns 19-32: two-digit year, day of the year).
 
@@ -107,18 +148,9 @@ def _tle_lines(ctx, field, tle) -> tuple[str, str]:
     lines = tuple(s.rstrip() for s in tle)
     for k, line in enumerate(lines, 1):
         field_str(ctx, field, line)  # no control characters
-        if len(line) != TLE_COLUMNS or line[:2] != f"{k} ":
-            raise ctx.error(
-                field,
-                f"line {k} must have {TLE_COLUMNS} columns and start with '{k} ', "
-                f"got {len(line)} columns: {line!r}",
-            )
-        if not line[-1].isdigit() or int(line[-1]) != tle_checksum(line):
-            raise ctx.error(
-                field,
-                f"line {k} checksum (column 69) is {line[-1]!r}, the line's digits give "
-                f"{tle_checksum(line)}: a damaged or edited line",
-            )
+        problem = tle_line_problem(line, k)
+        if problem:
+            raise ctx.error(field, problem)
     if lines[0][2:7] != lines[1][2:7]:
         raise ctx.error(
             field,
@@ -278,6 +310,16 @@ def _satellite(ctx, f, sat, default_name, epoch, duration) -> Satellite:
     power = _power(ctx, f, sat)
     swath = _num(ctx, f"{f}.swath_km", sat.get("swath_km", DEFAULT_SWATH_KM), "swath_km")
     limits = AxisLimits(rate, accel)
+    if flex is not None and not mode_suppressible(
+        flex.tolerance, flex.freq, flex.damping, rate, accel
+    ):
+        raise ctx.error(
+            f"{f}.flex",
+            f"no slew profile holds a {flex.freq / (2 * math.pi):g} Hz mode (damping "
+            f"{flex.damping:g}) to tolerance_deg = {math.degrees(flex.tolerance):g} at "
+            f"rate_deg_s = {math.degrees(rate):g}, accel_deg_s2 = {math.degrees(accel):g}: "
+            "give a larger tolerance_deg or freq_hz, or a smaller accel_deg_s2",
+        )
     try:
         return Satellite(
             name, orbit, model, limits, math.radians(off), sensor, settle, flex, power, 1e3 * swath

@@ -73,6 +73,8 @@ def read_json(path: str | os.PathLike) -> Any:
         return json.loads(text, object_pairs_hook=_no_dup_pairs, parse_constant=_no_constant)
     except ValueError as exc:
         raise ValueError(f"{path}: not valid JSON: {exc}") from None
+    except RecursionError:  # thousands of nested arrays or objects
+        raise ValueError(f"{path}: not valid JSON here: nested too deeply") from None
 
 
 def read_yaml(path: Path) -> Any:

@@ -22,6 +22,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from jaxspline.cli.flags import MAX_SEED, check_int, check_output_file, check_path, check_seconds
+
 
 def write_text_atomic(target: str, text: str) -> None:
     """Write ``text`` to ``target`` atomically (:func:`jaxspline.planner.files.atomic_write_text`).
@@ -59,9 +61,17 @@ def check_and_print(case, solution, json_out: str | None) -> int:
     return 0 if report.valid else 1
 
 
+def _check_paths(args) -> None:
+    """The path flags of both sub-commands, each by its name, before any work."""
+    check_path("CASE_DIR", args.case_dir, kind="dir", exists=True)
+    check_output_file("--json", args.json)
+
+
 def _cmd_check(args) -> int:
     from jaxspline.regional.case import load_case, load_solution
 
+    _check_paths(args)
+    check_path("SOLUTION", args.solution, kind="file", exists=True)
     case = load_case(args.case_dir)
     solution = load_solution(args.solution)
     return check_and_print(case, solution, args.json)
@@ -74,11 +84,11 @@ def _cmd_solve(args) -> int:
     from jaxspline.regional.solve import solve_case
 
     t0 = time.perf_counter()
-    if not args.time_limit > 0:
-        raise ValueError(f"--time-limit: must be > 0, got {args.time_limit}")
+    check_seconds("--time-limit", args.time_limit)
+    check_int("--seed", args.seed, 0, MAX_SEED)
+    check_output_file("-o/--output", args.output, force=args.force)
+    _check_paths(args)
     out = Path(args.output)
-    if out.exists() and not args.force:
-        raise ValueError(f"{out}: exists (use --force to overwrite)")
     case = load_case(args.case_dir)
     solution, st = solve_case(case, time_limit=args.time_limit, seed=args.seed, t_start=t0)
     write_text_atomic(str(out), json.dumps(solution, indent=1) + "\n")

@@ -15,9 +15,18 @@ import signal
 import threading
 import time
 
-__all__ = ["catch_signals", "clear_stop", "now", "request_stop", "stop_requested"]
+__all__ = [
+    "catch_signals",
+    "clear_stop",
+    "note_signal",
+    "now",
+    "raise_pending_signal",
+    "request_stop",
+    "stop_requested",
+]
 
 _STOP = threading.Event()
+_PENDING: list[str] = []  # a signal whose KeyboardInterrupt may have been swallowed
 
 
 def now() -> float:
@@ -38,6 +47,31 @@ def clear_stop() -> None:
 def stop_requested() -> bool:
     """True after :func:`request_stop` until :func:`clear_stop`."""
     return _STOP.is_set()
+
+
+def note_signal(name: str) -> None:
+    """Remember a signal a handler turns into ``KeyboardInterrupt`` (safe from a handler).
+
+    Python runs a signal handler in whatever frame is executing, a garbage-collector
+    callback or a finalizer included, where the exception is printed as "ignored" and
+    dropped: the signal would be lost. Remembered here, it is raised again at the next
+    check (:func:`raise_pending_signal`, the stage checks before the search) or taken
+    as the first signal by the next :func:`catch_signals` block.
+
+    Args:
+      name: the signal's name (``"SIGTERM"``).
+    """
+    _PENDING[:] = [name]
+
+
+def _take_pending() -> str | None:
+    return _PENDING.pop() if _PENDING else None
+
+
+def raise_pending_signal() -> None:
+    """Raise ``KeyboardInterrupt`` for a remembered signal (:func:`note_signal`), once."""
+    if _take_pending() is not None:
+        raise KeyboardInterrupt
 
 
 @contextlib.contextmanager
@@ -69,6 +103,9 @@ def catch_signals(first=None, *, abort_on_second: bool = False):
             first(state["signal"])
 
     old = {s: signal.signal(s, handler) for s in (signal.SIGINT, signal.SIGTERM)}
+    pending = _take_pending()  # a signal just before the block, possibly swallowed
+    if pending is not None:
+        handler(signal.Signals[pending], None)
     try:
         yield state
     finally:

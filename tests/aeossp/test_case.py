@@ -131,6 +131,13 @@ def _broken_copy(tmp_path, fname, edit):
             "tasks.yaml.*task_0004.*release_time",
         ),
         ("tasks.yaml", lambda d: d["tasks"][0].pop("weight"), "tasks.yaml.*weight"),
+        (  # a damaged TLE (SGP4 alone takes it): the checksum names the line
+            "satellites.yaml",
+            lambda d: d["satellites"][0].update(
+                tle_line1=d["satellites"][0]["tle_line1"][:-1] + "4"
+            ),
+            "satellites.yaml.*sat_001.*tle_line1: line 1 checksum",
+        ),
         (
             "tasks.yaml",
             lambda d: d["tasks"][2].__setitem__("latitude_deg", "north"),

@@ -15,6 +15,7 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import signal
 import time
@@ -174,6 +175,10 @@ def test_an_unexpected_error_is_one_line_and_debug_shows_the_traceback(monkeypat
     assert code == EXIT_INTERNAL and "Traceback (most recent call last)" in err
 
 
+def _obs(start, end):
+    return {"satellite": "s", "target": "t", "start_s": start, "end_s": end}
+
+
 def test_deep_toml_and_bad_plan_json_are_named(tmp_path, capsys):
     deep = tmp_path / "deep.toml"
     deep.write_text("x = " + "[" * 3000 + "]" * 3000 + "\n")
@@ -188,6 +193,11 @@ def test_deep_toml_and_bad_plan_json_are_named(tmp_path, capsys):
             "view.targets: must be an object",
         ),  # fmt: skip
         ([1, 2], "the document: must be an object"),
+        # numbers a plan never writes: NaN (plan.json writes null), times past any horizon
+        ({"summary": {"value": math.nan}, "report": {}, "observations": []}, "summary.value"),
+        ({"summary": {}, "report": {}, "observations": [_obs(1e308, 1e308)]}, "observations[0]"),
+        ({"summary": {}, "report": {}, "observations": [_obs(3000.0, 10.0)]}, "start_s <= end_s"),
+        ({"summary": {}, "report": {}, "observations": [_obs(-5e6, 10.0)]}, "observations[0]"),
     ]:
         plan = tmp_path / "plan.json"
         plan.write_text(json.dumps(doc))
@@ -291,3 +301,66 @@ def test_a_write_error_is_one_line_with_exit_4_and_keeps_the_previous_set(
     assert err == "jaxspline: cannot write: cannot write the outputs: No space left on device\n"
     assert (out / "plan.json").read_text() == "previous"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "s.toml"]
+
+
+def test_output_file_flags_are_checked_before_any_work(tmp_path, scen, capsys):
+    """Every command's output file (--json, --plan, -o) is checked before it works: its
+    folder must exist, a file there must not block it, and the message names the flag."""
+    (tmp_path / "f").write_text("a file")
+    (tmp_path / "e.json").write_text('{"actions": []}')
+    (tmp_path / "case").mkdir()
+    missing, under_file = str(tmp_path / "no" / "x.json"), str(tmp_path / "f" / "x.json")
+    case, sol = str(tmp_path / "case"), str(tmp_path / "e.json")
+    cases = [
+        (["bound", str(scen), "--json", missing], "--json: the folder of"),
+        (["bound", str(scen), "--plan", under_file], "--plan: the folder of"),
+        (["bound", str(scen), "--json", sol], "--json: "),
+        (["view", sol, "-o", missing], "-o/--output: the folder of"),
+        (["aeossp", "solve", case, "-o", missing], "-o/--output: the folder"),
+        (["aeossp", "check", case, sol, "--json", under_file], "--json: "),
+        (
+            ["regional", "solve", case, "-o", "s.json", "--time-limit", "inf"],
+            "--time-limit: must be a finite",
+        ),
+        (["regional", "solve", case, "-o", "s.json", "--seed", "-1"], "--seed"),
+        (["regional", "solve", case, "-o", ""], "-o/--output: must not be"),
+        (["regional", "solve", case, "-o", str(tmp_path)], "-o/--output: "),
+        (["regional", "solve", case, "-o", sol], "-o/--output: "),
+        (["regional", "solve", str(tmp_path / "nocase"), "-o", "s.json"], "CASE_DIR: not found"),
+        (["regional", "check", case, sol, "--json", ""], "--json: must"),
+        (["regional", "check", case, sol, "--json", missing], "--json: "),
+    ]
+    for argv, msg in cases:
+        code, err, seconds = _run(capsys, argv)
+        assert code == EXIT_BAD_INPUT and msg in err, (argv, err)
+        assert err.count("\n") == 1 and "Traceback" not in err and seconds < 10.0
+    assert sorted(os.listdir(tmp_path)) == ["case", "e.json", "f", "s.toml"]
+
+
+def test_a_signal_that_a_finalizer_swallows_still_stops_the_run(tmp_path, scen, capsys):
+    """Python runs a signal handler in whatever frame is running, a garbage-collector
+    callback included, whose ``KeyboardInterrupt`` it prints as "ignored" and drops (a
+    SIGTERM during the screening of the probe of issue 30 was lost that way, the run
+    ended 0 with a traceback on stderr). The signal is remembered and raised at the next
+    stage check: exit 130, no traceback, nothing written."""
+    import gc
+
+    from jaxspline.cli import EXIT_INTERRUPTED, _terminate
+
+    fired = []
+
+    def callback(phase, info):
+        if phase == "start" and not fired and signal.getsignal(signal.SIGTERM) is _terminate:
+            fired.append(phase)
+            os.kill(os.getpid(), signal.SIGTERM)
+            sum(range(1000))  # the handler runs here, inside the callback
+
+    gc.callbacks.append(callback)
+    try:
+        argv = ["plan", str(scen), "-o", str(tmp_path / "out"), "--quiet", "--no-aem"]
+        code, err, _ = _run(capsys, [*argv, "--no-plots", "--no-html", "--max-iters", "5"])
+    finally:
+        gc.callbacks.remove(callback)
+    assert fired and code == EXIT_INTERRUPTED, (code, err)
+    assert "Traceback" not in err and "ignored" not in err, err
+    assert not (tmp_path / "out").exists()

@@ -72,6 +72,9 @@ def test_tau_matches_brute_force_and_eq7():
     # sufficient condition of the paper: nu > nu_min => a root exists
     nu_min = np.asarray(flex.min_mode_frequency(tol, w, e))
     assert np.all(np.isfinite(got[nu > nu_min]))
+    # the readers' plain-float test says the same as the kernel
+    for i in range(n):
+        assert flex.mode_suppressible(tol[i], nu[i], zeta[i], w[i], e[i]) == np.isfinite(got[i])
 
 
 def test_tau_small_damping_expansion():

@@ -60,3 +60,20 @@ def test_a_product_that_fits_is_written_one_that_does_not_is_left_out(
     skipped = doc["report"]["time_limit"]["skipped"]
     assert [s["what"] for s in skipped] == ["plan.html", "figures"]
     assert doc["report"]["time_limit"]["limit_s"] == 3600.0
+
+
+def test_a_write_error_names_the_file(result, tmp_path, monkeypatch):  # noqa: F811
+    """A full disk raises ENOSPC from write(), which names no file: the message names
+    the product being written (the probe of issue 30 got 'cannot write the outputs')."""
+    import errno
+    import os
+
+    from jaxspline.products import czml
+    from jaxspline.products.outputs import OutputError
+
+    def full(*args, **kwargs):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
+
+    monkeypatch.setattr(czml, "write_czml", full)
+    with pytest.raises(OutputError, match="cannot write plan.czml: No space left on device"):
+        write_plan_outputs(result, tmp_path, plots=False, aem=False, html=False)

@@ -337,7 +337,17 @@ def test_bad_areas_name_the_field(tmp_path, text, field, why):
 def test_bad_geojson_content_is_named(tmp_path):
     (tmp_path / "p.geojson").write_text('{"type": "Point", "coordinates": [13, 45]}')
     (tmp_path / "bad.geojson").write_text("{not json")
-    for name, why in (("p.geojson", "is not an area"), ("bad.geojson", "invalid JSON")):
+    ring = "[[[13.6, 45.6], [14.0, 45.6], [14.0, 45.85], [13.6, 45.6]]]"
+    # GeoJSON types are case-sensitive, and a Feature's geometry is not a Feature
+    (tmp_path / "lower.geojson").write_text(f'{{"type": "polygon", "coordinates": {ring}}}')
+    inner = f'{{"type": "Feature", "geometry": {{"type": "Polygon", "coordinates": {ring}}}}}'
+    (tmp_path / "nested.geojson").write_text(f'{{"type": "Feature", "geometry": {inner}}}')
+    for name, why in (
+        ("p.geojson", "is not an area"),
+        ("bad.geojson", "invalid JSON"),
+        ("lower.geojson", "type 'polygon' is not an area"),
+        ("nested.geojson", "type 'Feature' is not an area"),
+    ):
         with pytest.raises(ValueError, match=why) as exc:
             load_scenario(_write(tmp_path, HEAD + f'[[areas]]\ngeojson = "{name}"\n'))
         assert "areas[0].geojson" in str(exc.value)

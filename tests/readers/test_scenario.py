@@ -337,6 +337,13 @@ BAD = [
         6,
         "only used by model 'flexible'",
     ),
+    (  # valid ranges, but no ramp time holds this mode: refused when read, not when planning
+        HEAD + SAT + "model = 'flexible'\nrate_deg_s = 2.0\naccel_deg_s2 = 1.0\n"
+        "flex = { freq_hz = 0.5, tolerance_deg = 1e-4 }\n" + POINT_TARGET,
+        "satellites[0].flex",
+        9,
+        "no slew profile holds a 0.5 Hz mode",
+    ),
     (
         HEAD + SAT + "model = 'flexible'\nflex = { damping = 0.1 }\n" + POINT_TARGET,
         "satellites[0].flex.freq_hz",
@@ -437,6 +444,20 @@ BAD = [
         "unknown key",
     ),
 ]
+
+
+def test_tle_angles_are_checked(tmp_path):
+    """SGP4 propagates an inclination of 200 deg without a word: the reader refuses it."""
+    from jaxspline.readers.satellites import tle_checksum
+
+    line2 = TLE[1][:8] + "200.0448" + TLE[1][16:68]
+    line2 += str(tle_checksum(line2))
+    text = (
+        '[scenario]\nepoch = "2026-04-14T12:00:00Z"\nduration_s = 600.0\n[[satellites]]\n'
+        f"tle = [{TLE[0]!r}, {line2!r}]\n" + POINT_TARGET
+    )
+    with pytest.raises(ValueError, match=r"satellites\[0\].tle .*inclination .* got 200"):
+        load_scenario(_write(tmp_path, text))
 
 
 @pytest.mark.parametrize(("text", "field", "line", "why"), BAD)

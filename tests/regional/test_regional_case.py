@@ -243,6 +243,12 @@ def test_missing_directory(tmp_path):
         (rc.SATELLITES, "- [unclosed", "satellites.yaml: not valid YAML"),
         (rc.SATELLITES, "- a: 1\n  a: 2\n", "satellites.yaml: not valid YAML"),
         (rc.GRID, b"\xff\xfe{}", "coverage_grid.json: not UTF-8"),
+        pytest.param(
+            rc.MANIFEST,
+            "[" * 50000 + "]" * 50000,
+            "manifest.json: not valid JSON here",
+            id="deep-json",
+        ),  # fmt: skip
     ],
 )
 def test_unparsable_files(case_dir, fname, text, message):
