@@ -274,12 +274,18 @@ class StageDeadline:
         if done > 0:
             estimate = (start - self.t0) + (now - start) / min(done, 1.0) - compiling
         progress = f"{100 * done:.0f} % through it" if done < 1 else "at its end"
-        need = (
-            f"at this pace the stages before the search alone need ~{estimate:.0f} s or more; "
-            f"give a time limit of {suggested_limit(estimate)} s or more"
-            if estimate is not None
-            else "give a longer time limit"
-        )
+        if estimate is not None:
+            need = (
+                f"at this pace the stages before the search alone need ~{estimate:.0f} s or "
+                f"more; give a time limit of {suggested_limit(estimate)} s or more"
+            )
+        else:  # not even a first share of the stage done: what is known is a lower bound
+            spent = now - self.t0 - compiling
+            need = (
+                f"the stages before the search need more than {spent:.0f} s at this pace "
+                f"({now - start:.1f} s in {stage!r} did not finish a first share of it); give "
+                f"a time limit well above {suggested_limit(spent)} s"
+            )
         raise TimeLimitError(
             f"time limit of {self.limit:.4g} s reached before the search, in stage {stage!r} "
             f"after {elapsed:.1f} s ({compile_seconds() - self.compiled0:.1f} s of it compiling; "

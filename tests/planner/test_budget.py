@@ -206,3 +206,17 @@ def test_a_call_whose_checks_would_end_far_past_the_limit_stops_before_the_searc
     b = bd.deadline_budget(ctx, d, flown_joins=True, refill_s=2.0, capped=True)  # reproducible
     assert b.search_end == pytest.approx(clock.wall)  # nothing left: a quarter of nothing
     assert bd.deadline_budget(_ctx(10, False), d, flown_joins=True, refill_s=2.0)  # small: late
+
+
+def test_a_stage_stopped_before_any_share_gives_a_lower_bound():
+    # a stage that has not finished its first block (0 %) cannot extrapolate its rate:
+    # the message still says how much more time is needed, as a lower bound
+    d = dl.StageDeadline(time.monotonic() - 50.0, 20.0, "50000 targets")
+    with pytest.raises(dl.TimeLimitError) as err:
+        d.check("screening", 0.0, stage_t0=time.monotonic() - 30.0)
+    msg = str(err.value)
+    assert "0 % through it" in msg and "need more than" in msg
+    assert err.value.estimate is None
+    spent = float(msg.split("need more than ")[1].split(" s")[0])
+    assert spent >= 49.0 - dl.COMPILE_ALLOWANCE_S
+    assert "well above" in msg
