@@ -91,8 +91,8 @@ def run_view(plan, output=None, *, force: bool = False) -> Path:
     check_path("-o/--output", None if output is None else str(output), kind="file")
     plan = Path(plan)
     out = plan.parent / HTML_FILE if output is None else Path(output)
+    doc = read_plan_file(plan)  # the input's own errors first (reading it is instant)
     check_output_file("-o/--output", str(out), force=force)
-    doc = read_plan_file(plan)
     try:
         return write_plan_html(doc, out, force=force)
     except (KeyError, TypeError, IndexError, AttributeError, ValueError) as exc:
