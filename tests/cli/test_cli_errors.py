@@ -311,11 +311,13 @@ def test_output_file_flags_are_checked_before_any_work(tmp_path, scen, capsys):
     (tmp_path / "case").mkdir()
     missing, under_file = str(tmp_path / "no" / "x.json"), str(tmp_path / "f" / "x.json")
     case, sol = str(tmp_path / "case"), str(tmp_path / "e.json")
+    plan = str(tmp_path / "p.json")  # a plan document view reads (its errors come first)
+    (tmp_path / "p.json").write_text('{"summary": {}, "report": {}, "observations": []}')
     cases = [
         (["bound", str(scen), "--json", missing], "--json: the folder of"),
         (["bound", str(scen), "--plan", under_file], "--plan: the folder of"),
         (["bound", str(scen), "--json", sol], "--json: "),
-        (["view", sol, "-o", missing], "-o/--output: the folder of"),
+        (["view", plan, "-o", missing], "-o/--output: the folder of"),
         (["aeossp", "solve", case, "-o", missing], "-o/--output: the folder"),
         (["aeossp", "check", case, sol, "--json", under_file], "--json: "),
         (
@@ -334,7 +336,7 @@ def test_output_file_flags_are_checked_before_any_work(tmp_path, scen, capsys):
         code, err, seconds = _run(capsys, argv)
         assert code == EXIT_BAD_INPUT and msg in err, (argv, err)
         assert err.count("\n") == 1 and "Traceback" not in err and seconds < 10.0
-    assert sorted(os.listdir(tmp_path)) == ["case", "e.json", "f", "s.toml"]
+    assert sorted(os.listdir(tmp_path)) == ["case", "e.json", "f", "p.json", "s.toml"]
 
 
 def test_a_signal_that_a_finalizer_swallows_still_stops_the_run(tmp_path, scen, capsys):
