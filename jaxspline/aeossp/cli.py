@@ -14,42 +14,22 @@ import sys
 import time
 from pathlib import Path
 
+from jaxspline.cli.case_commands import check_and_print, check_case_paths
 from jaxspline.cli.flags import MAX_SEED, check_int, check_output_file, check_path, check_seconds
 
 __all__ = ["register"]
 
 
-def _write_json(text: str, target: str) -> None:
-    if target == "-":
-        print(text)
-        return
-    from jaxspline.planner.files import atomic_write_text
-
-    atomic_write_text(Path(target), text + "\n")
-
-
 def _check_and_print(case, solution: dict, json_out: str | None) -> int:
     from jaxspline.aeossp.check import check_solution, format_report
 
-    t0 = time.perf_counter()
-    report = check_solution(case, solution)
-    print(format_report(report))
-    print(f"  checked in {time.perf_counter() - t0:.1f} s")
-    if json_out:
-        _write_json(report.to_json(), json_out)
-    return 0 if report.valid else 1
-
-
-def _check_paths(args) -> None:
-    """The path flags of both sub-commands, each by its name (ValueError)."""
-    check_path("CASE_DIR", args.case_dir, kind="dir", exists=True)
-    check_output_file("--json", args.json)
+    return check_and_print(check_solution, format_report, case, solution, json_out)
 
 
 def _cmd_check(args) -> int:
     from jaxspline.aeossp.case import load_case, load_solution
 
-    _check_paths(args)
+    check_case_paths(args)
     check_path("SOLUTION", args.solution, kind="file", exists=True)
     case = load_case(args.case_dir)
     solution = load_solution(args.solution)
@@ -62,7 +42,7 @@ def _cmd_solve(args) -> int:
     check_seconds("--time-limit", args.time_limit)
     check_int("--seed", args.seed, 0, MAX_SEED)
     check_output_file("-o/--output", args.output, force=args.force)
-    _check_paths(args)
+    check_case_paths(args)
     out = Path(args.output)
     case = load_case(args.case_dir)
     from jaxspline.aeossp.adapter import solve_case

@@ -20,7 +20,8 @@ Layer 8: may import everything below (``kernels`` ... ``products``); only the
 ``aeossp`` adapter sits above, and its sub-command is registered by name
 (``_SUBCOMMAND_MODULES``), not imported here. One module per sub-command: ``plan``
 (``jaxspline plan``), ``bound`` (``jaxspline bound``), ``view`` (``jaxspline view``);
-``flags`` checks the flags. The entry point lives in this ``__init__`` so the console
+``flags`` checks the flags; ``case_commands`` is what the benchmark adapters' commands
+share. The entry point lives in this ``__init__`` so the console
 script ``jaxspline = "jaxspline.cli:main"`` and ``python -m jaxspline.cli``
 (``__main__``) keep working.
 """

@@ -14,7 +14,8 @@ with ``--force``), prints coverage, actions, bound and gap, then checks the solu
 ``check`` does (same exit codes).
 
 Each sub-command is one ``_cmd_*`` function plus a few lines in :func:`register`; a new
-one (e.g. ``solve``) adds its parser there and may reuse :func:`check_and_print`.
+one adds its parser there; the checking and printing are
+:mod:`jaxspline.cli.case_commands`, shared with the aeossp adapter.
 """
 
 from __future__ import annotations
@@ -22,59 +23,24 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
+from jaxspline.cli.case_commands import check_and_print, check_case_paths, write_report
 from jaxspline.cli.flags import MAX_SEED, check_int, check_output_file, check_path, check_seconds
 
 
-def write_text_atomic(target: str, text: str) -> None:
-    """Write ``text`` to ``target`` atomically (:func:`jaxspline.planner.files.atomic_write_text`).
-
-    Args:
-      target: path, or ``-`` for stdout.
-      text: the content.
-    """
-    if target == "-":
-        print(text)
-        return
-    from jaxspline.planner.files import atomic_write_text
-
-    atomic_write_text(target, text)
-
-
-def check_and_print(case, solution, json_out: str | None) -> int:
-    """Check ``solution``, print the readable report, write the JSON one if asked.
-
-    Args:
-      case: the loaded Case.
-      solution: the solution dict (``{"actions": [...]}``).
-      json_out: path for the JSON report (``-`` = stdout), or None.
-    Returns:
-      int, exit code: 0 valid, 1 invalid.
-    """
+def _check_and_print(case, solution, json_out: str | None) -> int:
     from jaxspline.regional.check import check_solution, format_report
 
-    t0 = time.perf_counter()
-    report = check_solution(case, solution)
-    print(format_report(report))
-    print(f"checked in {time.perf_counter() - t0:.1f} s")
-    if json_out:
-        write_text_atomic(json_out, report.to_json() + "\n")
-    return 0 if report.valid else 1
-
-
-def _check_paths(args) -> None:
-    """The path flags of both sub-commands, each by its name, before any work."""
-    check_path("CASE_DIR", args.case_dir, kind="dir", exists=True)
-    check_output_file("--json", args.json)
+    return check_and_print(check_solution, format_report, case, solution, json_out)
 
 
 def _cmd_check(args) -> int:
     from jaxspline.regional.case import load_case, load_solution
 
-    _check_paths(args)
+    check_case_paths(args)
     check_path("SOLUTION", args.solution, kind="file", exists=True)
     case = load_case(args.case_dir)
     solution = load_solution(args.solution)
-    return check_and_print(case, solution, args.json)
+    return _check_and_print(case, solution, args.json)
 
 
 def _cmd_solve(args) -> int:
@@ -87,17 +53,17 @@ def _cmd_solve(args) -> int:
     check_seconds("--time-limit", args.time_limit)
     check_int("--seed", args.seed, 0, MAX_SEED)
     check_output_file("-o/--output", args.output, force=args.force)
-    _check_paths(args)
+    check_case_paths(args)
     out = Path(args.output)
     case = load_case(args.case_dir)
     solution, st = solve_case(case, time_limit=args.time_limit, seed=args.seed, t_start=t0)
-    write_text_atomic(str(out), json.dumps(solution, indent=1) + "\n")
+    write_report(str(out), json.dumps(solution, indent=1))
     print(
         f"wrote {out}: coverage_ratio {st['coverage_ratio']:.5f}, weighted "
         f"{st['weighted_coverage_ratio']:.5f}, {st['actions']} actions, bound {st['bound']:.5f}, "
         f"gap {st['gap']:.5f} ({time.perf_counter() - t0:.1f} s)"
     )
-    return check_and_print(case, solution, args.json)
+    return _check_and_print(case, solution, args.json)
 
 
 def register(sub) -> None:
