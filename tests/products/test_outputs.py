@@ -21,6 +21,7 @@ import textwrap
 import time
 
 import pytest
+from test_cli_errors import SCENARIO  # the one-satellite, one-target scenario
 
 from jaxspline.products import outputs as outputs_module
 from jaxspline.products.outputs import (
@@ -206,7 +207,7 @@ def test_the_command_exits_5_while_another_process_holds_the_directory(tmp_path,
     try:
         assert holder.stdout.readline().strip() == "locked"
         scen = tmp_path / "s.toml"
-        scen.write_text(_SCENARIO, encoding="utf-8")
+        scen.write_text(SCENARIO, encoding="utf-8")
         t0 = time.monotonic()
         assert main(["plan", str(scen), "-o", str(out), "--quiet"]) == EXIT_BUSY
         assert time.monotonic() - t0 < 30.0  # at once: no planning
@@ -216,15 +217,3 @@ def test_the_command_exits_5_while_another_process_holds_the_directory(tmp_path,
     finally:
         holder.kill()
         holder.wait()
-
-
-_SCENARIO = """
-[scenario]
-epoch = "2026-04-14T00:00:00Z"
-duration_s = 600.0
-[[satellites]]
-altitude_km = 600.0
-[[targets]]
-lat_deg = 46.0
-lon_deg = 15.0
-"""
