@@ -266,12 +266,16 @@ def _deadline(sc, limit, t_start, **asked):
     with the estimated time of the asked outputs (``asked``: plots, html, aem, aem_step)
     kept out of the search."""
     from jaxspline.planner.deadline import StageDeadline
-    from jaxspline.products.output_budget import output_seconds
+    from jaxspline.products.output_budget import RESERVE_FACTOR, output_seconds
 
     size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
     cost = output_seconds(sc, **asked)
     return StageDeadline(
-        t_start, limit, size, after_s=sum(cost.values()), must_s=cost["plan files"]
+        t_start,
+        limit,
+        size,
+        after_s=RESERVE_FACTOR * sum(cost.values()),
+        must_s=cost["plan files"],
     )
 
 

@@ -29,6 +29,7 @@ __all__ = [
     "PLOTS_S_PER_SAT_HOUR",
     "PRODUCTS",
     "REMEDIES",
+    "RESERVE_FACTOR",
     "output_seconds",
 ]
 
@@ -53,6 +54,13 @@ AEM_S_PER_STATE = 5.5e-4  # attitude history and its AEM files, per attitude sta
 PLOTS_FIXED_S = 3.0  # the PNG figures (the world map's coastlines) [s]
 PLOTS_S_PER_SAT_HOUR = 0.02  # ... per satellite and hour [s]
 ATTITUDE_PLOT_S_PER_STATE = 1.7e-4  # attitude.png, per attitude state [s]
+#: What the search keeps free for the outputs, as a multiple of their estimate. The
+#: estimates are each product's own CPU seconds; the writing phase also pays for the
+#: attitude history's set-up and imports, and the stages before it (repair, attitude)
+#: run over theirs, so with the plain estimate the figures, written last, never fitted
+#: in the default job. Whether each product is written is still decided on its own
+#: estimate against the time really left.
+RESERVE_FACTOR = 2.5
 
 
 def output_seconds(sc, *, plots: bool, html: bool, aem: bool, aem_step: float) -> dict:
