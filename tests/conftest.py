@@ -11,7 +11,12 @@ import tempfile
 _HERE = pathlib.Path(__file__).parent
 sys.path[:0] = [str(d) for d in sorted(_HERE.iterdir()) if d.is_dir() and d.name[0] not in "._"]
 
-os.environ.setdefault("XLA_FLAGS", "")
+# Most of the suite's time is compiling small programs that run once. The tests compile
+# with XLA's unoptimized CPU back end (the loop emitters, LLVM at -O0): the same
+# semantics, about a third less CPU time in total (half on the kernel tests), measured.
+# An XLA_FLAGS of your own replaces these (XLA_FLAGS= runs the tests with the defaults).
+TEST_XLA_FLAGS = "--xla_cpu_use_fusion_emitters=false --xla_backend_optimization_level=0"
+os.environ.setdefault("XLA_FLAGS", TEST_XLA_FLAGS)
 # One persistent XLA cache for the whole run, in a temporary folder (never the user's
 # cache): made by the first process (pytest itself, or its only process without xdist),
 # inherited through the environment by the xdist workers and every ``jaxspline``

@@ -386,11 +386,20 @@ def tle_orbit(line1: str, line2: str, epoch_jd: float, t_end: float, step: float
     return HermiteOrbit(*(jnp.asarray(x) for x in (t, r, v, _gravity_j2(r))))
 
 
+@jax.jit
+def _circular_knots(orb: CircularOrbit, t):
+    r = _circular_position(orb, t)
+    v, a = jax.jvp(lambda x: _circular_velocity(orb, x), (t,), (jnp.ones_like(t),))
+    return r, v, a
+
+
 def _circular_table(orb: CircularOrbit, t):
-    """(r, v, a) [M, 3] of a circular orbit at knots t [M]; a = dv/dt by forward autodiff."""
-    tj = jnp.asarray(t, jnp.float64)
-    r = _circular_position(orb, tj)
-    v, a = jax.jvp(lambda x: _circular_velocity(orb, x), (tj,), (jnp.ones_like(tj),))
+    """(r, v, a) [M, 3] of a circular orbit at knots t [M]; a = dv/dt by forward autodiff.
+
+    One compiled program per knot count (run op by op, the same arithmetic compiled
+    some seventy programs of one operation each, per knot count).
+    """
+    r, v, a = _circular_knots(orb, jnp.asarray(t, jnp.float64))
     return np.asarray(r), np.asarray(v), np.asarray(a)
 
 
@@ -448,9 +457,13 @@ def tabulate_orbits(sources, epoch_jd: float, t_end: float, step: float) -> Orbi
     v = np.zeros((s_count, m, 3))
     ok = np.ones((s_count, m), bool)
     tle_idx = [i for i, src in enumerate(sources) if not isinstance(src, CircularOrbit)]
-    for i, src in enumerate(sources):
-        if isinstance(src, CircularOrbit):
-            r[i], v[i], _ = _circular_table(src, t)
+    circ = {
+        i: _circular_table(src, t)
+        for i, src in enumerate(sources)
+        if isinstance(src, CircularOrbit)
+    }
+    for i, (ri, vi, _) in circ.items():
+        r[i], v[i] = ri, vi
     if tle_idx:
         from sgp4.api import SatrecArray
 
@@ -465,9 +478,8 @@ def tabulate_orbits(sources, epoch_jd: float, t_end: float, step: float) -> Orbi
             near = _nearest_good(g)
             r[i], v[i], ok[i] = rr[row][near] * _KM, vv[row][near] * _KM, g
     a = _gravity_j2(r)
-    for i, src in enumerate(sources):
-        if isinstance(src, CircularOrbit):
-            a[i] = _circular_table(src, t)[2]
+    for i, (_, _, ai) in circ.items():
+        a[i] = ai
     return OrbitTable(HermiteOrbit(*(jnp.asarray(x) for x in (t, r, v, a))), ok)
 
 

@@ -308,7 +308,7 @@ _SHARD_SCRIPT = textwrap.dedent(
 
 def _run_sharded(ndev: int) -> dict:
     env = dict(os.environ)
-    env["XLA_FLAGS"] = f"--xla_force_host_platform_device_count={ndev}"
+    env["XLA_FLAGS"] = f"{env['XLA_FLAGS']} --xla_force_host_platform_device_count={ndev}"
     env["JAX_PLATFORMS"] = "cpu"
     script = _SHARD_SCRIPT.format(tests=os.path.dirname(__file__))
     out = subprocess.run(
@@ -429,7 +429,7 @@ def _free_port() -> int:
 
 def test_two_distributed_processes_split_the_candidates():
     """Two local CPU processes under jax.distributed: the union of parts is the whole."""
-    env = dict(os.environ, JAX_PLATFORMS="cpu", XLA_FLAGS="")
+    env = dict(os.environ, JAX_PLATFORMS="cpu")
     script = _DIST_SCRIPT.format(port=_free_port(), tests=os.path.dirname(__file__))
     procs = [
         subprocess.Popen(

@@ -267,7 +267,8 @@ _SHARD_SCRIPT = textwrap.dedent(
 
 def test_rows_sharded_over_four_devices():
     """Rows split over 4 CPU devices (chunks of 52 rows, rounded to 4): same answers."""
-    env = dict(os.environ, XLA_FLAGS="--xla_force_host_platform_device_count=4")
+    env = dict(os.environ)
+    env["XLA_FLAGS"] = f"{env['XLA_FLAGS']} --xla_force_host_platform_device_count=4"
     env["JAX_PLATFORMS"] = "cpu"
     here = os.path.dirname(__file__)
     script = _SHARD_SCRIPT.format(tests=here, screen_tests=os.path.join(here, "..", "screen"))
