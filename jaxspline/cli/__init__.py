@@ -187,9 +187,12 @@ def _report(exc: Exception, debug: bool) -> int:
     """Print ``exc`` as one line (with the traceback before it under ``--debug``) and
     return its exit code."""
     from jaxspline.planner.deadline import TimeLimitError
+    from jaxspline.planner.memory_guard import MemoryLimitError
     from jaxspline.products.outputs import OutputBusyError, OutputError
 
     code, label = _classify(exc, TimeLimitError, OutputBusyError, OutputError)
+    if isinstance(exc, MemoryLimitError):  # too big for its memory: exit 3 as for the time
+        code, label = EXIT_TIME_LIMIT, "memory limit"
     if debug:
         traceback.print_exception(exc, file=sys.stderr)
     text = str(exc).replace("\r", " ").replace("\n", " ").strip() or type(exc).__name__

@@ -54,6 +54,7 @@ from jaxspline.cli.flags import (
     check_int,
     check_path,
     check_seconds,
+    check_value,
 )
 from jaxspline.products.outputs import ATTITUDE_FIGURE, OUTPUT_FILES
 from jaxspline.products.plan_html import HTML_FILE
@@ -73,6 +74,7 @@ EXIT_INTERRUPTED = 130  # exit code after Ctrl-C / SIGTERM (128 + SIGINT, the sh
 # AEM sample step of the plan command [s]: ccsds-ndm serializes ~2,000 states/s, so
 # 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
 AEM_STEP_S = 10.0
+MAX_MEMORY_RANGE_GB = (0.25, 65536.0)  # --max-memory [GB]: a quarter GB runs nothing
 AEM_STEP_RANGE_S = (1e-3, 86400.0)
 MAX_AEM_STATES = 50_000  # attitude states over all AEM files (~30-60 s to compute and write)
 
@@ -131,6 +133,14 @@ def register(sub) -> None:
         default=AEM_STEP_S,
         help=f"attitude sample step of the AEM files [s] (default {AEM_STEP_S:g})",
     )
+    p.add_argument(
+        "--max-memory",
+        type=float,
+        default=None,
+        metavar="GB",
+        help="memory the run may hold [GiB] (default: 80 %% of the available memory); a "
+        "scenario whose estimate does not fit stops before it allocates (exit 3)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=_main)
 
@@ -150,14 +160,18 @@ def _main(args) -> int:
         aem=args.aem,
         aem_step=args.aem_step,
         t_start=getattr(args, "started", None),
+        max_memory=args.max_memory,
     )
     if result.report.get("interrupted"):
         return EXIT_INTERRUPTED
     return 0 if result.report["valid"] else 1
 
 
-def _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step) -> None:
+def _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step, max_memory) -> None:
     """The flags of ``jaxspline plan``, each by its name (ValueError), before any work."""
+    lo, hi = MAX_MEMORY_RANGE_GB
+    if check_value("--max-memory", max_memory) is not None and not lo <= max_memory <= hi:
+        raise ValueError(f"--max-memory: must be within [{lo:g}, {hi:g}] GB, got {max_memory:g}")
     if isinstance(scenario, str):
         check_path("SCENARIO", scenario, kind="file")
     check_seconds("--time-limit", time_limit)
@@ -207,6 +221,7 @@ def run_plan(
     aem: bool = True,
     aem_step: float = AEM_STEP_S,
     t_start: float | None = None,
+    max_memory: float | None = None,
 ):
     """Load ``scenario``, plan it, write the outputs as one set (module docstring).
 
@@ -228,20 +243,24 @@ def run_plan(
       aem_step: sampling step of the AEM files [s].
       t_start: when the time limit starts [s, ``time.monotonic``] (the command passes
         its process's start); None: now.
+      max_memory: memory the run may hold [GiB] (None: :data:`MEMORY_SHARE` of the
+        available memory, :mod:`jaxspline.planner.memory_guard`).
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
       FileExistsError: an earlier set exists and ``force`` is false.
       ValueError: a bad flag or scenario file (naming it).
       jaxspline.planner.deadline.TimeLimitError: the limit ran out before the search.
+      jaxspline.planner.memory_guard.MemoryLimitError: a stage would not fit the memory.
       jaxspline.products.outputs.OutputError: the outputs cannot be written
         (``OutputBusyError``: another run holds the directory).
     """
+    from jaxspline.planner.memory_guard import GB, MemoryGuard
     from jaxspline.products.outputs import OutputSet
     from jaxspline.readers.scenario import scenario_from
 
     t_start = time.monotonic() if t_start is None else t_start
-    _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step)
+    _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step, max_memory)
     outputs = OutputSet(outdir, force=force)
     outputs.check()  # fail before loading, nothing written
     sc = scenario_from(scenario)
@@ -251,7 +270,8 @@ def run_plan(
     names += (HTML_FILE,) * html + ((ATTITUDE_FIGURE,) * plots + aems if aem else ())
     deadline = _deadline(sc, limit, t_start, plots=plots, html=html, aem=aem, aem_step=aem_step)
     with outputs:  # locked, staged and probed: planning starts only now
-        result = _plan(sc, deadline, seed, max_iters, certify, progress, aem)
+        memory = MemoryGuard(None if max_memory is None else max_memory * GB)
+        result = _plan(sc, deadline, seed, max_iters, certify, progress, aem, memory)
         # --max-iters: fixed work, the whole set is written whatever the clock says
         timed = deadline if max_iters is None else None
         page, t_write = _write(result, outputs, plots, aem, aem_step, html, timed)
@@ -279,16 +299,16 @@ def _deadline(sc, limit, t_start, **asked):
     )
 
 
-def _plan(sc, deadline, seed, max_iters, certify, progress, aem):
+def _plan(sc, deadline, seed, max_iters, certify, progress, aem, memory):
     """:func:`jaxspline.plan` with what is left of the limit after loading the scenario,
-    every stage bound by ``deadline``."""
+    every stage bound by ``deadline`` and ``memory``."""
     from jaxspline.planner.pipeline import plan
 
     deadline.check("loading", 1.0)
     left = max(deadline.end - time.monotonic(), 1e-3)  # the search's share (may be none)
     # with --aem the flown joins are checked: the AEM files never exceed a limit
     return plan(sc, time_limit=left, seed=seed, progress=progress, max_iters=max_iters,
-                certify=certify, flown_joins=aem, deadline=deadline)  # fmt: skip
+                certify=certify, flown_joins=aem, deadline=deadline, memory=memory)  # fmt: skip
 
 
 def _write(result, outputs, plots, aem, aem_step, html, deadline=None):

@@ -53,7 +53,19 @@ from jaxspline.planner.join_screen import (
     screen_first_joins,
     screen_joins,
 )
-from jaxspline.planner.opportunities import build_opportunities, nadir_rate, reference_points
+from jaxspline.planner.memory_guard import (
+    MemoryGuard,
+    check_stage,
+    option_bytes,
+    orbit_bytes,
+    pair_bytes,
+)
+from jaxspline.planner.opportunities import (
+    build_opportunities,
+    nadir_rate,
+    option_counts,
+    reference_points,
+)
 from jaxspline.planner.repair import dropped_line, repair
 from jaxspline.planner.result import PlanResult
 from jaxspline.readers.mission import Scenario, orbit_scene
@@ -139,6 +151,7 @@ def plan(
     certify: float = 0.0,
     flown_joins: bool = False,
     deadline: StageDeadline | None = None,
+    memory: MemoryGuard | None = None,
 ) -> PlanResult:
     """Plan a scenario: the best observations found within ``time_limit`` seconds.
 
@@ -170,10 +183,13 @@ def plan(
         ``report["time_limit"]`` records the split and what was left out. Without it
         (the default) the search leaves a fixed share of ``time_limit``
         (:func:`jaxspline.planner.budget.default_budget`).
+      memory: optional :class:`jaxspline.planner.memory_guard.MemoryGuard`: the stages
+        before the search stop before they allocate more than it allows.
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
       jaxspline.planner.deadline.TimeLimitError: ``deadline`` passed before the search.
+      jaxspline.planner.memory_guard.MemoryLimitError: a stage would not fit ``memory``.
     """
     if not isinstance(scenario, Scenario):
         raise ValueError(f"scenario must be a jaxspline Scenario, got {type(scenario).__name__}")
@@ -188,7 +204,7 @@ def plan(
         raise ValueError(f"max_iters must be an integer >= 1, got {max_iters!r}")
     with jax.enable_x64(True):
         args = (float(limit), int(seed), bool(progress), max_iters, certify, flown_joins)
-        return _plan(scenario, *args, deadline)
+        return _plan(scenario, *args, deadline, memory)
 
 
 def _orbits(sc: Scenario):
@@ -281,6 +297,7 @@ def build_problem(
     joins: bool = False,
     reduce_slack=None,
     deadline: StageDeadline | None = None,
+    memory: MemoryGuard | None = None,
     _clock=None,
 ) -> PlanContext:
     """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
@@ -299,6 +316,9 @@ def build_problem(
       deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` checked
         between the stages and inside options and screening
         (:class:`jaxspline.planner.deadline.TimeLimitError` once it has passed).
+      memory: optional :class:`jaxspline.planner.memory_guard.MemoryGuard` checked before
+        the orbits, options and near pairs are built (``MemoryLimitError`` when they
+        would not fit).
       _clock: private; the stage timer of an enclosing :func:`plan` call.
     Returns:
       :class:`jaxspline.planner.context.PlanContext`: the search's problem and what the
@@ -307,8 +327,10 @@ def build_problem(
     sc = scenario
     clock = _clock or _Clock(sc.name, progress)
     check = _stage_check(deadline, clock)
+    fits = functools.partial(check_stage, memory)
     with jax.enable_x64(True):
         sats = sc.satellites
+        fits("orbits", lambda: orbit_bytes(sc))
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
         check("orbits")
@@ -316,6 +338,7 @@ def build_problem(
         n_tg = len(np.unique(windows.target))
         clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
         check("windows")
+        fits("options", lambda: option_bytes(sc, *option_counts(sc, windows)))
         opp = build_opportunities(sc, scene, table.usable, windows, tick=check("options", 0))
         clock.lap("options", f"{len(opp)} options")
         tick = check("screening", 0, f"{len(opp)} options")
@@ -330,6 +353,8 @@ def build_problem(
             far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega, beat)
             lookup = np.ones(len(sats), bool)
         beat(0.0)
+        reach = np.asarray(far) + slack + _NEAR_SLACK + _WINDOW_GUARD
+        fits("screening", lambda: pair_bytes(sc, opp.options, reach))
         tick = check("screening", 0, f"{len(opp)} options", since=time.monotonic())
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
@@ -484,14 +509,14 @@ def _search(pb, deadline, seed, max_iters, pc, clock):
 
 
 def _plan(
-    sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins, deadline
+    sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins, deadline, memory=None
 ) -> PlanResult:
     """:func:`plan` after its argument checks (inside ``jax.enable_x64``): stages 1-4,
     then search and repair under the signal guard, the optional HiGHS certificate, and
     the result."""
     clock = _Clock(sc.name, progress)
     budget = default_budget(sc, limit, clock.t0)
-    ctx = build_problem(sc, joins=flown_joins, deadline=deadline, _clock=clock)
+    ctx = build_problem(sc, joins=flown_joins, deadline=deadline, memory=memory, _clock=clock)
     if deadline is not None:
         budget = deadline_budget(
             ctx, deadline, flown_joins=flown_joins, refill_s=_REFILL_S, capped=max_iters is not None
