@@ -30,10 +30,12 @@ __all__ = [
     "CANDIDATE_BYTES",
     "GB",
     "KNOT_BYTES",
+    "MB",
     "MEMORY_SHARE",
     "PAIR_BYTES",
     "SAMPLE_BYTES",
     "SORT_PAIR_BYTES",
+    "STAGE_BYTES",
     "MemoryGuard",
     "MemoryLimitError",
     "available_bytes",
@@ -45,6 +47,7 @@ __all__ = [
 ]
 
 GB = float(1 << 30)
+MB = float(1 << 20)
 #: Share of the system's available memory a run may take (the rest: other processes,
 #: the page cache, a forked bound worker's own pages).
 MEMORY_SHARE = 0.8
@@ -62,6 +65,9 @@ CANDIDATE_BYTES = 1024
 PAIR_BYTES = 16
 #: [bytes] per candidate near pair of the largest satellite: the sort of its pairs.
 SORT_PAIR_BYTES = 32
+#: [bytes] every stage adds whatever its size: its compiled programs and work buffers
+#: (the default job's stages each add 30-170 MB).
+STAGE_BYTES = 256 << 20
 _CGROUP = Path("/sys/fs/cgroup")
 _Estimate = tuple[float, str, Callable[[float], str]]  # bytes, drivers, remedy(factor)
 
@@ -134,10 +140,13 @@ class MemoryGuard:
 
     Attributes:
       max_bytes, share: as given.
+      estimates_mb: the estimate of every stage checked [MB], with the resident set when
+        it was checked (``"<stage> at"``) (``plan.json``'s ``stats.memory_estimate_mb``).
     """
 
     def __init__(self, max_bytes=None, share=MEMORY_SHARE, available=available_bytes):
         self.max_bytes, self.share, self._available = max_bytes, float(share), available
+        self.estimates_mb: dict[str, float] = {}
 
     def room(self) -> tuple[float, str]:
         """What the next stage may still allocate [bytes], and where the figure comes from.
@@ -172,6 +181,9 @@ class MemoryGuard:
             the remedy.
         """
         need, drivers, remedy = estimate
+        need += STAGE_BYTES
+        self.estimates_mb[stage] = round(need / MB, 1)
+        self.estimates_mb[f"{stage} at"] = round(_rss_bytes() / MB, 1)
         room, said = self.room()
         if need <= room:
             return

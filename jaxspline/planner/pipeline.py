@@ -545,6 +545,8 @@ def _plan(
     )
     if deadline is not None:  # the caller adds what its outputs leave out
         result.report["time_limit"] = deadline.record()
+    if memory is not None:  # beside the measured peaks (stats.peak_rss_mb)
+        result.stats["memory_estimate_mb"] = dict(memory.estimates_mb)
     return result
 
 

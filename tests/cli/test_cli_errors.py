@@ -9,7 +9,9 @@
 * writing: a failure while writing the set is one line (exit 4), the previous set is
   kept; a signal while writing is recorded in ``plan.json``;
 * the time limit: a scenario that cannot fit a tiny limit stops before the search
-  with exit 3, an estimate and the remedy, and writes nothing.
+  with exit 3, an estimate and the remedy, and writes nothing;
+* the memory: a scenario whose options would take terabytes (steps of 0.01 s, both in
+  their ranges) stops before it allocates them, with exit 3, the estimate and the remedy.
 """
 
 from __future__ import annotations
@@ -75,6 +77,9 @@ PLAN_FLAGS = [
     (["--aem-step", "1e-9"], "--aem-step: must be >="),
     (["--aem-step", "1e9"], "--aem-step: must be <="),
     (["--aem-step", "0.01"], "--aem-step: 0.01 s over the 600 s horizon"),
+    (["--max-memory", "0"], "--max-memory: must be a finite number > 0"),
+    (["--max-memory", "nan"], "--max-memory: must be a finite number > 0"),
+    (["--max-memory", "0.01"], "--max-memory: must be within [0.25, 65536] GB"),
     (["-o", ""], "-o/--outdir: must not be empty"),
     (["-o", " "], "-o/--outdir: must not be empty"),
 ]
@@ -221,6 +226,26 @@ def test_the_time_limit_stops_a_scenario_too_big_for_it(tmp_path, capsys):
     assert "give a time limit of" in err and "--time-limit" in err, err
     assert not out.exists() and sorted(os.listdir(tmp_path)) == ["big.toml"]
     assert seconds < 60.0
+
+
+def test_a_scenario_too_big_for_the_memory_stops_before_it_allocates(tmp_path, capsys):
+    big = SCENARIO.replace("duration_s = 600.0", "duration_s = 7200.0").replace(
+        "[[targets]]\nlat_deg = 46.0\nlon_deg = 15.0\n",
+        "[random_targets]\ncount = 40\nseed = 3\nlat_deg = [40.0, 50.0]\n"
+        "[planner]\ntime_step_s = 0.01\ngeometry_step_s = 0.01\n",
+    )
+    scen = tmp_path / "big.toml"
+    scen.write_text(big, encoding="utf-8")
+    out = tmp_path / "out"
+    argv = ["plan", str(scen), "-o", str(out), "--time-limit", "60", "--quiet"]
+    code, err, seconds = _run(capsys, argv)
+    assert code == EXIT_TIME_LIMIT, err
+    assert err.startswith("jaxspline: memory limit: stage 'options' would need ~"), err
+    assert "planner.time_step_s = 0.01, planner.geometry_step_s = 0.01" in err, err
+    assert "GB are available" in err and "raise planner.time_step_s to >= " in err, err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists() and sorted(os.listdir(tmp_path)) == ["big.toml"]
+    assert seconds < 30.0  # orbits and windows only (a few seconds)
 
 
 def test_stage_deadline_estimate_and_compile_time(monkeypatch):
