@@ -82,6 +82,7 @@ _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-fea
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
 _JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
+_PAIRS, _CANDS = "target-satellite pairs", "candidate options"  # the stages' work units
 _REFILL_S = 2.0  # [s] budget of one refill after join rejections
 _REFILL_ITERS = 2000  # LNS iterations of one refill in iteration-capped runs
 _WORKER_MIN_CPUS = 2  # the bound worker runs only with a second CPU
@@ -334,14 +335,17 @@ def build_problem(
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
         check("orbits")
-        windows = _windows(sc, scene, table, check("windows", 0))
+        pairs = len(sc.targets) * len(sats)
+        windows = _windows(sc, scene, table, check("windows", 0, work=lambda: (pairs, _PAIRS)))
         n_tg = len(np.unique(windows.target))
         clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
         check("windows")
         fits("options", lambda: option_bytes(sc, *option_counts(sc, windows)))
-        opp = build_opportunities(sc, scene, table.usable, windows, tick=check("options", 0))
+        cands = check("options", 0, work=lambda: (option_counts(sc, windows)[0], _CANDS))
+        opp = build_opportunities(sc, scene, table.usable, windows, tick=cands)
         clock.lap("options", f"{len(opp)} options")
-        tick = check("screening", 0, f"{len(opp)} options")
+        work = functools.partial(tuple, (len(opp), "options"))
+        tick = check("screening", 0, f"{len(opp)} options", work=work)
         beat = tick or _no_tick  # between the steps before the near pairs (each may be long)
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
         beat(0.0)
@@ -355,7 +359,7 @@ def build_problem(
         beat(0.0)
         reach = np.asarray(far) + slack + _NEAR_SLACK + _WINDOW_GUARD
         fits("screening", lambda: pair_bytes(sc, opp.options, reach))
-        tick = check("screening", 0, f"{len(opp)} options", since=time.monotonic())
+        tick = check("screening", 0, f"{len(opp)} options", since=time.monotonic(), work=work)
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )
@@ -369,20 +373,21 @@ def build_problem(
 
 
 def _stage_check(deadline: StageDeadline | None, clock):
-    """``check(stage, done=1, what="", since=None)``: with ``done`` = 1 it checks the
-    deadline at the end of a stage; with ``done`` = 0 it returns the stage's
+    """``check(stage, done=1, what="", since=None, work=None)``: with ``done`` = 1 it
+    checks the deadline at the end of a stage; with ``done`` = 0 it returns the stage's
     ``tick(share)`` (None without a deadline). A stage starts at the clock's last lap;
     ``since`` starts the part of it the shares measure (its time before counts whole in
-    the estimate: the near pairs after the far gaps and join screens)."""
+    the estimate: the near pairs after the far gaps and join screens); ``work() ->
+    (units, name)`` is the stage's work (:meth:`StageDeadline.check`)."""
 
-    def check(stage, done=1.0, what="", since=None):
+    def check(stage, done=1.0, what="", since=None, work=None):
         search_clock.raise_pending_signal()  # a Ctrl-C / SIGTERM a finalizer swallowed
         if deadline is None:
             return None
         if done >= 1.0:
             return deadline.check(stage, 1.0, clock.last, what)
         start = clock.last if since is None else since
-        return lambda share: deadline.check(stage, share, start, what)
+        return lambda share: deadline.check(stage, share, start, what, work)
 
     return check
 

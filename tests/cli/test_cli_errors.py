@@ -269,6 +269,25 @@ def test_stage_deadline_estimate_and_compile_time(monkeypatch):
     assert dl.suggested_limit(4.0) == 10 and dl.suggested_limit(1e6) == 2_000_000
 
 
+def test_a_stage_stopped_before_its_first_share_estimates_its_work(monkeypatch):
+    from jaxspline.planner import deadline as dl
+
+    clock = {"now": 100.0}
+    monkeypatch.setattr(dl.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(dl, "compile_seconds", lambda: 0.0)
+    d = dl.StageDeadline(100.0, 60.0, "50000 targets")
+    monkeypatch.setattr(d, "pace", lambda: 2.0)
+    clock["now"] = 161.0  # screening started at 150 s and is still at its first block
+    with pytest.raises(dl.TimeLimitError) as exc:
+        d.check("screening", 0.0, 150.0, "918734 options", lambda: (918_734, "options"))
+    e, msg = exc.value, str(exc.value)
+    each = dl.WORK_SECONDS["screening"]
+    assert e.estimate == pytest.approx(50.0 + 918_734 * each * 2.0)  # 50 s + 367 s
+    assert "0 % through it of 918,734 options" in msg, msg
+    assert "need ~417 s or more (its work: 918,734 options at ~0.2 ms of CPU each" in msg, msg
+    assert "give a time limit of 1200 s or more" in msg, msg
+
+
 class _FakeResult:
     """Enough of a PlanResult for the write phase: a report and plan.json."""
 
