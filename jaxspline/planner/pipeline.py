@@ -345,7 +345,7 @@ def build_problem(
         opp = build_opportunities(sc, scene, table.usable, windows, tick=cands)
         clock.lap("options", f"{len(opp)} options")
         work = functools.partial(tuple, (len(opp), "options"))
-        tick = check("screening", 0, f"{len(opp)} options", work=work)
+        tick = check("screening", 0, work=work)
         beat = tick or _no_tick  # between the steps before the near pairs (each may be long)
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
         beat(0.0)
@@ -359,7 +359,7 @@ def build_problem(
         beat(0.0)
         reach = np.asarray(far) + slack + _NEAR_SLACK + _WINDOW_GUARD
         fits("screening", lambda: pair_bytes(sc, opp.options, reach))
-        tick = check("screening", 0, f"{len(opp)} options", since=time.monotonic(), work=work)
+        tick = check("screening", 0, since=time.monotonic(), work=work)
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )

@@ -279,13 +279,13 @@ def test_a_stage_stopped_before_its_first_share_estimates_its_work(monkeypatch):
     monkeypatch.setattr(d, "pace", lambda: 2.0)
     clock["now"] = 161.0  # screening started at 150 s and is still at its first block
     with pytest.raises(dl.TimeLimitError) as exc:
-        d.check("screening", 0.0, 150.0, "918734 options", lambda: (918_734, "options"))
+        d.check("screening", 0.0, 150.0, "", lambda: (918_734, "options"))
     e, msg = exc.value, str(exc.value)
     each = dl.WORK_SECONDS["screening"]
-    assert e.estimate == pytest.approx(50.0 + 918_734 * each * 2.0)  # 50 s + 367 s
-    assert "0 % through it of 918,734 options" in msg, msg
-    assert "need ~417 s or more (its work: 918,734 options at ~0.2 ms of CPU each" in msg, msg
-    assert "give a time limit of 1200 s or more" in msg, msg
+    assert e.estimate == pytest.approx(50.0 + 918_734 * each * 2.0)  # 50 s + 551 s
+    assert "0 % through it of 918,734 options; 50000 targets)" in msg, msg
+    assert "need ~601 s or more (its work: 918,734 options at ~0.3 ms of CPU each" in msg, msg
+    assert "give a time limit of 1800 s or more" in msg, msg
 
 
 class _FakeResult:
