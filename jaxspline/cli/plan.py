@@ -257,20 +257,25 @@ def run_plan(
     """
     from jaxspline.planner.memory_guard import GB, MemoryGuard
     from jaxspline.products.outputs import OutputSet
+    from jaxspline.readers.fields import READ_CLOCK
     from jaxspline.readers.scenario import scenario_from
 
     t_start = time.monotonic() if t_start is None else t_start
     _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step, max_memory)
     outputs = OutputSet(outdir, force=force)
     outputs.check()  # fail before loading, nothing written
-    sc = scenario_from(scenario)
+    memory = MemoryGuard(None if max_memory is None else max_memory * GB)
+    token = READ_CLOCK.set(_reading_clock(t_start, time_limit, memory))
+    try:
+        sc = scenario_from(scenario)
+    finally:
+        READ_CLOCK.reset(token)
     aems = _check_aem(sc, aem_step) if aem else ()
     limit = sc.planner.default_time_limit if time_limit is None else time_limit
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
     names += (HTML_FILE,) * html + ((ATTITUDE_FIGURE,) * plots + aems if aem else ())
     deadline = _deadline(sc, limit, t_start, plots=plots, html=html, aem=aem, aem_step=aem_step)
     with outputs:  # locked, staged and probed: planning starts only now
-        memory = MemoryGuard(None if max_memory is None else max_memory * GB)
         result = _plan(sc, deadline, seed, max_iters, certify, progress, aem, memory)
         # --max-iters: fixed work, the whole set is written whatever the clock says
         timed = deadline if max_iters is None else None
@@ -279,6 +284,45 @@ def run_plan(
     _print_summary(result, Path(outdir), names, page)
     _say_late(result, limit, time.monotonic() - t_start, t_write)
     return result
+
+
+def _reading_clock(t_start: float, limit: float | None, memory):
+    """The clock of the scenario's files while they are read
+    (:data:`jaxspline.readers.fields.READ_CLOCK`): ``clock(file, share read)`` raises
+    ``TimeLimitError`` past ``--time-limit`` (``limit``; None: the scenario's limit is
+    checked once it is read) and ``MemoryLimitError`` when the memory the file's rows
+    take, from its first tick on, projected over the rest of it, does not fit
+    ``memory`` (the file's text, read before, is not projected)."""
+    from jaxspline.planner.deadline import TimeLimitError, suggested_limit
+    from jaxspline.planner.memory_guard import rss_bytes
+
+    t0, first = time.monotonic(), {}  # file -> (share, resident set) at its first tick
+
+    def clock(label: str, share: float) -> None:
+        now, share = time.monotonic(), max(share, 1e-6)
+        rows = f"{100 * share:.0f} % of {label} read"
+        if limit is not None and now - t_start > limit:
+            est = (t0 - t_start) + (now - t0) / share
+            raise TimeLimitError(
+                f"time limit of {limit:.4g} s reached while reading the scenario "
+                f"({rows} after {now - t_start:.1f} s): reading it alone needs ~{est:.0f} s "
+                f"at this pace; give a time limit of {suggested_limit(est)} s or more "
+                "(--time-limit or planner.time_limit_s), or split the file",
+                "loading",
+                now - t_start,
+                est,
+            )
+        share0, rss0 = first.setdefault(label, (share, rss_bytes()))
+        if share <= share0:
+            return
+        more = (rss_bytes() - rss0) / (share - share0) * (1.0 - share)
+
+        def remedy(f):
+            return f"read a file about {f:.2g} times smaller (fewer targets)"
+
+        memory.check("loading", (more, f"{rows}, its rows growing as they are read", remedy))
+
+    return clock
 
 
 def _deadline(sc, limit, t_start, **asked):

@@ -44,6 +44,7 @@ __all__ = [
     "option_bytes",
     "orbit_bytes",
     "pair_bytes",
+    "rss_bytes",
 ]
 
 GB = float(1 << 30)
@@ -119,8 +120,12 @@ def available_bytes() -> float | None:
     return max(min(known), 0.0) if known else None
 
 
-def _rss_bytes() -> float:
-    """This process's resident set size [bytes] (0 where unknown)."""
+def rss_bytes() -> float:
+    """This process's resident set size now [bytes].
+
+    Returns:
+      float (0 where unknown: no ``/proc/self/statm``).
+    """
     try:
         pages = int(Path("/proc/self/statm").read_text().split()[1])
     except (OSError, ValueError, IndexError):
@@ -160,10 +165,10 @@ class MemoryGuard:
             room = self.share * avail
             said = f"{100 * self.share:.0f} % of the {avail / GB:.1f} GB the system has available"
         if self.max_bytes is not None:
-            own = self.max_bytes - _rss_bytes()
+            own = self.max_bytes - rss_bytes()
             if own < room:
                 room = max(own, 0.0)
-                held = _rss_bytes() / GB
+                held = rss_bytes() / GB
                 said = f"--max-memory {self.max_bytes / GB:g} GB less the {held:.2f} GB held"
         return room, said
 
@@ -183,7 +188,7 @@ class MemoryGuard:
         need, drivers, remedy = estimate
         need += STAGE_BYTES
         self.estimates_mb[stage] = round(need / MB, 1)
-        self.estimates_mb[f"{stage} at"] = round(_rss_bytes() / MB, 1)
+        self.estimates_mb[f"{stage} at"] = round(rss_bytes() / MB, 1)
         room, said = self.room()
         if need <= room:
             return

@@ -248,6 +248,28 @@ def test_a_scenario_too_big_for_the_memory_stops_before_it_allocates(tmp_path, c
     assert seconds < 30.0  # orbits and windows only (a few seconds)
 
 
+@pytest.mark.parametrize(
+    ("extra", "msg"),
+    [
+        (["--time-limit", "0.05"], "time limit: time limit of 0.05 s reached while reading"),
+        (["--max-memory", "0.25"], "memory limit: stage 'loading' would need ~"),
+    ],
+    ids=["time", "memory"],
+)
+def test_a_long_targets_csv_is_stopped_while_it_is_read(tmp_path, capsys, extra, msg):
+    rows = "".join(f"t{i},{40 + i % 10},{10 + i % 7},1\n" for i in range(25_000))
+    (tmp_path / "t.csv").write_text("name,lat_deg,lon_deg,priority\n" + rows, encoding="utf-8")
+    scen = tmp_path / "csv.toml"
+    head = 'targets_csv = "t.csv"\n'
+    scen.write_text(head + SCENARIO.split("[[targets]]")[0], encoding="utf-8")
+    out = tmp_path / "out"
+    code, err, seconds = _run(capsys, ["plan", str(scen), "-o", str(out), "--quiet", *extra])
+    assert code == EXIT_TIME_LIMIT, err
+    assert err.startswith(f"jaxspline: {msg}") and "% of t.csv read" in err, err
+    assert err.count("\n") == 1 and not out.exists()
+    assert seconds < 20.0  # stopped at its first or second block of 10,000 rows
+
+
 def test_stage_deadline_estimate_and_compile_time(monkeypatch):
     from jaxspline.planner import deadline as dl
 
