@@ -228,7 +228,8 @@ def test_the_time_limit_stops_a_scenario_too_big_for_it(tmp_path, capsys):
     assert seconds < 60.0
 
 
-def test_a_scenario_too_big_for_the_memory_stops_before_it_allocates(tmp_path, capsys):
+@pytest.mark.parametrize("command", ["plan", "bound"])
+def test_a_scenario_too_big_for_the_memory_stops_before_it_allocates(tmp_path, capsys, command):
     big = SCENARIO.replace("duration_s = 600.0", "duration_s = 7200.0").replace(
         "[[targets]]\nlat_deg = 46.0\nlon_deg = 15.0\n",
         "[random_targets]\ncount = 40\nseed = 3\nlat_deg = [40.0, 50.0]\n"
@@ -237,7 +238,8 @@ def test_a_scenario_too_big_for_the_memory_stops_before_it_allocates(tmp_path, c
     scen = tmp_path / "big.toml"
     scen.write_text(big, encoding="utf-8")
     out = tmp_path / "out"
-    argv = ["plan", str(scen), "-o", str(out), "--time-limit", "60", "--quiet"]
+    argv = [command, str(scen), "--time-limit", "60"]
+    argv += ["-o", str(out), "--quiet"] if command == "plan" else []
     code, err, seconds = _run(capsys, argv)
     assert code == EXIT_TIME_LIMIT, err
     assert err.startswith("jaxspline: memory limit: stage 'options' would need ~"), err
