@@ -194,12 +194,23 @@ class MemoryGuard:
             return
         raise MemoryLimitError(
             f"stage {stage!r} would need ~{need / GB:.1f} GB ({drivers}) but "
-            f"{room / GB:.1f} GB are available ({said}): "
-            f"{remedy(need / max(room, 1.0))}",
+            f"{room / GB:.1f} GB are available ({said}): {self._fix(need, room, remedy)}",
             stage,
             need,
             room,
         )
+
+    def _fix(self, need: float, room: float, remedy) -> str:
+        """The remedy: the scenario's (for the part of the estimate that scales with it),
+        or more memory when even a tiny scenario would not fit (or ``--max-memory``)."""
+        more = ""
+        if self.max_bytes is not None:
+            want = math.ceil(4.0 * (rss_bytes() + need) / GB) / 4.0
+            more = f"give --max-memory {want:g} or more"
+        if room <= STAGE_BYTES:  # not even a stage's programs fit: no step would help
+            return more or "free memory (other processes hold it) and run again"
+        fix = remedy((need - STAGE_BYTES) / (room - STAGE_BYTES))
+        return f"{fix}; or {more}" if more else fix
 
 
 def _coarser(step: float, factor: float, unit: float) -> float:

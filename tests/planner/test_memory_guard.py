@@ -69,8 +69,13 @@ def test_the_orbit_estimate_and_the_max_memory_limit(sc):
     guard = _guard(1000.0, max_bytes=0.25 * mg.GB)  # --max-memory 0.25, below what is held
     room, said = guard.room()
     assert room < 0.25 * mg.GB and said.startswith("--max-memory 0.25 GB less the")
-    with pytest.raises(mg.MemoryLimitError, match="stage 'orbits' would need ~0.5 GB"):
+    with pytest.raises(mg.MemoryLimitError, match="stage 'orbits' would need ~0.5 GB") as exc:
         guard.check("orbits", (need, drivers, remedy))
+    # less room than a stage's own programs: no step helps, only more memory
+    assert str(exc.value).endswith(" or more") and "give --max-memory " in str(exc.value)
+    assert "geometry_step_s to >=" not in str(exc.value)
+    with pytest.raises(mg.MemoryLimitError, match="free memory") as exc:
+        _guard(0.1).check("orbits", (need, drivers, remedy))
     mg.MemoryGuard(available=lambda: None).check("orbits", (1e18, "", remedy))  # unknown: pass
 
 
