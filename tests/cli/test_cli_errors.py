@@ -28,6 +28,7 @@ import pytest
 from jaxspline.cli import (
     EXIT_BAD_INPUT,
     EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
     EXIT_TIME_LIMIT,
     EXIT_WRITE,
     build_parser,
@@ -310,6 +311,38 @@ def test_a_stage_stopped_before_its_first_share_estimates_its_work(monkeypatch):
     assert "0 % through it of 918,734 options; 50000 targets)" in msg, msg
     assert "need ~601 s or more (its work: 918,734 options at ~0.3 ms of CPU each" in msg, msg
     assert "give a time limit of 1800 s or more" in msg, msg
+
+
+def test_the_start_up_handlers_belong_to_the_command_only():
+    from jaxspline.cli.startup import runs_the_command
+
+    assert runs_the_command(["python", "-m", "jaxspline.cli", "plan"])
+    assert runs_the_command(["python3", "-m", "jaxspline.aeossp", "solve"])
+    assert runs_the_command(["/usr/bin/python3", "/venv/bin/jaxspline", "plan"])
+    assert not runs_the_command(["python", "-m", "pytest", "tests"])
+    assert not runs_the_command(["python", "script.py", "-m", "jaxspline"])
+    assert not runs_the_command(["python", "-c", "import jaxspline"])
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_a_signal_while_the_command_imports_is_one_line_and_exit_130(sig):
+    import subprocess
+    import sys
+
+    # the command's process, stopped by a signal as soon as `import jaxspline` is done
+    # (the imports take 2-8 s before main() installs its own handlers)
+    code = (
+        "import sys, os, signal, time; sys.orig_argv[1:] = ['-m', 'jaxspline.cli', 'plan']; "
+        f"import jaxspline; os.kill(os.getpid(), signal.{sig}); time.sleep(30); print('alive')"
+    )
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    p = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )  # fmt: skip
+    assert p.returncode == EXIT_INTERRUPTED, (p.returncode, p.stderr)
+    assert p.stderr == f"jaxspline: interrupted ({sig}) while starting: nothing was done\n"
+    assert p.stdout == ""
 
 
 class _FakeResult:
