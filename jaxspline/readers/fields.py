@@ -193,8 +193,8 @@ def _read_bytes(path: Path) -> bytes:
         raise ValueError(f"{path}: not a regular file (a device, pipe or socket)")
     if data is None:
         raise ValueError(
-            f"{path}: {st.st_size / 2**20:.0f} MiB, more than the "
-            f"{MAX_FILE_BYTES / 2**20:.0f} MiB an input file may have"
+            f"{path}: {st.st_size:,} bytes, more than the {MAX_FILE_BYTES:,} "
+            f"({MAX_FILE_BYTES >> 20} MiB) an input file may have"
         )
     return data
 
