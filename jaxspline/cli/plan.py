@@ -184,7 +184,8 @@ def _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step, max_m
 
 
 def _check_aem(sc, aem_step: float) -> tuple[str, ...]:
-    """The AEM file names of the satellites: distinct, and not too many states to write."""
+    """The AEM file names of the satellites: distinct, a step within the horizon (two
+    samples at least), and not too many states to write."""
     from jaxspline.products.aem import aem_file_name
 
     names = tuple(aem_file_name(s.name) for s in sc.satellites)
@@ -195,6 +196,11 @@ def _check_aem(sc, aem_step: float) -> tuple[str, ...]:
                 f"satellites {other!r} and {sc.satellites[k].name!r} would share the AEM "
                 f"file {n}: give them names that differ in letters, digits, '_', '.' or '-'"
             )
+    if aem_step > sc.duration:  # one sample a satellite: not an AEM
+        raise ValueError(
+            f"--aem-step: {aem_step:g} s is longer than the {sc.duration:g} s horizon; use at "
+            f"most {sc.duration:g} (or --no-aem)"
+        )
     states = sc.duration / aem_step * len(names)
     if states > MAX_AEM_STATES:
         least = sc.duration * len(names) / MAX_AEM_STATES

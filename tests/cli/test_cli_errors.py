@@ -78,6 +78,10 @@ PLAN_FLAGS = [
     (["--aem-step", "1e-9"], "--aem-step: must be >="),
     (["--aem-step", "1e9"], "--aem-step: must be <="),
     (["--aem-step", "0.01"], "--aem-step: 0.01 s over the 600 s horizon"),
+    (
+        ["--aem-step", "86400"],
+        "--aem-step: 86400 s is longer than the 600 s horizon; use at most 600",
+    ),
     (["--max-memory", "0"], "--max-memory: must be a finite number > 0"),
     (["--max-memory", "nan"], "--max-memory: must be a finite number > 0"),
     (["--max-memory", "0.01"], "--max-memory: must be within [0.25, 65536] GB"),
