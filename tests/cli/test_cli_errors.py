@@ -337,13 +337,13 @@ def test_a_signal_while_the_command_imports_is_one_line_and_exit_130(sig):
     # (the imports take 2-8 s before main() installs its own handlers)
     code = (
         "import sys, os, signal, time; sys.orig_argv[1:] = ['-m', 'jaxspline.cli', 'plan']; "
+        "signal.signal(signal.SIGINT, signal.default_int_handler); "  # as a shell starts it
         f"import jaxspline; os.kill(os.getpid(), signal.{sig}); time.sleep(30); print('alive')"
     )
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
     p = subprocess.run(
-        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )  # fmt: skip
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env
+    )
     assert p.returncode == EXIT_INTERRUPTED, (p.returncode, p.stderr)
     assert p.stderr == f"jaxspline: interrupted ({sig}) while starting: nothing was done\n"
     assert p.stdout == ""
