@@ -37,7 +37,15 @@ outputs the optional files that no longer fit (``plan.json`` and ``plan.csv`` ar
 always written). With ``--max-iters`` the work is fixed: the search, the repair and
 the outputs run whole (the same plan and the same files on every run). What was
 left out is said on stderr and recorded in ``plan.json``
-(``report.time_limit``); a run that ends past its limit says so on stderr.
+(``report.time_limit``); a run that ends past its limit says so on stderr. The
+scenario's files are read under the same clock (every 10,000 CSV rows or GeoJSON
+features).
+
+Memory: before the stages that allocate in proportion to the scenario (reading its
+files, the orbits, the options, the near pairs) the run estimates their bytes and stops
+with exit 3, the estimate and the remedy when they do not fit the memory it may take
+(``--max-memory``, else 80 % of the available memory:
+:mod:`jaxspline.planner.memory_guard`).
 """
 
 from __future__ import annotations
