@@ -10,11 +10,11 @@ Exit codes (every command): 0 done; 1 the plan or solution failed its check; 2 b
 input (a scenario, case or plan file, a flag; nothing was planned or written); 3 the
 scenario is too big for its limits: the time limit ran out before the search could
 start, or a stage would need more memory than the run may take (the message estimates
-the time or memory needed); 4 an output could not be written (read-only or full disk, a path that is a
-file; the previous outputs are left as they were); 5 the output directory is in use by
-another run; 70 an internal error (a bug: run again with ``--debug`` for the
-traceback); 130 interrupted (Ctrl-C or SIGTERM). No Python traceback reaches the
-terminal without ``--debug``.
+the time or memory needed); 4 an output could not be written (read-only or full disk,
+a path that is a file; the previous outputs are left as they were); 5 the output
+directory is in use by another run; 70 an internal error (a bug: run again with
+``--debug`` for the traceback); 130 interrupted (Ctrl-C or SIGTERM). No Python
+traceback reaches the terminal without ``--debug``.
 
 This package: the parser, the sub-command registry, the exit codes and :func:`main`.
 Layer 8: may import everything below (``kernels`` ... ``products``); only the
