@@ -31,6 +31,8 @@ enables float64 on import or globally: :func:`plan` runs inside
 """
 
 # ruff: noqa: I001  (grouped by subject, not sorted)
+# first: a Ctrl-C during the imports below ends the command with one line (cli.startup)
+import jaxspline.cli.startup  # noqa: F401  (installs the command's start-up handlers)
 
 # the planner: entry points and the result
 from jaxspline.planner.pipeline import plan as plan

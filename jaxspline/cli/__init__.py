@@ -8,12 +8,13 @@ JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left alone.
 
 Exit codes (every command): 0 done; 1 the plan or solution failed its check; 2 bad
 input (a scenario, case or plan file, a flag; nothing was planned or written); 3 the
-time limit ran out before the search could start (the message estimates the time
-needed); 4 an output could not be written (read-only or full disk, a path that is a
-file; the previous outputs are left as they were); 5 the output directory is in use by
-another run; 70 an internal error (a bug: run again with ``--debug`` for the
-traceback); 130 interrupted (Ctrl-C or SIGTERM). No Python traceback reaches the
-terminal without ``--debug``.
+scenario is too big for its limits: the time limit ran out before the search could
+start, or a stage would need more memory than the run may take (the message estimates
+the time or memory needed); 4 an output could not be written (read-only or full disk,
+a path that is a file; the previous outputs are left as they were); 5 the output
+directory is in use by another run; 70 an internal error (a bug: run again with
+``--debug`` for the traceback); 130 interrupted (Ctrl-C or SIGTERM). No Python
+traceback reaches the terminal without ``--debug``.
 
 This package: the parser, the sub-command registry, the exit codes and :func:`main`.
 Layer 8: may import everything below (``kernels`` ... ``products``); only the
@@ -187,9 +188,12 @@ def _report(exc: Exception, debug: bool) -> int:
     """Print ``exc`` as one line (with the traceback before it under ``--debug``) and
     return its exit code."""
     from jaxspline.planner.deadline import TimeLimitError
+    from jaxspline.planner.memory_guard import MemoryLimitError
     from jaxspline.products.outputs import OutputBusyError, OutputError
 
     code, label = _classify(exc, TimeLimitError, OutputBusyError, OutputError)
+    if isinstance(exc, MemoryLimitError):  # too big for its memory: exit 3 as for the time
+        code, label = EXIT_TIME_LIMIT, "memory limit"
     if debug:
         traceback.print_exception(exc, file=sys.stderr)
     text = str(exc).replace("\r", " ").replace("\n", " ").strip() or type(exc).__name__

@@ -123,6 +123,7 @@ def check_bound_flags(args) -> None:
 
 def _main(args) -> int:
     from jaxspline.planner.bound import run_bound
+    from jaxspline.planner.memory_guard import MemoryGuard
 
     check_bound_flags(args)
 
@@ -140,6 +141,7 @@ def _main(args) -> int:
         coordinator=args.coordinator,
         num_processes=args.num_processes,
         process_id=args.process_id,
+        memory=MemoryGuard(),
         **more,
     )
     if res.process == 0:

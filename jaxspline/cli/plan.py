@@ -37,7 +37,15 @@ outputs the optional files that no longer fit (``plan.json`` and ``plan.csv`` ar
 always written). With ``--max-iters`` the work is fixed: the search, the repair and
 the outputs run whole (the same plan and the same files on every run). What was
 left out is said on stderr and recorded in ``plan.json``
-(``report.time_limit``); a run that ends past its limit says so on stderr.
+(``report.time_limit``); a run that ends past its limit says so on stderr. The
+scenario's files are read under the same clock (every 10,000 CSV rows or GeoJSON
+features).
+
+Memory: before the stages that allocate in proportion to the scenario (reading its
+files, the orbits, the options, the near pairs) the run estimates their bytes and stops
+with exit 3, the estimate and the remedy when they do not fit the memory it may take
+(``--max-memory``, else 80 % of the available memory:
+:mod:`jaxspline.planner.memory_guard`).
 """
 
 from __future__ import annotations
@@ -54,6 +62,7 @@ from jaxspline.cli.flags import (
     check_int,
     check_path,
     check_seconds,
+    check_value,
 )
 from jaxspline.products.outputs import ATTITUDE_FIGURE, OUTPUT_FILES
 from jaxspline.products.plan_html import HTML_FILE
@@ -73,6 +82,7 @@ EXIT_INTERRUPTED = 130  # exit code after Ctrl-C / SIGTERM (128 + SIGINT, the sh
 # AEM sample step of the plan command [s]: ccsds-ndm serializes ~2,000 states/s, so
 # 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
 AEM_STEP_S = 10.0
+MAX_MEMORY_RANGE_GB = (0.25, 65536.0)  # --max-memory [GB]: a quarter GB runs nothing
 AEM_STEP_RANGE_S = (1e-3, 86400.0)
 MAX_AEM_STATES = 50_000  # attitude states over all AEM files (~30-60 s to compute and write)
 
@@ -131,6 +141,14 @@ def register(sub) -> None:
         default=AEM_STEP_S,
         help=f"attitude sample step of the AEM files [s] (default {AEM_STEP_S:g})",
     )
+    p.add_argument(
+        "--max-memory",
+        type=float,
+        default=None,
+        metavar="GB",
+        help="memory the run may hold [GiB] (default: 80 %% of the available memory); a "
+        "scenario whose estimate does not fit stops before it allocates (exit 3)",
+    )
     p.add_argument("--quiet", action="store_true", help="no progress lines")
     p.set_defaults(func=_main)
 
@@ -150,14 +168,18 @@ def _main(args) -> int:
         aem=args.aem,
         aem_step=args.aem_step,
         t_start=getattr(args, "started", None),
+        max_memory=args.max_memory,
     )
     if result.report.get("interrupted"):
         return EXIT_INTERRUPTED
     return 0 if result.report["valid"] else 1
 
 
-def _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step) -> None:
+def _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step, max_memory) -> None:
     """The flags of ``jaxspline plan``, each by its name (ValueError), before any work."""
+    lo, hi = MAX_MEMORY_RANGE_GB
+    if check_value("--max-memory", max_memory) is not None and not lo <= max_memory <= hi:
+        raise ValueError(f"--max-memory: must be within [{lo:g}, {hi:g}] GB, got {max_memory:g}")
     if isinstance(scenario, str):
         check_path("SCENARIO", scenario, kind="file")
     check_seconds("--time-limit", time_limit)
@@ -170,7 +192,8 @@ def _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step) -> No
 
 
 def _check_aem(sc, aem_step: float) -> tuple[str, ...]:
-    """The AEM file names of the satellites: distinct, and not too many states to write."""
+    """The AEM file names of the satellites: distinct, a step within the horizon (two
+    samples at least), and not too many states to write."""
     from jaxspline.products.aem import aem_file_name
 
     names = tuple(aem_file_name(s.name) for s in sc.satellites)
@@ -181,6 +204,11 @@ def _check_aem(sc, aem_step: float) -> tuple[str, ...]:
                 f"satellites {other!r} and {sc.satellites[k].name!r} would share the AEM "
                 f"file {n}: give them names that differ in letters, digits, '_', '.' or '-'"
             )
+    if aem_step > sc.duration:  # one sample a satellite: not an AEM
+        raise ValueError(
+            f"--aem-step: {aem_step:g} s is longer than the {sc.duration:g} s horizon; use at "
+            f"most {sc.duration:g} (or --no-aem)"
+        )
     states = sc.duration / aem_step * len(names)
     if states > MAX_AEM_STATES:
         least = sc.duration * len(names) / MAX_AEM_STATES
@@ -207,6 +235,7 @@ def run_plan(
     aem: bool = True,
     aem_step: float = AEM_STEP_S,
     t_start: float | None = None,
+    max_memory: float | None = None,
 ):
     """Load ``scenario``, plan it, write the outputs as one set (module docstring).
 
@@ -228,30 +257,40 @@ def run_plan(
       aem_step: sampling step of the AEM files [s].
       t_start: when the time limit starts [s, ``time.monotonic``] (the command passes
         its process's start); None: now.
+      max_memory: memory the run may hold [GiB] (None: :data:`MEMORY_SHARE` of the
+        available memory, :mod:`jaxspline.planner.memory_guard`).
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
       FileExistsError: an earlier set exists and ``force`` is false.
       ValueError: a bad flag or scenario file (naming it).
       jaxspline.planner.deadline.TimeLimitError: the limit ran out before the search.
+      jaxspline.planner.memory_guard.MemoryLimitError: a stage would not fit the memory.
       jaxspline.products.outputs.OutputError: the outputs cannot be written
         (``OutputBusyError``: another run holds the directory).
     """
+    from jaxspline.planner.memory_guard import GB, MemoryGuard
     from jaxspline.products.outputs import OutputSet
+    from jaxspline.readers.fields import READ_CLOCK
     from jaxspline.readers.scenario import scenario_from
 
     t_start = time.monotonic() if t_start is None else t_start
-    _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step)
+    _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step, max_memory)
     outputs = OutputSet(outdir, force=force)
     outputs.check()  # fail before loading, nothing written
-    sc = scenario_from(scenario)
+    memory = MemoryGuard(None if max_memory is None else max_memory * GB)
+    token = READ_CLOCK.set(_reading_clock(t_start, time_limit, memory))
+    try:
+        sc = scenario_from(scenario)
+    finally:
+        READ_CLOCK.reset(token)
     aems = _check_aem(sc, aem_step) if aem else ()
     limit = sc.planner.default_time_limit if time_limit is None else time_limit
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
     names += (HTML_FILE,) * html + ((ATTITUDE_FIGURE,) * plots + aems if aem else ())
     deadline = _deadline(sc, limit, t_start, plots=plots, html=html, aem=aem, aem_step=aem_step)
     with outputs:  # locked, staged and probed: planning starts only now
-        result = _plan(sc, deadline, seed, max_iters, certify, progress, aem)
+        result = _plan(sc, deadline, seed, max_iters, certify, progress, aem, memory)
         # --max-iters: fixed work, the whole set is written whatever the clock says
         timed = deadline if max_iters is None else None
         page, t_write = _write(result, outputs, plots, aem, aem_step, html, timed)
@@ -259,6 +298,45 @@ def run_plan(
     _print_summary(result, Path(outdir), names, page)
     _say_late(result, limit, time.monotonic() - t_start, t_write)
     return result
+
+
+def _reading_clock(t_start: float, limit: float | None, memory):
+    """The clock of the scenario's files while they are read
+    (:data:`jaxspline.readers.fields.READ_CLOCK`): ``clock(file, share read)`` raises
+    ``TimeLimitError`` past ``--time-limit`` (``limit``; None: the scenario's limit is
+    checked once it is read) and ``MemoryLimitError`` when the memory the file's rows
+    take, from its first tick on, projected over the rest of it, does not fit
+    ``memory`` (the file's text, read before, is not projected)."""
+    from jaxspline.planner.deadline import TimeLimitError, suggested_limit
+    from jaxspline.planner.memory_guard import rss_bytes
+
+    t0, first = time.monotonic(), {}  # file -> (share, resident set) at its first tick
+
+    def clock(label: str, share: float) -> None:
+        now, share = time.monotonic(), max(share, 1e-6)
+        rows = f"{100 * share:.0f} % of {label} read"
+        if limit is not None and now - t_start > limit:
+            est = (t0 - t_start) + (now - t0) / share
+            raise TimeLimitError(
+                f"time limit of {limit:.4g} s reached while reading the scenario "
+                f"({rows} after {now - t_start:.1f} s): reading it alone needs ~{est:.0f} s "
+                f"at this pace; give a time limit of {suggested_limit(est)} s or more "
+                "(--time-limit or planner.time_limit_s), or split the file",
+                "loading",
+                now - t_start,
+                est,
+            )
+        share0, rss0 = first.setdefault(label, (share, rss_bytes()))
+        if share <= share0:
+            return
+        more = (rss_bytes() - rss0) / (share - share0) * (1.0 - share)
+
+        def remedy(f):
+            return f"read a file about {f:.2g} times smaller (fewer targets)"
+
+        memory.check("loading", (more, f"{rows}, its rows growing as they are read", remedy))
+
+    return clock
 
 
 def _deadline(sc, limit, t_start, **asked):
@@ -279,16 +357,16 @@ def _deadline(sc, limit, t_start, **asked):
     )
 
 
-def _plan(sc, deadline, seed, max_iters, certify, progress, aem):
+def _plan(sc, deadline, seed, max_iters, certify, progress, aem, memory):
     """:func:`jaxspline.plan` with what is left of the limit after loading the scenario,
-    every stage bound by ``deadline``."""
+    every stage bound by ``deadline`` and ``memory``."""
     from jaxspline.planner.pipeline import plan
 
     deadline.check("loading", 1.0)
     left = max(deadline.end - time.monotonic(), 1e-3)  # the search's share (may be none)
     # with --aem the flown joins are checked: the AEM files never exceed a limit
     return plan(sc, time_limit=left, seed=seed, progress=progress, max_iters=max_iters,
-                certify=certify, flown_joins=aem, deadline=deadline)  # fmt: skip
+                certify=certify, flown_joins=aem, deadline=deadline, memory=memory)  # fmt: skip
 
 
 def _write(result, outputs, plots, aem, aem_step, html, deadline=None):

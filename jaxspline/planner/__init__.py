@@ -10,7 +10,8 @@ those joins) -> ``context`` (:class:`PlanContext`, what the stages share) -> ``p
 ``result`` (the :class:`PlanResult`). ``sharded`` runs the plan over
 several hosts; ``bound`` the bound alone; ``files`` the atomic file writes every writer
 uses; ``deadline`` the clock of a call's time limit; ``budget`` its split between the
-search and the stages after it.
+search and the stages after it; ``memory_guard`` the memory the stages before the
+search may take.
 """
 
 from jaxspline.planner.bound import SEARCH_TIME_S as SEARCH_TIME_S
@@ -30,6 +31,8 @@ from jaxspline.planner.flown_joins import join_limits as join_limits
 from jaxspline.planner.flown_joins import join_summary as join_summary
 from jaxspline.planner.flown_joins import plan_joins as plan_joins
 from jaxspline.planner.flown_joins import reject_unflyable as reject_unflyable
+from jaxspline.planner.memory_guard import MemoryGuard as MemoryGuard
+from jaxspline.planner.memory_guard import MemoryLimitError as MemoryLimitError
 from jaxspline.planner.pipeline import build_problem as build_problem
 from jaxspline.planner.pipeline import plan as plan
 from jaxspline.planner.result import Observations as Observations

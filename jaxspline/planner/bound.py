@@ -112,6 +112,7 @@ def run_bound(
     coordinator: str | None = None,
     num_processes: int = 1,
     process_id: int = 0,
+    memory=None,
 ) -> BoundRun:
     """Screen ``scenario`` and iterate its Lagrangian bound (module docstring).
 
@@ -132,10 +133,13 @@ def run_bound(
       coordinator: ``HOST:PORT`` of process 0 for ``jax.distributed``; None: one process.
       num_processes: number of processes (with ``coordinator``).
       process_id: this run's index among the processes.
+      memory: optional :class:`jaxspline.planner.memory_guard.MemoryGuard` for the
+        screening of this process's satellites (``jaxspline bound`` passes one).
     Returns:
       :class:`BoundRun` of this process.
     Raises:
       ValueError: bad arguments (more processes than satellites, bad limits).
+      jaxspline.planner.memory_guard.MemoryLimitError: the screening would not fit ``memory``.
     """
     _validate(time_limit, plan_path, search_time, search_iters, num_processes, coordinator)
     for path in (json_path, plan_path):
@@ -151,7 +155,7 @@ def run_bound(
             )
         with jax.enable_x64(True):  # float64 through the collectives too
             search = None if plan_path is None else (search_time, search_iters, seed)
-            run, doc = _run(sc, procs, time_limit, max_iters, target, search)
+            run, doc = _run(sc, procs, time_limit, max_iters, target, search, memory)
         if procs.index == 0:
             if doc is not None:
                 atomic_write_text(plan_path, json.dumps(doc, indent=1) + "\n", force=force)
@@ -185,13 +189,15 @@ def _start_processes(coordinator, num_processes: int, process_id: int) -> _Proce
     return _Processes(jax.process_index(), jax.process_count(), jax_allgather, True)
 
 
-def _run(sc, procs: _Processes, time_limit, max_iters, target, search):
+def _run(sc, procs: _Processes, time_limit, max_iters, target, search, memory=None):
     """The bound (and with ``search`` = (time, iterations, seed), the sharded plan)."""
     t0 = time.monotonic()
     owned = owned_satellites(len(sc.satellites), procs.index, procs.count)
     shard = dataclasses.replace(sc, satellites=tuple(sc.satellites[k] for k in owned))
     allgather = procs.allgather
-    ctx = build_problem(shard, reduce_slack=lambda s: float(allgather(np.array([s])).min()))
+    ctx = build_problem(
+        shard, reduce_slack=lambda s: float(allgather(np.array([s])).min()), memory=memory
+    )
     pb = ctx.problem
     if target is None:
         tl = Timeline(pb)

@@ -38,6 +38,7 @@ __all__ = [
     "PACE_MAX",
     "StageDeadline",
     "TimeLimitError",
+    "WORK_SECONDS",
     "compile_seconds",
     "process_start",
     "startup_seconds",
@@ -132,6 +133,15 @@ def startup_seconds(age_s: float, cpu_s: float) -> float:
     return age_s
 
 
+#: CPU seconds a unit of a stage's work takes, rounded up from the 12x12h preset (5,000
+#: targets, 12 satellites, 12 h; 2 cores, programs compiled: windows 2.9 s for 60,000
+#: target-satellite pairs, options 9.9 s for ~95,000 candidates, screening 15.9 s for
+#: 91,595 options): the estimate of a stage stopped before it finished a first share of
+#: its work. Windows: per target and satellite; options: per candidate option
+#: (:func:`jaxspline.planner.opportunities.option_counts`); screening: per option (the far
+#: gaps, first observations and near pairs together; denser options take longer each:
+#: ~0.4 ms with 50,000 targets, measured at 6 % of the stage).
+WORK_SECONDS = {"windows": 5e-5, "options": 1e-4, "screening": 3e-4}
 _STAT_STARTTIME = 19  # field 22 of /proc/PID/stat (starttime), counted after "(comm) "
 _NICE_LIMITS = (10, 20, 30, 60, 120, 300, 600, 1200, 1800, 3600, 7200, 14400, 28800, 86400)
 
@@ -253,7 +263,7 @@ class StageDeadline:
             "skipped": list(self.skipped),
         }
 
-    def check(self, stage: str, done: float = 1.0, stage_t0: float | None = None, what=""):
+    def check(self, stage: str, done=1.0, stage_t0=None, what="", work=None):
         """Raise :class:`TimeLimitError` when the limit has passed (compile time aside).
 
         Args:
@@ -261,6 +271,10 @@ class StageDeadline:
           done: share of the stage done, in [0, 1].
           stage_t0: when the stage started [s, monotonic] (None: the call's start).
           what: what the stage works on (``"1.9 M options"``), for the message.
+          work: optional callable returning ``(units, name)``, the stage's work
+            (``(918734, "options")``; called only when the limit has passed): with
+            nothing done yet, the estimate is its units times the stage's
+            :data:`WORK_SECONDS` at the run's pace.
         Raises:
           TimeLimitError: naming the stage, its progress, the estimate and the remedy.
         """
@@ -270,30 +284,44 @@ class StageDeadline:
             return
         elapsed = now - self.t0
         start = self.t0 if stage_t0 is None else stage_t0
-        estimate = None
+        estimate, basis = None, ""
+        work = None if work is None else work()
         if done > 0:
             estimate = (start - self.t0) + (now - start) / min(done, 1.0) - compiling
+        elif work is not None and stage in WORK_SECONDS:  # nothing measured: the constant
+            units, name = work
+            each = WORK_SECONDS[stage]
+            estimate = (start - self.t0) - compiling + units * each * self.pace()
+            basis = (
+                f" (its work: {units:,} {name} at ~{1e3 * each:.2g} ms of CPU each, "
+                f"x {self.pace():.2g} for the machine's load)"
+            )
         progress = f"{100 * done:.0f} % through it" if done < 1 else "at its end"
-        if estimate is not None:
-            need = (
-                f"at this pace the stages before the search alone need ~{estimate:.0f} s or "
-                f"more; give a time limit of {suggested_limit(estimate)} s or more"
-            )
-        else:  # not even a first share of the stage done: what is known is a lower bound
-            spent = now - self.t0 - compiling
-            need = (
-                f"the stages before the search need more than {spent:.0f} s at this pace "
-                f"({now - start:.1f} s in {stage!r} did not finish a first share of it); give "
-                f"a time limit well above {suggested_limit(spent)} s"
-            )
+        if work is not None and done < 1:
+            progress += f" of {work[0]:,} {work[1]}"
         raise TimeLimitError(
             f"time limit of {self.limit:.4g} s reached before the search, in stage {stage!r} "
             f"after {elapsed:.1f} s ({compile_seconds() - self.compiled0:.1f} s of it compiling; "
             f"{progress}"
-            f"{'; ' + what if what else ''}{'; ' + self.scale if self.scale else ''}): {need} "
+            f"{'; ' + what if what else ''}{'; ' + self.scale if self.scale else ''}): "
+            f"{_need(estimate, basis, now - self.t0 - compiling, now - start, stage)} "
             "(--time-limit or planner.time_limit_s), or plan fewer targets or satellites, "
             "a shorter horizon, or a coarser planner.time_step_s",
             stage,
             elapsed,
             estimate,
         )
+
+
+def _need(estimate, basis: str, spent: float, in_stage: float, stage: str) -> str:
+    """The message's estimate and suggested limit (a lower bound without an estimate)."""
+    if estimate is not None:
+        return (
+            f"at this pace the stages before the search alone need ~{estimate:.0f} s or "
+            f"more{basis}; give a time limit of {suggested_limit(estimate)} s or more"
+        )
+    return (  # not even a first share of the stage done: what is known is a lower bound
+        f"the stages before the search need more than {spent:.0f} s at this pace "
+        f"({in_stage:.1f} s in {stage!r} did not finish a first share of it); give "
+        f"a time limit well above {suggested_limit(spent)} s"
+    )

@@ -49,6 +49,7 @@ __all__ = [
     "evaluate",
     "nadir_rate",
     "observation_samples",
+    "option_counts",
     "reference_points",
 ]
 
@@ -224,6 +225,32 @@ def build_opportunities(
     order = np.lexsort((c.tgt, c.t0, c.sat))
     sat, tgt, t0, t1, speed, params = (x[order] for x in c)
     return Opportunities(option_states(sc, scene, sat, tgt, t0, t1, params, per_ch), speed, params)
+
+
+def option_counts(sc: Scenario, windows: Windows) -> tuple[int, int]:
+    """Upper bounds on what :func:`build_opportunities` will hold, without building it.
+
+    The candidates are counted window by window as :func:`_grid_candidates` makes them
+    (before duplicates are removed); every candidate is counted with the samples of a
+    checked one (start, end and every geometry knot inside), whether it needs them or not.
+
+    Args:
+      sc: the scenario.
+      windows: its visibility windows.
+    Returns:
+      (candidates, samples): int, int.
+    """
+    gstep = sc.planner.geometry_step
+    strip = sc.targets.kind[windows.target] == STRIP
+    cands = samples = 0
+    for li, (_, _, dur_all) in enumerate(aim_laws(sc)):
+        keep = strip if li > 0 else np.ones(len(windows), bool)
+        dur = dur_all[windows.target[keep]]
+        k_lo, k_hi = _start_range(sc, windows, keep, strip[keep], dur)
+        n = np.maximum(k_hi - k_lo + 1, 0).astype(np.float64)
+        cands += int(n.sum())
+        samples += int((n * (np.ceil(dur / gstep) + 2.0)).sum())
+    return cands, samples
 
 
 class _Candidates(NamedTuple):

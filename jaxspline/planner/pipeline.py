@@ -53,7 +53,19 @@ from jaxspline.planner.join_screen import (
     screen_first_joins,
     screen_joins,
 )
-from jaxspline.planner.opportunities import build_opportunities, nadir_rate, reference_points
+from jaxspline.planner.memory_guard import (
+    MemoryGuard,
+    check_stage,
+    option_bytes,
+    orbit_bytes,
+    pair_bytes,
+)
+from jaxspline.planner.opportunities import (
+    build_opportunities,
+    nadir_rate,
+    option_counts,
+    reference_points,
+)
 from jaxspline.planner.repair import dropped_line, repair
 from jaxspline.planner.result import PlanResult
 from jaxspline.readers.mission import Scenario, orbit_scene
@@ -70,6 +82,7 @@ _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-fea
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
 _JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
+_PAIRS, _CANDS = "target-satellite pairs", "candidate options"  # the stages' work units
 _REFILL_S = 2.0  # [s] budget of one refill after join rejections
 _REFILL_ITERS = 2000  # LNS iterations of one refill in iteration-capped runs
 _WORKER_MIN_CPUS = 2  # the bound worker runs only with a second CPU
@@ -139,6 +152,7 @@ def plan(
     certify: float = 0.0,
     flown_joins: bool = False,
     deadline: StageDeadline | None = None,
+    memory: MemoryGuard | None = None,
 ) -> PlanResult:
     """Plan a scenario: the best observations found within ``time_limit`` seconds.
 
@@ -170,10 +184,13 @@ def plan(
         ``report["time_limit"]`` records the split and what was left out. Without it
         (the default) the search leaves a fixed share of ``time_limit``
         (:func:`jaxspline.planner.budget.default_budget`).
+      memory: optional :class:`jaxspline.planner.memory_guard.MemoryGuard`: the stages
+        before the search stop before they allocate more than it allows.
     Returns:
       :class:`jaxspline.planner.result.PlanResult`.
     Raises:
       jaxspline.planner.deadline.TimeLimitError: ``deadline`` passed before the search.
+      jaxspline.planner.memory_guard.MemoryLimitError: a stage would not fit ``memory``.
     """
     if not isinstance(scenario, Scenario):
         raise ValueError(f"scenario must be a jaxspline Scenario, got {type(scenario).__name__}")
@@ -188,7 +205,7 @@ def plan(
         raise ValueError(f"max_iters must be an integer >= 1, got {max_iters!r}")
     with jax.enable_x64(True):
         args = (float(limit), int(seed), bool(progress), max_iters, certify, flown_joins)
-        return _plan(scenario, *args, deadline)
+        return _plan(scenario, *args, deadline, memory)
 
 
 def _orbits(sc: Scenario):
@@ -281,6 +298,7 @@ def build_problem(
     joins: bool = False,
     reduce_slack=None,
     deadline: StageDeadline | None = None,
+    memory: MemoryGuard | None = None,
     _clock=None,
 ) -> PlanContext:
     """Stages 1-4 of :func:`plan` (orbits, windows, options, screening), no search.
@@ -299,6 +317,9 @@ def build_problem(
       deadline: optional :class:`jaxspline.planner.deadline.StageDeadline` checked
         between the stages and inside options and screening
         (:class:`jaxspline.planner.deadline.TimeLimitError` once it has passed).
+      memory: optional :class:`jaxspline.planner.memory_guard.MemoryGuard` checked before
+        the orbits, options and near pairs are built (``MemoryLimitError`` when they
+        would not fit).
       _clock: private; the stage timer of an enclosing :func:`plan` call.
     Returns:
       :class:`jaxspline.planner.context.PlanContext`: the search's problem and what the
@@ -307,18 +328,24 @@ def build_problem(
     sc = scenario
     clock = _clock or _Clock(sc.name, progress)
     check = _stage_check(deadline, clock)
+    fits = functools.partial(check_stage, memory)
     with jax.enable_x64(True):
         sats = sc.satellites
+        fits("orbits", lambda: orbit_bytes(sc))
         table, scene, sunlit = _orbits(sc)
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
         check("orbits")
-        windows = _windows(sc, scene, table, check("windows", 0))
+        pairs = len(sc.targets) * len(sats)
+        windows = _windows(sc, scene, table, check("windows", 0, work=lambda: (pairs, _PAIRS)))
         n_tg = len(np.unique(windows.target))
         clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
         check("windows")
-        opp = build_opportunities(sc, scene, table.usable, windows, tick=check("options", 0))
+        fits("options", lambda: option_bytes(sc, *option_counts(sc, windows)))
+        cands = check("options", 0, work=lambda: (option_counts(sc, windows)[0], _CANDS))
+        opp = build_opportunities(sc, scene, table.usable, windows, tick=cands)
         clock.lap("options", f"{len(opp)} options")
-        tick = check("screening", 0, f"{len(opp)} options")
+        work = functools.partial(tuple, (len(opp), "options"))
+        tick = check("screening", 0, work=work)
         beat = tick or _no_tick  # between the steps before the near pairs (each may be long)
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
         beat(0.0)
@@ -330,7 +357,9 @@ def build_problem(
             far, first, join_filter = _join_screens(sats, scene, opp, far, first, omega, beat)
             lookup = np.ones(len(sats), bool)
         beat(0.0)
-        tick = check("screening", 0, f"{len(opp)} options", since=time.monotonic())
+        reach = np.asarray(far) + slack + _NEAR_SLACK + _WINDOW_GUARD
+        fits("screening", lambda: pair_bytes(sc, opp.options, reach))
+        tick = check("screening", 0, since=time.monotonic(), work=work)
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )
@@ -344,20 +373,21 @@ def build_problem(
 
 
 def _stage_check(deadline: StageDeadline | None, clock):
-    """``check(stage, done=1, what="", since=None)``: with ``done`` = 1 it checks the
-    deadline at the end of a stage; with ``done`` = 0 it returns the stage's
+    """``check(stage, done=1, what="", since=None, work=None)``: with ``done`` = 1 it
+    checks the deadline at the end of a stage; with ``done`` = 0 it returns the stage's
     ``tick(share)`` (None without a deadline). A stage starts at the clock's last lap;
     ``since`` starts the part of it the shares measure (its time before counts whole in
-    the estimate: the near pairs after the far gaps and join screens)."""
+    the estimate: the near pairs after the far gaps and join screens); ``work() ->
+    (units, name)`` is the stage's work (:meth:`StageDeadline.check`)."""
 
-    def check(stage, done=1.0, what="", since=None):
+    def check(stage, done=1.0, what="", since=None, work=None):
         search_clock.raise_pending_signal()  # a Ctrl-C / SIGTERM a finalizer swallowed
         if deadline is None:
             return None
         if done >= 1.0:
             return deadline.check(stage, 1.0, clock.last, what)
         start = clock.last if since is None else since
-        return lambda share: deadline.check(stage, share, start, what)
+        return lambda share: deadline.check(stage, share, start, what, work)
 
     return check
 
@@ -484,14 +514,14 @@ def _search(pb, deadline, seed, max_iters, pc, clock):
 
 
 def _plan(
-    sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins, deadline
+    sc: Scenario, limit, seed, progress, max_iters, certify, flown_joins, deadline, memory=None
 ) -> PlanResult:
     """:func:`plan` after its argument checks (inside ``jax.enable_x64``): stages 1-4,
     then search and repair under the signal guard, the optional HiGHS certificate, and
     the result."""
     clock = _Clock(sc.name, progress)
     budget = default_budget(sc, limit, clock.t0)
-    ctx = build_problem(sc, joins=flown_joins, deadline=deadline, _clock=clock)
+    ctx = build_problem(sc, joins=flown_joins, deadline=deadline, memory=memory, _clock=clock)
     if deadline is not None:
         budget = deadline_budget(
             ctx, deadline, flown_joins=flown_joins, refill_s=_REFILL_S, capped=max_iters is not None
@@ -520,6 +550,8 @@ def _plan(
     )
     if deadline is not None:  # the caller adds what its outputs leave out
         result.report["time_limit"] = deadline.record()
+    if memory is not None:  # beside the measured peaks (stats.peak_rss_mb)
+        result.stats["memory_estimate_mb"] = dict(memory.estimates_mb)
     return result
 
 

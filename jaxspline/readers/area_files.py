@@ -37,6 +37,7 @@ from shapely.validation import explain_validity
 from jaxspline.geometry.frames import geodetic_to_ecef
 from jaxspline.geometry.ground import unit_vectors
 from jaxspline.readers.fields import (
+    READ_TICK_ROWS,
     check_float,
     field_number,
     field_pair,
@@ -44,6 +45,7 @@ from jaxspline.readers.fields import (
     field_table,
     field_tables,
     read_text,
+    read_tick,
 )
 from jaxspline.readers.ranges import MAX_NAME_CHARS, RANGES, bounds
 
@@ -167,8 +169,9 @@ def _feature_geometry(f, where: str):
     return _shape(f["geometry"], f"{where} geometry")
 
 
-def _geojson_geometry(doc):
-    """The union of the polygons of a GeoJSON document (shapely, lon/lat degrees)."""
+def _geojson_geometry(doc, label: str = "GeoJSON"):
+    """The union of the polygons of a GeoJSON document (shapely, lon/lat degrees);
+    :func:`jaxspline.readers.fields.read_tick` every :data:`READ_TICK_ROWS` features."""
     if not isinstance(doc, dict):
         raise ValueError(f"must be a GeoJSON object, got {type(doc).__name__}")
     kind = doc.get("type")
@@ -177,7 +180,11 @@ def _geojson_geometry(doc):
             feats = doc.get("features")
             if not isinstance(feats, list) or not feats:
                 raise ValueError("a FeatureCollection needs a non-empty 'features' list")
-            parts = [_feature_geometry(f, f"features[{i}]") for i, f in enumerate(feats)]
+            parts = []
+            for i, f in enumerate(feats):
+                if i % READ_TICK_ROWS == READ_TICK_ROWS - 1:
+                    read_tick(label, i / len(feats))
+                parts.append(_feature_geometry(f, f"features[{i}]"))
             geom = shapely.union_all(parts)
         elif kind == "Feature":
             geom = _feature_geometry(doc, "Feature")
@@ -233,7 +240,7 @@ def read_geojson(path):
     except RecursionError:
         raise ValueError(f"{path.name}: invalid GeoJSON: nested too deeply") from None
     try:
-        return _geojson_geometry(doc)
+        return _geojson_geometry(doc, path.name)
     except ValueError as exc:
         raise ValueError(f"{path.name}: {exc}") from None
 

@@ -8,7 +8,9 @@ hold control characters (NUL, escape, line breaks, ...: :func:`check_text`).
 :func:`read_text` reads every input file (TOML, CSV, GeoJSON, YAML) as UTF-8, a
 byte-order mark dropped, and names the file and line of bytes that are not UTF-8; a
 directory, a device or pipe, an unreadable file or one over :data:`MAX_FILE_BYTES` is
-a ``ValueError`` naming the file.
+a ``ValueError`` naming the file. The readers of long files (CSV rows, GeoJSON
+features) call :func:`read_tick` every :data:`READ_TICK_ROWS` rows: a command sets
+:data:`READ_CLOCK` to check its time and memory limits while a file is read.
 """
 
 from __future__ import annotations
@@ -18,10 +20,14 @@ import os
 import re
 import stat
 import unicodedata
+from collections.abc import Callable
+from contextvars import ContextVar
 from pathlib import Path
 
 __all__ = [
     "MAX_FILE_BYTES",
+    "READ_CLOCK",
+    "READ_TICK_ROWS",
     "REQUIRED",
     "FieldContext",
     "check_float",
@@ -34,10 +40,31 @@ __all__ = [
     "field_table",
     "field_tables",
     "read_text",
+    "read_tick",
 ]
 
 _IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
 MAX_FILE_BYTES = 1 << 30  # largest input file read [bytes] (1 GiB: ~15 M CSV rows)
+#: Rows (CSV) or features (GeoJSON) between two calls of :func:`read_tick` (~0.7 s of
+#: CSV reading).
+READ_TICK_ROWS = 10_000
+#: The clock of the files being read: ``clock(file, share read)``, which may raise to
+#: stop the reading (None: nothing checks; ``jaxspline plan`` sets it).
+READ_CLOCK: ContextVar[Callable[[str, float], None] | None] = ContextVar(
+    "jaxspline_read_clock", default=None
+)
+
+
+def read_tick(label: str, share: float) -> None:
+    """Call :data:`READ_CLOCK` (when set) with the file and the share of it read.
+
+    Args:
+      label: the file's name, for the clock's message.
+      share: share of the file read, in [0, 1].
+    """
+    clock = READ_CLOCK.get()
+    if clock is not None:
+        clock(label, min(max(float(share), 0.0), 1.0))
 
 
 class FieldContext:
@@ -166,8 +193,8 @@ def _read_bytes(path: Path) -> bytes:
         raise ValueError(f"{path}: not a regular file (a device, pipe or socket)")
     if data is None:
         raise ValueError(
-            f"{path}: {st.st_size / 2**20:.0f} MiB, more than the "
-            f"{MAX_FILE_BYTES / 2**20:.0f} MiB an input file may have"
+            f"{path}: {st.st_size:,} bytes, more than the {MAX_FILE_BYTES:,} "
+            f"({MAX_FILE_BYTES >> 20} MiB) an input file may have"
         )
     return data
 

@@ -180,7 +180,7 @@ DEFAULT_SCENARIO_PATH = Path(str(importlib.resources.files("jaxspline") / "data"
 SECONDS_PER_HOUR = 3600.0
 MAX_DURATION_S = RANGES["scenario.duration_s"][1]  # longest horizon [s]: TLEs are days, not months
 MAX_GRID_POINTS = 1_000_000  # longest ephemeris grid, duration / geometry_step_s
-MAX_TOML_BYTES = 16 << 20  # a scenario file is a few kB; targets come in CSV files
+MAX_TOML_BYTES = 16 << 20  # characters (16 MiB): a scenario is a few kB, targets come in CSV
 
 _KEYS = {
     name: frozenset(keys.split())
@@ -405,7 +405,7 @@ def load_scenario(path) -> Scenario:
         raise FileNotFoundError(f"scenario file not found: {path}") from None
     if len(text) > MAX_TOML_BYTES:
         raise ValueError(
-            f"{path}: {len(text) / 2**20:.0f} MiB, more than the {MAX_TOML_BYTES >> 20} MiB "
+            f"{path}: {len(text):,} characters, more than the {MAX_TOML_BYTES:,} (16 MiB) "
             "a scenario file may have (put targets in a CSV file)"
         )
     try:

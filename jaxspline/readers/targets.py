@@ -62,6 +62,7 @@ from pathlib import Path
 import numpy as np
 
 from jaxspline.readers.fields import (
+    READ_TICK_ROWS,
     check_float,
     check_text,
     field_bool,
@@ -72,6 +73,7 @@ from jaxspline.readers.fields import (
     field_table,
     field_tables,
     read_text,
+    read_tick,
 )
 from jaxspline.readers.mission import POINT, STRIP, Targets, make_targets
 from jaxspline.readers.ranges import MAX_NAME_CHARS, RANGES, bounds
@@ -327,6 +329,7 @@ def _read_csv(path, horizon=None) -> tuple[Targets, list[str]]:
     except FileNotFoundError:
         raise FileNotFoundError(f"targets CSV not found: {path}") from None
     rows, origins = [], []
+    lines = text.count("\n") + 1  # the rows to read, for the clock (read_tick)
     reader = csv.reader(io.StringIO(text, newline=""))
     try:
         header = [h.strip() for h in next(reader, [])]
@@ -343,6 +346,8 @@ def _read_csv(path, horizon=None) -> tuple[Targets, list[str]]:
                 raise ValueError(f"{label} row 1, column {h!r}: missing (required: {CSV_REQUIRED})")
         for cells in reader:
             line = reader.line_num
+            if line % READ_TICK_ROWS == 0:
+                read_tick(label, line / lines)
             if not any(c.strip() for c in cells):
                 continue
             if len(cells) != len(header):

@@ -9,7 +9,9 @@
 * writing: a failure while writing the set is one line (exit 4), the previous set is
   kept; a signal while writing is recorded in ``plan.json``;
 * the time limit: a scenario that cannot fit a tiny limit stops before the search
-  with exit 3, an estimate and the remedy, and writes nothing.
+  with exit 3, an estimate and the remedy, and writes nothing;
+* the memory: a scenario whose options would take terabytes (steps of 0.01 s, both in
+  their ranges) stops before it allocates them, with exit 3, the estimate and the remedy.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import pytest
 from jaxspline.cli import (
     EXIT_BAD_INPUT,
     EXIT_INTERNAL,
+    EXIT_INTERRUPTED,
     EXIT_TIME_LIMIT,
     EXIT_WRITE,
     build_parser,
@@ -75,6 +78,13 @@ PLAN_FLAGS = [
     (["--aem-step", "1e-9"], "--aem-step: must be >="),
     (["--aem-step", "1e9"], "--aem-step: must be <="),
     (["--aem-step", "0.01"], "--aem-step: 0.01 s over the 600 s horizon"),
+    (
+        ["--aem-step", "86400"],
+        "--aem-step: 86400 s is longer than the 600 s horizon; use at most 600",
+    ),
+    (["--max-memory", "0"], "--max-memory: must be a finite number > 0"),
+    (["--max-memory", "nan"], "--max-memory: must be a finite number > 0"),
+    (["--max-memory", "0.01"], "--max-memory: must be within [0.25, 65536] GB"),
     (["-o", ""], "-o/--outdir: must not be empty"),
     (["-o", " "], "-o/--outdir: must not be empty"),
 ]
@@ -223,6 +233,50 @@ def test_the_time_limit_stops_a_scenario_too_big_for_it(tmp_path, capsys):
     assert seconds < 60.0
 
 
+@pytest.mark.parametrize("command", ["plan", "bound"])
+def test_a_scenario_too_big_for_the_memory_stops_before_it_allocates(tmp_path, capsys, command):
+    big = SCENARIO.replace("duration_s = 600.0", "duration_s = 7200.0").replace(
+        "[[targets]]\nlat_deg = 46.0\nlon_deg = 15.0\n",
+        "[random_targets]\ncount = 40\nseed = 3\nlat_deg = [40.0, 50.0]\n"
+        "[planner]\ntime_step_s = 0.01\ngeometry_step_s = 0.01\n",
+    )
+    scen = tmp_path / "big.toml"
+    scen.write_text(big, encoding="utf-8")
+    out = tmp_path / "out"
+    argv = [command, str(scen), "--time-limit", "60"]
+    argv += ["-o", str(out), "--quiet"] if command == "plan" else []
+    code, err, seconds = _run(capsys, argv)
+    assert code == EXIT_TIME_LIMIT, err
+    assert err.startswith("jaxspline: memory limit: stage 'options' would need ~"), err
+    assert "planner.time_step_s = 0.01, planner.geometry_step_s = 0.01" in err, err
+    assert "GB are available" in err and "raise planner.time_step_s to >= " in err, err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    assert not out.exists() and sorted(os.listdir(tmp_path)) == ["big.toml"]
+    assert seconds < 30.0  # orbits and windows only (a few seconds)
+
+
+@pytest.mark.parametrize(
+    ("extra", "msg"),
+    [
+        (["--time-limit", "0.05"], "time limit: time limit of 0.05 s reached while reading"),
+        (["--max-memory", "0.25"], "memory limit: stage 'loading' would need ~"),
+    ],
+    ids=["time", "memory"],
+)
+def test_a_long_targets_csv_is_stopped_while_it_is_read(tmp_path, capsys, extra, msg):
+    rows = "".join(f"t{i},{40 + i % 10},{10 + i % 7},1\n" for i in range(25_000))
+    (tmp_path / "t.csv").write_text("name,lat_deg,lon_deg,priority\n" + rows, encoding="utf-8")
+    scen = tmp_path / "csv.toml"
+    head = 'targets_csv = "t.csv"\n'
+    scen.write_text(head + SCENARIO.split("[[targets]]")[0], encoding="utf-8")
+    out = tmp_path / "out"
+    code, err, seconds = _run(capsys, ["plan", str(scen), "-o", str(out), "--quiet", *extra])
+    assert code == EXIT_TIME_LIMIT, err
+    assert err.startswith(f"jaxspline: {msg}") and "% of t.csv read" in err, err
+    assert err.count("\n") == 1 and not out.exists()
+    assert seconds < 20.0  # stopped at its first or second block of 10,000 rows
+
+
 def test_stage_deadline_estimate_and_compile_time(monkeypatch):
     from jaxspline.planner import deadline as dl
 
@@ -242,6 +296,57 @@ def test_stage_deadline_estimate_and_compile_time(monkeypatch):
     assert e.estimate == pytest.approx(5.0 + 20.0 / 0.25 - 5.0)  # 80 s
     assert "give a time limit of 300 s" in str(e) and "700 options; 5 targets" in str(e)
     assert dl.suggested_limit(4.0) == 10 and dl.suggested_limit(1e6) == 2_000_000
+
+
+def test_a_stage_stopped_before_its_first_share_estimates_its_work(monkeypatch):
+    from jaxspline.planner import deadline as dl
+
+    clock = {"now": 100.0}
+    monkeypatch.setattr(dl.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(dl, "compile_seconds", lambda: 0.0)
+    d = dl.StageDeadline(100.0, 60.0, "50000 targets")
+    monkeypatch.setattr(d, "pace", lambda: 2.0)
+    clock["now"] = 161.0  # screening started at 150 s and is still at its first block
+    with pytest.raises(dl.TimeLimitError) as exc:
+        d.check("screening", 0.0, 150.0, "", lambda: (918_734, "options"))
+    e, msg = exc.value, str(exc.value)
+    each = dl.WORK_SECONDS["screening"]
+    assert e.estimate == pytest.approx(50.0 + 918_734 * each * 2.0)  # 50 s + 551 s
+    assert "0 % through it of 918,734 options; 50000 targets)" in msg, msg
+    assert "need ~601 s or more (its work: 918,734 options at ~0.3 ms of CPU each" in msg, msg
+    assert "give a time limit of 1800 s or more" in msg, msg
+
+
+def test_the_start_up_handlers_belong_to_the_command_only():
+    from jaxspline.cli.startup import runs_the_command
+
+    assert runs_the_command(["python", "-m", "jaxspline.cli", "plan"])
+    assert runs_the_command(["python3", "-m", "jaxspline.aeossp", "solve"])
+    assert runs_the_command(["/usr/bin/python3", "/venv/bin/jaxspline", "plan"])
+    assert not runs_the_command(["python", "-m", "pytest", "tests"])
+    assert not runs_the_command(["python", "script.py", "-m", "jaxspline"])
+    assert not runs_the_command(["python", "-c", "import jaxspline"])
+
+
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_a_signal_while_the_command_imports_is_one_line_and_exit_130(sig):
+    import subprocess
+    import sys
+
+    # the command's process, stopped by a signal as soon as `import jaxspline` is done
+    # (the imports take 2-8 s before main() installs its own handlers)
+    code = (
+        "import sys, os, signal, time; sys.orig_argv[1:] = ['-m', 'jaxspline.cli', 'plan']; "
+        "signal.signal(signal.SIGINT, signal.default_int_handler); "  # as a shell starts it
+        f"import jaxspline; os.kill(os.getpid(), signal.{sig}); time.sleep(30); print('alive')"
+    )
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(p for p in sys.path if p))
+    p = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, timeout=120, env=env
+    )
+    assert p.returncode == EXIT_INTERRUPTED, (p.returncode, p.stderr)
+    assert p.stderr == f"jaxspline: interrupted ({sig}) while starting: nothing was done\n"
+    assert p.stdout == ""
 
 
 class _FakeResult:

@@ -477,3 +477,17 @@ def test_invalid_toml_and_missing_files(tmp_path):
         load_scenario(tmp_path / "nothere.toml")
     with pytest.raises(FileNotFoundError, match="nothere"):
         load_targets_csv(tmp_path / "nothere.csv")
+
+
+def test_a_scenario_file_over_its_size_limit_says_by_how_much(tmp_path):
+    from jaxspline.readers.scenario import MAX_TOML_BYTES
+
+    path = tmp_path / "big.toml"
+    path.write_text("#" + "x" * MAX_TOML_BYTES + "\n", encoding="utf-8")  # 2 characters over
+    with pytest.raises(ValueError) as exc:
+        load_scenario(path)
+    msg = str(exc.value)  # not "16 MiB, more than the 16 MiB"
+    assert msg == (
+        f"{path}: 16,777,218 characters, more than the 16,777,216 (16 MiB) a scenario file "
+        "may have (put targets in a CSV file)"
+    )
