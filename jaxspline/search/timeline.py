@@ -92,6 +92,8 @@ class Timeline:
         self.stale = [True] * n_s
         self.battery_failed = False
         self._win = pb.battery.steps_of(pb.option_start, pb.option_end)  # per option (s0, e0, s1)
+        self._steps = np.asarray(self._win, np.int64).reshape(-1, 3)  # the same, one row each
+        self._starts = np.asarray(pb.option_start, np.float64)
         self.value = 0.0
         self.n_observations = 0
         self.tat = 0.0
@@ -168,7 +170,11 @@ class Timeline:
     def _levels(self, k):
         """Satellite k's current battery Levels (recomputed when stale)."""
         if self.stale[k] or self.levels[k] is None:
-            self.levels[k] = self.pb.battery.levels(k, *self._timeline_loads(k))
+            bat = self.pb.battery
+            line = np.array(self.lines[k], np.int64)
+            s0, e0, s1 = self._steps[line].T
+            m0 = bat.slew_steps(self._starts[line], self.maneuvers[k])
+            self.levels[k] = bat.levels_of(k, bat.step_loads(k, s0, e0, m0, s1))
             self.debt[k] = 0.0
             self.stale[k] = False
         return self.levels[k]
