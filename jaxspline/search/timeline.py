@@ -4,6 +4,9 @@ A :class:`Timeline` holds, per satellite, its chosen options in start order and,
 target, the option that images it (each target at most once). :meth:`Timeline.check`
 tests one insertion: no overlap, the transition from the predecessor (or the first
 maneuver) and to the successor fit their gaps, and the battery stays above its margin.
+Each satellite's starts, ends and the maneuver into each observation are kept beside
+its option ids (updated by :meth:`Timeline.insert` and :meth:`Timeline.remove`), so
+a test or a battery refresh reads them instead of re-deriving the transitions.
 Every change is logged so a search step can be undone. A timeline may withdraw options
 of its problem (``withdrawn``): they are no longer offered for any target, while the
 :class:`Problem` itself stays as built.
