@@ -95,7 +95,7 @@ class Timeline:
         self.stale = [True] * n_s
         self.battery_failed = False
         self._win = pb.battery.steps_of(pb.option_start, pb.option_end)  # per option (s0, e0, s1)
-        self._steps = np.asarray(self._win, np.int64).reshape(-1, 3)  # the same, one row each
+        self._s0, self._e0, self._s1 = pb.battery.step_windows(pb.option_start, pb.option_end)
         self._starts = np.asarray(pb.option_start, np.float64)
         self.value = 0.0
         self.n_observations = 0
@@ -175,9 +175,9 @@ class Timeline:
         if self.stale[k] or self.levels[k] is None:
             bat = self.pb.battery
             line = np.array(self.lines[k], np.int64)
-            s0, e0, s1 = self._steps[line].T
             m0 = bat.slew_steps(self._starts[line], self.maneuvers[k])
-            self.levels[k] = bat.levels_of(k, bat.step_loads(k, s0, e0, m0, s1))
+            loads = bat.step_loads(k, self._s0[line], self._e0[line], m0, self._s1[line])
+            self.levels[k] = bat.levels_of(k, loads)
             self.debt[k] = 0.0
             self.stale[k] = False
         return self.levels[k]
