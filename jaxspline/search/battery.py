@@ -223,7 +223,14 @@ class BatteryModel:
         return list(zip(s0.tolist(), e0.tolist(), s1.tolist(), strict=True))
 
     def step_windows(self, starts, ends):
-        """:meth:`steps_of` as three int64 [K] arrays ``(s0, e0, s1)``."""
+        """:meth:`steps_of` as arrays.
+
+        Args:
+          starts: float [K], observation start times [s].
+          ends: float [K], observation end times [s].
+        Returns:
+          three int64 [K] arrays ``(s0, e0, s1)`` of step indices.
+        """
         n, dt = self.n, self.dt
         s = np.asarray(starts, np.float64)
         e = np.asarray(ends, np.float64)
