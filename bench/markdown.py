@@ -53,6 +53,8 @@ RUN_FORMATS = {
     "strengthened_bound": "{:.6g}",
     "worker_status": "{}",
     "dp_per_s": "{:.1f}",
+    "lns_moves_per_s": "{:.1f}",
+    "lns_moves_per_cpu_s": "{:.1f}",
 }
 
 

@@ -53,7 +53,7 @@ TIME_BIN = "/usr/bin/time"
 RUN_COLUMNS = (
     "size|sats|targets|limit s|exit|wall s|peak RSS MB|windows|options|near pairs|bytes/pair|"
     "store MB|Lagr. it.|worker it.|LNS it.|value|bound|bound status|gap %|valid|load|"
-    "plain bound|strengthened bound|worker status|DP it/s"
+    "plain bound|strengthened bound|worker status|DP it/s|LNS moves/s|LNS moves/CPU-s"
 ).split("|")
 _STAGE_LINE = re.compile(r"\[plan [^\]]*\] (\w+)\s")
 
@@ -234,6 +234,12 @@ def _get(d, *paths, default=None):
     return default
 
 
+def _per_second(doc, count: str, seconds: str):
+    """``count / seconds`` of two dotted fields of ``doc``, None when either is missing."""
+    n, secs = _get(doc, count), _get(doc, seconds)
+    return round(n / secs, 1) if n is not None and secs else None
+
+
 def parse_plan_json(path: Path) -> dict:
     """The scale figures of one ``plan.json``; every field may be None (missing)."""
     try:
@@ -272,6 +278,8 @@ def parse_plan_json(path: Path) -> dict:
         "strengthened_bound": _get(doc, "stats.worker_bound"),
         "worker_status": _get(doc, "stats.worker_status"),
         "dp_per_s": _get(doc, "stats.worker_dp_per_s"),
+        "lns_moves_per_s": _per_second(doc, "stats.lns_iterations", "stats.lns_seconds"),
+        "lns_moves_per_cpu_s": _per_second(doc, "stats.lns_iterations", "stats.lns_cpu_seconds"),
         "valid": _get(doc, "summary.valid", "report.valid"),
         "dropped": _get(doc, "report.dropped", default={}),
         "repair_rounds": _get(doc, "report.repair_rounds"),
@@ -403,6 +411,7 @@ def _run_row(r: dict, report: dict) -> str:
             *run_cells(r, "lagrangian_iterations worker_iterations lns_iterations"),
             *run_cells(r, "value bound bound_status gap_pct valid load_avg_before"),
             *run_cells(r, "plain_bound strengthened_bound worker_status dp_per_s"),
+            *run_cells(r, "lns_moves_per_s lns_moves_per_cpu_s"),
         ]
     )
 
@@ -434,7 +443,8 @@ def scale_table(report: dict) -> list[str]:
         "run started. *plain bound*: the search's own Lagrangian phase (per-satellite "
         "path relaxation, its share of the budget); *strengthened bound*: the worker's "
         "(a run of one target's options credited once), *worker status* whether it "
-        "converged, *DP it/s* its iterations per second.",
+        "converged, *DP it/s* its iterations per second; *LNS moves/s* the search's LNS "
+        "iterations per second of its LNS stage, wall and CPU (the planner process alone).",
         *header(*RUN_COLUMNS),
         *(_run_row(r, report) for r in runs),
     ]

@@ -127,22 +127,41 @@ class BatteryModel:
           ends: observation end times [s].
           maneuver: maneuver durations [s] ending at each start.
         """
-        n = self.n
-        d = np.zeros(n + 1)
         starts = np.asarray(starts, np.float64)
-        if starts.size:
-            p = self.powers[sat]
-            h = self.dt / 3600.0
-            s0 = np.clip(np.floor(starts / self.dt + _EPS_STEPS), 0, n).astype(np.int64)
-            e0 = np.clip(np.ceil(np.asarray(ends) / self.dt - _EPS_STEPS), 0, n).astype(np.int64)
-            m0 = np.floor((starts - np.asarray(maneuver, np.float64)) / self.dt + _EPS_STEPS)
-            m0 = np.clip(m0, 0, n).astype(np.int64)
-            s1 = np.clip(np.ceil(starts / self.dt - _EPS_STEPS), 0, n).astype(np.int64)
-            np.add.at(d, s0, p.imaging_w * h)
-            np.add.at(d, e0, -p.imaging_w * h)
-            np.add.at(d, m0, p.slew_w * h)
-            np.add.at(d, s1, -p.slew_w * h)
-        return np.cumsum(d)[:n]
+        s0, e0, s1 = self.step_windows(starts, ends)
+        return self.step_loads(sat, s0, e0, self.slew_steps(starts, maneuver), s1)
+
+    def slew_steps(self, starts, maneuver) -> np.ndarray:
+        """First step of each maneuver window ``[start - maneuver, start)`` (:meth:`loads`).
+
+        Args:
+          starts: float [K], observation starts [s].
+          maneuver: float [K], maneuver times [s] (inf: from the horizon start).
+        Returns:
+          int64 [K].
+        """
+        t = np.asarray(starts, np.float64) - np.asarray(maneuver, np.float64)
+        return np.clip(np.floor(t / self.dt + _EPS_STEPS), 0, self.n).astype(np.int64)
+
+    def step_loads(self, sat: int, s0, e0, m0, s1) -> np.ndarray:
+        """:meth:`loads` from the observations' step windows.
+
+        Args:
+          sat: satellite index.
+          s0, e0: int [K], imaging loads the steps ``[s0, e0)``.
+          m0, s1: int [K], the maneuver into it loads the steps ``[m0, s1)``.
+        Returns:
+          float [n], load energy per step [Wh].
+        """
+        k = len(s0)
+        if not k:
+            return np.zeros(self.n)
+        p = self.powers[sat]
+        h = self.dt / 3600.0
+        w = np.repeat([p.imaging_w * h, -p.imaging_w * h, p.slew_w * h, -p.slew_w * h], k)
+        # one sequential pass in the order of four np.add.at calls (same sums, bit for bit)
+        d = np.bincount(np.concatenate((s0, e0, m0, s1)), w, minlength=self.n + 1)
+        return np.cumsum(d)[: self.n]
 
     def profile(self, sat: int, starts, ends, maneuver):
         """Battery level at the grid instants 0..n for these observations.
@@ -166,8 +185,19 @@ class BatteryModel:
         Returns:
           Levels.
         """
+        return self.levels_of(sat, self.loads(sat, starts, ends, maneuver))
+
+    def levels_of(self, sat: int, loads) -> Levels:
+        """:meth:`levels` of the load energy per step.
+
+        Args:
+          sat: int, satellite index.
+          loads: float [n], :meth:`loads` [Wh].
+        Returns:
+          Levels.
+        """
         p = self.powers[sat]
-        net = self.base[sat] - self.loads(sat, starts, ends, maneuver)
+        net = self.base[sat] - loads
         raw = p.initial_wh + np.concatenate([[0.0], np.cumsum(net)])
         level = raw - np.maximum.accumulate(np.maximum(raw - p.capacity_wh, 0.0))
         return Levels(
@@ -189,13 +219,25 @@ class BatteryModel:
           list of K tuples ``(s0, e0, s1)``: imaging loads the steps ``[s0, e0)``, the
           maneuver into the observation ends before step ``s1``.
         """
+        s0, e0, s1 = self.step_windows(starts, ends)
+        return list(zip(s0.tolist(), e0.tolist(), s1.tolist(), strict=True))
+
+    def step_windows(self, starts, ends):
+        """:meth:`steps_of` as arrays.
+
+        Args:
+          starts: float [K], observation start times [s].
+          ends: float [K], observation end times [s].
+        Returns:
+          three int64 [K] arrays ``(s0, e0, s1)`` of step indices.
+        """
         n, dt = self.n, self.dt
         s = np.asarray(starts, np.float64)
         e = np.asarray(ends, np.float64)
         s0 = np.clip(np.floor(s / dt + _EPS_STEPS), 0, n).astype(np.int64)
         e0 = np.clip(np.ceil(e / dt - _EPS_STEPS), 0, n).astype(np.int64)
         s1 = np.clip(np.ceil(s / dt - _EPS_STEPS), 0, n).astype(np.int64)
-        return list(zip(s0.tolist(), e0.tolist(), s1.tolist(), strict=True))
+        return s0, e0, s1
 
     def slew_step(self, start: float, maneuver: float) -> int:
         """First step of the maneuver window ``[start - maneuver, start)``, as in :meth:`loads`.

@@ -170,9 +170,8 @@ def _reinsert(tl: Timeline, er: EnergyRank, k: int, lo: float, hi: float, remove
     pool = set(moved)
     a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
     b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
-    for c in range(a, b):
-        if tl.assigned[pb.option_target[c]] < 0:
-            pool.add(pb.option_target[c])
+    assigned = tl.assigned
+    pool.update(t for t in pb.option_target[a:b] if assigned[t] < 0)
     if er.binds(tl, k):
         pool = er.order(pool, rng)
     else:

@@ -61,6 +61,7 @@ class EnergyRank:
         for options in self.target_options:
             wh = [self.option_wh(c, _SLEW_REF_S) for c in options if bat.has(pb.option_sat[c])]
             self.target_wh.append(min(wh) if len(wh) == len(options) and wh else 0.0)
+        self._dens = self._mean = self._sats = None  # target_weights' constants, once needed
 
     def option_wh(self, c: int, maneuver: float) -> float:
         """Imaging plus slew energy of option c after a maneuver of ``maneuver`` s.
@@ -148,12 +149,17 @@ class EnergyRank:
         bound = [self.binds(tl, k) for k in range(pb.n_sats)]
         if not any(bound):
             return [pb.target_value[t] for t in targets]
-        dens = [pb.target_value[t] / wh if wh > 0.0 else 0.0 for t, wh in enumerate(self.target_wh)]
-        mean = sum(dens) / max(1, sum(d > 0.0 for d in dens))
+        if self._dens is None:  # constants of the problem, made once
+            self._dens = [
+                pb.target_value[t] / wh if wh > 0.0 else 0.0 for t, wh in enumerate(self.target_wh)
+            ]
+            self._mean = sum(self._dens) / max(1, sum(d > 0.0 for d in self._dens))
+            self._sats = [sorted({pb.option_sat[c] for c in opts}) for opts in self.target_options]
+        dens, mean, sats = self._dens, self._mean, self._sats
         out = []
         for t in targets:
             w = pb.target_value[t]
-            if dens[t] > 0.0 and all(bound[pb.option_sat[c]] for c in self.target_options[t]):
+            if dens[t] > 0.0 and all(bound[k] for k in sats[t]):
                 w *= dens[t] / mean
             out.append(w)
         return out

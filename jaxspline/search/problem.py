@@ -41,7 +41,8 @@ class Problem:
       pairs: :class:`NearPairs`, every feasible near pair (every model) by destination.
       far: per satellite the always-feasible gap [s].
       battery: :class:`BatteryModel`.
-      target_options: per target its option ids.
+      target_options: per target its option ids, ascending (so one satellite's are a
+        contiguous run, options being sorted by satellite).
       sat_lo, sat_hi: option id range per satellite (options sorted by sat, start).
       sat_starts: per satellite the sorted starts of its options.
       near_slack: the near pairs include every feasible pair with gap < far + this [s]

@@ -165,6 +165,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
         stats["exact_proven"] = exact
     rng = random.Random(seed)
     its = 0
+    t_lns, cpu_lns = time.monotonic(), time.process_time()
     if not (exact or res.status == BoundStatus.OPTIMAL):
         its = lns(
             tl,
@@ -175,7 +176,12 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
                 "lns", f"it {it}: value {tl.value:.6g} ({imp} improvements)"
             ),
         )
-    stats.update(lns_iterations=its, lns_value=tl.value)
+    stats.update(
+        lns_iterations=its,
+        lns_value=tl.value,
+        lns_seconds=round(time.monotonic() - t_lns, 3),
+        lns_cpu_seconds=round(time.process_time() - cpu_lns, 3),
+    )
     earliest_pass(tl, deadline)
     bound, status = res.bound, res.status
     if worker is not None:

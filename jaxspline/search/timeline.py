@@ -4,6 +4,9 @@ A :class:`Timeline` holds, per satellite, its chosen options in start order and,
 target, the option that images it (each target at most once). :meth:`Timeline.check`
 tests one insertion: no overlap, the transition from the predecessor (or the first
 maneuver) and to the successor fit their gaps, and the battery stays above its margin.
+Each satellite's starts, ends and the maneuver into each observation are kept beside
+its option ids (updated by :meth:`Timeline.insert` and :meth:`Timeline.remove`), so
+a test or a battery refresh reads them instead of re-deriving the transitions.
 Every change is logged so a search step can be undone. A timeline may withdraw options
 of its problem (``withdrawn``): they are no longer offered for any target, while the
 :class:`Problem` itself stays as built.
@@ -52,6 +55,10 @@ class Timeline:
         without the withdrawn ones).
       lines: per satellite, its option ids in start order.
       line_starts: per satellite, their start times [s].
+      line_ends: per satellite, their end times [s].
+      maneuvers: per satellite, the required time of the maneuver into each of them
+        (from the predecessor, or the first maneuver) [s], kept up to date by
+        :meth:`insert` and :meth:`remove`.
       assigned: per target, the option that images it (-1: none).
       levels: per satellite, the battery :class:`Levels` of a past state (None: not
         computed).
@@ -80,12 +87,16 @@ class Timeline:
         n_s = pb.n_sats
         self.lines = [[] for _ in range(n_s)]  # option ids by start
         self.line_starts = [[] for _ in range(n_s)]  # their starts
+        self.line_ends = [[] for _ in range(n_s)]  # their ends
+        self.maneuvers = [[] for _ in range(n_s)]  # the maneuver into each
         self.assigned = [-1] * pb.n_targets
         self.levels = [None] * n_s
         self.debt = [0.0] * n_s
         self.stale = [True] * n_s
         self.battery_failed = False
         self._win = pb.battery.steps_of(pb.option_start, pb.option_end)  # per option (s0, e0, s1)
+        self._s0, self._e0, self._s1 = pb.battery.step_windows(pb.option_start, pb.option_end)
+        self._starts = np.asarray(pb.option_start, np.float64)
         self.value = 0.0
         self.n_observations = 0
         self.tat = 0.0
@@ -122,8 +133,7 @@ class Timeline:
         Returns:
           float [s].
         """
-        line = self.lines[k]
-        return self.pb.option_first[line[pos]] if pos == 0 else self.need(line[pos - 1], line[pos])
+        return self.maneuvers[k][pos]
 
     def insert_position(self, c: int) -> int:
         """Position option c would take in its satellite's timeline.
@@ -146,20 +156,28 @@ class Timeline:
     # ------------------------------------------------------------ battery
     def _timeline_loads(self, k, extra=None):
         """(starts, ends, maneuvers) of satellite k's timeline, with option ``extra``."""
+        starts, ends, man = self.line_starts[k], self.line_ends[k], self.maneuvers[k]
+        if extra is None:
+            return starts, ends, man
         pb = self.pb
-        line = list(self.lines[k])
-        if extra is not None:
-            line.insert(bisect.bisect_left(self.line_starts[k], pb.option_start[extra]), extra)
-        man, prev = [], -1
-        for c in line:
-            man.append(pb.option_first[c] if prev < 0 else self.need(prev, c))
-            prev = c
-        return [pb.option_start[c] for c in line], [pb.option_end[c] for c in line], man
+        line = self.lines[k]
+        pos = bisect.bisect_left(starts, pb.option_start[extra])
+        starts, ends, man = list(starts), list(ends), list(man)
+        starts.insert(pos, pb.option_start[extra])
+        ends.insert(pos, pb.option_end[extra])
+        man.insert(pos, pb.option_first[extra] if pos == 0 else self.need(line[pos - 1], extra))
+        if pos < len(line):
+            man[pos + 1] = self.need(extra, line[pos])
+        return starts, ends, man
 
     def _levels(self, k):
         """Satellite k's current battery Levels (recomputed when stale)."""
         if self.stale[k] or self.levels[k] is None:
-            self.levels[k] = self.pb.battery.levels(k, *self._timeline_loads(k))
+            bat = self.pb.battery
+            line = np.array(self.lines[k], np.int64)
+            m0 = bat.slew_steps(self._starts[line], self.maneuvers[k])
+            loads = bat.step_loads(k, self._s0[line], self._e0[line], m0, self._s1[line])
+            self.levels[k] = bat.levels_of(k, loads)
             self.debt[k] = 0.0
             self.stale[k] = False
         return self.levels[k]
@@ -235,19 +253,31 @@ class Timeline:
           float, the time it consumes [s], or None when infeasible.
         """
         pb = self.pb
-        k = pb.option_sat[c]
         self.battery_failed = False
         if self.assigned[pb.option_target[c]] >= 0:
             return None
+        k = pb.option_sat[c]
+        pos = self._slot(k, pb.option_start[c], pb.option_end[c])
+        return None if pos < 0 else self._fit(c, k, pos)
+
+    def _slot(self, k, s, e):
+        """Position of an interval [s, e] in satellite k's timeline; -1 when it overlaps."""
+        starts = self.line_starts[k]
+        pos = bisect.bisect_left(starts, s)
+        if (pos > 0 and self.line_ends[k][pos - 1] > s) or (pos < len(starts) and e > starts[pos]):
+            return -1
+        return pos
+
+    def _fit(self, c, k, pos):
+        """:meth:`check` of option c once it overlaps nothing at position ``pos`` of
+        satellite k's timeline: the transitions and the battery."""
+        pb = self.pb
         s, e = pb.option_start[c], pb.option_end[c]
-        pos = bisect.bisect_left(self.line_starts[k], s)
         line = self.lines[k]
         if pos > 0:
             p = line[pos - 1]
-            if pb.option_end[p] > s:
-                return None
             n_in = self.need(p, c)
-            if s - pb.option_end[p] < n_in:
+            if s - self.line_ends[k][pos - 1] < n_in:
                 return None
         else:
             p = -1
@@ -256,12 +286,10 @@ class Timeline:
                 return None
         if pos < len(line):
             q = line[pos]
-            if e > pb.option_start[q]:
-                return None
             n_out = self.need(c, q)
-            if pb.option_start[q] - e < n_out:
+            if self.line_starts[k][pos] - e < n_out:
                 return None
-            n_old = pb.option_first[q] if p < 0 else self.need(p, q)
+            n_old = self.maneuvers[k][pos]
         else:
             q = -1
             n_out = n_old = 0.0
@@ -288,6 +316,11 @@ class Timeline:
         self.debt[k] += self._energy(k, c, n_in, n_out)
         line.insert(pos, c)
         self.line_starts[k].insert(pos, pb.option_start[c])
+        self.line_ends[k].insert(pos, pb.option_end[c])
+        man = self.maneuvers[k]
+        man.insert(pos, n_in)
+        if pos + 1 < len(line):
+            man[pos + 1] = n_out
         self.assigned[t] = c
         self.value += pb.target_value[t]
         self.n_observations += 1
@@ -306,11 +339,19 @@ class Timeline:
         if k not in self.saved:
             self.saved[k] = (self.levels[k], self.debt[k], self.stale[k])
         self.stale[k] = True
-        pos = line.index(c)
+        pos = bisect.bisect_left(self.line_starts[k], pb.option_start[c])
+        if pos >= len(line) or line[pos] != c:
+            pos = line.index(c)
         del line[pos]
         del self.line_starts[k][pos]
-        if pos < len(line) and pb.battery.has(k):  # the successor's maneuver may get longer
-            self.debt[k] += pb.battery.extra_energy(k, 0.0, self.maneuver_into(k, pos))
+        del self.line_ends[k][pos]
+        man = self.maneuvers[k]
+        del man[pos]
+        if pos < len(line):  # the successor's maneuver, now from the predecessor
+            q = line[pos]
+            man[pos] = pb.option_first[q] if pos == 0 else self.need(line[pos - 1], q)
+            if pb.battery.has(k):  # it may get longer
+                self.debt[k] += pb.battery.extra_energy(k, 0.0, man[pos])
         self.assigned[t] = -1
         self.value -= pb.target_value[t]
         self.n_observations -= 1
@@ -383,17 +424,30 @@ class Timeline:
           is already imaged.
         """
         pb = self.pb
-        option_sat = pb.option_sat
+        option_sat, option_start, option_end = pb.option_sat, pb.option_start, pb.option_end
         options, costs = [], []
         if self.assigned[t] >= 0:
             return options, costs
-        for c in self.target_options[t]:
-            if sat is not None and option_sat[c] != sat:
+        opts = self.target_options[t]
+        if sat is not None:  # ascending ids, grouped by satellite: one slice
+            opts = opts[
+                bisect.bisect_left(opts, pb.sat_lo[sat]) : bisect.bisect_left(opts, pb.sat_hi[sat])
+            ]
+        line_starts, line_ends, bisect_left = self.line_starts, self.line_ends, bisect.bisect_left
+        for c in opts:
+            k, s = option_sat[c], option_start[c]
+            starts = line_starts[k]
+            pos = bisect_left(starts, s)
+            # :meth:`_slot` inline (the hot path: most options overlap an observation)
+            if (pos > 0 and line_ends[k][pos - 1] > s) or (
+                pos < len(starts) and option_end[c] > starts[pos]
+            ):
                 continue
-            cost = self.check(c)
+            self.battery_failed = False
+            cost = self._fit(c, k, pos)
             if cost is None:
                 continue
-            cost += _TURNAROUND_WEIGHT * pb.option_end[c]
+            cost += _TURNAROUND_WEIGHT * option_end[c]
             if rng is not None:
                 cost *= 1.0 + _INSERT_NOISE * rng.random()
             options.append(c)
@@ -424,7 +478,8 @@ class Timeline:
         """
         pb = self.pb
         for k in range(pb.n_sats):
-            self.lines[k], self.line_starts[k] = [], []
+            self.lines[k], self.line_starts[k], self.line_ends[k] = [], [], []
+            self.maneuvers[k] = []
             self.levels[k], self.debt[k], self.stale[k] = None, 0.0, True
         self.assigned = [-1] * pb.n_targets
         self.value, self.n_observations, self.tat = 0.0, 0, 0.0

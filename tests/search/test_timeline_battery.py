@@ -87,6 +87,28 @@ def _random_obs(rng, n, count):
     return out
 
 
+def test_loads_sum_in_the_order_of_add_at():
+    """BatteryModel.loads == four sequential np.add.at passes (imaging starts, ends, slew
+    starts, ends), bit for bit, on random observations (steps shared and clipped)."""
+    rng = np.random.default_rng(7)
+    for _ in range(300):
+        n = int(rng.integers(20, 200))
+        bm, _ = _random_model(rng, n)
+        p, h = bm.powers[0], DT / 3600.0
+        obs = _random_obs(rng, n, int(rng.integers(0, 12)))
+        starts, ends, man = (
+            (np.array(x, float) for x in zip(*obs, strict=True)) if obs else ([],) * 3
+        )
+        man = np.asarray(man) * rng.uniform(0.0, 3.0)  # maneuvers reaching past the start
+        s0, e0, s1 = bm.step_windows(starts, ends)
+        d = np.zeros(n + 1)
+        np.add.at(d, s0, p.imaging_w * h)
+        np.add.at(d, e0, -p.imaging_w * h)
+        np.add.at(d, bm.slew_steps(starts, man), p.slew_w * h)
+        np.add.at(d, s1, -p.slew_w * h)
+        np.testing.assert_array_equal(bm.loads(0, starts, ends, man), np.cumsum(d)[:n])
+
+
 def test_change_ok_matches_resimulation():
     """change_ok == re-simulation for random load changes (either sign), 4000 cases."""
     rng = np.random.default_rng(1)
@@ -220,6 +242,25 @@ def test_timeline_check_matches_brute_force(seed):
             assert (got is not None) == (level >= pb.battery.margin_wh), (c, level)
             assert tl.battery_failed == (got is None)
             battery_cut += got is None
+        for t in range(pb.n_targets):  # the greedy's candidates are check's feasible options
+            for k in (None, *range(pb.n_sats)):
+                want = [
+                    (c, cost + 0.02 * pb.option_end[c])
+                    for c in pb.target_options[t]
+                    if (k is None or pb.option_sat[c] == k) and (cost := tl.check(c)) is not None
+                ]
+                assert list(zip(*tl.insert_choices(t, sat=k), strict=True)) == want
+        for k in range(pb.n_sats):  # the stored maneuvers and the refreshed levels, exactly
+            line = tl.lines[k]
+            starts = [pb.option_start[x] for x in line]
+            ends = [pb.option_end[x] for x in line]
+            man = [
+                pb.option_first[x] if i == 0 else pb.need(line[i - 1], x)
+                for i, x in enumerate(line)
+            ]
+            assert (tl.line_starts[k], tl.line_ends[k], tl.maneuvers[k]) == (starts, ends, man)
+            want = pb.battery.levels(k, starts, ends, man).level
+            np.testing.assert_array_equal(tl.battery_level(k), want)
         for k in range(pb.n_sats):  # the cached levels follow the timeline
             obs = [(pb.option_start[x], pb.option_end[x], 0.0) for x in tl.lines[k]]
             obs = [(s, e, tl.maneuver_into(k, i)) for i, (s, e, _) in enumerate(obs)]
