@@ -80,7 +80,10 @@ def _force_infeasible(tl, rng, count):
     return forced
 
 
-@pytest.mark.parametrize("seed", [0, 1, 2, 3, 4])
+@pytest.mark.parametrize(
+    "seed",
+    [0, 1, 2, pytest.param(3, marks=pytest.mark.slow), pytest.param(4, marks=pytest.mark.slow)],
+)
 def test_repair_drops_at_most_one_observation_per_violation(seed):
     """Random small scenarios with infeasible options forced into the plan: the repaired
     plan passes the independent check, nothing is dropped without a violation, and the

@@ -269,6 +269,9 @@ def _bound_cmd(scen, out, plan, *extra):
     ]
 
 
+# slow: two processes under jax.distributed are checked by default in
+# tests/screen/test_screen.py, the sharded protocol by the thread tests above
+@pytest.mark.slow
 def test_two_processes_under_jax_distributed_equal_one(
     scenario_file, built, thread_plans, tmp_path
 ):
