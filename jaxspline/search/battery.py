@@ -148,8 +148,10 @@ class BatteryModel:
 
         Args:
           sat: satellite index.
-          s0, e0: int [K], imaging loads the steps ``[s0, e0)``.
-          m0, s1: int [K], the maneuver into it loads the steps ``[m0, s1)``.
+          s0: int [K], first step of each observation's imaging load.
+          e0: int [K], end (exclusive) of its imaging load: the steps ``[s0, e0)``.
+          m0: int [K], first step of the maneuver into it.
+          s1: int [K], end (exclusive) of that maneuver's load: the steps ``[m0, s1)``.
         Returns:
           float [n], load energy per step [Wh].
         """

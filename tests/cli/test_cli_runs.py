@@ -70,8 +70,15 @@ def _start_until(env, out, marker: bytes, *extra):
 def _plan_json(out):
     data = json.loads((out / "plan.json").read_text())
     data.pop("timings_s")
-    for measured in ("peak_rss_mb", "worker_dp_per_s", "memory_estimate_mb"):  # not the plan
-        data["stats"].pop(measured, None)
+    measured = (
+        "peak_rss_mb",
+        "worker_dp_per_s",
+        "memory_estimate_mb",
+        "lns_seconds",
+        "lns_cpu_seconds",
+    )
+    for name in measured:  # not the plan
+        data["stats"].pop(name, None)
     data["report"].pop("time_limit", None)  # the clock's account of the run (elapsed, pace)
     return data
 
