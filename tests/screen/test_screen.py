@@ -498,8 +498,9 @@ def _assert_same(f, h, rtol=1e-12):
     "kw",
     [
         {},
-        {"max_gap": 100.0},
-        {"feasible_only": True},
+        # each option alone is slow: the default run checks them together
+        pytest.param({"max_gap": 100.0}, marks=pytest.mark.slow),
+        pytest.param({"feasible_only": True}, marks=pytest.mark.slow),
         {"max_gap": 100.0, "feasible_only": True, "chunk_size": 100},
         {"chunk_size": 1},
         {"chunk_size": 700},
