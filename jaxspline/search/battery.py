@@ -211,27 +211,15 @@ class BatteryModel:
             np.minimum.accumulate(raw[::-1])[::-1],
         )
 
-    def steps_of(self, starts, ends) -> list:
+    def step_windows(self, starts, ends):
         """Step windows of observations, as :meth:`loads` charges them.
 
         Args:
           starts: float [K], observation start times [s].
           ends: float [K], observation end times [s].
         Returns:
-          list of K tuples ``(s0, e0, s1)``: imaging loads the steps ``[s0, e0)``, the
-          maneuver into the observation ends before step ``s1``.
-        """
-        s0, e0, s1 = self.step_windows(starts, ends)
-        return list(zip(s0.tolist(), e0.tolist(), s1.tolist(), strict=True))
-
-    def step_windows(self, starts, ends):
-        """:meth:`steps_of` as arrays.
-
-        Args:
-          starts: float [K], observation start times [s].
-          ends: float [K], observation end times [s].
-        Returns:
-          three int64 [K] arrays ``(s0, e0, s1)`` of step indices.
+          three int64 [K] arrays ``(s0, e0, s1)`` of step indices: imaging loads the
+          steps ``[s0, e0)``, the maneuver into the observation ends before step ``s1``.
         """
         n, dt = self.n, self.dt
         s = np.asarray(starts, np.float64)
