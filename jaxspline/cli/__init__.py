@@ -39,6 +39,8 @@ import time
 import traceback
 from pathlib import Path
 
+from jaxspline.cli.startup import EXIT_INTERRUPTED  # Ctrl-C / SIGTERM
+
 __all__ = [
     "CACHE_ENV",
     "EXIT_BAD_INPUT",
@@ -66,7 +68,6 @@ EXIT_TIME_LIMIT = 3  # the time limit ran out before the search
 EXIT_WRITE = 4  # an output could not be written
 EXIT_BUSY = 5  # the output directory is locked by another run
 EXIT_INTERNAL = 70  # an unexpected error (EX_SOFTWARE of sysexits.h)
-EXIT_INTERRUPTED = 130  # Ctrl-C / SIGTERM (128 + SIGINT, the shell convention)
 
 
 def cache_dir() -> Path | None:

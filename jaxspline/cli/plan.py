@@ -64,6 +64,7 @@ from jaxspline.cli.flags import (
     check_seconds,
     check_value,
 )
+from jaxspline.cli.startup import EXIT_INTERRUPTED  # exit code after Ctrl-C / SIGTERM
 from jaxspline.products.outputs import ATTITUDE_FIGURE, OUTPUT_FILES
 from jaxspline.products.plan_html import HTML_FILE
 
@@ -76,8 +77,6 @@ __all__ = [
     "register",
     "run_plan",
 ]
-
-EXIT_INTERRUPTED = 130  # exit code after Ctrl-C / SIGTERM (128 + SIGINT, the shell convention)
 
 # AEM sample step of the plan command [s]: ccsds-ndm serializes ~2,000 states/s, so
 # 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)

@@ -21,7 +21,7 @@ import threading
 
 __all__ = ["EXIT_INTERRUPTED", "INSTALLED", "install_startup_signals", "runs_the_command"]
 
-EXIT_INTERRUPTED = 130  # 128 + SIGINT, as jaxspline.cli.EXIT_INTERRUPTED
+EXIT_INTERRUPTED = 130  # exit code after Ctrl-C / SIGTERM (128 + SIGINT, the shell convention)
 _COMMAND = "jaxspline"
 _OPTIONS_WITH_VALUE = ("-X", "-W", "--check-hash-based-pycs")  # python OPTION VALUE
 
