@@ -1,9 +1,12 @@
 """The Python examples of ``README.md`` and ``docs/*.md`` run as written.
 
 Every fenced ``python`` block runs; the blocks of one page run in order, in one
-namespace, in a fresh process whose working folder is a temporary directory holding
+namespace of its own, with a working folder of its own: a temporary directory holding
 links to the clone's ``scripts/``, ``bench/`` and ``jaxspline/`` (the examples use paths
-relative to the repository root and write their outputs where they run). A block is
+relative to the repository root and write their outputs where they run). All pages run
+in one fresh process (one JAX import and one set of compiled kernels for all of them),
+the pages that leave JAX's float64 switch alone first, so each of them runs with JAX's
+default as a reader's fresh session would. A block is
 skipped only when an HTML comment ``<!-- skip-test: REASON -->`` stands right above its
 fence (with a reason); the README's library examples are never skipped. Shell, TOML and
 other blocks are not run. A failure names the page and the line of the block.
@@ -27,15 +30,25 @@ SKIP = re.compile(r"^<!--\s*skip-test:\s*(?P<reason>.*?)\s*-->$")
 LINKED = ("scripts", "bench", "jaxspline")
 _TIMEOUT_S = 300
 
-# runs the blocks of one page: exec in one namespace, each compiled under "page:line"
+# runs each page's blocks in its folder and one namespace, each block compiled under
+# "page:line"; a page's failure (its traceback) is recorded and the next page runs
 DRIVER = """
-import json, sys
-blocks = json.load(open(sys.argv[1], encoding="utf-8"))
-ns = {"__name__": "__main__"}
-for b in blocks:
-    print(f"--- {b['page']}:{b['line']}", flush=True)
-    exec(compile(b["code"], f"{b['page']}:{b['line']}", "exec"), ns)
+import json, os, sys, traceback
+pages = json.load(open(sys.argv[1], encoding="utf-8"))
+result = {}
+for page in pages:
+    os.chdir(page["cwd"])
+    ns = {"__name__": "__main__"}
+    try:
+        for b in page["blocks"]:
+            print(f"--- {b['page']}:{b['line']}", flush=True)
+            exec(compile(b["code"], f"{b['page']}:{b['line']}", "exec"), ns)
+        result[page["page"]] = ""
+    except BaseException:
+        result[page["page"]] = traceback.format_exc()
+json.dump(result, open(sys.argv[2], "w", encoding="utf-8"))
 """
+X64_SWITCH = "jax_enable_x64"
 
 
 def blocks_of(page: Path, root: Path = ROOT) -> list[dict]:
@@ -99,23 +112,39 @@ def test_block_parser_reads_fences_and_skip_markers(tmp_path):
     ]
 
 
-@pytest.mark.parametrize("page", RUN, ids=[str(p.relative_to(ROOT)) for p in RUN])
-def test_python_blocks_run(page, tmp_path):
-    work = tmp_path / "work"
-    work.mkdir()
-    for name in LINKED:
-        (work / name).symlink_to(ROOT / name, target_is_directory=True)
-    blocks = [b for b in _python(page) if b["skip"] is None]
-    spec = tmp_path / "blocks.json"
-    spec.write_text(json.dumps(blocks), encoding="utf-8")
+@pytest.fixture(scope="module")
+def page_runs(tmp_path_factory):
+    """Run every page's blocks in one process: {page: traceback or ""}, the process's output."""
+    tmp = tmp_path_factory.mktemp("pages")
+    order = sorted(RUN, key=lambda p: X64_SWITCH in p.read_text(encoding="utf-8"))
+    pages = []
+    for k, page in enumerate(order):
+        work = tmp / f"work{k}"
+        work.mkdir()
+        for name in LINKED:
+            (work / name).symlink_to(ROOT / name, target_is_directory=True)
+        blocks = [b for b in _python(page) if b["skip"] is None]
+        pages.append({"page": str(page.relative_to(ROOT)), "cwd": str(work), "blocks": blocks})
+    spec, result = tmp / "pages.json", tmp / "result.json"
+    spec.write_text(json.dumps(pages), encoding="utf-8")
     path = os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH", "")) if p)
     env = dict(os.environ, PYTHONPATH=path, MPLBACKEND="Agg")
     run = subprocess.run(
-        [sys.executable, "-c", DRIVER, str(spec)],
-        cwd=work,
+        [sys.executable, "-c", DRIVER, str(spec), str(result)],
+        cwd=tmp,
         env=env,
         capture_output=True,
         text=True,
         timeout=_TIMEOUT_S,
     )
-    assert run.returncode == 0, f"{run.stdout[-4000:]}\n{run.stderr[-4000:]}"
+    output = f"{run.stdout[-4000:]}\n{run.stderr[-4000:]}"
+    assert run.returncode == 0 and result.exists(), output
+    return json.loads(result.read_text(encoding="utf-8")), output
+
+
+@pytest.mark.parametrize("page", RUN, ids=[str(p.relative_to(ROOT)) for p in RUN])
+def test_python_blocks_run(page, page_runs):
+    failures, output = page_runs
+    name = str(page.relative_to(ROOT))
+    assert name in failures, output
+    assert failures[name] == "", failures[name]

@@ -11,6 +11,7 @@ the ground, buffered by half the swath in an azimuthal equidistant projection).
 import json
 import math
 
+import jax
 import numpy as np
 import pytest
 import shapely
@@ -178,15 +179,12 @@ def _footprints_from_observations(sc, res, area):
             aim_params(g0, strip_direction(tg.lat[r], tg.lon[r], tg.azimuth[r]), obs.speed[i])
         )
         ts = np.linspace(obs.start[i], obs.end[i], 41)
-        ground = []
-        for t in ts:
-            _, _, los, _ = aim_geometry(scene, p, obs.start[i], t, k)
-            sat = np.asarray(orbit_position(table.orbit, t, sat=k))
-            los = np.asarray(los)
-            rd = sat @ los  # ray sat + s los meets the sphere |g| = |g0| (near side)
-            s = -rd - math.sqrt(rd * rd - (sat @ sat - g0 @ g0))
-            g_eci = sat + s * los
-            ground.append(rot_z(earth_rotation_angle(float(scene.gmst0), t), g_eci))
+        los = np.asarray(jax.vmap(lambda t: aim_geometry(scene, p, obs.start[i], t, k)[2])(ts))
+        sat = np.asarray(orbit_position(table.orbit, ts, sat=k))
+        rd = np.sum(sat * los, -1)  # ray sat + s los meets the sphere |g| = |g0| (near side)
+        s = -rd - np.sqrt(rd * rd - (np.sum(sat * sat, -1) - g0 @ g0))
+        g_eci = sat + s[:, None] * los
+        ground = rot_z(earth_rotation_angle(float(scene.gmst0), ts), g_eci)
         lat, lon, _ = ecef_to_geodetic(np.asarray(ground))
         line = LineString(np.column_stack(_aeqd(np.degrees(lon), np.degrees(lat), lon0, lat0)))
         feet.append(line.buffer(sc.satellites[k].swath / 2, cap_style="flat"))

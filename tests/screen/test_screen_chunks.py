@@ -43,21 +43,30 @@ def _check_order(opt, chunks, cols, top_k):
                 assert not owner[a] & owner[b]
 
 
+_CHUNK_KW = [
+    {},
+    {"feasible_only": False},
+    {"feasible_only": False, "chunk_size": 8},
+    {"max_gap": 80.0, "chunk_size": 1},
+    {"max_gap": 80.0, "feasible_only": False, "chunk_size": 37},
+    {"top_k": 1, "chunk_size": 8},
+    {"top_k": 3, "chunk_size": 64},
+    {"top_k": 2, "max_gap": 120.0, "chunk_size": 2},
+    {"top_k": 500},
+]
+# float32 (x64 off) runs the same code at another dtype: three option sets (plain, gap
+# with odd chunks, top_k with a gap over tiny chunks) by default, the rest as slow variants
+_F32_DEFAULT = (0, 4, 7)
+
+
 @pytest.mark.parametrize(
-    "kw",
-    [
-        {},
-        {"feasible_only": False},
-        {"feasible_only": False, "chunk_size": 8},
-        {"max_gap": 80.0, "chunk_size": 1},
-        {"max_gap": 80.0, "feasible_only": False, "chunk_size": 37},
-        {"top_k": 1, "chunk_size": 8},
-        {"top_k": 3, "chunk_size": 64},
-        {"top_k": 2, "max_gap": 120.0, "chunk_size": 2},
-        {"top_k": 500},
+    "kw, x64",
+    [(kw, True) for kw in _CHUNK_KW]
+    + [
+        pytest.param(kw, False, marks=() if i in _F32_DEFAULT else pytest.mark.slow)
+        for i, kw in enumerate(_CHUNK_KW)
     ],
 )
-@pytest.mark.parametrize("x64", [True, False])
 def test_chunks_concatenate_to_screen_transitions(kw, x64):
     rng = np.random.default_rng(31)
     opt = synthetic_options(rng, n_routes=14, per_route=4, horizon=500.0, spread=0.8)

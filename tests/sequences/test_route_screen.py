@@ -265,6 +265,8 @@ _SHARD_SCRIPT = textwrap.dedent(
 )
 
 
+# the same kind of check as tests/screen/test_screen.py's four-device screen (kept there)
+@pytest.mark.slow
 def test_rows_sharded_over_four_devices():
     """Rows split over 4 CPU devices (chunks of 52 rows, rounded to 4): same answers."""
     env = dict(os.environ)
