@@ -179,7 +179,10 @@ def _footprints_from_observations(sc, res, area):
             aim_params(g0, strip_direction(tg.lat[r], tg.lon[r], tg.azimuth[r]), obs.speed[i])
         )
         ts = np.linspace(obs.start[i], obs.end[i], 41)
-        los = np.asarray(jax.vmap(lambda t: aim_geometry(scene, p, obs.start[i], t, k)[2])(ts))
+        los = jax.vmap(aim_geometry, in_axes=(None, None, None, 0, None))(
+            scene, p, obs.start[i], ts, k
+        )[2]
+        los = np.asarray(los)
         sat = np.asarray(orbit_position(table.orbit, ts, sat=k))
         rd = np.sum(sat * los, -1)  # ray sat + s los meets the sphere |g| = |g0| (near side)
         s = -rd - np.sqrt(rd * rd - (np.sum(sat * sat, -1) - g0 @ g0))
