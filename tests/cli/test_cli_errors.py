@@ -170,8 +170,8 @@ def test_an_unexpected_error_is_one_line_and_debug_shows_the_traceback(monkeypat
     def boom(args):
         raise KeyError("surprise")
 
-    def patched():
-        parser = build_parser()
+    def patched(command=None):
+        parser = build_parser(command)
         sub = next(a for a in parser._actions if isinstance(a.choices, dict))
         sub.choices["view"].set_defaults(func=boom)
         return parser
