@@ -4,13 +4,16 @@ A run that is refused before any planning (a bad flag, a bad scenario) spends ne
 its time importing; issue 30 asks for such a rejection within 3 s. The command therefore
 registers only the sub-command its line names (the benchmark adapters bring YAML and
 SGP4), and optax (with ``jax.scipy``) is imported where the start-time refinement runs,
-not when the package is imported.
+not when the package is imported. Once the command is done, it ends its process at
+once (``jaxspline.cli.end_process``).
 """
 
 from __future__ import annotations
 
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import pytest
 
@@ -65,3 +68,38 @@ def test_a_rejected_plan_imports_neither_optax_nor_the_adapters(tmp_path):
     )
     assert out.stdout.split(None, 1) == ["2", "[]\n"], (out.stdout, out.stderr)
     assert "bad.toml: x (line 1): unknown section or key" in out.stderr
+
+
+_END = """
+import multiprocessing as mp, sys, time
+from jaxspline.cli import end_process
+child = mp.get_context("fork").Process(target=time.sleep, args=(60,))
+child.start()
+print(child.pid)
+sys.stdout.write("written, not flushed")
+end_process(4)
+"""
+
+
+def test_the_command_ends_its_process_at_once_with_its_children_stopped():
+    # JAX's clean-up at exit took up to ~13 s on a loaded machine after the work was done
+    out = subprocess.run(
+        [sys.executable, "-c", _END], stdout=subprocess.PIPE, text=True, timeout=60
+    )
+    pid, rest = out.stdout.split("\n", 1)
+    assert out.returncode == 4 and rest == "written, not flushed"
+    assert _ends(int(pid)), "the child still runs"
+
+
+def _ends(pid: int, wait_s: float = 5.0) -> bool:
+    """Whether process ``pid`` is gone (or a zombie: ended, not yet reaped) within ``wait_s``."""
+    status = Path(f"/proc/{pid}/status")
+    t_end = time.monotonic() + wait_s
+    while time.monotonic() < t_end:
+        try:
+            if "\tZ" in status.read_text().split("State:", 1)[1].split("\n", 1)[0]:
+                return True
+        except (FileNotFoundError, ProcessLookupError):
+            return True
+        time.sleep(0.05)
+    return False
