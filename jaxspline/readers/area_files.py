@@ -37,7 +37,6 @@ from shapely.validation import explain_validity
 from jaxspline.geometry.frames import geodetic_to_ecef
 from jaxspline.geometry.ground import unit_vectors
 from jaxspline.readers.fields import (
-    READ_TICK_ROWS,
     check_float,
     field_number,
     field_pair,
@@ -171,7 +170,7 @@ def _feature_geometry(f, where: str):
 
 def _geojson_geometry(doc, label: str = "GeoJSON"):
     """The union of the polygons of a GeoJSON document (shapely, lon/lat degrees);
-    :func:`jaxspline.readers.fields.read_tick` every :data:`READ_TICK_ROWS` features."""
+    :func:`jaxspline.readers.fields.read_tick` on every feature."""
     if not isinstance(doc, dict):
         raise ValueError(f"must be a GeoJSON object, got {type(doc).__name__}")
     kind = doc.get("type")
@@ -182,8 +181,7 @@ def _geojson_geometry(doc, label: str = "GeoJSON"):
                 raise ValueError("a FeatureCollection needs a non-empty 'features' list")
             parts = []
             for i, f in enumerate(feats):
-                if i % READ_TICK_ROWS == READ_TICK_ROWS - 1:
-                    read_tick(label, i / len(feats))
+                read_tick(label, i + 1, len(feats))
                 parts.append(_feature_geometry(f, f"features[{i}]"))
             geom = shapely.union_all(parts)
         elif kind == "Feature":
