@@ -391,10 +391,13 @@ def _area_objective(ctx, f, a, radius: float, swath: float) -> tuple[str, float]
     if objective == "coverage":
         across = 2.0 * radius * _KM_PER_DEG * 1e3  # the area's size bound [m]
         if (across / grid) ** 2 > MAX_AREA_SAMPLES:
+            given = f" ({GRID_PER_SWATH:.3g} x the {swath / 1e3:g} km swath: grid_km not given)"
+            given = "" if "grid_km" in a else given
             raise ctx.error(
                 f"{f}.grid_km",
-                f"{grid / 1e3:g} km is too fine: the area, up to {across / 1e3:.4g} km across, "
-                f"would get ~{(across / grid) ** 2:.3g} samples (at most {MAX_AREA_SAMPLES})",
+                f"{grid / 1e3:g} km{given} is too fine: the area, up to {across / 1e3:.4g} km "
+                f"across, would get ~{(across / grid) ** 2:.3g} samples (at most "
+                f"{MAX_AREA_SAMPLES}); give a coarser grid_km",
             )
     return objective, grid
 
