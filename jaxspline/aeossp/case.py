@@ -412,7 +412,7 @@ def load_solution(path: str | os.PathLike) -> dict:
     path = Path(path)
     try:
         data = json.loads(read_text(path))  # UTF-8, else names the line
-    except json.JSONDecodeError as exc:
+    except ValueError as exc:  # JSONDecodeError, or an integer of over 4,300 digits
         raise ValueError(f"{path}: not valid JSON: {exc}") from None
     except RecursionError:
         raise ValueError(f"{path}: not valid JSON here: nested too deeply") from None

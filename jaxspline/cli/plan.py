@@ -42,9 +42,9 @@ scenario's files are read under the same clock (every 10,000 CSV rows or GeoJSON
 features).
 
 Memory: before the stages that allocate in proportion to the scenario (reading its
-files, the orbits, the options, the near pairs) the run estimates their bytes and stops
-with exit 3, the estimate and the remedy when they do not fit the memory it may take
-(``--max-memory``, else 80 % of the available memory:
+files, the orbits, the windows, the options, the near pairs) the run estimates their
+bytes and stops with exit 3, the estimate and the remedy when they do not fit the
+memory it may take (``--max-memory``, else 80 % of the available memory:
 :mod:`jaxspline.planner.memory_guard`).
 """
 

@@ -63,8 +63,8 @@ def read_plan_file(plan: Path) -> dict:
         raise FileNotFoundError(f"plan file not found: {plan}") from None
     try:
         doc = json.loads(text)
-    except json.JSONDecodeError as exc:
-        raise ValueError(f"{plan}: not JSON ({exc})") from None
+    except ValueError as exc:  # JSONDecodeError, or an integer of over 4,300 digits
+        raise ValueError(f"{plan}: not JSON this reader takes ({exc})") from None
     except RecursionError:
         raise ValueError(f"{plan}: not JSON this reader takes (nested too deeply)") from None
     return check_plan_doc(doc, str(plan))

@@ -28,11 +28,13 @@ import numpy as np
 from jaxspline.geometry.frames import angle_between, earth_rotation_angle, rot_z
 from jaxspline.geometry.pointing import Scene
 
-__all__ = ["Windows", "visibility_windows_all"]
+__all__ = ["WindowWork", "Windows", "visibility_windows_all", "window_work"]
 
 _COARSE = 12  # knots per coarse step of the pre-screen
 _SAFETY_ANGLE = math.radians(0.5)  # extra Earth-central angle of the pre-screen [rad]
 _BLOCK = 512  # targets per pre-screen block
+_HALF = _COARSE // 2 + 1  # fine knots each side of a near coarse knot
+_SAMPLE = 64  # targets a satellite's work is estimated from (window_work)
 
 
 class Windows(NamedTuple):
@@ -110,7 +112,7 @@ def _near_knots(knots: _Knots, cone: _Cone, g_hat, tb, lo_t, hi_t):
         tc[None, :] <= hi_t[tb, None] + _COARSE * knots.step
     )
     ii, ci = np.nonzero(near)
-    half = np.arange(-(_COARSE // 2) - 1, _COARSE // 2 + 2)
+    half = np.arange(-_HALF, _HALF + 1)
     ks = np.clip((cone.coarse[ci][:, None] + half[None, :]).ravel(), 0, m - 1)
     key = np.unique(np.repeat(ii, half.size) * m + ks)
     ii, ks = key // m, key % m
@@ -137,6 +139,99 @@ def _sorted_windows(out: dict) -> Windows:
     w = Windows(w.sat.astype(np.int64), w.target.astype(np.int64), w.lo, w.hi)
     order = np.lexsort((w.lo, w.target, w.sat))
     return Windows(*(x[order] for x in w))
+
+
+class _Grid(NamedTuple):
+    """The knots, the satellites' positions and the targets of one windows call."""
+
+    knots: _Knots
+    r: np.ndarray  # [S, M, 3] TEME positions at the knots [m]
+    g: np.ndarray  # [R, 3] Earth-fixed reference points [m]
+    g_hat: np.ndarray  # [R, 3] their unit vectors
+    r_min_t: float  # the lowest target's geocentric radius [m]
+    lo_t: np.ndarray  # [R] the targets' windows clipped to the horizon [s]
+    hi_t: np.ndarray
+
+    @classmethod
+    def of(cls, scene: Scene, points_ecef, t_lo, t_hi, duration: float) -> _Grid:
+        """The grid of :func:`visibility_windows_all`'s arguments."""
+        tk = np.asarray(scene.orbit.t)
+        in_h = (tk >= -1e-9) & (tk <= duration + 1e-9)
+        knots = _Knots(tk, tk[1] - tk[0], in_h, earth_rotation_angle(float(scene.gmst0), tk))
+        g = np.asarray(points_ecef, np.float64)
+        g_hat = g / np.linalg.norm(g, axis=-1, keepdims=True)
+        r_min_t = float(np.min(np.linalg.norm(g, axis=-1))) if len(g) else 1.0
+        lo_t = np.maximum(np.asarray(t_lo, np.float64), 0.0)
+        hi_t = np.minimum(np.asarray(t_hi, np.float64), duration)
+        return cls(knots, np.asarray(scene.orbit.r), g, g_hat, r_min_t, lo_t, hi_t)
+
+    def satellite(self, s: int, ok_knots, allowed, off_nadir_limit):
+        """(tasks, cone) of satellite ``s``: its targets' indices and its pre-screen
+        (None when it has no target or no valid knot)."""
+        tasks = np.flatnonzero(allowed[s] & (self.lo_t <= self.hi_t))
+        good_k = ok_knots[s] & self.knots.in_horizon
+        if tasks.size == 0 or not good_k.any():
+            return tasks, None
+        limit = float(off_nadir_limit[s])
+        return tasks, _satellite_cone(self.knots, self.r[s], good_k, limit, self.r_min_t)
+
+
+class WindowWork(NamedTuple):
+    """Upper-ish size of a :func:`visibility_windows_all` call (:func:`window_work`).
+
+    Attributes:
+      cells: (target, coarse knot) cells of its largest block of targets.
+      pairs: (target, knot) pairs its largest block evaluates (before duplicates go).
+      windows: windows of all satellites.
+      knots: knots of the orbit table.
+    """
+
+    cells: int
+    pairs: int
+    windows: int
+    knots: int
+
+
+def window_work(
+    scene: Scene,
+    ok_knots: np.ndarray,
+    points_ecef: np.ndarray,
+    allowed: np.ndarray,
+    off_nadir_limit: np.ndarray,
+    horizon: float,
+    t_lo: np.ndarray,
+    t_hi: np.ndarray,
+    duration: float,
+) -> WindowWork:
+    """The work of :func:`visibility_windows_all` on the same arguments, before it runs.
+
+    Every satellite's pre-screen is run on an evenly spread sample of at most
+    ``_SAMPLE`` (64) of its targets; the target of the sample nearest the most coarse
+    knots, and the one with the most runs of them, stand for every target of the
+    satellite (an upper-ish estimate: targets sorted by place give blocks of like
+    targets). Costs the pre-screen of 64 targets a satellite.
+
+    Args:
+      scene, ok_knots, points_ecef, allowed, off_nadir_limit, horizon, t_lo, t_hi,
+        duration: as :func:`visibility_windows_all` (``horizon`` unused: the estimate
+        counts every near knot as visible).
+    Returns:
+      :class:`WindowWork`.
+    """
+    grid = _Grid.of(scene, points_ecef, t_lo, t_hi, duration)
+    cells = pairs = windows = 0
+    for s in range(grid.r.shape[0]):
+        tasks, cone = grid.satellite(s, ok_knots, allowed, off_nadir_limit)
+        if cone is None:
+            continue
+        pick = tasks[np.unique(np.linspace(0, tasks.size - 1, _SAMPLE).astype(int))]
+        near = (grid.g_hat[pick] @ cone.u_coarse.T) > cone.cos_c
+        runs = near[:, 0].astype(int) + (near[:, 1:] & ~near[:, :-1]).sum(axis=1)
+        block = min(_BLOCK, tasks.size)
+        cells = max(cells, block * cone.coarse.size)
+        pairs = max(pairs, block * int(near.sum(axis=1).max()) * (2 * _HALF + 1))
+        windows += tasks.size * int(runs.max())
+    return WindowWork(cells, pairs, windows, grid.knots.t.size)
 
 
 def visibility_windows_all(
@@ -168,28 +263,19 @@ def visibility_windows_all(
     Returns:
       :class:`Windows`.
     """
-    orbit = scene.orbit
-    tk = np.asarray(orbit.t)
-    rk = np.asarray(orbit.r)
-    in_h = (tk >= -1e-9) & (tk <= duration + 1e-9)
-    knots = _Knots(tk, tk[1] - tk[0], in_h, earth_rotation_angle(float(scene.gmst0), tk))
-    g = np.asarray(points_ecef, np.float64)
-    g_hat = g / np.linalg.norm(g, axis=-1, keepdims=True)
-    r_min_t = float(np.min(np.linalg.norm(g, axis=-1))) if len(g) else 1.0
-    lo_t = np.maximum(np.asarray(t_lo, np.float64), 0.0)
-    hi_t = np.minimum(np.asarray(t_hi, np.float64), duration)
+    grid = _Grid.of(scene, points_ecef, t_lo, t_hi, duration)
+    knots, g, lo_t, hi_t = grid.knots, grid.g, grid.lo_t, grid.hi_t
+    tk = knots.t
     out = {"sat": [], "target": [], "lo": [], "hi": []}
-    s_count = rk.shape[0]
+    s_count = grid.r.shape[0]
     for s in range(s_count):
-        tasks = np.flatnonzero(allowed[s] & (lo_t <= hi_t))
-        good_k = ok_knots[s] & in_h
-        if tasks.size == 0 or not good_k.any():
+        tasks, cone = grid.satellite(s, ok_knots, allowed, off_nadir_limit)
+        if cone is None:
             continue
-        cone = _satellite_cone(knots, rk[s], good_k, float(off_nadir_limit[s]), r_min_t)
         for b0 in range(0, tasks.size, _BLOCK):
             if tick is not None:
                 tick((s + b0 / tasks.size) / s_count)
-            ti, ks = _near_knots(knots, cone, g_hat, tasks[b0 : b0 + _BLOCK], lo_t, hi_t)
+            ti, ks = _near_knots(knots, cone, grid.g_hat, tasks[b0 : b0 + _BLOCK], lo_t, hi_t)
             offn, elev = _exact_numpy(cone.r_e[ks], g[ti])
             vis = _visible(offn, elev, cone.limit, horizon)
             ti, ks = ti[vis], ks[vis]

@@ -42,6 +42,7 @@ from jaxspline.planner.context import PlanContext
 from jaxspline.planner.deadline import StageDeadline, TimeLimitError, suggested_limit
 
 __all__ = [
+    "CHECK_FIRST_S",
     "CHECK_S_PER_TARGET",
     "JOINS_FIRST_S",
     "JOINS_S_PER_TARGET",
@@ -73,10 +74,13 @@ LATE_MAX_S = 20.0  # [s] past the limit the checks after the search may end, at 
 
 # CPU seconds of the repair's steps, per target that has an option (the plan's size is
 # not known before the search; the default job plans ~half of its 950 such targets),
-# measured on the default job (2-core machine, compiled programs in the cache):
+# measured on the default job (2-core machine, compiled programs in the cache); the
+# first calls (loading their programs, one set per maneuver model: 0.6 and 3.0 s for a
+# 12-target scenario with three models, as much as the default job's) on both:
 CHECK_S_PER_TARGET = 0.9e-3  # one independent check (plan_check), per round
+CHECK_FIRST_S = 0.8  # its first call
 JOINS_S_PER_TARGET = 1.2e-3  # one flown-join check (reject_unflyable), per round
-JOINS_FIRST_S = 2.0  # its first call (loading its programs)
+JOINS_FIRST_S = 3.0  # its first call
 REFINE_S_PER_TARGET = 1.1e-3  # one start-time refinement, per round
 REFINE_FIRST_S = 2.5  # its first call
 REFILL_OVERHEAD_S = 0.5  # a refill's greedy pass and restore, besides its budget
@@ -138,7 +142,7 @@ def repair_seconds(ctx: PlanContext, flown_joins: bool, refining: bool, refill_s
     """
     n = int(np.unique(ctx.opportunities.options.route).size)
     rounds = _ROUNDS_WITH_JOINS if flown_joins else 1
-    need = rounds * CHECK_S_PER_TARGET * n
+    need = CHECK_FIRST_S + rounds * CHECK_S_PER_TARGET * n
     if flown_joins:
         need += JOINS_FIRST_S + rounds * JOINS_S_PER_TARGET * n + refill_s + REFILL_OVERHEAD_S
     if refining:
@@ -158,7 +162,7 @@ def mandatory_seconds(ctx: PlanContext, flown_joins: bool, after_s: float = 0.0)
       float [s].
     """
     n = int(np.unique(ctx.opportunities.options.route).size)
-    need = _MANDATORY_ROUNDS * CHECK_S_PER_TARGET * n + after_s
+    need = CHECK_FIRST_S + _MANDATORY_ROUNDS * CHECK_S_PER_TARGET * n + after_s
     if flown_joins:
         need += JOINS_FIRST_S + _MANDATORY_ROUNDS * JOINS_S_PER_TARGET * n
     return need

@@ -1,18 +1,21 @@
 """The memory guard: a scenario too big for the memory stops before a stage allocates it.
 
 The stages before the search allocate in proportion to the scenario: the orbits per
-satellite and ephemeris knot (``duration / geometry_step_s``), the options' samples per
-candidate start (``1 / time_step_s``) and geometry knot inside it
-(``1 / geometry_step_s``), the near-pair store per pair of options closer than the
-always-feasible gap. Before each of these stages :class:`MemoryGuard` compares an
-upper-ish estimate of the bytes it will add (this module's functions, from the
-scenario's keys and what the earlier stages found) with the memory the process may
-still take (:meth:`MemoryGuard.room`: :data:`MEMORY_SHARE` of the system's
-``MemAvailable``, within a cgroup's limit, within ``--max-memory``), and raises
-:class:`MemoryLimitError` when it does not fit: one line naming the stage, the keys
-that drive it with their values, the estimate, what is available and the remedy.
+satellite and ephemeris knot (``duration / geometry_step_s``), the windows' pre-screen
+per target of a block and knot and per window (a sample of the targets' pre-screen,
+:func:`jaxspline.geometry.windows.window_work`), the options' samples per candidate
+start (``1 / time_step_s``) and geometry knot inside it (``1 / geometry_step_s``), the
+near-pair store per pair of options closer than the always-feasible gap. Before each
+of these stages :class:`MemoryGuard` compares an upper-ish estimate of the bytes it
+will add (this module's functions, from the scenario's keys and what the earlier
+stages found) with the memory the process may still take (:meth:`MemoryGuard.room`:
+:data:`MEMORY_SHARE` of the system's ``MemAvailable``, within a cgroup's limit,
+within ``--max-memory``), and raises :class:`MemoryLimitError` when it does not fit:
+one line naming the stage, the keys that drive it with their values, the estimate,
+what is available and the remedy.
 
-The per-item constants were measured (peak RSS, ``/usr/bin/time -v``; docs/cli.md
+The per-item constants were measured (peak RSS, ``/usr/bin/time -v``; the windows'
+with ``tracemalloc``; docs/cli.md
 *The memory limit*) and rounded up: the estimate is meant to stay above what a run
 takes, so a run that fits is never stopped.
 """
@@ -28,6 +31,8 @@ import numpy as np
 
 __all__ = [
     "CANDIDATE_BYTES",
+    "CELL_BYTES",
+    "FINE_PAIR_BYTES",
     "GB",
     "KNOT_BYTES",
     "MB",
@@ -36,6 +41,7 @@ __all__ = [
     "SAMPLE_BYTES",
     "SORT_PAIR_BYTES",
     "STAGE_BYTES",
+    "WINDOW_BYTES",
     "MemoryGuard",
     "MemoryLimitError",
     "available_bytes",
@@ -45,6 +51,7 @@ __all__ = [
     "orbit_bytes",
     "pair_bytes",
     "rss_bytes",
+    "window_bytes",
 ]
 
 GB = float(1 << 30)
@@ -55,6 +62,15 @@ MEMORY_SHARE = 0.8
 #: [bytes] per satellite and ephemeris knot: orbit tables, the Sun, the shadow and the
 #: windows' cone (measured ~280).
 KNOT_BYTES = 400
+#: [bytes] per (target, coarse knot) cell of the windows' largest block of targets: the
+#: pre-screen's dot products and masks (:func:`jaxspline.geometry.windows.window_work`;
+#: measured with the next, ~6).
+CELL_BYTES = 16
+#: [bytes] per (target, knot) pair the windows' largest block evaluates: the pairs'
+#: indices, their sort and the exact geometry (measured ~100 per estimated pair).
+FINE_PAIR_BYTES = 192
+#: [bytes] per window: the windows and their sort.
+WINDOW_BYTES = 128
 #: [bytes] per sample of a checked candidate: its times, owner, aim law and geometry
 #: (measured ~250).
 SAMPLE_BYTES = 320
@@ -246,6 +262,32 @@ def orbit_bytes(sc) -> _Estimate:
         )
 
     return float(KNOT_BYTES) * knots * n_sat, drivers, remedy
+
+
+def window_bytes(sc, work) -> _Estimate:
+    """The windows' estimate: :data:`CELL_BYTES` a pre-screen cell and
+    :data:`FINE_PAIR_BYTES` a pair of the largest block, :data:`WINDOW_BYTES` a window.
+
+    Args:
+      sc: the scenario.
+      work: :class:`jaxspline.geometry.windows.WindowWork` of the stage.
+    Returns:
+      (bytes, drivers, remedy(factor) -> str).
+    """
+    gstep = sc.planner.geometry_step
+    drivers = (
+        f"{len(sc.targets):,} targets, {len(sc.satellites)} satellites x {work.knots:,} knots, "
+        f"up to {work.windows:,} windows; {_steps(sc)}"
+    )
+
+    def remedy(f):  # the blocks' work scales as 1 / geometry_step
+        return (
+            f"raise planner.geometry_step_s to >= {gstep * f:.3g} (and planner.time_step_s "
+            "with it), or plan a shorter horizon, fewer targets or satellites"
+        )
+
+    block = float(CELL_BYTES) * work.cells + float(FINE_PAIR_BYTES) * work.pairs
+    return block + float(WINDOW_BYTES) * work.windows, drivers, remedy
 
 
 def option_bytes(sc, candidates: int, samples: int) -> _Estimate:

@@ -42,7 +42,7 @@ import jax
 import numpy as np
 
 from jaxspline.geometry.frames import in_shadow, jd_split, sun_direction
-from jaxspline.geometry.windows import visibility_windows_all
+from jaxspline.geometry.windows import visibility_windows_all, window_work
 from jaxspline.planner.assemble import assemble_result
 from jaxspline.planner.budget import Budget, deadline_budget, default_budget, refine_steps
 from jaxspline.planner.context import PlanContext
@@ -59,6 +59,7 @@ from jaxspline.planner.memory_guard import (
     option_bytes,
     orbit_bytes,
     pair_bytes,
+    window_bytes,
 )
 from jaxspline.planner.opportunities import (
     build_opportunities,
@@ -318,8 +319,8 @@ def build_problem(
         between the stages and inside options and screening
         (:class:`jaxspline.planner.deadline.TimeLimitError` once it has passed).
       memory: optional :class:`jaxspline.planner.memory_guard.MemoryGuard` checked before
-        the orbits, options and near pairs are built (``MemoryLimitError`` when they
-        would not fit).
+        the orbits, windows, options and near pairs are built (``MemoryLimitError`` when
+        they would not fit).
       _clock: private; the stage timer of an enclosing :func:`plan` call.
     Returns:
       :class:`jaxspline.planner.context.PlanContext`: the search's problem and what the
@@ -336,6 +337,7 @@ def build_problem(
         clock.lap("orbits", f"{len(sats)} satellites, {sunlit.shape[1]} knots")
         check("orbits")
         pairs = len(sc.targets) * len(sats)
+        fits("windows", lambda: window_bytes(sc, window_work(*_window_args(sc, scene, table))))
         windows = _windows(sc, scene, table, check("windows", 0, work=lambda: (pairs, _PAIRS)))
         n_tg = len(np.unique(windows.target))
         clock.lap("windows", f"{len(windows)} windows for {n_tg}/{len(sc.targets)} targets")
@@ -397,23 +399,18 @@ def _windows(sc: Scenario, scene, table, tick=None):
     satellite allowed to image it (sensor type), within the off-nadir limit and the
     horizon (both minus their margins) and the target's imaging window (``tick``: the
     clock, between blocks of targets)."""
+    return visibility_windows_all(*_window_args(sc, scene, table), tick=tick)
+
+
+def _window_args(sc: Scenario, scene, table) -> tuple:
+    """The arguments of :func:`visibility_windows_all` (and ``window_work``) of stage 2."""
     pc = sc.planner
     tg = sc.targets
     sensors = np.array([s.sensor for s in sc.satellites])
     allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
     limit_k = np.array([s.off_nadir_max for s in sc.satellites]) - pc.margins.off_nadir
-    return visibility_windows_all(
-        scene,
-        table.ok,
-        reference_points(sc),
-        allowed,
-        limit_k,
-        pc.margins.horizon,
-        tg.t_lo,
-        tg.t_hi,
-        sc.duration,
-        tick=tick,
-    )
+    times = (pc.margins.horizon, tg.t_lo, tg.t_hi, sc.duration)
+    return (scene, table.ok, reference_points(sc), allowed, limit_k, *times)
 
 
 def _no_tick(share: float) -> None:

@@ -37,7 +37,6 @@ from shapely.validation import explain_validity
 from jaxspline.geometry.frames import geodetic_to_ecef
 from jaxspline.geometry.ground import unit_vectors
 from jaxspline.readers.fields import (
-    READ_TICK_ROWS,
     check_float,
     field_number,
     field_pair,
@@ -171,7 +170,7 @@ def _feature_geometry(f, where: str):
 
 def _geojson_geometry(doc, label: str = "GeoJSON"):
     """The union of the polygons of a GeoJSON document (shapely, lon/lat degrees);
-    :func:`jaxspline.readers.fields.read_tick` every :data:`READ_TICK_ROWS` features."""
+    :func:`jaxspline.readers.fields.read_tick` on every feature."""
     if not isinstance(doc, dict):
         raise ValueError(f"must be a GeoJSON object, got {type(doc).__name__}")
     kind = doc.get("type")
@@ -182,8 +181,7 @@ def _geojson_geometry(doc, label: str = "GeoJSON"):
                 raise ValueError("a FeatureCollection needs a non-empty 'features' list")
             parts = []
             for i, f in enumerate(feats):
-                if i % READ_TICK_ROWS == READ_TICK_ROWS - 1:
-                    read_tick(label, i / len(feats))
+                read_tick(label, i + 1, len(feats))
                 parts.append(_feature_geometry(f, f"features[{i}]"))
             geom = shapely.union_all(parts)
         elif kind == "Feature":
@@ -393,10 +391,13 @@ def _area_objective(ctx, f, a, radius: float, swath: float) -> tuple[str, float]
     if objective == "coverage":
         across = 2.0 * radius * _KM_PER_DEG * 1e3  # the area's size bound [m]
         if (across / grid) ** 2 > MAX_AREA_SAMPLES:
+            given = f" ({GRID_PER_SWATH:.3g} x the {swath / 1e3:g} km swath: grid_km not given)"
+            given = "" if "grid_km" in a else given
             raise ctx.error(
                 f"{f}.grid_km",
-                f"{grid / 1e3:g} km is too fine: the area, up to {across / 1e3:.4g} km across, "
-                f"would get ~{(across / grid) ** 2:.3g} samples (at most {MAX_AREA_SAMPLES})",
+                f"{grid / 1e3:g} km{given} is too fine: the area, up to {across / 1e3:.4g} km "
+                f"across, would get ~{(across / grid) ** 2:.3g} samples (at most "
+                f"{MAX_AREA_SAMPLES}); give a coarser grid_km",
             )
     return objective, grid
 

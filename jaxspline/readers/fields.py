@@ -8,9 +8,10 @@ hold control characters (NUL, escape, line breaks, ...: :func:`check_text`).
 :func:`read_text` reads every input file (TOML, CSV, GeoJSON, YAML) as UTF-8, a
 byte-order mark dropped, and names the file and line of bytes that are not UTF-8; a
 directory, a device or pipe, an unreadable file or one over :data:`MAX_FILE_BYTES` is
-a ``ValueError`` naming the file. The readers of long files (CSV rows, GeoJSON
-features) call :func:`read_tick` every :data:`READ_TICK_ROWS` rows: a command sets
-:data:`READ_CLOCK` to check its time and memory limits while a file is read.
+a ``ValueError`` naming the file. The readers of long files call :func:`read_tick` on
+every CSV row or GeoJSON feature, and it ticks every :data:`READ_TICK_ROWS` of them: a
+command sets :data:`READ_CLOCK` to check its time and memory limits while a file is
+read.
 """
 
 from __future__ import annotations
@@ -45,7 +46,7 @@ __all__ = [
 
 _IDENT = r"[A-Za-z_][A-Za-z0-9_]*"
 MAX_FILE_BYTES = 1 << 30  # largest input file read [bytes] (1 GiB: ~15 M CSV rows)
-#: Rows (CSV) or features (GeoJSON) between two calls of :func:`read_tick` (~0.7 s of
+#: Rows (CSV) or features (GeoJSON) between two ticks of :func:`read_tick` (~0.7 s of
 #: CSV reading).
 READ_TICK_ROWS = 10_000
 #: The clock of the files being read: ``clock(file, share read)``, which may raise to
@@ -55,16 +56,21 @@ READ_CLOCK: ContextVar[Callable[[str, float], None] | None] = ContextVar(
 )
 
 
-def read_tick(label: str, share: float) -> None:
-    """Call :data:`READ_CLOCK` (when set) with the file and the share of it read.
+def read_tick(label: str, done: int, total: int) -> None:
+    """The reading clock's cadence: every :data:`READ_TICK_ROWS` rows or features
+    (``done`` a multiple of it), call :data:`READ_CLOCK` (when set) with the file and
+    the share of it read.
 
     Args:
       label: the file's name, for the clock's message.
-      share: share of the file read, in [0, 1].
+      done: rows (CSV lines, the header included) or features read so far (>= 1).
+      total: rows or features in the file.
     """
+    if done % READ_TICK_ROWS:
+        return
     clock = READ_CLOCK.get()
     if clock is not None:
-        clock(label, min(max(float(share), 0.0), 1.0))
+        clock(label, min(max(done / max(total, 1), 0.0), 1.0))
 
 
 class FieldContext:

@@ -410,7 +410,7 @@ def load_scenario(path) -> Scenario:
         )
     try:
         data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
+    except ValueError as exc:  # TOMLDecodeError, or an integer of over 4,300 digits
         raise ValueError(f"{path}: invalid TOML: {exc}") from None
     except RecursionError:  # thousands of nested arrays or inline tables
         raise ValueError(f"{path}: invalid TOML: arrays or tables nested too deeply") from None

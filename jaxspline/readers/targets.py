@@ -62,7 +62,6 @@ from pathlib import Path
 import numpy as np
 
 from jaxspline.readers.fields import (
-    READ_TICK_ROWS,
     check_float,
     check_text,
     field_bool,
@@ -346,8 +345,7 @@ def _read_csv(path, horizon=None) -> tuple[Targets, list[str]]:
                 raise ValueError(f"{label} row 1, column {h!r}: missing (required: {CSV_REQUIRED})")
         for cells in reader:
             line = reader.line_num
-            if line % READ_TICK_ROWS == 0:
-                read_tick(label, line / lines)
+            read_tick(label, line, lines)
             if not any(c.strip() for c in cells):
                 continue
             if len(cells) != len(header):

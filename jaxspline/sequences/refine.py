@@ -33,7 +33,6 @@ from typing import NamedTuple
 import jax
 import jax.numpy as jnp
 import numpy as np
-import optax
 
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 from jaxspline.screen.options import RouteOptions, validate_options
@@ -140,6 +139,8 @@ def _costs_jit(model_leaves, model_static, route, t0, rate, accel):
 def _optimize(
     u0, lo, hi, route, rate, accel, tau, lr, model_leaves, model_static, objective, steps
 ):
+    import optax  # here, not at import: optax (and jax.scipy) cost ~0.3 s of every start
+
     model = _join_model(model_static, model_leaves)
     opt = optax.adam(lr)
 

@@ -4,8 +4,8 @@
   any work and named in the message (exit 2, within seconds, nothing written);
 * an unexpected error is one line with the exception's name and a pointer to
   ``--debug`` (exit 70); ``--debug`` prints the traceback; no other output has one;
-* bad files: a directory as the scenario, TOML nested thousands deep, a malformed
-  ``plan.json`` for ``view`` (exit 2);
+* bad files: a directory as the scenario, TOML nested thousands deep or a number of
+  thousands of digits, a malformed ``plan.json`` for ``view`` (exit 2);
 * writing: a failure while writing the set is one line (exit 4), the previous set is
   kept; a signal while writing is recorded in ``plan.json``;
 * the time limit: a scenario that cannot fit a tiny limit stops before the search
@@ -170,8 +170,8 @@ def test_an_unexpected_error_is_one_line_and_debug_shows_the_traceback(monkeypat
     def boom(args):
         raise KeyError("surprise")
 
-    def patched():
-        parser = build_parser()
+    def patched(command=None):
+        parser = build_parser(command)
         sub = next(a for a in parser._actions if isinstance(a.choices, dict))
         sub.choices["view"].set_defaults(func=boom)
         return parser
@@ -194,6 +194,14 @@ def test_deep_toml_and_bad_plan_json_are_named(tmp_path, capsys):
     deep.write_text("x = " + "[" * 3000 + "]" * 3000 + "\n")
     code, err, _ = _run(capsys, ["plan", str(deep), "-o", str(tmp_path / "o")])
     assert code == EXIT_BAD_INPUT and "deep.toml: invalid TOML" in err, err
+    # an integer of 5,000 digits: Python's int() refuses it inside the TOML / JSON parser
+    digits = "9" * 5000
+    deep.write_text(f"[scenario]\nduration_s = {digits}\n")
+    code, err, _ = _run(capsys, ["plan", str(deep), "-o", str(tmp_path / "o")])
+    assert code == EXIT_BAD_INPUT and "deep.toml: invalid TOML" in err, err
+    (tmp_path / "long.json").write_text(f'{{"summary": {digits}}}')
+    code, err, _ = _run(capsys, ["view", str(tmp_path / "long.json"), "--force"])
+    assert code == EXIT_BAD_INPUT and "long.json: not JSON" in err, err
     for doc, field in [
         ({"summary": {}, "report": {}, "observations": 3}, "observations: must be a list"),
         ({"summary": {}, "report": {}, "observations": [], "view": "x"}, "view: must be"),

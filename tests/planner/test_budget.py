@@ -107,7 +107,7 @@ def _ctx(n_targets, refining, duration=3600.0):
 def test_repair_estimate_grows_with_the_steps_that_run():
     ctx = _ctx(1000, refining=True)
     plain = bd.repair_seconds(ctx, False, False, 2.0)
-    assert plain == pytest.approx(bd.CHECK_S_PER_TARGET * 1000)
+    assert plain == pytest.approx(bd.CHECK_FIRST_S + bd.CHECK_S_PER_TARGET * 1000)
     joins = bd.repair_seconds(ctx, True, False, 2.0)
     assert joins > plain + bd.JOINS_FIRST_S + 2.0
     assert bd.repair_seconds(ctx, True, True, 2.0) > joins + bd.REFINE_FIRST_S
@@ -196,8 +196,9 @@ def test_a_call_whose_checks_would_end_far_past_the_limit_stops_before_the_searc
     clock.cpu += 25.0
     ctx = _ctx(2000, refining=False)
     need = bd.mandatory_seconds(ctx, True, 0.5)
+    first = bd.CHECK_FIRST_S + bd.JOINS_FIRST_S  # loading the checks' programs
     assert need == pytest.approx(
-        2 * (bd.CHECK_S_PER_TARGET + bd.JOINS_S_PER_TARGET) * 2000 + bd.JOINS_FIRST_S + 0.5
+        2 * (bd.CHECK_S_PER_TARGET + bd.JOINS_S_PER_TARGET) * 2000 + first + 0.5
     )
     assert 25.0 + need - 10.0 > bd.LATE_MAX_S
     with pytest.raises(dl.TimeLimitError, match="would end .* past the limit; 3 targets") as e:
@@ -206,6 +207,18 @@ def test_a_call_whose_checks_would_end_far_past_the_limit_stops_before_the_searc
     b = bd.deadline_budget(ctx, d, flown_joins=True, refill_s=2.0, capped=True)  # reproducible
     assert b.search_end == pytest.approx(clock.wall)  # nothing left: a quarter of nothing
     assert bd.deadline_budget(_ctx(10, False), d, flown_joins=True, refill_s=2.0)  # small: late
+
+
+def test_a_small_scenario_whose_stages_ran_late_on_a_loaded_machine_is_refused(monkeypatch):
+    # the probe's case: 12 targets, three maneuver models, --time-limit 25; the stages
+    # before the search ended at 37.9 s at pace 3, and the checks (their programs'
+    # first calls, 15.2 s there) ended the run 29.8 s past the limit: now refused
+    clock = _Clock(monkeypatch)
+    d = dl.StageDeadline(clock.wall, 25.0, after_s=1.0, must_s=0.5)
+    clock.wall += 37.9
+    clock.cpu += 37.9 / 3.0
+    with pytest.raises(dl.TimeLimitError, match="would end 2[0-9] s past the limit"):
+        bd.deadline_budget(_ctx(12, False), d, flown_joins=True, refill_s=2.0)
 
 
 def test_a_stage_stopped_before_any_share_gives_a_lower_bound():

@@ -95,3 +95,64 @@ def test_near_pair_counts_match_a_brute_force_count():
 def test_available_memory_is_read_from_the_system():
     avail = mg.available_bytes()
     assert avail is None or avail > 0
+
+
+# three days at 1 s over 600 targets: the orbits (~0.36 GB with a stage's programs) fit
+# in 0.8 x 0.55 GB, the windows' blocks of 512 targets x 21,600 coarse knots do not
+# (their estimate: a sample of the targets' pre-screen, geometry.windows.window_work)
+WINDOWS_TOML = """
+[scenario]
+epoch = "2026-04-14T00:00:00Z"
+duration_s = 259200.0
+[[satellites]]
+altitude_km = 600.0
+[random_targets]
+count = 600
+seed = 3
+lat_deg = [-60.0, 60.0]
+[planner]
+time_step_s = 1.0
+geometry_step_s = 1.0
+"""
+
+
+def test_the_windows_estimate_stops_the_run_before_the_stage(monkeypatch):
+    from jaxspline.planner import pipeline
+
+    def never(*args, **kwargs):
+        raise AssertionError("the windows stage ran")
+
+    monkeypatch.setattr(pipeline, "visibility_windows_all", never)
+    sc = parse_scenario(tomllib.loads(WINDOWS_TOML), "days.toml", WINDOWS_TOML)
+    guard = _guard(0.55)
+    with pytest.raises(mg.MemoryLimitError) as exc:
+        pipeline.build_problem(sc, memory=guard)
+    msg, e = str(exc.value), exc.value
+    assert e.stage == "windows" and e.room < e.need < 2 * e.room, msg
+    assert msg.startswith("stage 'windows' would need ~0.6 GB (600 targets, 1 satellites x "), msg
+    assert "259,203 knots, up to " in msg and "planner.geometry_step_s = 1)" in msg, msg
+    # 0.6 GB over 0.44 GB, less a stage's programs: a 1.64 s geometry step fits
+    assert "raise planner.geometry_step_s to >= 1.64 " in msg and "shorter horizon" in msg, msg
+    assert guard.estimates_mb["orbits"] < guard.estimates_mb["windows"]
+
+
+def test_the_windows_estimate_stays_above_what_the_stage_allocates():
+    import tracemalloc
+
+    import jax
+
+    from jaxspline.planner import pipeline
+
+    toml = WINDOWS_TOML.replace("259200.0", "86400.0").replace("count = 600", "count = 200")
+    sc = parse_scenario(tomllib.loads(toml), "day.toml", toml)
+    with jax.enable_x64(True):
+        table, scene, _ = pipeline._orbits(sc)
+        args = pipeline._window_args(sc, scene, table)
+        need = mg.window_bytes(sc, pipeline.window_work(*args))[0]
+        tracemalloc.start()
+        try:
+            windows = pipeline.visibility_windows_all(*args)
+            peak = tracemalloc.get_traced_memory()[1]
+        finally:
+            tracemalloc.stop()
+    assert peak < need < 4 * peak and len(windows) > 100

@@ -323,6 +323,12 @@ BAD = [
         "areas[1].name",
         "duplicate",
     ),
+    (  # the grid from a tiny swath: the message says where the spacing came from
+        '[[areas]]\nobjective = "coverage"\nswath_km = 0.01\n'
+        "lonlat_deg = [[13, 45], [14, 45], [14, 46]]\n",
+        "areas[0].grid_km",
+        "0.00333333 km (0.333 x the 0.01 km swath: grid_km not given) is too fine",
+    ),
 ]
 
 

@@ -491,3 +491,29 @@ def test_a_scenario_file_over_its_size_limit_says_by_how_much(tmp_path):
         f"{path}: 16,777,218 characters, more than the 16,777,216 (16 MiB) a scenario file "
         "may have (put targets in a CSV file)"
     )
+
+
+def test_the_reading_clock_ticks_every_read_tick_rows_of_a_csv_and_a_geojson(tmp_path):
+    import json
+
+    from jaxspline.readers.area_files import read_geojson
+    from jaxspline.readers.fields import READ_CLOCK, READ_TICK_ROWS
+
+    rows = "".join(f"t{i},{40 + i % 10},{10 + i % 7},1\n" for i in range(2 * READ_TICK_ROWS))
+    (tmp_path / "t.csv").write_text("name,lat_deg,lon_deg,priority\n" + rows, encoding="utf-8")
+    square = [[[15.0, 46.0], [15.001, 46.0], [15.001, 46.001], [15.0, 46.001], [15.0, 46.0]]]
+    feature = {"type": "Feature", "geometry": {"type": "Polygon", "coordinates": square}}
+    n_feats = READ_TICK_ROWS + 5
+    doc = {"type": "FeatureCollection", "features": [feature] * n_feats}
+    (tmp_path / "a.geojson").write_text(json.dumps(doc), encoding="utf-8")
+    ticks = []
+    token = READ_CLOCK.set(lambda label, share: ticks.append((label, round(share, 4))))
+    try:
+        load_targets_csv(tmp_path / "t.csv")
+        read_geojson(tmp_path / "a.geojson")
+    finally:
+        READ_CLOCK.reset(token)
+    lines = 2 * READ_TICK_ROWS + 2  # the header and the last newline
+    csv = [s for label, s in ticks if label == "t.csv"]
+    assert csv == [round(READ_TICK_ROWS / lines, 4), round(2 * READ_TICK_ROWS / lines, 4)]
+    assert [s for label, s in ticks if label == "a.geojson"] == [round(READ_TICK_ROWS / n_feats, 4)]
