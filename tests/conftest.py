@@ -11,6 +11,12 @@ import tempfile
 _HERE = pathlib.Path(__file__).parent
 sys.path[:0] = [str(d) for d in sorted(_HERE.iterdir()) if d.is_dir() and d.name[0] not in "._"]
 
+# Python bytecode: an environment with PYTHONDONTWRITEBYTECODE set makes every process
+# the run starts (xdist workers, CLI runs, doc pages) compile the package's and the tests'
+# sources again, ~0.6 CPU-s each; the run writes the __pycache__ folders (ignored by git)
+os.environ.pop("PYTHONDONTWRITEBYTECODE", None)
+sys.dont_write_bytecode = False
+
 # Most of the suite's time is compiling small programs that run once. The tests compile
 # with XLA's unoptimized CPU back end (the loop emitters, LLVM at -O0): the same
 # semantics, about a third less CPU time in total (half on the kernel tests), measured.
