@@ -51,7 +51,7 @@ PAGE_S_PER_TARGET = 4.5e-4  # ... per target [s]
 CZML_S_PER_TARGET = 3e-4  # plan.czml, per target [s]
 CZML_S_PER_SAT_HOUR = 0.03  # ... per satellite and hour of the horizon [s]
 AEM_S_PER_STATE = 5.5e-4  # attitude history and its AEM files, per attitude state [s]
-PLOTS_FIXED_S = 3.0  # the PNG figures (the world map's coastlines) [s]
+PLOTS_FIXED_S = 3.0  # the PNG figures (matplotlib, the world map) [s]
 PLOTS_S_PER_SAT_HOUR = 0.02  # ... per satellite and hour [s]
 ATTITUDE_PLOT_S_PER_STATE = 1.7e-4  # attitude.png, per attitude state [s]
 #: What the search keeps free for the outputs, as a multiple of their estimate. The

@@ -7,7 +7,11 @@ file row block by row block, so a land test or a coarse land-fraction grid costs
 few MB of memory and one pass of decompression (about 3-4 s).
 
 * :func:`is_land`: land test of points, with the package's cell indexing;
-* :func:`land_fraction`: land share on a coarse grid (coastline contours), cached.
+* :func:`ocean_cells`: per coarse grid cell, how many mask cells are ocean (streamed);
+* :func:`land_fraction`: land share on a coarse grid (coastline contours), cached. The
+  default grid (0.25 deg) ships with the package (:data:`COAST_FILE`, 90 kB, written by
+  ``scripts/make_coast_grid.py`` from :func:`ocean_cells`), so the plan page and the
+  ground-track figure do not decompress the whole mask (about 4 s) in every run.
 """
 
 from __future__ import annotations
@@ -20,9 +24,11 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["COAST_BLOCK", "is_land", "land_fraction"]
+__all__ = ["COAST_BLOCK", "COAST_FILE", "is_land", "land_fraction", "ocean_cells"]
 
 COAST_BLOCK = 30  # mask cells (1/120 deg) per coastline grid cell: 0.25 deg
+#: the shipped :func:`ocean_cells` grid of ``COAST_BLOCK`` (arrays lat, lon, ocean_cells)
+COAST_FILE = Path(__file__).resolve().parents[1] / "data" / f"coast_cells_{COAST_BLOCK}.npz"
 _MASK_FILE = "globe_combined_mask_compressed.npz"
 _READ_ROWS = 240  # mask rows decompressed per read (10 MB)
 
@@ -94,9 +100,40 @@ def is_land(lat, lon) -> np.ndarray:
     return out
 
 
+def ocean_cells(block: int = COAST_BLOCK):
+    """Ocean cell counts of the mask on a coarse global grid (one streamed pass).
+
+    Args:
+      block: mask cells (1/120 deg each) per grid cell along each axis; must divide
+        21600 and 43200 (30 gives 0.25 deg).
+    Returns:
+      ``(lat [N] deg, descending, lon [M] deg, ascending, count [N, M] uint16)``: the
+      cell centres and how many of a cell's ``block**2`` mask cells are ocean.
+    Raises:
+      ValueError: ``block`` does not divide the mask's shape.
+    """
+    with _mask_stream() as (lat, lon, (nr, nc), f):
+        if nr % block or nc % block:
+            raise ValueError(f"block={block!r}: mask ({nr}, {nc}) is not divisible by it")
+        n, m = nr // block, nc // block
+        count = np.empty((n, m), np.uint16 if block * block < 2**16 else np.uint32)
+        per_read = max(1, _READ_ROWS // block)
+        for i in range(0, n, per_read):
+            k = min(per_read, n - i)
+            buf = np.frombuffer(f.read(k * block * nc), np.uint8).reshape(k, block, nc)
+            rows_sum = buf.sum(axis=1, dtype=np.uint16).reshape(k, m, block)
+            count[i : i + k] = rows_sum.sum(axis=2, dtype=np.uint32)
+    lat_c = lat[: n * block].reshape(n, block).mean(axis=1)
+    lon_c = lon[: m * block].reshape(m, block).mean(axis=1)
+    return lat_c, lon_c, count
+
+
 @functools.cache
 def land_fraction(block: int = COAST_BLOCK):
     """Land fraction on a coarse global grid.
+
+    The default ``block`` reads the shipped grid (:data:`COAST_FILE`); another block
+    streams the mask (:func:`ocean_cells`).
 
     Args:
       block: mask cells (1/120 deg each) averaged per grid cell along each axis; must
@@ -105,17 +142,9 @@ def land_fraction(block: int = COAST_BLOCK):
       ``(lat [N] deg, descending, lon [M] deg, ascending, land [N, M] in [0, 1])``,
       cell centres. Cached per process.
     """
-    with _mask_stream() as (lat, lon, (nr, nc), f):
-        if nr % block or nc % block:
-            raise ValueError(f"block={block!r}: mask ({nr}, {nc}) is not divisible by it")
-        n, m = nr // block, nc // block
-        ocean = np.empty((n, m))
-        per_read = max(1, _READ_ROWS // block)
-        for i in range(0, n, per_read):
-            k = min(per_read, n - i)
-            buf = np.frombuffer(f.read(k * block * nc), np.uint8).reshape(k, block, nc)
-            rows_sum = buf.sum(axis=1, dtype=np.uint16).reshape(k, m, block)
-            ocean[i : i + k] = rows_sum.sum(axis=2, dtype=np.uint32) / (block * block)
-    lat_c = lat[: n * block].reshape(n, block).mean(axis=1)
-    lon_c = lon[: m * block].reshape(m, block).mean(axis=1)
-    return lat_c, lon_c, 1.0 - ocean
+    if block == COAST_BLOCK and COAST_FILE.is_file():
+        with np.load(COAST_FILE) as z:
+            lat, lon, count = z["lat"], z["lon"], z["ocean_cells"]
+    else:
+        lat, lon, count = ocean_cells(block)
+    return lat, lon, 1.0 - count / (block * block)

@@ -1,11 +1,11 @@
-"""The streamed land test against the global_land_mask package's own (reference)."""
+"""The streamed land test and the coastline grids against the global_land_mask package."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from jaxspline.readers.land import is_land
+from jaxspline.readers.land import COAST_BLOCK, is_land, land_fraction, ocean_cells
 
 
 def test_is_land_equals_the_package_on_random_points():
@@ -27,3 +27,32 @@ def test_is_land_equals_the_package_on_random_points():
 def test_is_land_rejects_bad_coordinates(lat, lon):
     with pytest.raises(ValueError, match="lat must lie"):
         is_land(lat, lon)
+
+
+def _package_ocean_counts(block):
+    """Ocean cells per block x block cell of the package's in-memory mask (the reference)."""
+    from global_land_mask import globe
+
+    mask, (n, m) = globe._mask, (s // block for s in globe._mask.shape)
+    count = np.empty((n, m), np.int64)
+    for i in range(n):  # a row of cells at a time: the mask is 0.9 GB
+        rows = mask[i * block : (i + 1) * block]
+        count[i] = rows.reshape(block, m, block).sum(axis=(0, 2))
+    lat = globe._lat[: n * block].reshape(n, block).mean(axis=1)
+    lon = globe._lon[: m * block].reshape(m, block).mean(axis=1)
+    return lat, lon, count
+
+
+def test_shipped_coast_grid_and_streamed_grids_equal_the_package_mask():
+    """The shipped 0.25 deg grid (COAST_FILE) and a streamed 0.5 deg one: the package's
+    mask summed per block, cell centres included."""
+    lat, lon, land = land_fraction()
+    ref_lat, ref_lon, ref = _package_ocean_counts(COAST_BLOCK)
+    np.testing.assert_allclose(lat, ref_lat, rtol=0, atol=1e-9)
+    np.testing.assert_allclose(lon, ref_lon, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(land, 1.0 - ref / COAST_BLOCK**2)
+    assert 0.25 < land.mean() < 0.35  # Earth: ~29 % land
+    lat2, lon2, count2 = ocean_cells(2 * COAST_BLOCK)  # streamed from the package's file
+    ref_lat2, _, ref2 = _package_ocean_counts(2 * COAST_BLOCK)
+    np.testing.assert_array_equal(count2, ref2)
+    np.testing.assert_allclose(lat2, ref_lat2, rtol=0, atol=1e-9)
