@@ -67,6 +67,9 @@ class DPData:
       rows_at: per block the first pair of each row up to its last row with pairs
         (0-based in the block's pair range); rows_pen: per such row ``-inf`` if it
         has no pair, else 0.
+      max_pairs: the most near pairs of one block (the size of the forward pass's buffer).
+      steps: per block the bounds and slices of one forward step, filled by the first
+        :func:`dp_forward` (see ``_steps``).
     """
 
     order: np.ndarray
