@@ -67,6 +67,9 @@ class DPData:
       rows_at: per block the first pair of each row up to its last row with pairs
         (0-based in the block's pair range); rows_pen: per such row ``-inf`` if it
         has no pair, else 0.
+      max_pairs: the most near pairs of one block (the size of the forward pass's buffer).
+      steps: per block the bounds and slices of one forward step, filled by the first
+        :func:`dp_forward` (see ``_steps``).
     """
 
     order: np.ndarray
@@ -88,6 +91,8 @@ class DPData:
     absorb_cuts: list | None = None
     rows_at: list | None = None
     rows_pen: list | None = None
+    max_pairs: int = 0
+    steps: list | None = None
 
 
 def _block_bounds(so: np.ndarray, width: float) -> list:
@@ -166,13 +171,48 @@ def dp_prepare(pb: Problem) -> DPData:
         absorb_cuts=absorb_cuts,
         rows_at=rows_at,
         rows_pen=rows_pen,
+        max_pairs=int(np.diff(ptr[bounds]).max()) if len(bounds) > 1 else 0,
     )
+
+
+def _steps(d: DPData, ptr: np.ndarray) -> list:
+    """Per block the Python ints and slices :func:`dp_forward` needs (no per-pass indexing).
+
+    One tuple a block: ``(ga, gb, aa, az, sats, cuts, pa, pz, rows_at, rows_pen, ra, rz,
+    rep_local)`` with ``rep_local`` the block's repeat positions relative to its first
+    pair ``pa``.
+    """
+    steps = []
+    for b, (ga, gb) in enumerate(d.groups):
+        pa, pz = int(ptr[ga]), int(ptr[gb])
+        ra, rz = int(d.repeat_at[b]), int(d.repeat_at[b + 1])
+        steps.append(
+            (
+                int(ga),
+                int(gb),
+                int(d.absorb_at[b]),
+                int(d.absorb_at[b + 1]),
+                d.absorb_sats[b],
+                d.absorb_cuts[b],
+                pa,
+                pz,
+                d.rows_at[b],
+                d.rows_pen[b],
+                ra,
+                rz,
+                d.repeat_pos[ra:rz] - pa,
+            )
+        )
+    return steps
 
 
 def dp_forward(
     pb: Problem, d: DPData, w: np.ndarray, arc=None, merge_repeats: bool = False
 ) -> np.ndarray:
     """The DP values ``best`` (float [N]) of every option for option values ``w``.
+
+    One block a step, into preallocated buffers (a block's near pairs are gathered
+    into ``buf`` by ``np.take``; the per-block bounds are Python ints of ``d.steps``).
 
     Args:
       pb: Problem.
@@ -185,34 +225,32 @@ def dp_forward(
     Returns:
       float [N]: the best value of a sequence ending with each option (``-inf``: none).
     """
-    n_s = pb.n_sats
-    src, ptr = pb.pairs.src, pb.pairs.ptr
+    if d.steps is None:
+        d.steps = _steps(d, pb.pairs.ptr)
+    src = pb.pairs.src
     best = np.full(len(w), -np.inf)
-    run = np.full(n_s, -np.inf)
-    order, sat_o, base_o = d.order, d.sat_order, d.base_order
-    absorb, absorb_at = d.absorb, d.absorb_at
-    for b, (ga, gb) in enumerate(d.groups):
-        aa, az = absorb_at[b], absorb_at[b + 1]
+    run = np.full(pb.n_sats, -np.inf)
+    order, sat_o, base_o, absorb = d.order, d.sat_order, d.base_order, d.absorb
+    w_o = w[order]
+    w_rep = w[d.repeat_dst] if merge_repeats else None
+    buf = np.empty(d.max_pairs)
+    for ga, gb, aa, az, u, cuts, pa, pz, rows_at, pen, ra, rz, rloc in d.steps:
         if az > aa:  # options far from here on: into their satellites' running maxima
-            u = d.absorb_sats[b]
-            red = np.maximum.reduceat(best[absorb[aa:az]], d.absorb_cuts[b])
-            run[u] = np.maximum(run[u], red)
-        v = np.maximum(base_o[ga:gb], run[sat_o[ga:gb]])
-        pa, pz = ptr[ga], ptr[gb]
+            np.maximum.at(run, u, np.maximum.reduceat(best[absorb[aa:az]], cuts))
+        v = run[sat_o[ga:gb]]
+        np.maximum(base_o[ga:gb], v, out=v)
         if pz > pa:
-            pv = best[src[pa:pz]]
+            pv = np.take(best, src[pa:pz], out=buf[: pz - pa], mode="clip")
             if arc is not None:
-                pv -= arc[pa:pz]
-            ra, rz = d.repeat_at[b], d.repeat_at[b + 1]
+                np.subtract(pv, arc[pa:pz], out=pv)
             if merge_repeats and rz > ra:
-                pv[d.repeat_pos[ra:rz] - pa] -= w[d.repeat_dst[ra:rz]]
-            near = np.maximum.reduceat(pv, d.rows_at[b])
-            near += d.rows_pen[b]  # rows without pairs: -inf
+                pv[rloc] -= w_rep[ra:rz]
+            near = np.maximum.reduceat(pv, rows_at)
+            near += pen  # rows without pairs: -inf
             vm = v[: near.size]
             np.maximum(vm, near, out=vm)
-        J = order[ga:gb]
-        v += w[J]
-        best[J] = v
+        v += w_o[ga:gb]
+        best[order[ga:gb]] = v
     return best
 
 
