@@ -236,9 +236,9 @@ def test_solve_small_case_valid_by_checker(small_case):
     from jaxspline.aeossp.check import check_solution
 
     t0 = time.monotonic()
-    sol, res = solve_case(small_case, time_limit=15.0, progress=False)
+    sol, res = solve_case(small_case, time_limit=8.0, progress=False)
     wall = time.monotonic() - t0
-    assert wall <= 15.0 + 2.0
+    assert wall <= 8.0 + 2.0
     assert res.report["valid"] and res.report["dropped_total"] == 0
     assert len(sol["actions"]) == len(res.observations) > 40
     rep = check_solution(small_case, sol)

@@ -98,7 +98,8 @@ def scenario(tmp_path_factory):
 
 @pytest.fixture(scope="module")
 def planned(scenario):
-    return plan(scenario, time_limit=10.0, seed=0, progress=False)
+    # an iteration cap, not only a clock: the search would otherwise run its whole limit
+    return plan(scenario, time_limit=10.0, seed=0, progress=False, max_iters=300)
 
 
 # --- cutting ---
