@@ -142,7 +142,8 @@ def test_signals_while_repairing_and_writing_leave_whole_files(env):
     """SIGTERM from the repair on, every 0.3 s until the process exits: whatever phase a
     signal lands in, every output that exists parses whole and no temporary file stays."""
     out = env["dir"] / "writing"
-    p, _ = _start_until(env, out, b"repair", "--time-limit", "20")  # the search is over
+    # the search is over (an iteration cap ends it at once, not its share of the limit)
+    p, _ = _start_until(env, out, b"repair", "--time-limit", "20", "--max-iters", "30")
     sent = 0
     while p.poll() is None and sent < 100:
         p.send_signal(signal.SIGTERM)
