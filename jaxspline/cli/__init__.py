@@ -188,10 +188,10 @@ def end_process(code: int) -> None:
     """End the command's process now, with exit code ``code``.
 
     The command is done: its outputs are written and closed. What Python would still do
-    at exit is JAX's clean-up of its back ends (0.5 s on a lightly loaded machine, ~13 s
-    seen on a loaded one), all of it after the work and past the time limit. So any
-    child process still running (a bound worker) is stopped, the streams are flushed,
-    and the process ends at once (``os._exit``).
+    at exit is JAX's clean-up of its back ends and the interpreter's teardown, all of it
+    after the work (and on a loaded machine far past the time limit). So any child
+    process still running (a bound worker) is stopped, the streams are flushed, and the
+    process ends at once (``os._exit``).
 
     Args:
       code: the exit code.
@@ -251,9 +251,7 @@ def _report(exc: Exception, debug: bool) -> int:
     from jaxspline.planner.memory_guard import MemoryLimitError
     from jaxspline.products.outputs import OutputBusyError, OutputError
 
-    code, label = _classify(exc, TimeLimitError, OutputBusyError, OutputError)
-    if isinstance(exc, MemoryLimitError):  # too big for its memory: exit 3 as for the time
-        code, label = EXIT_TIME_LIMIT, "memory limit"
+    code, label = _classify(exc, TimeLimitError, MemoryLimitError, OutputBusyError, OutputError)
     if debug:
         traceback.print_exception(exc, file=sys.stderr)
     text = str(exc).replace("\r", " ").replace("\n", " ").strip() or type(exc).__name__
@@ -265,10 +263,12 @@ def _report(exc: Exception, debug: bool) -> int:
     return code
 
 
-def _classify(exc, time_limit, busy, output) -> tuple[int, str]:
+def _classify(exc, time_limit, memory_limit, busy, output) -> tuple[int, str]:
     """(exit code, label) of an exception (module docstring)."""
     if isinstance(exc, time_limit):
         return EXIT_TIME_LIMIT, "time limit"
+    if isinstance(exc, memory_limit):  # too big for its memory: exit 3 as for the time
+        return EXIT_TIME_LIMIT, "memory limit"
     if isinstance(exc, busy):
         return EXIT_BUSY, "busy"
     if isinstance(exc, output):

@@ -346,8 +346,7 @@ def build_problem(
         cands = check("options", 0, work=lambda: (option_counts(sc, windows)[0], _CANDS))
         opp = build_opportunities(sc, scene, table.usable, windows, tick=cands)
         clock.lap("options", f"{len(opp)} options")
-        work = functools.partial(tuple, (len(opp), "options"))
-        tick = check("screening", 0, work=work)
+        tick = check("screening", 0, work=lambda: (len(opp), "options"))
         beat = tick or _no_tick  # between the steps before the near pairs (each may be long)
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
         beat(0.0)
@@ -361,7 +360,7 @@ def build_problem(
         beat(0.0)
         reach = np.asarray(far) + slack + _NEAR_SLACK + _WINDOW_GUARD
         fits("screening", lambda: pair_bytes(sc, opp.options, reach))
-        tick = check("screening", 0, since=time.monotonic(), work=work)
+        tick = check("screening", 0, since=time.monotonic(), work=lambda: (len(opp), "options"))
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )

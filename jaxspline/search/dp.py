@@ -68,8 +68,7 @@ class DPData:
         (0-based in the block's pair range); rows_pen: per such row ``-inf`` if it
         has no pair, else 0.
       max_pairs: the most near pairs of one block (the size of the forward pass's buffer).
-      steps: per block the bounds and slices of one forward step, filled by the first
-        :func:`dp_forward` (see ``_steps``).
+      steps: per block the bounds and slices of one forward step (see ``_steps``).
     """
 
     order: np.ndarray
@@ -151,7 +150,7 @@ def dp_prepare(pb: Problem) -> DPData:
         rep.append(np.flatnonzero(tg[src[ptr[ga] : ptr[gb]]] == tg[dst]) + ptr[ga])
     repeat_pos = np.concatenate(rep) if rep else np.zeros(0, np.int64)
     repeat_at = np.r_[0, np.cumsum([r.size for r in rep])].astype(np.int64)
-    return DPData(
+    d = DPData(
         order=order,
         sat=sat,
         start=s,
@@ -173,6 +172,8 @@ def dp_prepare(pb: Problem) -> DPData:
         rows_pen=rows_pen,
         max_pairs=int(np.diff(ptr[bounds]).max()) if len(bounds) > 1 else 0,
     )
+    d.steps = _steps(d, ptr)
+    return d
 
 
 def _steps(d: DPData, ptr: np.ndarray) -> list:
@@ -225,8 +226,6 @@ def dp_forward(
     Returns:
       float [N]: the best value of a sequence ending with each option (``-inf``: none).
     """
-    if d.steps is None:
-        d.steps = _steps(d, pb.pairs.ptr)
     src = pb.pairs.src
     best = np.full(len(w), -np.inf)
     run = np.full(pb.n_sats, -np.inf)

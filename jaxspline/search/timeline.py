@@ -94,7 +94,8 @@ class Timeline:
         self.debt = [0.0] * n_s
         self.stale = [True] * n_s
         self.battery_failed = False
-        # per option, the step windows (s0, e0, s1): arrays for refreshes, tuples for tests
+        # per option, the step windows (s0, e0, s1): arrays for the battery refresh, Python
+        # int tuples for the per-option insertion check (_changes)
         self._s0, self._e0, self._s1 = pb.battery.step_windows(pb.option_start, pb.option_end)
         self._win = list(zip(self._s0.tolist(), self._e0.tolist(), self._s1.tolist(), strict=True))
         self._starts = np.asarray(pb.option_start, np.float64)
