@@ -9,7 +9,8 @@ for each horizon H, the 12 x 12 h preset cut to H hours
   pass alone (:func:`jaxspline.search.dp_forward`), iterations/s over ``--bound-seconds``;
 * *JAX*: :class:`jaxspline.search.dp_jax.JaxDP` on ``jax.devices()[0]`` (CPU here, a GPU
   where one is installed), compile time apart, the forward pass alone and with the
-  host back-tracking; ``equal`` says its values match numpy's bit for bit;
+  host back-tracking, and ``DP_BATCH`` value vectors in one scan (``JaxDP.forward_many``,
+  counted as that many passes); ``equal`` says its values match numpy's bit for bit;
 * the bound iterated to convergence (:func:`jaxspline.search.upper_bound`, battery
   relaxed, iteration cap ``BOUND_ITERS``): plain and strengthened (``merge_repeats``),
   value, iterations, seconds.
@@ -32,10 +33,12 @@ from bench.markdown import cell, header, row, section, write_result
 REPO = Path(__file__).resolve().parents[1]
 GENERATOR = REPO / "scripts" / "make_scale_scenario.py"
 BOUND_ITERS = 3000  # cap of the converged bound (it converges in a few hundred)
+DP_BATCH = 64  # value vectors of one batched JAX forward pass
 PLAN_VALUE = 1.0  # step-size target of the bound runs (any value gives a valid bound)
 COLUMNS = (
     "hours|options|near pairs|blocks|numpy DP it/s|numpy fwd it/s|JAX fwd it/s|"
-    "JAX DP it/s|JAX compile s|equal|plain bound|it|s|strengthened bound|it|s"
+    f"JAX DP it/s|JAX fwd x{DP_BATCH} passes/s|JAX compile s|equal|plain bound|it|s|"
+    "strengthened bound|it|s"
 ).split("|")
 
 
@@ -92,6 +95,12 @@ def bench_one(hours: float, seconds: float, workdir: Path) -> dict:
     out["jax_equal"] = bool(np.array_equal(best, dp_forward(pb, d, w)))
     out["jax_forward_per_s"] = _rate(lambda: jd.forward(w), seconds)
     out["jax_dp_per_s"] = _rate(lambda: jd.paths(w), seconds)
+    ws = w * np.random.default_rng(0).uniform(0.5, 1.0, (DP_BATCH, w.size))
+    many = jd.forward_many(ws)  # compiles
+    same = all(np.array_equal(many[k], dp_forward(pb, d, ws[k])) for k in (0, DP_BATCH - 1))
+    out["jax_equal"] = out["jax_equal"] and same
+    out["jax_batch"] = DP_BATCH
+    out["jax_batch_passes_per_s"] = DP_BATCH * _rate(lambda: jd.forward_many(ws), seconds)
     out["jax_device"] = str(jax.devices()[0])
     for key, merge in (("plain", False), ("strengthened", True)):
         t0 = time.perf_counter()
@@ -134,7 +143,8 @@ def bound_table(report: dict) -> list[str]:
         "12x12h --hours H`). DP it/s: forward pass + back-tracking of every satellite's "
         "path (`dp_paths`); fwd: the forward pass alone; JAX on "
         f"{', '.join(report.get('devices', [])) or '-'} (compile apart; *equal*: the same "
-        "values as numpy bit for bit). Bounds iterated to convergence, battery relaxed: "
+        f"values as numpy bit for bit; x{DP_BATCH}: that many value vectors in one scan, "
+        "counted as that many passes). Bounds iterated to convergence, battery relaxed: "
         "*plain* is the per-satellite path relaxation, *strengthened* credits a run of "
         "one target's options once (`merge_repeats`).",
         *header(*COLUMNS),
@@ -155,6 +165,7 @@ def bound_table(report: dict) -> list[str]:
                             "numpy_forward_per_s",
                             "jax_forward_per_s",
                             "jax_dp_per_s",
+                            "jax_batch_passes_per_s",
                         )
                     ),
                     cell(r.get("jax_compile_s"), "{:.1f}"),

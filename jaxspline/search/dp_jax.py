@@ -64,6 +64,7 @@ class JaxDP:
             self._ptr = put(np.r_[ptr, np.full(bm + 1, ptr[-1])].astype(np.int64))
             self._n, self._n_s = n, n_s
             self._fwd = jax.jit(self._scan, static_argnums=2)
+            self._fwd_many = jax.jit(self._scan_many, static_argnums=2)
         self.device = device
 
     def _scan(self, w, arc, merge_repeats):
@@ -103,6 +104,15 @@ class JaxDP:
         (best, _), _ = jax.lax.scan(step, init, self._xs)
         return best[:n]
 
+    def _scan_many(self, ws, arc, merge_repeats):
+        """best [K, N] for K value vectors ``ws`` [K, N] (one scan, the rows side by side)."""
+        return jax.vmap(lambda w: self._scan(w, arc, merge_repeats))(ws)
+
+    def _arc(self, arc):
+        """The pair costs as a float64 device array (zeros where ``arc`` is None)."""
+        a = np.zeros(len(self.pb.pairs)) if arc is None else np.asarray(arc, np.float64)
+        return jax.device_put(a, self.device)
+
     def forward(self, w, arc=None, merge_repeats: bool = False) -> np.ndarray:
         """The DP values (float64 [N]) as :func:`jaxspline.search.dp.dp_forward` gives them.
 
@@ -115,9 +125,28 @@ class JaxDP:
         """
         with jax.enable_x64(True):
             w = jax.device_put(np.asarray(w, np.float64), self.device)
-            p = len(self.pb.pairs)
-            a = np.zeros(p) if arc is None else np.asarray(arc, np.float64)
-            return np.asarray(self._fwd(w, jax.device_put(a, self.device), bool(merge_repeats)))
+            return np.asarray(self._fwd(w, self._arc(arc), bool(merge_repeats)))
+
+    def forward_many(self, ws, arc=None, merge_repeats: bool = False) -> np.ndarray:
+        """:meth:`forward` for K value vectors at once (one scan whose steps carry K rows).
+
+        The scan's depth is the number of blocks whatever K is, so on an accelerator K
+        price vectors (several step sizes of a subgradient step, the plain and the
+        strengthened bound) cost about what one does.
+
+        Args:
+          ws: float [K, N], option values, one vector a row.
+          arc: optional float [P], near-pair costs shared by the rows.
+          merge_repeats: as :func:`jaxspline.search.dp.dp_forward`.
+        Returns:
+          float64 numpy [K, N].
+        """
+        ws = np.asarray(ws, np.float64)
+        if ws.ndim != 2 or ws.shape[1] != self._n:
+            raise ValueError(f"ws: expected shape (K, {self._n}), got {ws.shape}")
+        with jax.enable_x64(True):
+            w = jax.device_put(ws, self.device)
+            return np.asarray(self._fwd_many(w, self._arc(arc), bool(merge_repeats)))
 
     def paths(self, w, arc=None, used=None, merge_repeats: bool = False):
         """``(paths, values)`` as :func:`jaxspline.search.dp.dp_paths` (forward on the device,

@@ -569,7 +569,8 @@ def test_merged_repeats_bound_covers_the_optimum(make, seed):
 @pytest.mark.parametrize("make, seed", [(_bridge_scenario, 0), (_random_scenario, 1)])
 @pytest.mark.parametrize("merge_repeats", [False, True])
 def test_jax_dp_forward_equals_numpy(make, seed, merge_repeats):
-    """The lax.scan forward pass == the numpy one bit for bit (values, arc costs, paths)."""
+    """The lax.scan forward pass == the numpy one bit for bit (values, arc costs, paths,
+    several value vectors in one scan)."""
     from jaxspline.search.dp_jax import JaxDP
 
     pb = build_problem(make(seed)).problem
@@ -582,3 +583,8 @@ def test_jax_dp_forward_equals_numpy(make, seed, merge_repeats):
         ref = dp_forward(pb, d, w, a, merge_repeats)
         assert np.array_equal(jd.forward(w, a, merge_repeats), ref)
         assert jd.paths(w, a, None, merge_repeats) == dp_paths(pb, d, w, a, None, merge_repeats)
+    if merge_repeats:  # K value vectors in one scan: each row as numpy gives it alone
+        ws = w * rng.uniform(0, 1, (3, pb.n_options))
+        many = jd.forward_many(ws, arc, merge_repeats)
+        for k in range(3):
+            assert np.array_equal(many[k], dp_forward(pb, d, ws[k], arc, merge_repeats))
