@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Accelerator bench, one prepared run (< 8 min wall): the bound's DP (numpy vs JAX on the
+# Accelerator bench, one prepared run (< 9.5 min wall): the bound's DP (numpy vs JAX on the
 # default device, one value vector and a batch of them) and the screening engine.
 #
 #   OUT=/some/dir bash scripts/gpu_bench.sh          # from the repository root
@@ -23,12 +23,12 @@ PY="${PY:-python3}"
 } > "$OUT/devices.txt" 2>&1
 cat "$OUT/devices.txt"
 # 1. the bound's DP: the 12x12h preset cut to 0.5 h and 3 h (problem build + rates + bounds)
-timeout 120 "$PY" -m bench --section bound --bound-hours 0.5,3 --bound-seconds 2 \
+timeout 100 "$PY" -m bench --section bound --bound-hours 0.5,3 --bound-seconds 2 \
   --out "$WORK/b" 2>&1 | tee "$OUT/bound.log"
 echo "bound section exit ${PIPESTATUS[0]}"
 cp "$WORK/b/bound.json" "$OUT/" 2>/dev/null
 # 2. the screening engine, two sizes (speed, memory, streaming)
-timeout 200 "$PY" -m bench --section screening --routes 1000 --routes 2000 --reps 3 \
+timeout 300 "$PY" -m bench --section screening --routes 1000 --routes 2000 --reps 3 \
   --out "$WORK/s" 2>&1 | tee "$OUT/screening.log"
 echo "screening section exit ${PIPESTATUS[0]}"
 cp "$WORK/s/screening.json" "$OUT/" 2>/dev/null
