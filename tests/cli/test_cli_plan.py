@@ -17,6 +17,7 @@ import datetime as dt
 import html
 import json
 import re
+import shutil
 
 import pytest
 
@@ -233,13 +234,17 @@ def test_plan_refuses_to_overwrite(runs, capsys):
     assert _snapshot(out) == before  # bytes and modification times unchanged
 
 
-def test_plan_force_overwrites(runs):
-    scen, out = runs["scen"], runs["out"]
-    before = {n: (out / n).stat().st_mtime_ns for n in OUTPUT_FILES + (HTML_FILE,)}
-    assert main(["plan", str(scen), "-o", str(out), "--force", *QUICK]) == 0
-    for name in before:
+def test_plan_force_overwrites(runs, tmp_path):
+    # --force replaces the whole set: a data-only run over a full set leaves its own
+    # three files, never the earlier page, figures or AEMs beside them
+    out = tmp_path / "out"
+    shutil.copytree(runs["out"], out)  # keeps the modification times
+    before = {n: (out / n).stat().st_mtime_ns for n in FULL}
+    args = ["plan", str(runs["scen"]), "-o", str(out), "--force", "--no-plots", "--no-aem"]
+    assert main([*args, "--no-html", *QUICK]) == 0
+    assert sorted(p.name for p in out.iterdir()) == sorted(OUTPUT_FILES[:3])
+    for name in OUTPUT_FILES[:3]:
         assert (out / name).stat().st_mtime_ns > before[name], name
-    assert sorted(p.name for p in out.iterdir()) == sorted(FULL)
     assert json.loads((out / "plan.json").read_text())["summary"]["valid"] is True
 
 

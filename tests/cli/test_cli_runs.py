@@ -90,7 +90,7 @@ def test_max_iters_gives_the_same_plan_every_run(env):
         e = dict(env["env"], PYTHONHASHSEED=hash_seed)
         # the page is not the plan: --no-html spares each run the Bokeh page (~4 s)
         cmd = _cmd(
-            env["scen"], out, "--max-iters", "300", "--quiet", "--time-limit", "120", "--no-html"
+            env["scen"], out, "--max-iters", "30", "--quiet", "--time-limit", "120", "--no-html"
         )
         r = subprocess.run(cmd, env=e, capture_output=True, text=True, timeout=_TIMEOUT_S)
         assert r.returncode == 0, r.stderr

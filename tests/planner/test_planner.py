@@ -250,7 +250,7 @@ def _solved(seed, n_points, n_strips, off_nadir_deg, exact_max_options, max_iter
     return sc, optimum, res
 
 
-LNS_CASE = dict(n_points=20, n_strips=2, off_nadir_deg=14.0, exact_max_options=0, max_iters=5000)
+LNS_CASE = dict(n_points=20, n_strips=2, off_nadir_deg=14.0, exact_max_options=0, max_iters=1000)
 EXACT_CASE = dict(n_points=15, n_strips=1, off_nadir_deg=10.0, exact_max_options=60, max_iters=2000)
 
 

@@ -261,9 +261,13 @@ def variants(opt, tr, rng):
     }
 
 
+STREAM_SEEDS = 4  # random instances of the stream and greedy equivalence checks
+PULL_SEEDS = 8
+
+
 def test_streams_give_the_same_plans(reach_kernels, monkeypatch):  # noqa: F811
     """Random cuts, one row per chunk, shuffled rows, infeasible rows: one plan each."""
-    for seed in range(8):
+    for seed in range(STREAM_SEEDS):
         rng = np.random.default_rng(100 + seed)
         opt, tr = instance(seed)
         make = variants(opt, tr, rng)
@@ -279,7 +283,7 @@ def test_streams_give_the_same_plans(reach_kernels, monkeypatch):  # noqa: F811
 
 
 def test_greedy_equals_the_pull_implementation(reach_kernels):  # noqa: F811
-    for seed in range(15):
+    for seed in range(PULL_SEEDS):
         rng = np.random.default_rng(200 + seed)
         opt, tr = instance(seed)
         ref = old_greedy(opt, tr)
