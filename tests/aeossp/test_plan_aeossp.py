@@ -250,7 +250,7 @@ def test_solve_small_case_valid_by_checker(small_case):
 
 @needs_data
 def test_solve_deterministic_for_seed(small_case):
-    kw = dict(time_limit=60.0, progress=False, seed=3, max_iters=500)
+    kw = dict(time_limit=60.0, progress=False, seed=3, max_iters=100)
     a, ra = solve_case(small_case, **kw)
     b, rb = solve_case(small_case, **kw)
     assert a == b
@@ -471,9 +471,12 @@ def _enumerate_plans(pb):
     return best[True], best[False]
 
 
+# one bridge and two random instances by default; the other seeds are slow variants
 @pytest.mark.parametrize(
     "make, seed",
-    [(_bridge_scenario, s) for s in range(3)] + [(_random_scenario, s) for s in range(4)],
+    [(_bridge_scenario, 0), (_random_scenario, 0), (_random_scenario, 1)]
+    + [pytest.param(_bridge_scenario, s, marks=pytest.mark.slow) for s in (1, 2)]
+    + [pytest.param(_random_scenario, s, marks=pytest.mark.slow) for s in (2, 3)],
 )
 def test_bound_covers_plans_with_repeats(make, seed):
     """plan().bound >= the best plan imaging targets repeatedly; value == best without."""
