@@ -253,12 +253,60 @@ def dp_forward(
     return best
 
 
-def _far_predecessor(pb: Problem, d: DPData, best, j: int, rest) -> int:
-    """Lowest-id far predecessor of option j providing ``rest`` (-1: none)."""
+def _far_predecessor(pb: Problem, d: DPData, best, top, j: int, rest) -> int:
+    """Lowest-id far predecessor of option j providing ``rest`` (-1: none).
+
+    ``top`` is the running maximum of ``best`` over each satellite's ids (:func:`backtrack`):
+    ids before the first one whose running maximum reaches ``rest`` provide less, so the
+    scan starts there (the same option as a scan from the satellite's first id).
+    """
     lo = pb.sat_lo[d.sat[j]]
-    fp = lo + np.flatnonzero(d.ready[lo:j] <= d.start[j])  # ids below j start earlier
-    hit = fp[best[fp] >= rest - _PATH_TOL]
+    need = rest - _PATH_TOL
+    i0 = lo + int(np.searchsorted(top[lo:j], need))
+    fp = i0 + np.flatnonzero(d.ready[i0:j] <= d.start[j])  # ids below j start earlier
+    hit = fp[best[fp] >= need]
     return int(hit[0]) if hit.size else -1
+
+
+def _running_max(pb: Problem, best: np.ndarray) -> np.ndarray:
+    """Running maximum of ``best`` over each satellite's option ids (float [N])."""
+    top = np.empty_like(best)
+    for lo, hi in zip(pb.sat_lo, pb.sat_hi, strict=True):
+        np.maximum.accumulate(best[lo:hi], out=top[lo:hi])
+    return top
+
+
+def _near_step(pb: Problem, d: DPData, w, best, arc, merge_repeats, node, rest):
+    """One back-tracking step of several satellites at once (one current option each).
+
+    For each option ``node[i]`` the first (lowest-id) near predecessor providing
+    ``rest[i]``, as the per-row scan of :func:`backtrack` finds it, over the
+    concatenated rows.
+
+    Returns:
+      (pos, prev): int arrays: the pair position and predecessor option of each node,
+      ``-1`` where no near predecessor provides the value.
+    """
+    ptr, r = pb.pairs.ptr, pb.pairs.row_of[node]
+    q0 = ptr[r]
+    cnt = ptr[r + 1] - q0
+    seg = np.cumsum(cnt) - cnt  # each row's first element in the concatenation
+    idx = np.arange(int(cnt.sum()), dtype=np.int64) + np.repeat(q0 - seg, cnt)
+    s = pb.pairs.src[idx]
+    cv = best[s]
+    if arc is not None:
+        cv -= arc[idx]
+    if merge_repeats:  # a repeat of the node's target costs the node's value
+        m = d.target[s] == np.repeat(d.target[node], cnt)
+        cv[m] -= np.repeat(w[node], cnt)[m]
+    hits = np.flatnonzero(cv >= np.repeat(rest - _PATH_TOL, cnt))
+    pos = np.full(node.size, -1, np.int64)
+    prev = np.full(node.size, -1, np.int64)
+    if hits.size:
+        f = hits[np.minimum(np.searchsorted(hits, seg), hits.size - 1)]
+        ok = (f >= seg) & (f < seg + cnt)  # the row's first hit, if it has one
+        pos[ok], prev[ok] = idx[f[ok]], s[f[ok]]
+    return pos, prev
 
 
 def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeats=False):
@@ -266,56 +314,50 @@ def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeat
 
     Walks back from each satellite's best option: the first near predecessor (lowest
     id) that provides the value, else the first far one, until a first observation.
+    All satellites walk together, one step of every unfinished path per numpy pass
+    (:func:`_near_step`); far predecessors (rare) are found one at a time.
 
     Args:
       pb: the problem; d: its :class:`DPData`.
       w: option values, as :func:`dp_forward`.
       best: the result of :func:`dp_forward`.
       arc: optional per-pair costs, as :func:`dp_forward`.
-      used: optional list; the near-pair positions of the paths are appended to it.
+      used: optional list; the near-pair positions of the paths are appended to it
+        (satellite by satellite, each path from its end).
       merge_repeats: as :func:`dp_forward`.
     Returns:
       ``(paths, values)``: per satellite the option ids of an optimal sequence (time
       order) and its value (0 for the empty sequence).
     """
-    src, ptr, row_of = pb.pairs.src, pb.pairs.ptr, pb.pairs.row_of
-    paths, values = [], []
-    for k in range(pb.n_sats):
+    n_s = pb.n_sats
+    paths, values, steps = [[] for _ in range(n_s)], [0.0] * n_s, [[] for _ in range(n_s)]
+    walk = []
+    for k in range(n_s):
         lo, hi = pb.sat_lo[k], pb.sat_hi[k]
-        if hi <= lo or not best[lo:hi].max() > 0.0:
-            paths.append([])
-            values.append(0.0)
-            continue
-        j = lo + int(np.argmax(best[lo:hi]))
-        values.append(float(best[j]))
-        path = [j]
-        while True:
-            rest = best[j] - w[j]  # the value the predecessor (or the start) provides
-            if d.first_ok[j] and rest <= _PATH_TOL:
-                break
-            r = row_of[j]
-            q0, q1 = int(ptr[r]), int(ptr[r + 1])
-            q = -1
-            if q1 > q0:
-                cv = best[src[q0:q1]]
-                if arc is not None:
-                    cv -= arc[q0:q1]
-                if merge_repeats:
-                    cv[d.target[src[q0:q1]] == d.target[j]] -= w[j]
-                ok = cv >= rest - _PATH_TOL
-                q = int(ok.argmax())
-                q = q if ok[q] else -1
+        if hi > lo and best[lo:hi].max() > 0.0:
+            walk.append(lo + int(np.argmax(best[lo:hi])))
+            values[k] = float(best[walk[-1]])
+            paths[k].append(walk[-1])
+    sats = np.flatnonzero([len(p) > 0 for p in paths])
+    node = np.asarray(walk, np.int64)
+    top = None
+    while sats.size:
+        rest = best[node] - w[node]  # the value the predecessor (or the start) provides
+        go = ~(d.first_ok[node] & (rest <= _PATH_TOL))
+        sats, node, rest = sats[go], node[go], rest[go]
+        pos, prev = _near_step(pb, d, w, best, arc, merge_repeats, node, rest)
+        for i in np.flatnonzero(prev < 0).tolist():
+            top = _running_max(pb, best) if top is None else top
+            prev[i] = _far_predecessor(pb, d, best, top, int(node[i]), rest[i])
+        for k, q, j in zip(sats.tolist(), pos.tolist(), prev.tolist(), strict=True):
             if q >= 0:
-                if used is not None:
-                    used.append(q0 + q)
-                j = int(src[q0 + q])
-            else:
-                j = _far_predecessor(pb, d, best, j, rest)
-                if j < 0:  # cannot happen; stop defensively
-                    break
-            path.append(j)
-        paths.append(path[::-1])
-    return paths, values
+                steps[k].append(q)
+            if j >= 0:
+                paths[k].append(j)
+        sats, node = sats[prev >= 0], prev[prev >= 0]  # -1: cannot happen; stop defensively
+    if used is not None:
+        used.extend(q for k in range(n_s) for q in steps[k])
+    return [p[::-1] for p in paths], values
 
 
 def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None, merge_repeats=False):
