@@ -27,6 +27,7 @@ from jaxspline.search.problem import Problem
 __all__ = ["DPData", "backtrack", "dp_forward", "dp_paths", "dp_prepare"]
 
 _PATH_TOL = 1e-9  # tolerance of the path back-tracking
+_CHUNK_BLOCKS = 64  # the most blocks whose absorbs one forward step applies at once
 
 
 @dataclass
@@ -69,6 +70,8 @@ class DPData:
         has no pair, else 0.
       max_pairs: the most near pairs of one block (the size of the forward pass's buffer).
       steps: per block the bounds and slices of one forward step (see ``_steps``).
+      chunks: runs of consecutive blocks whose absorbed options all lie in earlier
+        runs, so their running maxima are found at once (see ``_chunks``).
     """
 
     order: np.ndarray
@@ -92,6 +95,7 @@ class DPData:
     rows_pen: list | None = None
     max_pairs: int = 0
     steps: list | None = None
+    chunks: list | None = None
 
 
 def _block_bounds(so: np.ndarray, width: float) -> list:
@@ -173,38 +177,57 @@ def dp_prepare(pb: Problem) -> DPData:
         max_pairs=int(np.diff(ptr[bounds]).max()) if len(bounds) > 1 else 0,
     )
     d.steps = _steps(d, ptr)
+    d.chunks = _chunks(d, pb.n_sats, float(np.min(far)) if far.size else 0.0)
     return d
 
 
 def _steps(d: DPData, ptr: np.ndarray) -> list:
     """Per block the Python ints and slices :func:`dp_forward` needs (no per-pass indexing).
 
-    One tuple a block: ``(ga, gb, aa, az, sats, cuts, pa, pz, rows_at, rows_pen, ra, rz,
-    rep_local)`` with ``rep_local`` the block's repeat positions relative to its first
-    pair ``pa``.
+    One tuple a block: ``(ga, gb, pa, pz, rows_at, rows_pen, ra, rz, rep_local)`` with
+    ``rows_pen`` None where every row has pairs and ``rep_local`` the block's repeat
+    positions relative to its first pair ``pa``.
     """
     steps = []
     for b, (ga, gb) in enumerate(d.groups):
         pa, pz = int(ptr[ga]), int(ptr[gb])
         ra, rz = int(d.repeat_at[b]), int(d.repeat_at[b + 1])
+        pen = d.rows_pen[b] if np.isinf(d.rows_pen[b]).any() else None
         steps.append(
-            (
-                int(ga),
-                int(gb),
-                int(d.absorb_at[b]),
-                int(d.absorb_at[b + 1]),
-                d.absorb_sats[b],
-                d.absorb_cuts[b],
-                pa,
-                pz,
-                d.rows_at[b],
-                d.rows_pen[b],
-                ra,
-                rz,
-                d.repeat_pos[ra:rz] - pa,
-            )
+            (int(ga), int(gb), pa, pz, d.rows_at[b], pen, ra, rz, d.repeat_pos[ra:rz] - pa)
         )
     return steps
+
+
+def _chunks(d: DPData, n_sats: int, far_min: float) -> list:
+    """Runs of blocks starting less than ``far_min`` after the run's first block.
+
+    An option absorbed by block b (``end + far <= start(b)``) then starts before the
+    run's first block, so every running maximum of the run comes from values known when
+    the run begins. One tuple a run: ``(b0, b1, aa, az, cuts, mpos, ga, gb, vpos)``:
+    blocks ``b0..b1-1``, their absorbed options ``absorb[aa:az]`` cut by (block,
+    satellite) at ``cuts``, each cut's place ``mpos`` in the flat ``[b1 - b0 + 1, S]``
+    table of running maxima (row 0: before the run; row ``1 + i``: after block
+    ``b0 + i``), and for the run's options ``order[ga:gb]`` their place ``vpos`` in it.
+    """
+    so = d.start[d.order]
+    first = np.array([so[ga] for ga, _ in d.groups])
+    chunks, b0, n_b = [], 0, len(d.groups)
+    while b0 < n_b:
+        b1 = int(np.searchsorted(first, first[b0] + far_min, side="left"))
+        b1 = max(b0 + 1, min(b1, b0 + _CHUNK_BLOCKS, n_b))
+        aa = int(d.absorb_at[b0])
+        cuts = [d.absorb_cuts[b] + (int(d.absorb_at[b]) - aa) for b in range(b0, b1)]
+        mpos = [(1 + b - b0) * n_sats + d.absorb_sats[b] for b in range(b0, b1)]
+        ga, gb = d.groups[b0][0], d.groups[b1 - 1][1]
+        sizes = [hi - lo for lo, hi in d.groups[b0:b1]]
+        vpos = (1 + np.repeat(np.arange(b1 - b0), sizes)) * n_sats + d.sat_order[ga:gb]
+        chunks.append(
+            (b0, b1, aa, int(d.absorb_at[b1]), np.concatenate(cuts), np.concatenate(mpos))
+            + (ga, gb, vpos)
+        )
+        b0 = b1
+    return chunks
 
 
 def dp_forward(
@@ -214,6 +237,8 @@ def dp_forward(
 
     One block a step, into preallocated buffers (a block's near pairs are gathered
     into ``buf`` by ``np.take``; the per-block bounds are Python ints of ``d.steps``).
+    The running maxima and their part of each option's value are found a run of
+    blocks at a time (``d.chunks``).
 
     Args:
       pb: Problem.
@@ -226,30 +251,37 @@ def dp_forward(
     Returns:
       float [N]: the best value of a sequence ending with each option (``-inf``: none).
     """
-    src = pb.pairs.src
+    src, n_s = pb.pairs.src, pb.n_sats
     best = np.full(len(w), -np.inf)
-    run = np.full(pb.n_sats, -np.inf)
-    order, sat_o, base_o, absorb = d.order, d.sat_order, d.base_order, d.absorb
+    run = np.full(n_s, -np.inf)
+    order, base_o, absorb = d.order, d.base_order, d.absorb
     w_o = w[order]
     w_rep = w[d.repeat_dst] if merge_repeats else None
     buf = np.empty(d.max_pairs)
-    for ga, gb, aa, az, u, cuts, pa, pz, rows_at, pen, ra, rz, rloc in d.steps:
+    for b0, b1, aa, az, cuts, mpos, g0, g1, vpos in d.chunks:
+        m = np.full((b1 - b0 + 1) * n_s, -np.inf)  # running maxima before / after each block
+        m[:n_s] = run
         if az > aa:  # options far from here on: into their satellites' running maxima
-            np.maximum.at(run, u, np.maximum.reduceat(best[absorb[aa:az]], cuts))
-        v = run[sat_o[ga:gb]]
-        np.maximum(base_o[ga:gb], v, out=v)
-        if pz > pa:
-            pv = np.take(best, src[pa:pz], out=buf[: pz - pa], mode="clip")
-            if arc is not None:
-                np.subtract(pv, arc[pa:pz], out=pv)
-            if merge_repeats and rz > ra:
-                pv[rloc] -= w_rep[ra:rz]
-            near = np.maximum.reduceat(pv, rows_at)
-            near += pen  # rows without pairs: -inf
-            vm = v[: near.size]
-            np.maximum(vm, near, out=vm)
-        v += w_o[ga:gb]
-        best[order[ga:gb]] = v
+            m[mpos] = np.maximum.reduceat(best[absorb[aa:az]], cuts)
+        m = np.maximum.accumulate(m.reshape(b1 - b0 + 1, n_s), axis=0)
+        run = m[-1]
+        val = m.reshape(-1)[vpos]
+        np.maximum(base_o[g0:g1], val, out=val)
+        for ga, gb, pa, pz, rows_at, pen, ra, rz, rloc in d.steps[b0:b1]:
+            v = val[ga - g0 : gb - g0]
+            if pz > pa:
+                pv = np.take(best, src[pa:pz], out=buf[: pz - pa], mode="clip")
+                if arc is not None:
+                    np.subtract(pv, arc[pa:pz], out=pv)
+                if merge_repeats and rz > ra:
+                    pv[rloc] -= w_rep[ra:rz]
+                near = np.maximum.reduceat(pv, rows_at)
+                if pen is not None:
+                    near += pen  # rows without pairs: -inf
+                vm = v[: near.size]
+                np.maximum(vm, near, out=vm)
+            v += w_o[ga:gb]
+            best[order[ga:gb]] = v
     return best
 
 
