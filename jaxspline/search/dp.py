@@ -18,6 +18,7 @@ numpy calls on slices. :func:`backtrack` recovers each satellite's optimal seque
 
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
 
 import numpy as np
@@ -341,13 +342,56 @@ def _near_step(pb: Problem, d: DPData, w, best, arc, merge_repeats, node, rest):
     return pos, prev
 
 
+def _walk(pb: Problem, d: DPData, w, best, top, merge_repeats, j: int, steps: list) -> list:
+    """One satellite's path back from option j without pair costs, scalar by scalar.
+
+    Each row is scanned from its first source at or after the first id whose running
+    maximum ``top`` reaches the value: the sources before provide less (a repeat's cost
+    ``w[j] >= 0`` only lowers them), so a step reads a few pairs, not the whole row.
+    Where ``merge_repeats`` and ``w[j] < 0`` (a repeat worth more than its source) the
+    row is scanned whole. Near-pair positions are appended to ``steps``.
+
+    Returns:
+      the path, from its end.
+    """
+    src, ptr, row_of = (memoryview(a) for a in (pb.pairs.src, pb.pairs.ptr, pb.pairs.row_of))
+    bm, wm, tm, tg = memoryview(best), memoryview(w), memoryview(top), memoryview(d.target)
+    first_ok, lo = memoryview(d.first_ok), pb.sat_lo[d.sat[j]]
+    path = [j]
+    while True:
+        rest = bm[j] - wm[j]  # the value the predecessor (or the start) provides
+        if first_ok[j] and rest <= _PATH_TOL:
+            break
+        need, wj, tj = rest - _PATH_TOL, wm[j], tg[j]
+        r = row_of[j]
+        q, q1 = ptr[r], ptr[r + 1]
+        if not (merge_repeats and wj < 0.0):
+            q = bisect.bisect_left(src, bisect.bisect_left(tm, need, lo, j), q, q1)
+        while q < q1:
+            i = src[q]
+            if bm[i] - (wj if merge_repeats and tg[i] == tj else 0.0) >= need:
+                break
+            q += 1
+        if q < q1:
+            steps.append(q)
+            j = src[q]
+        else:
+            j = _far_predecessor(pb, d, best, top, j, rest)
+            if j < 0:  # cannot happen; stop defensively
+                break
+        path.append(j)
+    return path
+
+
 def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeats=False):
     """Each satellite's optimal sequence from the DP values ``best`` of :func:`dp_forward`.
 
     Walks back from each satellite's best option: the first near predecessor (lowest
     id) that provides the value, else the first far one, until a first observation.
-    All satellites walk together, one step of every unfinished path per numpy pass
-    (:func:`_near_step`); far predecessors (rare) are found one at a time.
+    Without pair costs one satellite at a time, a few pairs a step (:func:`_walk`);
+    with them all satellites together, one step of every unfinished path per numpy
+    pass over the current options' rows (:func:`_near_step`). Far predecessors (rare)
+    are found one at a time.
 
     Args:
       pb: the problem; d: its :class:`DPData`.
@@ -363,23 +407,37 @@ def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeat
     """
     n_s = pb.n_sats
     paths, values, steps = [[] for _ in range(n_s)], [0.0] * n_s, [[] for _ in range(n_s)]
-    walk = []
     for k in range(n_s):
         lo, hi = pb.sat_lo[k], pb.sat_hi[k]
         if hi > lo and best[lo:hi].max() > 0.0:
-            walk.append(lo + int(np.argmax(best[lo:hi])))
-            values[k] = float(best[walk[-1]])
-            paths[k].append(walk[-1])
+            paths[k].append(lo + int(np.argmax(best[lo:hi])))
+            values[k] = float(best[paths[k][0]])
+    best = np.ascontiguousarray(best, np.float64)  # read through memoryviews
+    top = _running_max(pb, best)
+    if arc is None:
+        w = np.ascontiguousarray(w, np.float64)
+        for k in range(n_s):
+            if paths[k]:
+                paths[k] = _walk(pb, d, w, best, top, merge_repeats, paths[k][0], steps[k])
+    else:
+        _walk_all(pb, d, (w, best, arc, top), merge_repeats, paths, steps)
+    if used is not None:
+        used.extend(q for k in range(n_s) for q in steps[k])
+    return [p[::-1] for p in paths], values
+
+
+def _walk_all(pb: Problem, d: DPData, arrays, merge_repeats, paths, steps) -> None:
+    """All satellites' paths back together (:func:`backtrack` with pair costs), extending
+    ``paths`` (each holding its end option) and ``steps`` (near-pair positions)."""
+    w, best, arc, top = arrays
     sats = np.flatnonzero([len(p) > 0 for p in paths])
-    node = np.asarray(walk, np.int64)
-    top = None
+    node = np.asarray([paths[k][0] for k in sats.tolist()], np.int64)
     while sats.size:
         rest = best[node] - w[node]  # the value the predecessor (or the start) provides
         go = ~(d.first_ok[node] & (rest <= _PATH_TOL))
         sats, node, rest = sats[go], node[go], rest[go]
         pos, prev = _near_step(pb, d, w, best, arc, merge_repeats, node, rest)
         for i in np.flatnonzero(prev < 0).tolist():
-            top = _running_max(pb, best) if top is None else top
             prev[i] = _far_predecessor(pb, d, best, top, int(node[i]), rest[i])
         for k, q, j in zip(sats.tolist(), pos.tolist(), prev.tolist(), strict=True):
             if q >= 0:
@@ -387,9 +445,6 @@ def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeat
             if j >= 0:
                 paths[k].append(j)
         sats, node = sats[prev >= 0], prev[prev >= 0]  # -1: cannot happen; stop defensively
-    if used is not None:
-        used.extend(q for k in range(n_s) for q in steps[k])
-    return [p[::-1] for p in paths], values
 
 
 def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None, merge_repeats=False):

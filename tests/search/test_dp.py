@@ -3,8 +3,9 @@
 References: every subset of each satellite's options taken in start order (brute force:
 the best sequence's value, transitions by the rules of :mod:`jaxspline.search.dp`), and
 a one-satellite-at-a-time walk written here from :func:`backtrack`'s rule (first near
-predecessor by id that provides the value, else the first far one), which the
-all-satellites-at-once walk must reproduce exactly: same paths, values and near pairs.
+predecessor by id that provides the value, else the first far one), which both walks
+of :func:`backtrack` (a few pairs a step without pair costs, all satellites at once with
+them) must reproduce exactly: same paths, values and near pairs.
 """
 
 from __future__ import annotations
@@ -94,10 +95,9 @@ def _reference_walk(pb, d, w, best, arc, merge):
 @pytest.mark.parametrize("seed", range(12))
 def test_backtrack_matches_brute_force_and_reference_walk(seed):
     rng = np.random.default_rng(500 + seed)
-    if seed % 2:  # long horizon: far transitions
-        pb, _ = _problem(rng, int(rng.integers(40, 120)), n_sats=3, n_targets=12, far=25.0)
-    else:  # short horizon: rows of several near pairs
-        pb, _ = _problem(rng, int(rng.integers(30, 60)), n_sats=3, n_targets=12, far=80.0)
+    # long horizon: far transitions; short: rows of several near pairs; both: repeats
+    steps, far = (rng.integers(40, 120), 25.0) if seed % 2 else (rng.integers(30, 60), 80.0)
+    pb, _ = _problem(rng, int(steps), n_sats=3, n_targets=12, far=far, repeats=0.5)
     d = dp_prepare(pb)
     ties = seed % 4 < 2  # integer values: many exact ties between predecessors
     w = rng.integers(-2, 6, pb.n_options).astype(float) if ties else rng.normal(2, 2, pb.n_options)
