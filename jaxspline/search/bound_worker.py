@@ -9,7 +9,9 @@ per-pair energy terms would be derived anew in every iteration, and the relaxed 
 the looser one by little (docs/scale.md). It credits a run of consecutive options of
 one target once (``merge_repeats``, the strengthened relaxation of
 :mod:`jaxspline.search.lagrangian`). The fork shares the problem's arrays copy-on-write
-(nothing is pickled on the way in); the child only runs numpy code (no JAX) and sends
+(nothing is pickled on the way in), and with them the DP's block layout when the parent
+prepared it (``dp``: the search's own Lagrangian phase uses the same one, so it is
+prepared once, before the fork); the child only runs numpy code (no JAX) and sends
 three numbers back. Any bound is an upper bound of every plan, so the search reports the
 smaller of its own and the worker's; the plan itself is never touched, and with an
 iteration cap the worker's result is a function of the problem and the cap alone.
@@ -37,12 +39,12 @@ __all__ = ["BoundWorker"]
 _GRACE_S = 30.0  # [s] the parent waits this long past the deadline for the last iteration
 
 
-def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters):
+def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp):
     """Child: iterate the bound, send (bound, iterations, status, seconds)."""
     gc.disable()  # never finalize the parent's (JAX) objects in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    res = upper_bound(pb, plan_value, deadline, max_iters, energy=False, merge_repeats=True)
+    res = upper_bound(pb, plan_value, deadline, max_iters, energy=False, merge_repeats=True, dp=dp)
     conn.send((float(res.bound), int(res.iterations), res.status.value, float(res.seconds)))
     conn.close()
 
@@ -56,13 +58,15 @@ class BoundWorker:
         :func:`upper_bound`).
       deadline: float, ``time.monotonic()`` value at which the child stops [s].
       max_iters: cap on its iterations (None: the deadline alone).
+      dp: the problem's :func:`jaxspline.search.dp.dp_prepare` (shared like ``pb``;
+        None: the child prepares it).
     """
 
-    def __init__(self, pb: Problem, plan_value: float, deadline: float, max_iters=None):
+    def __init__(self, pb: Problem, plan_value: float, deadline: float, max_iters=None, dp=None):
         ctx = mp.get_context("fork")
         self._conn, child = ctx.Pipe(duplex=False)
         self._proc = ctx.Process(
-            target=_run, args=(child, pb, plan_value, deadline, max_iters), daemon=True
+            target=_run, args=(child, pb, plan_value, deadline, max_iters, dp), daemon=True
         )
         trim_heap()  # the child maps the parent's resident pages: no free ones among them
         with warnings.catch_warnings():  # JAX warns of any fork; the child runs no JAX

@@ -18,6 +18,7 @@ numpy calls on slices. :func:`backtrack` recovers each satellite's optimal seque
 
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +28,7 @@ from jaxspline.search.problem import Problem
 __all__ = ["DPData", "backtrack", "dp_forward", "dp_paths", "dp_prepare"]
 
 _PATH_TOL = 1e-9  # tolerance of the path back-tracking
+_CHUNK_BLOCKS = 64  # the most blocks whose absorbs one forward step applies at once
 
 
 @dataclass
@@ -69,6 +71,8 @@ class DPData:
         has no pair, else 0.
       max_pairs: the most near pairs of one block (the size of the forward pass's buffer).
       steps: per block the bounds and slices of one forward step (see ``_steps``).
+      chunks: runs of consecutive blocks whose absorbed options all lie in earlier
+        runs, so their running maxima are found at once (see ``_chunks``).
     """
 
     order: np.ndarray
@@ -92,6 +96,7 @@ class DPData:
     rows_pen: list | None = None
     max_pairs: int = 0
     steps: list | None = None
+    chunks: list | None = None
 
 
 def _block_bounds(so: np.ndarray, width: float) -> list:
@@ -173,38 +178,57 @@ def dp_prepare(pb: Problem) -> DPData:
         max_pairs=int(np.diff(ptr[bounds]).max()) if len(bounds) > 1 else 0,
     )
     d.steps = _steps(d, ptr)
+    d.chunks = _chunks(d, pb.n_sats, float(np.min(far)) if far.size else 0.0)
     return d
 
 
 def _steps(d: DPData, ptr: np.ndarray) -> list:
     """Per block the Python ints and slices :func:`dp_forward` needs (no per-pass indexing).
 
-    One tuple a block: ``(ga, gb, aa, az, sats, cuts, pa, pz, rows_at, rows_pen, ra, rz,
-    rep_local)`` with ``rep_local`` the block's repeat positions relative to its first
-    pair ``pa``.
+    One tuple a block: ``(ga, gb, pa, pz, rows_at, rows_pen, ra, rz, rep_local)`` with
+    ``rows_pen`` None where every row has pairs and ``rep_local`` the block's repeat
+    positions relative to its first pair ``pa``.
     """
     steps = []
     for b, (ga, gb) in enumerate(d.groups):
         pa, pz = int(ptr[ga]), int(ptr[gb])
         ra, rz = int(d.repeat_at[b]), int(d.repeat_at[b + 1])
+        pen = d.rows_pen[b] if np.isinf(d.rows_pen[b]).any() else None
         steps.append(
-            (
-                int(ga),
-                int(gb),
-                int(d.absorb_at[b]),
-                int(d.absorb_at[b + 1]),
-                d.absorb_sats[b],
-                d.absorb_cuts[b],
-                pa,
-                pz,
-                d.rows_at[b],
-                d.rows_pen[b],
-                ra,
-                rz,
-                d.repeat_pos[ra:rz] - pa,
-            )
+            (int(ga), int(gb), pa, pz, d.rows_at[b], pen, ra, rz, d.repeat_pos[ra:rz] - pa)
         )
     return steps
+
+
+def _chunks(d: DPData, n_sats: int, far_min: float) -> list:
+    """Runs of blocks starting less than ``far_min`` after the run's first block.
+
+    An option absorbed by block b (``end + far <= start(b)``) then starts before the
+    run's first block, so every running maximum of the run comes from values known when
+    the run begins. One tuple a run: ``(b0, b1, aa, az, cuts, mpos, ga, gb, vpos)``:
+    blocks ``b0..b1-1``, their absorbed options ``absorb[aa:az]`` cut by (block,
+    satellite) at ``cuts``, each cut's place ``mpos`` in the flat ``[b1 - b0 + 1, S]``
+    table of running maxima (row 0: before the run; row ``1 + i``: after block
+    ``b0 + i``), and for the run's options ``order[ga:gb]`` their place ``vpos`` in it.
+    """
+    so = d.start[d.order]
+    first = np.array([so[ga] for ga, _ in d.groups])
+    chunks, b0, n_b = [], 0, len(d.groups)
+    while b0 < n_b:
+        b1 = int(np.searchsorted(first, first[b0] + far_min, side="left"))
+        b1 = max(b0 + 1, min(b1, b0 + _CHUNK_BLOCKS, n_b))
+        aa = int(d.absorb_at[b0])
+        cuts = [d.absorb_cuts[b] + (int(d.absorb_at[b]) - aa) for b in range(b0, b1)]
+        mpos = [(1 + b - b0) * n_sats + d.absorb_sats[b] for b in range(b0, b1)]
+        ga, gb = d.groups[b0][0], d.groups[b1 - 1][1]
+        sizes = [hi - lo for lo, hi in d.groups[b0:b1]]
+        vpos = (1 + np.repeat(np.arange(b1 - b0), sizes)) * n_sats + d.sat_order[ga:gb]
+        chunks.append(
+            (b0, b1, aa, int(d.absorb_at[b1]), np.concatenate(cuts), np.concatenate(mpos))
+            + (ga, gb, vpos)
+        )
+        b0 = b1
+    return chunks
 
 
 def dp_forward(
@@ -214,6 +238,8 @@ def dp_forward(
 
     One block a step, into preallocated buffers (a block's near pairs are gathered
     into ``buf`` by ``np.take``; the per-block bounds are Python ints of ``d.steps``).
+    The running maxima and their part of each option's value are found a run of
+    blocks at a time (``d.chunks``).
 
     Args:
       pb: Problem.
@@ -226,39 +252,135 @@ def dp_forward(
     Returns:
       float [N]: the best value of a sequence ending with each option (``-inf``: none).
     """
-    src = pb.pairs.src
+    src, n_s = pb.pairs.src, pb.n_sats
     best = np.full(len(w), -np.inf)
-    run = np.full(pb.n_sats, -np.inf)
-    order, sat_o, base_o, absorb = d.order, d.sat_order, d.base_order, d.absorb
+    run = np.full(n_s, -np.inf)
+    order, base_o, absorb = d.order, d.base_order, d.absorb
     w_o = w[order]
     w_rep = w[d.repeat_dst] if merge_repeats else None
     buf = np.empty(d.max_pairs)
-    for ga, gb, aa, az, u, cuts, pa, pz, rows_at, pen, ra, rz, rloc in d.steps:
+    for b0, b1, aa, az, cuts, mpos, g0, g1, vpos in d.chunks:
+        m = np.full((b1 - b0 + 1) * n_s, -np.inf)  # running maxima before / after each block
+        m[:n_s] = run
         if az > aa:  # options far from here on: into their satellites' running maxima
-            np.maximum.at(run, u, np.maximum.reduceat(best[absorb[aa:az]], cuts))
-        v = run[sat_o[ga:gb]]
-        np.maximum(base_o[ga:gb], v, out=v)
-        if pz > pa:
-            pv = np.take(best, src[pa:pz], out=buf[: pz - pa], mode="clip")
-            if arc is not None:
-                np.subtract(pv, arc[pa:pz], out=pv)
-            if merge_repeats and rz > ra:
-                pv[rloc] -= w_rep[ra:rz]
-            near = np.maximum.reduceat(pv, rows_at)
-            near += pen  # rows without pairs: -inf
-            vm = v[: near.size]
-            np.maximum(vm, near, out=vm)
-        v += w_o[ga:gb]
-        best[order[ga:gb]] = v
+            m[mpos] = np.maximum.reduceat(best[absorb[aa:az]], cuts)
+        m = np.maximum.accumulate(m.reshape(b1 - b0 + 1, n_s), axis=0)
+        run = m[-1]
+        val = m.reshape(-1)[vpos]
+        np.maximum(base_o[g0:g1], val, out=val)
+        for ga, gb, pa, pz, rows_at, pen, ra, rz, rloc in d.steps[b0:b1]:
+            v = val[ga - g0 : gb - g0]
+            if pz > pa:
+                pv = np.take(best, src[pa:pz], out=buf[: pz - pa], mode="clip")
+                if arc is not None:
+                    np.subtract(pv, arc[pa:pz], out=pv)
+                if merge_repeats and rz > ra:
+                    pv[rloc] -= w_rep[ra:rz]
+                near = np.maximum.reduceat(pv, rows_at)
+                if pen is not None:
+                    near += pen  # rows without pairs: -inf
+                vm = v[: near.size]
+                np.maximum(vm, near, out=vm)
+            v += w_o[ga:gb]
+            best[order[ga:gb]] = v
     return best
 
 
-def _far_predecessor(pb: Problem, d: DPData, best, j: int, rest) -> int:
-    """Lowest-id far predecessor of option j providing ``rest`` (-1: none)."""
+def _far_predecessor(pb: Problem, d: DPData, best, top, j: int, rest) -> int:
+    """Lowest-id far predecessor of option j providing ``rest`` (-1: none).
+
+    ``top`` is the running maximum of ``best`` over each satellite's ids (:func:`backtrack`):
+    ids before the first one whose running maximum reaches ``rest`` provide less, so the
+    scan starts there (the same option as a scan from the satellite's first id).
+    """
     lo = pb.sat_lo[d.sat[j]]
-    fp = lo + np.flatnonzero(d.ready[lo:j] <= d.start[j])  # ids below j start earlier
-    hit = fp[best[fp] >= rest - _PATH_TOL]
+    need = rest - _PATH_TOL
+    i0 = lo + int(np.searchsorted(top[lo:j], need))
+    fp = i0 + np.flatnonzero(d.ready[i0:j] <= d.start[j])  # ids below j start earlier
+    hit = fp[best[fp] >= need]
     return int(hit[0]) if hit.size else -1
+
+
+def _running_max(pb: Problem, best: np.ndarray) -> np.ndarray:
+    """Running maximum of ``best`` over each satellite's option ids (float [N])."""
+    top = np.empty_like(best)
+    for lo, hi in zip(pb.sat_lo, pb.sat_hi, strict=True):
+        np.maximum.accumulate(best[lo:hi], out=top[lo:hi])
+    return top
+
+
+def _near_step(pb: Problem, d: DPData, w, best, arc, merge_repeats, node, rest):
+    """One back-tracking step of several satellites at once (one current option each).
+
+    For each option ``node[i]`` the first (lowest-id) near predecessor providing
+    ``rest[i]``, as the per-row scan of :func:`backtrack` finds it, over the
+    concatenated rows.
+
+    Returns:
+      (pos, prev): int arrays: the pair position and predecessor option of each node,
+      ``-1`` where no near predecessor provides the value.
+    """
+    ptr, r = pb.pairs.ptr, pb.pairs.row_of[node]
+    q0 = ptr[r]
+    cnt = ptr[r + 1] - q0
+    seg = np.cumsum(cnt) - cnt  # each row's first element in the concatenation
+    idx = np.arange(int(cnt.sum()), dtype=np.int64) + np.repeat(q0 - seg, cnt)
+    s = pb.pairs.src[idx]
+    cv = best[s]
+    if arc is not None:
+        cv -= arc[idx]
+    if merge_repeats:  # a repeat of the node's target costs the node's value
+        m = d.target[s] == np.repeat(d.target[node], cnt)
+        cv[m] -= np.repeat(w[node], cnt)[m]
+    hits = np.flatnonzero(cv >= np.repeat(rest - _PATH_TOL, cnt))
+    pos = np.full(node.size, -1, np.int64)
+    prev = np.full(node.size, -1, np.int64)
+    if hits.size:
+        f = hits[np.minimum(np.searchsorted(hits, seg), hits.size - 1)]
+        ok = (f >= seg) & (f < seg + cnt)  # the row's first hit, if it has one
+        pos[ok], prev[ok] = idx[f[ok]], s[f[ok]]
+    return pos, prev
+
+
+def _walk(pb: Problem, d: DPData, w, best, top, merge_repeats, j: int, steps: list) -> list:
+    """One satellite's path back from option j without pair costs, scalar by scalar.
+
+    Each row is scanned from its first source at or after the first id whose running
+    maximum ``top`` reaches the value: the sources before provide less (a repeat's cost
+    ``w[j] >= 0`` only lowers them), so a step reads a few pairs, not the whole row.
+    Where ``merge_repeats`` and ``w[j] < 0`` (a repeat worth more than its source) the
+    row is scanned whole. Near-pair positions are appended to ``steps``.
+
+    Returns:
+      the path, from its end.
+    """
+    src, ptr, row_of = (memoryview(a) for a in (pb.pairs.src, pb.pairs.ptr, pb.pairs.row_of))
+    bm, wm, tm, tg = memoryview(best), memoryview(w), memoryview(top), memoryview(d.target)
+    first_ok, lo = memoryview(d.first_ok), pb.sat_lo[d.sat[j]]
+    path = [j]
+    while True:
+        rest = bm[j] - wm[j]  # the value the predecessor (or the start) provides
+        if first_ok[j] and rest <= _PATH_TOL:
+            break
+        need, wj, tj = rest - _PATH_TOL, wm[j], tg[j]
+        r = row_of[j]
+        q, q1 = ptr[r], ptr[r + 1]
+        if not (merge_repeats and wj < 0.0):
+            q = bisect.bisect_left(src, bisect.bisect_left(tm, need, lo, j), q, q1)
+        while q < q1:
+            i = src[q]
+            if bm[i] - (wj if merge_repeats and tg[i] == tj else 0.0) >= need:
+                break
+            q += 1
+        if q < q1:
+            steps.append(q)
+            j = src[q]
+        else:
+            j = _far_predecessor(pb, d, best, top, j, rest)
+            if j < 0:  # cannot happen; stop defensively
+                break
+        path.append(j)
+    return path
 
 
 def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeats=False):
@@ -266,56 +388,63 @@ def backtrack(pb: Problem, d: DPData, w, best, arc=None, used=None, merge_repeat
 
     Walks back from each satellite's best option: the first near predecessor (lowest
     id) that provides the value, else the first far one, until a first observation.
+    Without pair costs one satellite at a time, a few pairs a step (:func:`_walk`);
+    with them all satellites together, one step of every unfinished path per numpy
+    pass over the current options' rows (:func:`_near_step`). Far predecessors (rare)
+    are found one at a time.
 
     Args:
       pb: the problem; d: its :class:`DPData`.
       w: option values, as :func:`dp_forward`.
       best: the result of :func:`dp_forward`.
       arc: optional per-pair costs, as :func:`dp_forward`.
-      used: optional list; the near-pair positions of the paths are appended to it.
+      used: optional list; the near-pair positions of the paths are appended to it
+        (satellite by satellite, each path from its end).
       merge_repeats: as :func:`dp_forward`.
     Returns:
       ``(paths, values)``: per satellite the option ids of an optimal sequence (time
       order) and its value (0 for the empty sequence).
     """
-    src, ptr, row_of = pb.pairs.src, pb.pairs.ptr, pb.pairs.row_of
-    paths, values = [], []
-    for k in range(pb.n_sats):
+    n_s = pb.n_sats
+    paths, values, steps = [[] for _ in range(n_s)], [0.0] * n_s, [[] for _ in range(n_s)]
+    for k in range(n_s):
         lo, hi = pb.sat_lo[k], pb.sat_hi[k]
-        if hi <= lo or not best[lo:hi].max() > 0.0:
-            paths.append([])
-            values.append(0.0)
-            continue
-        j = lo + int(np.argmax(best[lo:hi]))
-        values.append(float(best[j]))
-        path = [j]
-        while True:
-            rest = best[j] - w[j]  # the value the predecessor (or the start) provides
-            if d.first_ok[j] and rest <= _PATH_TOL:
-                break
-            r = row_of[j]
-            q0, q1 = int(ptr[r]), int(ptr[r + 1])
-            q = -1
-            if q1 > q0:
-                cv = best[src[q0:q1]]
-                if arc is not None:
-                    cv -= arc[q0:q1]
-                if merge_repeats:
-                    cv[d.target[src[q0:q1]] == d.target[j]] -= w[j]
-                ok = cv >= rest - _PATH_TOL
-                q = int(ok.argmax())
-                q = q if ok[q] else -1
+        if hi > lo and best[lo:hi].max() > 0.0:
+            paths[k].append(lo + int(np.argmax(best[lo:hi])))
+            values[k] = float(best[paths[k][0]])
+    best = np.ascontiguousarray(best, np.float64)  # read through memoryviews
+    top = _running_max(pb, best)
+    if arc is None:
+        w = np.ascontiguousarray(w, np.float64)
+        for k in range(n_s):
+            if paths[k]:
+                paths[k] = _walk(pb, d, w, best, top, merge_repeats, paths[k][0], steps[k])
+    else:
+        _walk_all(pb, d, (w, best, arc, top), merge_repeats, paths, steps)
+    if used is not None:
+        used.extend(q for k in range(n_s) for q in steps[k])
+    return [p[::-1] for p in paths], values
+
+
+def _walk_all(pb: Problem, d: DPData, arrays, merge_repeats, paths, steps) -> None:
+    """All satellites' paths back together (:func:`backtrack` with pair costs), extending
+    ``paths`` (each holding its end option) and ``steps`` (near-pair positions)."""
+    w, best, arc, top = arrays
+    sats = np.flatnonzero([len(p) > 0 for p in paths])
+    node = np.asarray([paths[k][0] for k in sats.tolist()], np.int64)
+    while sats.size:
+        rest = best[node] - w[node]  # the value the predecessor (or the start) provides
+        go = ~(d.first_ok[node] & (rest <= _PATH_TOL))
+        sats, node, rest = sats[go], node[go], rest[go]
+        pos, prev = _near_step(pb, d, w, best, arc, merge_repeats, node, rest)
+        for i in np.flatnonzero(prev < 0).tolist():
+            prev[i] = _far_predecessor(pb, d, best, top, int(node[i]), rest[i])
+        for k, q, j in zip(sats.tolist(), pos.tolist(), prev.tolist(), strict=True):
             if q >= 0:
-                if used is not None:
-                    used.append(q0 + q)
-                j = int(src[q0 + q])
-            else:
-                j = _far_predecessor(pb, d, best, j, rest)
-                if j < 0:  # cannot happen; stop defensively
-                    break
-            path.append(j)
-        paths.append(path[::-1])
-    return paths, values
+                steps[k].append(q)
+            if j >= 0:
+                paths[k].append(j)
+        sats, node = sats[prev >= 0], prev[prev >= 0]  # -1: cannot happen; stop defensively
 
 
 def dp_paths(pb: Problem, d: DPData, w: np.ndarray, arc=None, used=None, merge_repeats=False):

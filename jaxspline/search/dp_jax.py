@@ -10,7 +10,7 @@ maxima (``.at[].max``), gather the predecessors' values, segment-max them per ro
 (rows found by ``searchsorted`` in the block's row pointers), write the block's
 ``best``. Float64 (the values are summed over thousands of options): the calls run
 under ``jax.enable_x64``. The paths are recovered on the host by
-:func:`jaxspline.search.dp.backtrack` (sequential, a few steps per observation).
+:func:`jaxspline.search.dp.backtrack`.
 
 Not used by the planner's forked bound worker (JAX does not survive a fork); the bench
 (``python -m bench --section bound``) times it against the numpy form on any device.

@@ -108,13 +108,14 @@ class Prices:
     ``lam += mu (UB - plan_value) / |g|^2 g`` with ``g = takers - 1`` (targets) and
     ``g = scaled usage - 1`` (budgets), projected on ``[0, w]`` / ``[0, inf)``; after
     :data:`_STALL_ITERS` iterations without a better bound ``mu`` halves and the prices
-    restart from the best ones seen.
+    restart from the best ones seen. ``dp``: the problem's :func:`dp_prepare`, where the
+    caller has it (None: prepared here).
     """
 
-    def __init__(self, pb: Problem, energy: bool = False, merge_repeats: bool = False):
+    def __init__(self, pb: Problem, energy: bool = False, merge_repeats: bool = False, dp=None):
         self.pb = pb
         self.merge = bool(merge_repeats)
-        self.d = dp_prepare(pb)
+        self.d = dp_prepare(pb) if dp is None else dp
         self.target_value = np.asarray(pb.target_value, np.float64)
         self.option_target = np.asarray(pb.option_target, np.int64)
         self.en = EnergyBudgets(pb) if energy else None
@@ -196,7 +197,7 @@ class Prices:
         return True
 
 
-def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report=None):
+def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report=None, dp=None):
     """Lagrangian phase with repaired plans (see module docstring).
 
     The step target is the best repaired plan's value; ``tl`` ends at the best plan.
@@ -207,6 +208,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
       order_fill: target order used to fill each repaired plan greedily.
       max_iters: cap on the subgradient iterations (None: the deadline alone).
       report: callable ``report(iteration, bound, best_value)`` or None.
+      dp: the problem's :func:`dp_prepare` (None: prepared here).
     Returns:
       BoundResult.
     """
@@ -215,7 +217,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     best_w = tl.value
     if pb.n_options == 0:
         return BoundResult(best, 0.0, 0, BoundStatus.OPTIMAL)
-    pr = Prices(pb, energy=True)
+    pr = Prices(pb, energy=True, dp=dp)
     status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
@@ -242,6 +244,7 @@ def upper_bound(
     max_iters=None,
     energy: bool = False,
     merge_repeats: bool = True,
+    dp=None,
 ) -> BoundResult:
     """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
 
@@ -258,13 +261,14 @@ def upper_bound(
       merge_repeats: the strengthened relaxation (module docstring): consecutive
         options of one target joined by a near pair are credited once. False: the
         plain relaxation, as the search's Lagrangian phase iterates it.
+      dp: the problem's :func:`dp_prepare` (None: prepared here).
     Returns:
       BoundResult with status ``CONVERGED`` or ``TIME`` (cap / deadline reached).
     """
     if pb.n_options == 0:
         return BoundResult([], 0.0, 0, BoundStatus.OPTIMAL)
     t0 = time.monotonic()
-    pr = Prices(pb, energy=energy, merge_repeats=merge_repeats)
+    pr = Prices(pb, energy=energy, merge_repeats=merge_repeats, dp=dp)
     status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         pr.solve_dp()

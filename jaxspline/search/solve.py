@@ -10,7 +10,8 @@
 5. earliest-start pass (:func:`earliest_pass`).
 
 With ``bound_worker``, a forked process iterates the bound alone over the whole search
-budget (:class:`BoundWorker`) and the smaller of the two bounds is reported.
+budget (:class:`BoundWorker`, sharing the DP layout the Lagrangian phase uses) and the
+smaller of the two bounds is reported.
 """
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ from typing import NamedTuple
 
 from jaxspline.search import clock
 from jaxspline.search.bound_worker import BoundWorker
+from jaxspline.search.dp import dp_prepare
 from jaxspline.search.exact import exact_search
 from jaxspline.search.lagrangian import (
     lagrangian,
@@ -113,13 +115,14 @@ def solve(
     say("greedy", f"value {tl.value:.6g}")
     t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())
     cap = None if max_iters is None else max(10, max_iters // 10)
-    worker = None
+    worker, shared = None, []
     if bound_worker and pb.n_options:
         w_cap = None if cap is None else _WORKER_ITERS * cap
-        worker = BoundWorker(pb, tl.value, deadline - tail, w_cap)
+        shared.append(dp_prepare(pb))  # one DP layout: the worker's and the Lagrangian phase's
+        worker = BoundWorker(pb, tl.value, deadline - tail, w_cap, shared[0])
     try:
         budget = _Budget(deadline, now, tail, t_dp, cap, max_iters)
-        return _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say)
+        return _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, shared, say)
     finally:
         if worker is not None:
             worker.stop()
@@ -136,8 +139,12 @@ class _Budget(NamedTuple):
     max_iters: int | None  # LNS iteration cap
 
 
-def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
-    """Stages 2-5 of :func:`solve` and the bound worker's result."""
+def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, shared, say):
+    """Stages 2-5 of :func:`solve` and the bound worker's result.
+
+    ``shared`` holds the DP layout the worker shares (or nothing): the Lagrangian phase
+    takes it out, so the LNS runs without it resident.
+    """
     deadline, now, tail, t_dp, cap, max_iters = budget
     res = lagrangian(
         tl,
@@ -145,6 +152,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, say):
         order,
         max_iters=cap,
         report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
+        dp=shared.pop() if shared else None,
     )
     stats.update(
         lagrangian_value=tl.value,

@@ -17,7 +17,7 @@ import pytest
 
 from jaxspline.planner.pipeline import build_problem
 from jaxspline.readers.scenario import load_scenario
-from jaxspline.search import BoundWorker, solve, upper_bound
+from jaxspline.search import BoundWorker, dp_prepare, solve, upper_bound
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from test_cli_plan import SMALL  # noqa: E402
@@ -41,6 +41,13 @@ def test_worker_bound_equals_in_process_bound(problem):
     assert got.bound == ref.bound  # bit for bit across the fork
     assert got.iterations == ref.iterations
     assert got.status == ref.status
+
+
+def test_worker_with_the_parents_dp_layout_gives_the_same_bound(problem):
+    ref = upper_bound(problem, PLAN_VALUE, math.inf, CAP, energy=False)
+    got = BoundWorker(problem, PLAN_VALUE, math.inf, CAP, dp_prepare(problem)).result()
+    assert got is not None
+    assert (got.bound, got.iterations, got.status) == (ref.bound, ref.iterations, ref.status)
 
 
 def test_solve_with_worker_keeps_the_plan_and_tightens_the_bound(problem):

@@ -152,8 +152,12 @@ def test_change_ok_matches_resimulation():
     assert decided > 3500 and spilled > 1000 and 500 < low < 3500
 
 
-def _problem(rng, n_steps, n_sats=2, n_targets=60, far=40.0):
-    """A per-channel-style Problem: random options, random near transition times."""
+def _problem(rng, n_steps, n_sats=2, n_targets=60, far=40.0, repeats=0.0):
+    """A per-channel-style Problem: random options, random near transition times.
+
+    ``repeats``: chance that a target's next option follows its previous one on the
+    same satellite (a repeat, 0-9 s later).
+    """
     bm, lit = _random_model(rng, n_steps, n_sats, charge_max=150.0)
     horizon = n_steps * DT
     opts = []
@@ -161,6 +165,8 @@ def _problem(rng, n_steps, n_sats=2, n_targets=60, far=40.0):
         for _ in range(int(rng.integers(1, 4))):
             k = int(rng.integers(0, n_sats))
             s = float(rng.integers(0, int(horizon) - 40))
+            if repeats and opts and opts[-1][3] == t and rng.random() < repeats:
+                k, s = opts[-1][0], min(opts[-1][2] + float(rng.integers(0, 10)), horizon - 40)
             opts.append((k, s, s + float(rng.integers(2, 30)), t))
     opts.sort()
     sat = [o[0] for o in opts]
