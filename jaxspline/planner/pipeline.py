@@ -364,7 +364,7 @@ def build_problem(
         near, removed = _near_pairs(
             sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
         )
-        release_programs()  # the screen's compiled chunk programs are done with
+        release_programs(len(opp))  # the screen's compiled chunk programs are done with
         clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
         check("screening")
         battery = _battery(sc, sunlit)

@@ -47,10 +47,19 @@ _EXTRACT_MAX_K = 32
 _MIN_TABLE = 1 << 14
 
 
-def release_programs() -> None:
+def release_programs(n_options: int | None = None) -> None:
     """Drop the compiled chunk programs (:func:`fused_chunks` compiles them again when
-    called anew): their executables hold ~100-200 MB of a large screen, which a caller
-    that screens once (the planner) does not need afterwards."""
+    called anew): the executables of a large screen take hundreds of MB, which a caller
+    that screens once (the planner) does not need afterwards.
+
+    Args:
+      n_options: the options of the screen just done; a screen of at most
+        ``_MIN_TABLE`` keeps the programs: every such screen pads its table to that one
+        size, so the next small screen (another plan in the same process) runs them
+        again, and their executables are small. None drops them whatever the size.
+    """
+    if n_options is not None and n_options <= _MIN_TABLE:
+        return
     for program in (_fused_program, _compact_program, _topk_program):
         program.cache_clear()
 

@@ -112,3 +112,22 @@ def test_no_candidates_yields_empty_chunks():
     assert all(c.src.size == 0 and c.n_screened == 0 for c in chunks)
     lone = opt._replace(scan_ok=np.arange(len(opt.route)) == 0)  # one valid option: no slot
     assert list(screen.screen_chunks(lone, LIMITS, progress=False)) == []
+
+
+def test_release_keeps_a_small_screens_programs_and_drops_a_large_ones():
+    from jaxspline.screen import fused
+
+    rng = np.random.default_rng(5)
+    opt = synthetic_options(rng, n_routes=6, per_route=3, horizon=300.0)
+    ref = screen.screen_transitions(opt, LIMITS, progress=False)
+    held = fused._fused_program.cache_info().currsize
+    assert held > 0
+    fused.release_programs(fused._MIN_TABLE)  # a small screen: every one pads to this size
+    assert fused._fused_program.cache_info().currsize == held
+    again = screen.screen_transitions(opt, LIMITS, progress=False)  # the same programs
+    assert fused._fused_program.cache_info().hits > 0
+    np.testing.assert_array_equal(again.feasible, ref.feasible)
+    fused.release_programs(fused._MIN_TABLE + 1)
+    assert fused._fused_program.cache_info().currsize == 0
+    fused.release_programs()
+    assert fused._compact_program.cache_info().currsize == 0
