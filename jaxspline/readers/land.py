@@ -9,9 +9,9 @@ few MB of memory and one pass of decompression (about 3-4 s).
 * :func:`is_land`: land test of points, with the package's cell indexing;
 * :func:`ocean_cells`: per coarse grid cell, how many mask cells are ocean (streamed);
 * :func:`land_fraction`: land share on a coarse grid (coastline contours), cached. The
-  default grid (0.25 deg) ships with the package (:data:`COAST_FILE`, 90 kB, written by
+  default grid (0.25 deg) ships with the package (:data:`COAST_FILE`, written by
   ``scripts/make_coast_grid.py`` from :func:`ocean_cells`), so the plan page and the
-  ground-track figure do not decompress the whole mask (about 4 s) in every run.
+  ground-track figure do not decompress the whole mask in every run.
 """
 
 from __future__ import annotations
