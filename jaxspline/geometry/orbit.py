@@ -150,7 +150,9 @@ def circular_orbit(
     a = R_EARTH + float(altitude)
     n = np.sqrt(MU_EARTH / a**3)
     rate = -1.5 * n * _J2_EARTH * (R_EARTH / a) ** 2 * np.cos(inclination) if j2_drift else 0.0
-    return CircularOrbit(*(jnp.asarray(float(x)) for x in (a, inclination, raan, arg_lat, n, rate)))
+    # numpy float64 scalars: jnp arrays made here would be float32 whenever the caller has
+    # not switched JAX to float64 (a scenario read before plan() enters its float64 context)
+    return CircularOrbit(*(np.float64(x) for x in (a, inclination, raan, arg_lat, n, rate)))
 
 
 def circular_orbit_over(
@@ -194,7 +196,7 @@ def circular_orbit_over(
     u0 = u - float(base.mean_motion) * t
     raan0 = raan_t - float(base.raan_rate) * t
     return base._replace(
-        raan=jnp.asarray(np.mod(raan0, 2 * np.pi)), arg_lat=jnp.asarray(np.mod(u0, 2 * np.pi))
+        raan=np.float64(np.mod(raan0, 2 * np.pi)), arg_lat=np.float64(np.mod(u0, 2 * np.pi))
     )
 
 
