@@ -16,8 +16,11 @@ import csv
 import datetime as dt
 import html
 import json
+import os
 import re
 import shutil
+import subprocess
+import sys
 
 import pytest
 
@@ -89,6 +92,8 @@ time_limit_s = 15.0
 """
 N_TARGETS = 32
 QUICK = ["--time-limit", "10", "--max-iters", "30", "--quiet"]
+FIRST = ["--time-limit", "120", "--max-iters", "30", "--quiet"]  # compiles: time for it
+_TIMEOUT_S = 300
 AEMS = tuple(aem_file_name(n) for n in ("eo-tle", "eo-agile"))  # one file a satellite
 FULL = OUTPUT_FILES + (HTML_FILE, ATTITUDE_FIGURE) + AEMS  # the default (--aem, --html)
 OFF_NADIR_MAX_DEG = {"eo-tle": 30.0, "eo-agile": 40.0}
@@ -100,13 +105,46 @@ def runs(tmp_path_factory):
     scen = d / "small.toml"
     scen.write_text(SMALL, encoding="utf-8")
     no_plots = d / "no_plots"
-    first = ["--time-limit", "120", "--max-iters", "30", "--quiet"]  # compiles: time for it
-    args = ["plan", str(scen), "-o", str(no_plots), "--no-plots", "--no-aem", "--no-html", *first]
+    args = ["plan", str(scen), "-o", str(no_plots), "--no-plots", "--no-aem", "--no-html", *FIRST]
     code_no_plots = main(args)
     out = d / "out"
     # the default: flown joins and AEMs (their kernels compile now: time for them)
     code = main(["plan", str(scen), "-o", str(out), "--time-limit", "60", "--max-iters", "300"])
     return {"scen": scen, "out": out, "code": code, "no_plots": (code_no_plots, no_plots)}
+
+
+def plan_json(out):
+    """plan.json without what a run measures (times, memory, the clock's account)."""
+    data = json.loads((out / "plan.json").read_text())
+    data.pop("timings_s")
+    measured = (
+        "peak_rss_mb",
+        "worker_dp_per_s",
+        "memory_estimate_mb",
+        "lns_seconds",
+        "lns_cpu_seconds",
+    )
+    for name in measured:  # not the plan
+        data["stats"].pop(name, None)
+    data["report"].pop("time_limit", None)  # the clock's account of the run (elapsed, pace)
+    return data
+
+
+def test_max_iters_gives_the_same_plan_in_another_process(runs, tmp_path):
+    """The fixture's first run again as a command, under another hash seed (no set or dict
+    order can leak into the plan): plan.json is the same but for what the run measures."""
+    code, first = runs["no_plots"]
+    assert code == 0
+    seed = "2" if os.environ.get("PYTHONHASHSEED") == "1" else "1"
+    out = tmp_path / "again"
+    cmd = [sys.executable, "-m", "jaxspline.cli", "plan", str(runs["scen"]), "-o", str(out)]
+    cmd += ["--no-plots", "--no-aem", "--no-html", *FIRST]
+    env = dict(os.environ, PYTHONHASHSEED=seed)  # the run's shared XLA cache (conftest)
+    r = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=_TIMEOUT_S)
+    assert r.returncode == 0, r.stderr
+    again = plan_json(out)
+    assert again["summary"]["observations"] > 0
+    assert again == plan_json(first)
 
 
 def _snapshot(out):
