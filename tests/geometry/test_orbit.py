@@ -208,3 +208,13 @@ def test_value_errors_name_the_argument():
         propagate_tle("1 garbage", "2 garbage", np.array([2451545.0]))
     with pytest.raises(ValueError, match="orbit"):
         orbit_position("not an orbit", 0.0)
+
+
+def test_circular_elements_stay_float64_when_jax_is_in_float32():
+    """A scenario read before the planner switches float64 on keeps its elements exact."""
+    with jax.enable_x64(False):
+        orbs = (circular_orbit(600e3, 1.7, 0.3, 1.2), circular_orbit_over(0.8, 0.2, 900.0, 1.1))
+    for orb in orbs:
+        for name, x in orb._asdict().items():
+            assert np.asarray(x).dtype == np.float64, name
+    assert float(orbs[0].inclination) == 1.7 and float(orbs[0].arg_lat) == 1.2
