@@ -45,6 +45,10 @@ _WIDTHS = (256, 128, 64, 32, 16, 8, 4, 2, 1)
 _EXTRACT_MAX_K = 32
 #: Smallest padded option table (~1 MB for 3 channels): small tables share programs.
 _MIN_TABLE = 1 << 14
+#: Fewest rows of a single-chunk screen (tiny screens share one program shape).
+_MIN_ROWS = 1 << 6
+#: Compiled chunk programs kept per kind (shapes x models; a large screen drops them).
+_PROGRAMS_KEPT = 64
 
 
 def release_programs(n_options: int | None = None) -> None:
@@ -79,7 +83,7 @@ def _row_width(counts: np.ndarray, chunk_size: int) -> int:
     return fits[-1]
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=_PROGRAMS_KEPT)
 def _fused_program(pair, rows: int, width: int, mesh, dtype):
     """jit program screening one chunk: ``rows`` rows of the row table.
 
@@ -127,7 +131,7 @@ def _prefix_count(sel, block: int = 16):
     return ((jnp.cumsum(tot) - tot)[:, None] + inner).reshape(-1)
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=_PROGRAMS_KEPT)
 def _compact_program(rows: int, width: int, feasible_only: bool):
     """jit program moving the kept slots of one screened chunk to the front (order kept).
 
@@ -189,7 +193,7 @@ def _row_top_k(score, k: int):
     return jnp.stack(cols, axis=1), jnp.stack(real, axis=1)
 
 
-@functools.lru_cache(maxsize=16)
+@functools.lru_cache(maxsize=_PROGRAMS_KEPT)
 def _topk_program(rows: int, width: int, k: int, by: str):
     """jit program keeping, per row of one screened chunk, its ``k`` feasible slots of
     largest score ``by`` (margin, destination value or value density, see
@@ -224,12 +228,13 @@ def _topk_program(rows: int, width: int, k: int, by: str):
 
 
 def _bucket(n: int, maximum: int) -> int:
-    """Rows per chunk: ``maximum``, or for a single-chunk problem n rounded up to 1/16 of
-    its power of two (<= 6 % padding; at most 16 compiled shapes per octave)."""
+    """Rows per chunk: ``maximum``, or for a single-chunk problem n rounded up to a power
+    of two (at least :data:`_MIN_ROWS`): one compiled shape per octave, so the many small
+    screens of a process (a plan's satellites, a library user's loop) share programs; the
+    padding costs at most one small chunk's work again, far less than a compile."""
     if n >= maximum:
         return maximum
-    p = 1 << (max(int(n), 1) - 1).bit_length()
-    return min(maximum, round_up(n, max(1, p // 16)))
+    return min(maximum, max(_MIN_ROWS, 1 << (max(int(n), 1) - 1).bit_length()))
 
 
 def fused_chunks(

@@ -57,8 +57,15 @@ class Screener:
         rep = NamedSharding(self.mesh, P())
         self.cand = NamedSharding(self.mesh, P("cand"))
         pair, table, params = model_arrays(model, options, self.dtype)
-        # field-major [F, N]: each channel's column is one contiguous vector
-        self.table = tuple(jax.device_put(jnp.asarray(a), rep) for a in table)
+        # field-major [F, N]: each channel's column is one contiguous vector; N padded to a
+        # power of two, so tables of similar size share the compiled program
+        n_pad = padded_size(np.asarray(options.t_start).shape[0])
+        self.table = tuple(
+            jax.device_put(
+                jnp.asarray(np.pad(a, [(0, 0)] * (a.ndim - 1) + [(0, n_pad - a.shape[-1])])), rep
+            )
+            for a in map(np.asarray, table)
+        )
         self.params = tuple(jax.device_put(jnp.asarray(a), rep) for a in params)
         self.t_start = np.asarray(options.t_start, np.float64)
         self.t_end = np.asarray(options.t_end, np.float64)
