@@ -3,15 +3,18 @@
 The ``global_land_mask`` package ships the mask (21,600 x 43,200 cells of 1/120 deg,
 ``True`` = ocean) as one compressed ``.npy`` inside an ``.npz``; importing the package
 decompresses all of it (0.9 GB resident). Here the mask is read from the package's
-file row block by row block, so a land test or a coarse land-fraction grid costs a
-few MB of memory and one pass of decompression (about 3-4 s).
+file row block by row block (a few MB of memory, one pass of decompression), and
+what the planner asks of it most ships with jaxspline as a coastline grid
+(:data:`COAST_FILE`, written by ``scripts/make_coast_grid.py``): per 0.25 deg cell,
+how many mask cells are ocean, and the mask bits of every cell that is neither all
+land nor all ocean. So a land test reads no mask at all.
 
-* :func:`is_land`: land test of points, with the package's cell indexing;
+* :func:`is_land`: land test of points, with the package's cell indexing (from the
+  shipped grid: a cell's count, or its bit where the coast crosses it);
 * :func:`ocean_cells`: per coarse grid cell, how many mask cells are ocean (streamed);
-* :func:`land_fraction`: land share on a coarse grid (coastline contours), cached. The
-  default grid (0.25 deg) ships with the package (:data:`COAST_FILE`, written by
-  ``scripts/make_coast_grid.py`` from :func:`ocean_cells`), so the plan page and the
-  ground-track figure do not decompress the whole mask in every run.
+* :func:`coast_bits`: the mask bits of the mixed cells of such a grid (streamed);
+* :func:`land_fraction`: land share on a coarse grid (coastline contours), cached; the
+  default grid is the shipped one.
 """
 
 from __future__ import annotations
@@ -21,13 +24,24 @@ import functools
 import importlib.util
 import zipfile
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
-__all__ = ["COAST_BLOCK", "COAST_FILE", "is_land", "land_fraction", "ocean_cells"]
+__all__ = [
+    "COAST_BLOCK",
+    "COAST_FILE",
+    "coast_bits",
+    "is_land",
+    "land_fraction",
+    "mask_axes",
+    "ocean_cells",
+]
 
 COAST_BLOCK = 30  # mask cells (1/120 deg) per coastline grid cell: 0.25 deg
-#: the shipped :func:`ocean_cells` grid of ``COAST_BLOCK`` (arrays lat, lon, ocean_cells)
+#: the shipped grid of ``COAST_BLOCK``: arrays lat, lon, ocean_cells (:func:`ocean_cells`),
+#: bits (:func:`coast_bits`), mask_lat and mask_lon (the mask's axes: first, second, min,
+#: max value [deg])
 COAST_FILE = Path(__file__).resolve().parents[1] / "data" / f"coast_cells_{COAST_BLOCK}.npz"
 _MASK_FILE = "globe_combined_mask_compressed.npz"
 _READ_ROWS = 240  # mask rows decompressed per read (10 MB)
@@ -59,14 +73,41 @@ def _mask_stream():
             yield lat, lon, shape, f
 
 
-def _index(x, axis):
-    """Cell index of coordinates x [deg] on a regular axis (clipped to its range)."""
-    x = np.clip(np.asarray(x, np.float64), axis.min(), axis.max())
-    return ((x - axis[0]) / (axis[1] - axis[0])).astype(np.int64)
+def _axis_ends(axis) -> np.ndarray:
+    """What :func:`_index` reads of a mask axis: first, second, min and max value [deg]."""
+    return np.array([axis[0], axis[1], axis.min(), axis.max()], np.float64)
+
+
+def _index(x, ends):
+    """Cell index of coordinates x [deg] on a regular axis (:func:`_axis_ends`; clipped)."""
+    x = np.clip(np.asarray(x, np.float64), ends[2], ends[3])
+    return ((x - ends[0]) / (ends[1] - ends[0])).astype(np.int64)
+
+
+class _Coast(NamedTuple):
+    """The shipped grid, ready for lookups (:func:`_coast`)."""
+
+    count: np.ndarray  # [N, M] ocean mask cells per grid cell
+    rank: np.ndarray  # [N, M] position of a mixed cell among the mixed cells (row-major)
+    bits: np.ndarray  # packed mask bits of the mixed cells, block x block each (uint8)
+    mask_lat: np.ndarray  # _axis_ends of the mask's latitude axis
+    mask_lon: np.ndarray
+
+
+@functools.cache
+def _coast() -> _Coast:
+    with np.load(COAST_FILE) as z:
+        count, bits = z["ocean_cells"], z["bits"]
+        mask_lat, mask_lon = z["mask_lat"], z["mask_lon"]
+    mixed = (count > 0) & (count < COAST_BLOCK**2)
+    rank = (np.cumsum(mixed.ravel()) - 1).reshape(mixed.shape).astype(np.int32)
+    return _Coast(count, rank, bits, mask_lat, mask_lon)
 
 
 def is_land(lat, lon) -> np.ndarray:
     """Whether points are on land (GLOBE mask cell containing them; lakes count as land).
+
+    Answered from the shipped coastline grid (module docstring): exactly the mask's cell.
 
     Args:
       lat: float [...] geodetic latitudes [deg] in [-90, 90].
@@ -79,25 +120,50 @@ def is_land(lat, lon) -> np.ndarray:
     lat, lon = np.broadcast_arrays(np.asarray(lat, np.float64), np.asarray(lon, np.float64))
     if not (np.all(np.abs(lat) <= 90.0) and np.all(np.abs(lon) <= 180.0)):
         raise ValueError("is_land: lat must lie in [-90, 90] and lon in [-180, 180] deg")
-    out = np.zeros(lat.shape, bool)
-    flat_lat, flat_lon = lat.ravel(), lon.ravel()
-    with _mask_stream() as (ax_lat, ax_lon, (n_rows, n_cols), f):
-        row = _index(flat_lat, ax_lat)
-        col = _index(flat_lon, ax_lon)
-        order = np.argsort(row, kind="stable")
-        bounds = np.searchsorted(row[order], np.arange(0, n_rows + _READ_ROWS, _READ_ROWS))
-        ocean = np.zeros(row.size, bool)
-        for k, r0 in enumerate(range(0, n_rows, _READ_ROWS)):
-            q = order[bounds[k] : bounds[k + 1]]
-            n = min(_READ_ROWS, n_rows - r0)
-            block = f.read(n * n_cols)  # decompressed either way; kept only with queries
-            if q.size:
-                rows = np.frombuffer(block, np.bool_).reshape(n, n_cols)
-                ocean[q] = rows[row[q] - r0, col[q]]
-            if bounds[k + 1] == row.size:
-                break
-    out.ravel()[:] = ~ocean
-    return out
+    c = _coast()
+    row, col = _index(lat.ravel(), c.mask_lat), _index(lon.ravel(), c.mask_lon)
+    i, j = row // COAST_BLOCK, col // COAST_BLOCK
+    count = c.count[i, j]
+    ocean = count == COAST_BLOCK**2
+    mixed = np.flatnonzero((count > 0) & ~ocean)
+    cell = c.rank[i[mixed], j[mixed]].astype(np.int64) * COAST_BLOCK**2
+    pos = cell + (row[mixed] % COAST_BLOCK) * COAST_BLOCK + col[mixed] % COAST_BLOCK
+    ocean[mixed] = (c.bits[pos >> 3] >> (7 - (pos & 7))) & 1  # np.packbits' bit order
+    return ~ocean.reshape(lat.shape)
+
+
+def mask_axes():
+    """What the land test reads of the mask's axes (first, second, min, max value [deg]).
+
+    Returns:
+      (float [4] latitude, float [4] longitude), from the package's file.
+    """
+    with _mask_stream() as (lat, lon, _, _):
+        return _axis_ends(lat), _axis_ends(lon)
+
+
+def coast_bits(count: np.ndarray, block: int = COAST_BLOCK) -> np.ndarray:
+    """The mask bits of the mixed cells of a coarse grid (one streamed pass).
+
+    Args:
+      count: [N, M] ocean cell counts of the grid (:func:`ocean_cells` of ``block``).
+      block: mask cells per grid cell along each axis.
+    Returns:
+      uint8 [ceil(K block^2 / 8)]: for the K cells with ``0 < count < block^2`` in
+      row-major order, each cell's ``block x block`` mask (``True`` = ocean, rows
+      north to south as the mask), concatenated and packed by ``np.packbits``.
+    """
+    mixed = (count > 0) & (count < block * block)
+    parts = []
+    with _mask_stream() as (_, _, (nr, nc), f):
+        if count.shape != (nr // block, nc // block):
+            raise ValueError(f"count: shape {count.shape} is not the mask's grid of {block}")
+        for i in range(count.shape[0]):
+            rows = np.frombuffer(f.read(block * nc), np.bool_).reshape(block, nc // block, block)
+            js = np.flatnonzero(mixed[i])
+            if js.size:
+                parts.append(rows[:, js, :].transpose(1, 0, 2).reshape(-1))
+    return np.packbits(np.concatenate(parts)) if parts else np.zeros(0, np.uint8)
 
 
 def ocean_cells(block: int = COAST_BLOCK):

@@ -23,6 +23,19 @@ def test_is_land_equals_the_package_on_random_points():
     np.testing.assert_array_equal(grid.ravel(), got[north])
 
 
+def test_is_land_equals_the_package_along_whole_mask_rows():
+    """Every cell of some mask rows (each cell the coast crosses, from the shipped bits)."""
+    from global_land_mask import globe
+
+    rng = np.random.default_rng(1)
+    rows = rng.choice(np.flatnonzero(np.abs(globe._lat) < 75.0), 12, replace=False)
+    lon = np.clip(globe._lon + rng.uniform(0.0, 1.0 / 120.0, globe._lon.size), -180.0, 180.0)
+    lat = np.repeat(globe._lat[rows][:, None], lon.size, axis=1)
+    got = is_land(lat, np.broadcast_to(lon, lat.shape))
+    np.testing.assert_array_equal(got, globe.is_land(lat, np.broadcast_to(lon, lat.shape)))
+    assert 0 < got.sum() < got.size
+
+
 @pytest.mark.parametrize(("lat", "lon"), [(91.0, 0.0), (0.0, -181.0), (np.nan, 0.0)])
 def test_is_land_rejects_bad_coordinates(lat, lon):
     with pytest.raises(ValueError, match="lat must lie"):
