@@ -1,5 +1,7 @@
 """Routes: windows, boundary states, options and scan feasibility against independent references."""
 
+import functools
+
 import jax
 import jax.numpy as jnp
 import numpy as np
@@ -31,41 +33,48 @@ SPEC = make_route_spec(
     duration=[6.0, 5.0, 0.0, 0.0, 5.0],
     value=[3.0, 1.0, 5.0, 2.0, 4.0],
 )
-ROUTES = make_route_set(SCENE, SPEC, 0.0, 600.0, LIM, nominal_speed=7000.0)
+
+
+@functools.cache
+def _routes():
+    """The routes of SPEC (built on first use, not while the run collects the tests)."""
+    return make_route_set(SCENE, SPEC, 0.0, 600.0, LIM, nominal_speed=7000.0)
+
+
 LIMITS = AxisLimits(np.radians([2.0, 2.0, 2.0]), np.radians([1.0, 1.0, 1.0]))
 
 
 def _mid_t0():
-    lo, hi = np.asarray(ROUTES.t0_min[:4]), np.asarray(ROUTES.t0_max[:4])
+    lo, hi = np.asarray(_routes().t0_min[:4]), np.asarray(_routes().t0_max[:4])
     return jnp.asarray(0.5 * (lo + hi))
 
 
 def test_windows_and_visibility():
-    lo, hi = np.asarray(ROUTES.t0_min), np.asarray(ROUTES.t0_max)
+    lo, hi = np.asarray(_routes().t0_min), np.asarray(_routes().t0_max)
     assert np.all(lo[:4] < hi[:4])
     assert lo[4] == np.inf and hi[4] == -np.inf  # 10 N is out of view on this pass
-    r_e = np.asarray(geodetic_to_ecef(np.asarray(ROUTES.lat), np.asarray(ROUTES.lon), 0.0))
+    r_e = np.asarray(geodetic_to_ecef(np.asarray(_routes().lat), np.asarray(_routes().lon), 0.0))
     for k in range(4):
         assert float(off_nadir(SCENE, r_e[k], lo[k])) == pytest.approx(LIM, abs=1e-8)
-        dur = float(ROUTES.duration[k])
+        dur = float(_routes().duration[k])
         assert float(off_nadir(SCENE, r_e[k], hi[k] + dur)) == pytest.approx(LIM, abs=1e-8)
 
 
 def test_strip_against_the_flight_is_reversed():
     # strip 2 (azimuth 195 deg on a descending pass heading ~190 deg) keeps its direction,
     # strip 3 (azimuth 20 deg) is scanned from its far end towards the south
-    az = np.degrees(np.asarray(ROUTES.azimuth))
+    az = np.degrees(np.asarray(_routes().azimuth))
     assert az[2] == pytest.approx(195.0, abs=1e-9)
     assert abs(((az[3] - 200.0) + 180.0) % 360.0 - 180.0) < 1.0
-    assert float(ROUTES.lat[3]) > SPEC.lat[3]
+    assert float(_routes().lat[3]) > SPEC.lat[3]
 
 
 def test_point_states_match_pointing_and_t0_derivative_is_the_rate():
     route = jnp.asarray([0, 1, 2, 3])
     t0 = _mid_t0()
-    t1, sa, sr, ea, er = ROUTES.states(route, t0)
-    np.testing.assert_allclose(t1, t0 + np.asarray(ROUTES.duration)[np.asarray(route)])
-    tgt = np.asarray(geodetic_to_ecef(np.asarray(ROUTES.lat), np.asarray(ROUTES.lon), 0.0))
+    t1, sa, sr, ea, er = _routes().states(route, t0)
+    np.testing.assert_allclose(t1, t0 + np.asarray(_routes().duration)[np.asarray(route)])
+    tgt = np.asarray(geodetic_to_ecef(np.asarray(_routes().lat), np.asarray(_routes().lon), 0.0))
     ref = np.asarray(pointing_angles(SCENE, tgt[:2], t0[:2]))
     np.testing.assert_allclose(sa[:2], ref, atol=1e-13)
     # a tracked point does not depend on t0 except through time: d(start angle)/dt0 = rate
@@ -77,24 +86,25 @@ def test_point_states_match_pointing_and_t0_derivative_is_the_rate():
 def test_strip_end_points_at_the_great_circle_end():
     route = jnp.asarray([0, 1, 2, 3])
     t0 = _mid_t0()
-    t1, _, _, ea, _ = ROUTES.states(route, t0)
+    t1, _, _, ea, _ = _routes().states(route, t0)
     for k, r in [(2, 2), (3, 3)]:
         # independent numpy great circle on the sphere through the start point
-        lat, lon, az = (float(np.asarray(x)[r]) for x in (ROUTES.lat, ROUTES.lon, ROUTES.azimuth))
+        rs = _routes()
+        lat, lon, az = (float(np.asarray(x)[r]) for x in (rs.lat, rs.lon, rs.azimuth))
         g0 = np.asarray(geodetic_to_ecef(lat, lon, 0.0))
         rad = np.linalg.norm(g0)
         u = g0 / rad
         d = strip_direction(lat, lon, az)
         d = d - (d @ u) * u
         d /= np.linalg.norm(d)
-        delta = float(ROUTES.length[r]) / rad
+        delta = float(_routes().length[r]) / rad
         end = rad * (u * np.cos(delta) + d * np.sin(delta))
         ref = np.asarray(pointing_angles(SCENE, end, float(t1[k])))
         np.testing.assert_allclose(np.asarray(ea)[k, :2], ref[:2], atol=1e-11)
 
 
 def _states_flat(x):
-    _, sa, sr, ea, er = ROUTES.states(jnp.asarray([0, 1, 2, 3]), x)
+    _, sa, sr, ea, er = _routes().states(jnp.asarray([0, 1, 2, 3]), x)
     return jnp.concatenate([sa, sr, ea, er], axis=1)
 
 
@@ -126,7 +136,7 @@ def test_states_gradient_matches_finite_differences():
 def test_options_grid_scan_ok_and_model_agree():
     speeds = (4000.0, 7000.0)
     opts, info = build_route_options(
-        ROUTES, LIMITS, LIM, n_t0=3, scan_speeds=speeds, epoch_jd=JD, sun_elevation_min=None
+        _routes(), LIMITS, LIM, n_t0=3, scan_speeds=speeds, epoch_jd=JD, sun_elevation_min=None
     )
     assert isinstance(opts, RouteOptions)
     route = np.asarray(opts.route)
@@ -134,12 +144,12 @@ def test_options_grid_scan_ok_and_model_agree():
     assert route.size == 2 * 3 + 2 * 3 * 2
     assert 4 not in route
     t0 = np.asarray(opts.t_start)
-    assert np.all(t0 >= np.asarray(ROUTES.t0_min)[route] - 1e-9)
-    assert np.all(t0 <= np.asarray(ROUTES.t0_max)[route] + 1e-9)
-    strip = np.asarray(ROUTES.kind)[route] == STRIP
+    assert np.all(t0 >= np.asarray(_routes().t0_min)[route] - 1e-9)
+    assert np.all(t0 <= np.asarray(_routes().t0_max)[route] + 1e-9)
+    strip = np.asarray(_routes().kind)[route] == STRIP
     np.testing.assert_allclose(
         (np.asarray(opts.t_end) - t0)[strip],
-        np.asarray(ROUTES.length)[route][strip] / info.speed[strip],
+        np.asarray(_routes().length)[route][strip] / info.speed[strip],
     )
     # peak rates over the scan bound the boundary rates, and scan_ok follows the limits
     assert np.all(info.peak_rate >= np.abs(np.asarray(opts.start_rate)) - 1e-15)
@@ -152,17 +162,17 @@ def test_options_grid_scan_ok_and_model_agree():
     sel = np.flatnonzero(strip & (info.speed == 4000.0))
     sel = sel[np.unique(route[sel], return_index=True)[1]]  # one option per strip route
     sel = np.concatenate([sel, sel])  # K = 4, the shape compiled above
-    model = ROUTES.with_speeds(route[sel], info.speed[sel])
+    model = _routes().with_speeds(route[sel], info.speed[sel])
     t1, sa, sr, ea, er = model.states(jnp.asarray(route[sel]), jnp.asarray(t0[sel]))
     np.testing.assert_allclose(t1, np.asarray(opts.t_end)[sel], rtol=1e-13)
     np.testing.assert_allclose(ea, np.asarray(opts.end_angle)[sel], atol=1e-12)
     np.testing.assert_allclose(er, np.asarray(opts.end_rate)[sel], atol=1e-14)
     # tiny limits or a Sun that must be at the zenith: nothing is feasible
     tiny = AxisLimits(np.full(3, 1e-6), np.full(3, 1e-6))
-    opts2, _ = build_route_options(ROUTES, tiny, LIM, n_t0=3, scan_speeds=speeds)
+    opts2, _ = build_route_options(_routes(), tiny, LIM, n_t0=3, scan_speeds=speeds)
     assert not np.asarray(opts2.scan_ok).any()
     opts3, _ = build_route_options(
-        ROUTES, LIMITS, LIM, n_t0=3, scan_speeds=speeds, epoch_jd=JD, sun_elevation_min=1.5
+        _routes(), LIMITS, LIM, n_t0=3, scan_speeds=speeds, epoch_jd=JD, sun_elevation_min=1.5
     )
     assert not np.asarray(opts3.scan_ok).any()
 
@@ -190,6 +200,6 @@ def test_make_route_spec_errors(kwargs, match):
 
 def test_build_options_argument_errors():
     with pytest.raises(ValueError, match="n_t0"):
-        build_route_options(ROUTES, LIMITS, LIM, n_t0=0)
+        build_route_options(_routes(), LIMITS, LIM, n_t0=0)
     with pytest.raises(ValueError, match="scan_speeds"):
-        build_route_options(ROUTES, LIMITS, LIM, scan_speeds=(0.0,))
+        build_route_options(_routes(), LIMITS, LIM, scan_speeds=(0.0,))
