@@ -221,7 +221,8 @@ def check_text(value: str, err, max_chars: int | None = None) -> str:
     Raises:
       Exception: ``err(msg)`` naming the first bad character and its position.
     """
-    for i, ch in enumerate(value):
+    # printable text (the common case) holds neither: both are Unicode "Other" categories
+    for i, ch in enumerate("" if value.isprintable() else value):
         if unicodedata.category(ch) in ("Cc", "Cs"):
             raise err(f"must not contain control characters, got {ch!r} at position {i}")
     if max_chars is not None and len(value) > max_chars:
