@@ -18,13 +18,14 @@ function of the problem and the cap alone.
 
 Plans (``plans=True``, the time-limited search): the worker's DP paths at its prices are
 often much better starting points than the search's own plan on large instances (each
-satellite's path packs its timeline as the prices advise). Every so often (after
-:data:`_PLAN_FIRST_IT` iterations, then whenever the iterations since its last repair
-took :data:`_PLAN_RATIO` times that repair's CPU time) the worker repairs its current
-paths into a feasible plan (:func:`jaxspline.search.lagrangian.plan_from_paths`: every
-insertion re-checked, battery included) in a timeline of its own, and when the plan is
-worth more than the last one it published, writes it into an array shared with the
-parent (no pipe: neither side ever waits). The search adopts it when it beats its own
+satellite's path packs its timeline as the prices advise). Every so often (at an
+iteration that lowers the bound, from :data:`_PLAN_FIRST_IT` iterations on, once the
+iterations since its last repair took :data:`_PLAN_RATIO` times that repair's CPU time)
+the worker repairs that iteration's paths into a feasible plan
+(:func:`jaxspline.search.lagrangian.plan_from_paths`: every insertion re-checked, battery
+included) in a timeline of its own, and when the plan is worth more than the last one
+it published, writes it into an array shared with the parent (no pipe: neither side
+ever waits). The search adopts it when it beats its own
 (:meth:`BoundWorker.plan`, polled by the LNS). What the search finds then depends on the
 timing of the two processes, so an iteration-capped search (reproducible) never asks
 for plans.
@@ -53,7 +54,7 @@ __all__ = ["BoundWorker"]
 
 _GRACE_S = 30.0  # [s] the parent waits this long past the deadline for the last iteration
 _PLAN_FIRST_IT = 4  # the worker's first plan repair follows this many iterations
-_PLAN_RATIO = 2.0  # DP CPU time between two repairs, in units of the last repair's
+_PLAN_RATIO = 3.0  # DP CPU time between two repairs, in units of the last repair's
 
 
 class _Shared:
@@ -91,9 +92,9 @@ class _Repairs:
         self.mark = time.process_time()  # CPU clock at the end of the last repair
         self.cost = 0.0  # CPU seconds of the last repair
 
-    def __call__(self, it: int, paths) -> None:
+    def __call__(self, it: int, paths, improved: bool) -> None:
         now = time.process_time()
-        if it < _PLAN_FIRST_IT or now - self.mark < _PLAN_RATIO * self.cost:
+        if not improved or it < _PLAN_FIRST_IT or now - self.mark < _PLAN_RATIO * self.cost:
             return
         if self.tl is None:
             self.tl = Timeline(self.pb)

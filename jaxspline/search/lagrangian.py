@@ -272,8 +272,9 @@ def upper_bound(
         options of one target joined by a near pair are credited once. False: the
         plain relaxation, as the search's Lagrangian phase iterates it.
       dp: the problem's :func:`dp_prepare` (None: prepared here).
-      on_paths: optional callable ``on_paths(iteration, paths)`` called with the DP
-        paths of every iteration (before the price step; it must not change them).
+      on_paths: optional callable ``on_paths(iteration, paths, improved)`` called with
+        the DP paths of every iteration (before the price step; it must not change
+        them); ``improved``: this iteration gave the smallest bound so far.
     Returns:
       BoundResult with status ``CONVERGED`` or ``TIME`` (cap / deadline reached).
     """
@@ -285,7 +286,7 @@ def upper_bound(
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
         if on_paths is not None:
-            on_paths(pr.it, paths)
+            on_paths(pr.it, paths, pr.stall == 0)
         if not pr.step(plan_value):
             status = BoundStatus.CONVERGED
             break
