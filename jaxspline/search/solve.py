@@ -12,7 +12,8 @@
 With ``bound_worker``, a forked process iterates the bound alone over the whole search
 budget (:class:`BoundWorker`, sharing the DP layout the Lagrangian phase uses) and the
 smaller of the two bounds is reported. Without ``max_iters`` the worker also repairs its
-DP paths into plans now and then, and the LNS continues from such a plan whenever it
+DP paths into plans now and then: the Lagrangian phase ends as soon as the worker has a
+better plan than the phase's best, and the LNS continues from such a plan whenever it
 beats the LNS's best (``stats.worker_plans``: how many were taken); the last one is
 looked at once more before the earliest-start pass.
 """
@@ -157,6 +158,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
         max_iters=cap,
         report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
         dp=shared.pop() if shared else None,
+        give_way=(lambda v: worker.offered() > v) if worker is not None and worker.plans else None,
     )
     stats.update(
         lagrangian_value=tl.value,

@@ -19,7 +19,16 @@ import pytest
 
 from jaxspline.planner.pipeline import build_problem
 from jaxspline.readers.scenario import load_scenario
-from jaxspline.search import BoundWorker, Timeline, adopt, dp_prepare, greedy, solve, upper_bound
+from jaxspline.search import (
+    BoundWorker,
+    Timeline,
+    adopt,
+    dp_prepare,
+    greedy,
+    lagrangian,
+    solve,
+    upper_bound,
+)
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from test_cli_plan import SMALL  # noqa: E402
@@ -90,6 +99,7 @@ def test_worker_publishes_feasible_plans_below_its_bound(problem):
     assert len(assigned) == problem.n_targets
     assert _feasible_value(problem, assigned) == value
     assert 0.0 < value <= res.bound + 1e-9
+    assert w.offered() == value  # still readable, not taken
     assert w.plan(-math.inf) is None  # handed out once
 
 
@@ -98,6 +108,7 @@ def test_worker_without_plans_publishes_none(problem):
     w.result()
     assert not w.plans
     assert w.plan(-math.inf) is None
+    assert w.offered() == -math.inf
 
 
 def test_adopt_takes_only_a_better_plan(problem):
@@ -115,3 +126,18 @@ def test_timed_solve_with_worker_plans_stays_valid(problem):
     assert res.stats["worker_plans"] >= 0
     assert _feasible_value(problem, res.timeline.assigned) == res.timeline.value
     assert res.bound >= res.timeline.value - 1e-9
+
+
+def test_lagrangian_phase_gives_way_after_an_iteration(problem):
+    asked = []
+
+    def give_way(value):
+        asked.append(value)
+        return True
+
+    tl = Timeline(problem)
+    greedy(tl, math.inf)
+    start = tl.value
+    res = lagrangian(tl, math.inf, None, max_iters=50, give_way=give_way)
+    assert res.iterations == 1 and len(asked) == 1
+    assert tl.value >= start and res.bound >= tl.value - 1e-9
