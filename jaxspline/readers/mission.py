@@ -476,7 +476,8 @@ class PlannerConfig:
         :data:`MAX_EXACT_OPTIONS`.
       lagrangian_share: share of the search budget for the Lagrangian / DP phase.
       bound_worker: on a machine with at least two CPUs, iterate the bound in a
-        second process during the search (:class:`jaxspline.search.BoundWorker`).
+        second process during the search (:class:`jaxspline.search.BoundWorker`; in
+        time-limited runs it also hands plans repaired from its DP paths to the LNS).
       refine_steps: optax steps of start-time refinement of per-channel satellites'
         sequences (:mod:`jaxspline.planner.refine_starts`; 0 = off).
       default_time_limit: search budget [s] when :func:`plan` gets no time limit.

@@ -32,7 +32,9 @@ from jaxspline.search.dp_jax import JaxDP as JaxDP
 from jaxspline.search.exact import exact_search as exact_search
 from jaxspline.search.lagrangian import BoundResult as BoundResult
 from jaxspline.search.lagrangian import lagrangian as lagrangian
+from jaxspline.search.lagrangian import plan_from_paths as plan_from_paths
 from jaxspline.search.lagrangian import upper_bound as upper_bound
+from jaxspline.search.lns import adopt as adopt
 from jaxspline.search.lns import earliest_pass as earliest_pass
 from jaxspline.search.lns import greedy as greedy
 from jaxspline.search.lns import greedy_order as greedy_order

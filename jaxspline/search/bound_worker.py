@@ -13,8 +13,22 @@ one target once (``merge_repeats``, the strengthened relaxation of
 prepared it (``dp``: the search's own Lagrangian phase uses the same one, so it is
 prepared once, before the fork); the child only runs numpy code (no JAX) and sends
 three numbers back. Any bound is an upper bound of every plan, so the search reports the
-smaller of its own and the worker's; the plan itself is never touched, and with an
-iteration cap the worker's result is a function of the problem and the cap alone.
+smaller of its own and the worker's, and with an iteration cap the worker's result is a
+function of the problem and the cap alone.
+
+Plans (``plans=True``, the time-limited search): the worker's DP paths at its prices are
+often much better starting points than the search's own plan on large instances (each
+satellite's path packs its timeline as the prices advise). Every so often (at an
+iteration that lowers the bound, from :data:`_PLAN_FIRST_IT` iterations on, once the
+iterations since its last repair took :data:`_PLAN_RATIO` times that repair's CPU time)
+the worker repairs that iteration's paths into a feasible plan
+(:func:`jaxspline.search.lagrangian.plan_from_paths`: every insertion re-checked, battery
+included) in a timeline of its own, and when the plan is worth more than the last one
+it published, writes it into an array shared with the parent (no pipe: neither side
+ever waits). The search adopts it when it beats its own
+(:meth:`BoundWorker.plan`, polled by the LNS). What the search finds then depends on the
+timing of the two processes, so an iteration-capped search (reproducible) never asks
+for plans.
 
 The child ignores SIGINT (a Ctrl-C reaches the whole process group; the parent decides)
 and is terminated when the parent stops early or gives up waiting.
@@ -29,22 +43,80 @@ import signal
 import time
 import warnings
 
-from jaxspline.search.lagrangian import BoundResult, upper_bound
+from jaxspline.search.lagrangian import BoundResult, plan_from_paths, upper_bound
+from jaxspline.search.lns import greedy_order
 from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
+from jaxspline.search.timeline import Timeline
 
 __all__ = ["BoundWorker"]
 
 _GRACE_S = 30.0  # [s] the parent waits this long past the deadline for the last iteration
+_PLAN_FIRST_IT = 4  # the worker's first plan repair follows this many iterations
+_PLAN_RATIO = 3.0  # DP CPU time between two repairs, in units of the last repair's
 
 
-def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp):
-    """Child: iterate the bound, send (bound, iterations, status, seconds)."""
+class _Shared:
+    """The plan the worker publishes: per target its option (-1: none), the plan's
+    value and a publication count, in shared memory made before the fork."""
+
+    def __init__(self, ctx, n_targets: int):
+        self.lock = ctx.Lock()
+        self.assigned = ctx.RawArray("l", max(1, n_targets))
+        self.meta = ctx.RawArray("d", 2)  # publications, value
+        self.n = n_targets
+
+    def publish(self, value: float, assigned) -> None:
+        """Write a plan (child side)."""
+        with self.lock:
+            self.assigned[: self.n] = assigned
+            self.meta[1] = value
+            self.meta[0] += 1.0
+
+    def read(self, seen: int):
+        """``(count, value, assigned)`` when more than ``seen`` plans were published, else None."""
+        if int(self.meta[0]) <= seen:  # a float's read is atomic enough for this test
+            return None
+        with self.lock:
+            return int(self.meta[0]), float(self.meta[1]), list(self.assigned[: self.n])
+
+
+class _Repairs:
+    """Child side: repair the DP paths into plans now and then (module docstring)."""
+
+    def __init__(self, pb: Problem, shared: _Shared, deadline: float):
+        self.pb, self.shared, self.deadline = pb, shared, deadline
+        self.tl = self.order = None
+        self.best = -math.inf
+        self.mark = time.process_time()  # CPU clock at the end of the last repair
+        self.cost = 0.0  # CPU seconds of the last repair
+
+    def __call__(self, it: int, paths, improved: bool) -> None:
+        now = time.process_time()
+        if not improved or it < _PLAN_FIRST_IT or now - self.mark < _PLAN_RATIO * self.cost:
+            return
+        if self.tl is None:
+            self.tl = Timeline(self.pb)
+            self.order = greedy_order(self.tl)
+        plan_from_paths(self.tl, paths, self.order, self.deadline)
+        if self.tl.value > self.best:
+            self.best = self.tl.value
+            self.shared.publish(self.tl.value, self.tl.assigned)
+        self.mark = time.process_time()
+        self.cost = self.mark - now
+
+
+def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, shared):
+    """Child: iterate the bound (publishing plans into ``shared`` unless None), send
+    (bound, iterations, status, seconds)."""
     gc.disable()  # never finalize the parent's (JAX) objects in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    res = upper_bound(pb, plan_value, deadline, max_iters, energy=False, merge_repeats=True, dp=dp)
+    hook = None if shared is None else _Repairs(pb, shared, deadline)
+    res = upper_bound(
+        pb, plan_value, deadline, max_iters, energy=False, merge_repeats=True, dp=dp, on_paths=hook
+    )
     conn.send((float(res.bound), int(res.iterations), res.status.value, float(res.seconds)))
     conn.close()
 
@@ -60,14 +132,19 @@ class BoundWorker:
       max_iters: cap on its iterations (None: the deadline alone).
       dp: the problem's :func:`jaxspline.search.dp.dp_prepare` (shared like ``pb``;
         None: the child prepares it).
+      plans: also repair the DP paths into plans now and then (module docstring) and
+        publish them for :meth:`plan`.
     """
 
-    def __init__(self, pb: Problem, plan_value: float, deadline: float, max_iters=None, dp=None):
+    def __init__(
+        self, pb: Problem, plan_value: float, deadline: float, max_iters=None, dp=None, plans=False
+    ):
         ctx = mp.get_context("fork")
         self._conn, child = ctx.Pipe(duplex=False)
-        self._proc = ctx.Process(
-            target=_run, args=(child, pb, plan_value, deadline, max_iters, dp), daemon=True
-        )
+        self._shared = _Shared(ctx, pb.n_targets) if plans else None
+        self._seen = 0
+        args = (child, pb, plan_value, deadline, max_iters, dp, self._shared)
+        self._proc = ctx.Process(target=_run, args=args, daemon=True)
         trim_heap()  # the child maps the parent's resident pages: no free ones among them
         with warnings.catch_warnings():  # JAX warns of any fork; the child runs no JAX
             warnings.filterwarnings("ignore", message=r"os\.fork\(\) was called")
@@ -100,6 +177,34 @@ class BoundWorker:
             out = None
         self.stop()
         return out
+
+    def plan(self, above: float):
+        """The worker's latest published plan when it is worth more than ``above``.
+
+        Never waits; each published plan is handed out once at most.
+
+        Args:
+          above: the value to beat.
+        Returns:
+          ``(value, assigned)`` (per target its option id, -1: none) or None.
+        """
+        got = None if self._shared is None else self._shared.read(self._seen)
+        if got is None:
+            return None
+        self._seen, value, assigned = got
+        return (value, assigned) if value > above else None
+
+    def offered(self) -> float:
+        """Value of the latest plan the worker published (-inf: none yet), without
+        taking it."""
+        if self._shared is None or self._shared.meta[0] < 1.0:
+            return -math.inf
+        return float(self._shared.meta[1])
+
+    @property
+    def plans(self) -> bool:
+        """Whether the worker publishes plans (``plans`` of the constructor)."""
+        return self._shared is not None
 
     @property
     def alive(self) -> bool:

@@ -56,7 +56,7 @@ from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 from jaxspline.search.timeline import Timeline
 
-__all__ = ["BoundResult", "lagrangian", "upper_bound"]
+__all__ = ["BoundResult", "lagrangian", "plan_from_paths", "upper_bound"]
 
 _STALL_ITERS = 4  # iterations without a better bound before the step halves
 _MU_MIN = 1e-4  # the iteration stops (stalled) below this step factor
@@ -64,9 +64,18 @@ _GAP_TOL = 1e-9  # bound - best plan below this: optimal
 _REPAIR_EVERY = 4  # DP iterations per repaired plan (a repair costs ~2 block DPs)
 
 
-def _plan_from_paths(tl: Timeline, paths, order_fill, deadline: float):
-    """Feasible plan from DP paths: each target once (heaviest first, earliest option),
-    every insertion re-checked (maneuvers, battery); then a greedy fill."""
+def plan_from_paths(tl: Timeline, paths, order_fill, deadline: float) -> None:
+    """Replace the plan of ``tl`` by one repaired from DP paths.
+
+    Each target once (heaviest first, earliest option), every insertion re-checked
+    (maneuvers, battery), then a greedy fill: a feasible plan whatever the paths.
+
+    Args:
+      tl: Timeline (its plan is replaced).
+      paths: per satellite the option ids of a DP path.
+      order_fill: target order of the greedy fill.
+      deadline: float, ``time.monotonic()`` value at which the fill stops [s].
+    """
     pb = tl.pb
     tl.restore([])
     chosen = sorted(
@@ -197,7 +206,9 @@ class Prices:
         return True
 
 
-def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report=None, dp=None):
+def lagrangian(
+    tl: Timeline, deadline: float, order_fill, max_iters=None, report=None, dp=None, give_way=None
+):
     """Lagrangian phase with repaired plans (see module docstring).
 
     The step target is the best repaired plan's value; ``tl`` ends at the best plan.
@@ -209,6 +220,9 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
       max_iters: cap on the subgradient iterations (None: the deadline alone).
       report: callable ``report(iteration, bound, best_value)`` or None.
       dp: the problem's :func:`dp_prepare` (None: prepared here).
+      give_way: optional callable ``give_way(best_value)`` asked after every iteration;
+        True ends the phase (status ``TIME``): a better plan waits elsewhere (the bound
+        worker's, :func:`jaxspline.search.solve`).
     Returns:
       BoundResult.
     """
@@ -222,7 +236,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
         paths = pr.solve_dp()
         if (pr.it - 1) % _REPAIR_EVERY == 0:
-            _plan_from_paths(tl, paths, order_fill, deadline)
+            plan_from_paths(tl, paths, order_fill, deadline)
             if tl.value > best_w:
                 best_w, best = tl.value, list(tl.assigned)
         if pr.ub - best_w <= _GAP_TOL * max(1.0, pr.ub):
@@ -233,6 +247,8 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
             break
         if report is not None:
             report(pr.it, pr.ub, best_w)
+        if give_way is not None and give_way(best_w):
+            break
     tl.restore(best)
     return BoundResult(best, pr.ub, pr.it, status)
 
@@ -245,6 +261,7 @@ def upper_bound(
     energy: bool = False,
     merge_repeats: bool = True,
     dp=None,
+    on_paths=None,
 ) -> BoundResult:
     """The Lagrangian bound alone (no plan repair): smallest UB within the budget.
 
@@ -262,6 +279,9 @@ def upper_bound(
         options of one target joined by a near pair are credited once. False: the
         plain relaxation, as the search's Lagrangian phase iterates it.
       dp: the problem's :func:`dp_prepare` (None: prepared here).
+      on_paths: optional callable ``on_paths(iteration, paths, improved)`` called with
+        the DP paths of every iteration (before the price step; it must not change
+        them); ``improved``: this iteration gave the smallest bound so far.
     Returns:
       BoundResult with status ``CONVERGED`` or ``TIME`` (cap / deadline reached).
     """
@@ -271,7 +291,9 @@ def upper_bound(
     pr = Prices(pb, energy=energy, merge_repeats=merge_repeats, dp=dp)
     status = BoundStatus.TIME
     while clock.now() < deadline and (max_iters is None or pr.it < max_iters):
-        pr.solve_dp()
+        paths = pr.solve_dp()
+        if on_paths is not None:
+            on_paths(pr.it, paths, pr.stall == 0)
         if not pr.step(plan_value):
             status = BoundStatus.CONVERGED
             break

@@ -31,7 +31,7 @@ from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
 from jaxspline.search.timeline import Timeline
 
-__all__ = ["earliest_pass", "greedy", "greedy_order", "lns"]
+__all__ = ["adopt", "earliest_pass", "greedy", "greedy_order", "lns"]
 
 _RAD_TARGET = (30.0, 60.0, 90.0, 150.0)  # destroy half-widths [s] around an unscheduled target
 _RAD_RANDOM = (60.0, 120.0, 240.0)  # ... around a random scheduled observation
@@ -41,6 +41,7 @@ _ORDER_NOISE = 0.2  # relative noise of the re-insertion order
 _REPORT_EVERY = 5.0  # [s] between progress reports
 _REFRESH_EVERY = 16  # iterations between refreshes of the unscheduled list
 _TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
+_POLL_EVERY = 0.5  # [s] between two looks at the plans offered from outside (``incoming``)
 
 
 def greedy_order(tl: Timeline):
@@ -198,6 +199,29 @@ def _move(tl: Timeline, w: _Walk, mark: int, rng) -> bool:
     return True
 
 
+def adopt(tl: Timeline, w, offer) -> bool:
+    """Continue from an offered plan ``(value, assigned)`` when it beats the best one.
+
+    Args:
+      tl: Timeline (between two moves: nothing to undo).
+      w: the walk's state (or None outside the LNS: the plan is compared with ``tl``).
+      offer: ``(value, assigned)`` or None.
+    Returns:
+      bool, whether ``tl`` now holds the offered plan.
+    """
+    best = tl.value if w is None else w.best_key[0]
+    if offer is None or offer[0] <= best:
+        return False
+    tl.restore(offer[1])
+    if w is not None:
+        w.improved += 1
+        w.best_key = (tl.value, tl.n_observations)
+        w.best = list(tl.assigned)
+        w.refresh(tl)
+        w.dirty = False
+    return True
+
+
 def _accept(tl: Timeline, w: _Walk, base, mark: int, thr: float, it: int, rng):
     """Threshold acceptance of a move (loses at most ``thr * U(0, 1)``) and the
     bookkeeping of the best plan and of the unscheduled list."""
@@ -215,7 +239,7 @@ def _accept(tl: Timeline, w: _Walk, base, mark: int, thr: float, it: int, rng):
     tl.commit()
 
 
-def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
+def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None, incoming=None) -> int:
     """Large-neighbourhood search until ``deadline`` (or ``max_iters``).
 
     Args:
@@ -225,6 +249,10 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
       max_iters: cap on the iterations (None: the deadline alone).
       report: callable ``report(it, improved)`` called every few seconds (progress
         display), or None.
+      incoming: optional callable ``incoming(value)`` polled every :data:`_POLL_EVERY`
+        seconds: ``(value, assigned)`` of a feasible plan worth more than ``value``
+        (per target its option id, -1: none), which the walk then continues from as its
+        best plan, or None (the bound worker's plans, :meth:`BoundWorker.plan`).
     Returns:
       int, the number of iterations.
     """
@@ -235,9 +263,12 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None) -> int:
         return 0
     w = _Walk(tl, has)
     it = 0
-    last = time.monotonic()
+    last = polled = time.monotonic()
     while (max_iters is None or it < max_iters) and clock.now() < deadline:
         it += 1
+        if incoming is not None and time.monotonic() - polled > _POLL_EVERY:
+            polled = time.monotonic()
+            adopt(tl, w, incoming(w.best_key[0]))
         base = tl.score()
         mark = len(tl.log)
         if not _move(tl, w, mark, rng):

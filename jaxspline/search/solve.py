@@ -11,7 +11,11 @@
 
 With ``bound_worker``, a forked process iterates the bound alone over the whole search
 budget (:class:`BoundWorker`, sharing the DP layout the Lagrangian phase uses) and the
-smaller of the two bounds is reported.
+smaller of the two bounds is reported. Without ``max_iters`` the worker also repairs its
+DP paths into plans now and then: the Lagrangian phase ends as soon as the worker has a
+better plan than the phase's best, and the LNS continues from such a plan whenever it
+beats the LNS's best (``stats.worker_plans``: how many were taken); the last one is
+looked at once more before the earliest-start pass.
 """
 
 from __future__ import annotations
@@ -29,7 +33,7 @@ from jaxspline.search.exact import exact_search
 from jaxspline.search.lagrangian import (
     lagrangian,
 )
-from jaxspline.search.lns import earliest_pass, greedy, greedy_order, lns
+from jaxspline.search.lns import adopt, earliest_pass, greedy, greedy_order, lns
 from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
@@ -119,7 +123,8 @@ def solve(
     if bound_worker and pb.n_options:
         w_cap = None if cap is None else _WORKER_ITERS * cap
         shared.append(dp_prepare(pb))  # one DP layout: the worker's and the Lagrangian phase's
-        worker = BoundWorker(pb, tl.value, deadline - tail, w_cap, shared[0])
+        plans = max_iters is None  # plans from the worker depend on timing
+        worker = BoundWorker(pb, tl.value, deadline - tail, w_cap, shared[0], plans=plans)
     try:
         budget = _Budget(deadline, now, tail, t_dp, cap, max_iters)
         return _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, shared, say)
@@ -153,6 +158,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
         max_iters=cap,
         report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
         dp=shared.pop() if shared else None,
+        give_way=(lambda v: worker.offered() > v) if worker is not None and worker.plans else None,
     )
     stats.update(
         lagrangian_value=tl.value,
@@ -171,25 +177,8 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
         if value < sum(pb.target_value[t] for t, c in enumerate(start) if c >= 0):
             tl.restore(start)
         stats["exact_proven"] = exact
-    rng = random.Random(seed)
-    its = 0
-    t_lns, cpu_lns = time.monotonic(), time.process_time()
-    if not (exact or res.status == BoundStatus.OPTIMAL):
-        its = lns(
-            tl,
-            deadline - tail,
-            rng,
-            max_iters,
-            report=lambda it, imp: say(
-                "lns", f"it {it}: value {tl.value:.6g} ({imp} improvements)"
-            ),
-        )
-    stats.update(
-        lns_iterations=its,
-        lns_value=tl.value,
-        lns_seconds=round(time.monotonic() - t_lns, 3),
-        lns_cpu_seconds=round(time.process_time() - cpu_lns, 3),
-    )
+    its = 0 if exact or res.status == BoundStatus.OPTIMAL else max_iters  # 0: no LNS
+    _lns_stage(tl, deadline - tail, random.Random(seed), its, worker, stats, say)
     earliest_pass(tl, deadline)
     bound, status = res.bound, res.status
     if worker is not None:
@@ -206,3 +195,35 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
                 if bound - tl.value <= _OPTIMAL_TOL * max(1.0, bound):
                     status = BoundStatus.OPTIMAL
     return SearchResult(tl, bound, status, exact, stats)
+
+
+def _lns_stage(tl, end: float, rng, max_iters, worker, stats, say) -> None:
+    """The LNS until ``end`` (monotonic [s]) with its statistics; with a worker that
+    publishes plans, it continues from any of them that beats its best."""
+    taken = []
+
+    def incoming(value):
+        offer = worker.plan(value)
+        if offer is not None:
+            taken.append(offer[0])
+        return offer
+
+    offers = worker is not None and worker.plans
+    t_lns, cpu_lns = time.monotonic(), time.process_time()
+    its = lns(
+        tl,
+        end,
+        rng,
+        max_iters,
+        report=lambda it, imp: say("lns", f"it {it}: value {tl.value:.6g} ({imp} improvements)"),
+        incoming=incoming if offers else None,
+    )
+    if offers:
+        adopt(tl, None, incoming(tl.value))  # the worker's last plan
+        stats.update(worker_plans=len(taken), worker_plan_value=max(taken, default=None))
+    stats.update(
+        lns_iterations=its,
+        lns_value=tl.value,
+        lns_seconds=round(time.monotonic() - t_lns, 3),
+        lns_cpu_seconds=round(time.process_time() - cpu_lns, 3),
+    )

@@ -3,7 +3,9 @@
 References: :func:`upper_bound` iterated in this process (the worker must return the
 same bits across the fork), :func:`solve` without the worker (the plan must not change
 and the bound may only get smaller), and every plan value the search finds (a bound
-below one would be wrong).
+below one would be wrong). The plans the worker publishes are checked by inserting them
+option by option into an empty timeline (every insertion must pass its feasibility
+check, battery included) and against the bound.
 """
 
 from __future__ import annotations
@@ -17,7 +19,16 @@ import pytest
 
 from jaxspline.planner.pipeline import build_problem
 from jaxspline.readers.scenario import load_scenario
-from jaxspline.search import BoundWorker, dp_prepare, solve, upper_bound
+from jaxspline.search import (
+    BoundWorker,
+    Timeline,
+    adopt,
+    dp_prepare,
+    greedy,
+    lagrangian,
+    solve,
+    upper_bound,
+)
 
 sys.path.insert(0, str(Path(__file__).parents[1] / "cli"))
 from test_cli_plan import SMALL  # noqa: E402
@@ -67,3 +78,66 @@ def test_result_without_waiting_ends_the_process(problem):
     assert time.monotonic() - t0 < 10.0
     assert out is None or out.bound >= 0.0
     assert not w.alive
+
+
+def _feasible_value(pb, assigned) -> float:
+    """The value of a target -> option assignment, asserting every insertion (in start
+    order, into an empty timeline) passes :meth:`Timeline.check`."""
+    tl = Timeline(pb)
+    for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.option_start[c]):
+        assert tl.check(c) is not None, f"option {c} of the published plan does not fit"
+        tl.insert(c)
+    return tl.value
+
+
+def test_worker_publishes_feasible_plans_below_its_bound(problem):
+    w = BoundWorker(problem, PLAN_VALUE, time.monotonic() + 600.0, CAP, plans=True)
+    res = w.result()
+    offer = w.plan(-math.inf)
+    assert res is not None and offer is not None
+    value, assigned = offer
+    assert len(assigned) == problem.n_targets
+    assert _feasible_value(problem, assigned) == value
+    assert 0.0 < value <= res.bound + 1e-9
+    assert w.offered() == value  # still readable, not taken
+    assert w.plan(-math.inf) is None  # handed out once
+
+
+def test_worker_without_plans_publishes_none(problem):
+    w = BoundWorker(problem, PLAN_VALUE, time.monotonic() + 600.0, 8)
+    w.result()
+    assert not w.plans
+    assert w.plan(-math.inf) is None
+    assert w.offered() == -math.inf
+
+
+def test_adopt_takes_only_a_better_plan(problem):
+    ref = Timeline(problem)
+    greedy(ref, math.inf)
+    tl = Timeline(problem)
+    assert not adopt(tl, None, None)
+    assert adopt(tl, None, (ref.value, list(ref.assigned)))
+    assert tl.assigned == ref.assigned and tl.value == ref.value
+    assert not adopt(tl, None, (ref.value, [-1] * problem.n_targets))  # not better
+
+
+def test_timed_solve_with_worker_plans_stays_valid(problem):
+    res = solve(problem, time.monotonic() + 8.0, seed=3, bound_worker=True)
+    assert res.stats["worker_plans"] >= 0
+    assert _feasible_value(problem, res.timeline.assigned) == res.timeline.value
+    assert res.bound >= res.timeline.value - 1e-9
+
+
+def test_lagrangian_phase_gives_way_after_an_iteration(problem):
+    asked = []
+
+    def give_way(value):
+        asked.append(value)
+        return True
+
+    tl = Timeline(problem)
+    greedy(tl, math.inf)
+    start = tl.value
+    res = lagrangian(tl, math.inf, None, max_iters=50, give_way=give_way)
+    assert res.iterations == 1 and len(asked) == 1
+    assert tl.value >= start and res.bound >= tl.value - 1e-9
