@@ -475,9 +475,8 @@ class PlannerConfig:
         (branch and bound over the per-satellite timelines), at most
         :data:`MAX_EXACT_OPTIONS`.
       lagrangian_share: share of the search budget for the Lagrangian / DP phase.
-      bound_worker: on a machine with at least two CPUs, iterate the bound in a
-        second process during the search (:class:`jaxspline.search.BoundWorker`; in
-        time-limited runs it also hands plans repaired from its DP paths to the LNS).
+      bound_worker: on a machine with at least two CPUs, iterate the bound (and repair
+        its paths into plans for a time-limited LNS) in a second process (BoundWorker).
       refine_steps: optax steps of start-time refinement of per-channel satellites'
         sequences (:mod:`jaxspline.planner.refine_starts`; 0 = off).
       default_time_limit: search budget [s] when :func:`plan` gets no time limit.
