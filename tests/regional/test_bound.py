@@ -78,7 +78,10 @@ def milp_optimum(prob):
     return -res.fun
 
 
-@pytest.mark.parametrize("seed", range(6))
+# three random instances by default, three more as slow variants
+@pytest.mark.parametrize(
+    "seed", [0, 1, 2, *(pytest.param(s, marks=pytest.mark.slow) for s in range(3, 6))]
+)
 def test_bound_never_below_milp_optimum(seed):
     prob = make_problem(
         seed,

@@ -225,7 +225,10 @@ def _brute_insert(tl, c, lit, n_steps):
     return True, float(lev.min())
 
 
-@pytest.mark.parametrize("seed", range(6))
+# three random instances by default, three more as slow variants
+@pytest.mark.parametrize(
+    "seed", [0, 1, 2, *(pytest.param(s, marks=pytest.mark.slow) for s in range(3, 6))]
+)
 def test_timeline_check_matches_brute_force(seed):
     """Timeline.check (incremental battery) == from-scratch re-simulation of the new
     timeline, for every option at every state of random insert / remove / undo runs."""
