@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.geometry.frames import OMEGA_EARTH, R_EARTH, SECONDS_PER_DAY, jd_split
-from jaxspline.kernels._validate import check_finite, check_positive
+from jaxspline.kernels._validate import check_finite, check_positive, to_device
 
 __all__ = [
     "MU_EARTH",
@@ -385,7 +385,7 @@ def tle_orbit(line1: str, line2: str, epoch_jd: float, t_end: float, step: float
     r, v, err = propagate_tle(line1, line2, jd, fr)
     if np.any(err != 0):
         raise ValueError(f"tle: SGP4 error code {int(err[err != 0][0])} within the scenario span")
-    return HermiteOrbit(*(jnp.asarray(x) for x in (t, r, v, _gravity_j2(r))))
+    return HermiteOrbit(*(to_device(x) for x in (t, r, v, _gravity_j2(r))))
 
 
 @jax.jit
@@ -482,7 +482,7 @@ def tabulate_orbits(sources, epoch_jd: float, t_end: float, step: float) -> Orbi
     a = _gravity_j2(r)
     for i, (_, _, ai) in circ.items():
         a[i] = ai
-    return OrbitTable(HermiteOrbit(*(jnp.asarray(x) for x in (t, r, v, a))), ok)
+    return OrbitTable(HermiteOrbit(*(to_device(x) for x in (t, r, v, a))), ok)
 
 
 def _nearest_good(good: np.ndarray) -> np.ndarray:

@@ -38,7 +38,7 @@ import numpy as np
 from jaxspline.geometry.frames import OMEGA_EARTH, earth_rotation_angle, rot_z
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.kernels._batch import batched, padded_size
-from jaxspline.kernels._validate import check_finite, check_positive, is_concrete
+from jaxspline.kernels._validate import check_finite, check_positive, is_concrete, to_device
 
 __all__ = [
     "Scene",
@@ -91,7 +91,7 @@ def aim_params(target_ecef, direction_ecef=None, speed=0.0):
     Returns:
       float [..., 8], the aim law p.
     """
-    g0 = jnp.asarray(target_ecef)
+    g0 = to_device(target_ecef)
     if direction_ecef is None:
         d = jnp.zeros_like(g0).at[..., 2].set(1.0)
         strip = jnp.zeros(g0.shape[:-1], g0.dtype)

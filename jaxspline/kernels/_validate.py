@@ -13,6 +13,7 @@ import jax.numpy as jnp
 import numpy as np
 
 __all__ = [
+    "to_device",
     "is_concrete",
     "as_float_array",
     "check_positive",
@@ -24,6 +25,23 @@ __all__ = [
     "common_float",
     "finite_vector",
 ]
+
+
+def to_device(x):
+    """``jnp.asarray(x)`` without a compiled program for host data.
+
+    ``jnp.asarray`` of a numpy array outside a trace compiles a small program for every
+    new shape and dtype; ``jax.device_put`` copies it with the same dtype and weak type
+    (x64 or not). Anything else (JAX arrays, tracers, Python values) goes to ``jnp.asarray``.
+
+    Args:
+      x: array-like.
+    Returns:
+      JAX array, a copy for numpy input.
+    """
+    if isinstance(x, (np.ndarray, np.generic)) and x.dtype != object:
+        return jax.device_put(x, may_alias=False)
+    return jnp.asarray(x)
 
 
 def is_concrete(x) -> bool:
@@ -72,7 +90,7 @@ def as_float_array(name: str, x, dtype=None):
       ValueError: x is not numeric (message names ``name``).
     """
     try:
-        arr = jnp.asarray(x)
+        arr = to_device(x)
     except (TypeError, ValueError) as exc:
         raise ValueError(f"{name} must be numeric array-like, got {x!r}") from exc
     if dtype is None:

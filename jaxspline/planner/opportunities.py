@@ -26,7 +26,6 @@ from __future__ import annotations
 from typing import NamedTuple
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.geometry.frames import (
@@ -40,6 +39,7 @@ from jaxspline.geometry.pointing import Scene, aim_geometry, aim_params, aim_poi
 from jaxspline.geometry.routes import strip_direction
 from jaxspline.geometry.windows import Windows
 from jaxspline.kernels._batch import map_chunked, ragged_positions
+from jaxspline.kernels._validate import to_device
 from jaxspline.readers.mission import STRIP, Scenario
 from jaxspline.screen.options import RouteOptions
 
@@ -121,7 +121,7 @@ def evaluate(fn, scene: Scene, sat, p, t0, t, tick=None):
     args = [np.asarray(x) for x in (sat, p, t0, t)]
 
     def run(*a):
-        return fn(scene, *(jnp.asarray(x) for x in a))
+        return fn(scene, *(to_device(x) for x in a))
 
     if tick is None:
         return map_chunked(run, args, _CHUNK)
@@ -160,7 +160,7 @@ def reference_points(sc: Scenario) -> np.ndarray:
     tg = sc.targets
     _, p, _ = aim_laws(sc)[0]
     half = (tg.length / 2.0) / np.linalg.norm(p[:, :3], axis=-1)
-    mid = np.asarray(jax.vmap(aim_point)(jnp.asarray(p), jnp.asarray(half))[0])
+    mid = np.asarray(jax.vmap(aim_point)(to_device(p), to_device(half))[0])
     return np.where((tg.kind == STRIP)[:, None], mid, p[:, :3])
 
 
