@@ -43,6 +43,7 @@ from jaxspline.geometry.orbit import circular_orbit as circular_orbit
 from jaxspline.geometry.orbit import circular_orbit_over as circular_orbit_over
 from jaxspline.geometry.orbit import orbit_position as orbit_position
 from jaxspline.geometry.orbit import orbit_state as orbit_state
+from jaxspline.geometry.orbit import padded_orbit as padded_orbit
 from jaxspline.geometry.orbit import propagate_tle as propagate_tle
 from jaxspline.geometry.orbit import sso_inclination as sso_inclination
 from jaxspline.geometry.orbit import tabulate_orbits as tabulate_orbits

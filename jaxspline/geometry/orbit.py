@@ -37,6 +37,7 @@ __all__ = [
     "MU_EARTH",
     "CircularOrbit",
     "HermiteOrbit",
+    "padded_orbit",
     "sso_inclination",
     "circular_orbit",
     "circular_orbit_over",
@@ -85,6 +86,9 @@ class HermiteOrbit(NamedTuple):
       r, v, a: position [M, 3] [m], velocity [M, 3] [m/s], acceleration [M, 3] [m/s^2]
         at the knots (from SGP4; accelerations from the two-body + J2 model).
 
+      n: knots in use (int scalar; the tables beyond are padding, never read), or None
+        for all M (:func:`padded_orbit`).
+
     Between knots the position is the unique quintic matching r, v, a at both ends,
     so the interpolant and its first two derivatives are continuous. Outside the
     knot range the end pieces are extrapolated (keep the scenario inside the table).
@@ -94,6 +98,26 @@ class HermiteOrbit(NamedTuple):
     r: jnp.ndarray
     v: jnp.ndarray
     a: jnp.ndarray
+    n: jnp.ndarray | None = None
+
+
+def padded_orbit(orb: HermiteOrbit, min_knots: int = 64) -> HermiteOrbit:
+    """A multi-satellite table ([S, M, 3]) padded to power-of-two S and M (M at least
+    ``min_knots``), with ``n`` = M: the same interpolation, one compiled shape for
+    every table of the same sizes (programs take the orbit as an argument).
+
+    Args:
+      orb: HermiteOrbit with [S, M, 3] tables and ``n`` None.
+      min_knots: fewest knots of the padded table.
+    Returns:
+      HermiteOrbit (JAX arrays).
+    """
+    s, m = np.shape(orb.r)[:2]
+    s2 = 1 << (s - 1).bit_length()
+    m2 = max(min_knots, 1 << (m - 1).bit_length())
+    tab = [np.pad(np.asarray(x), [(0, s2 - s), (0, m2 - m), (0, 0)]) for x in orb[1:4]]
+    t = np.pad(np.asarray(orb.t), (0, m2 - m), mode="edge")
+    return HermiteOrbit(*(to_device(x) for x in (t, *tab, np.int32(m))))
 
 
 def sso_inclination(altitude: float) -> float:
@@ -221,7 +245,8 @@ def _circular_velocity(orb: CircularOrbit, t):
 def _hermite_basis(orb: HermiteOrbit, t, deriv: bool, sat=None):
     t = jnp.asarray(t)
     h = orb.t[1] - orb.t[0]
-    k = jnp.clip(jnp.floor((t - orb.t[0]) / h).astype(jnp.int32), 0, orb.t.shape[0] - 2)
+    last = orb.t.shape[0] - 2 if orb.n is None else orb.n - 2
+    k = jnp.clip(jnp.floor((t - orb.t[0]) / h).astype(jnp.int32), 0, last)
     s = ((t - orb.t[k]) / h)[..., None]
     s2, s3, s4 = s**2, s**3, s**4
     if deriv:  # d/ds of the quintic Hermite basis, then d/dt = (1/h) d/ds

@@ -35,6 +35,7 @@ from jaxspline.geometry.frames import (
     sun_direction,
     sun_elevation,
 )
+from jaxspline.geometry.orbit import HermiteOrbit, padded_orbit
 from jaxspline.geometry.pointing import Scene, aim_geometry, aim_params, aim_point, aim_state
 from jaxspline.geometry.routes import strip_direction
 from jaxspline.geometry.windows import Windows
@@ -96,6 +97,23 @@ state_batched = jax.jit(jax.vmap(_state, in_axes=(None, 0, 0, 0, 0)))
 """``aim_state`` (angles, rates, accelerations) batched like :data:`geometry_batched`."""
 
 
+_BUCKETED: list = []  # [(scene, its padded copy)] of the last call (one entry)
+
+
+def _bucketed(scene: Scene) -> Scene:
+    """The scene with its orbit table padded to power-of-two sizes (:func:`padded_orbit`):
+    the compiled kernels then serve every scenario of similar size. Kept for the next
+    call with the same scene."""
+    orb = scene.orbit
+    if not isinstance(orb, HermiteOrbit) or orb.n is not None or np.ndim(orb.r) != 3:
+        return scene
+    if _BUCKETED and _BUCKETED[0][0] is scene:
+        return _BUCKETED[0][1]
+    out = scene._replace(orbit=padded_orbit(orb))
+    _BUCKETED[:] = [(scene, out)]
+    return out
+
+
 def evaluate(fn, scene: Scene, sat, p, t0, t, tick=None):
     """Apply a vmapped kernel ``fn(scene, sat, p, t0, t)`` in padded chunks (numpy out).
 
@@ -119,6 +137,7 @@ def evaluate(fn, scene: Scene, sat, p, t0, t, tick=None):
     if m == 0:
         return None
     args = [np.asarray(x) for x in (sat, p, t0, t)]
+    scene = _bucketed(scene)
 
     def run(*a):
         return fn(scene, *(to_device(x) for x in a))

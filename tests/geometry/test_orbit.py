@@ -22,8 +22,10 @@ from jaxspline.geometry.orbit import (
     circular_orbit_over,
     orbit_position,
     orbit_state,
+    padded_orbit,
     propagate_tle,
     sso_inclination,
+    tabulate_orbits,
     tle_orbit,
 )
 
@@ -218,3 +220,20 @@ def test_circular_elements_stay_float64_when_jax_is_in_float32():
         for name, x in orb._asdict().items():
             assert np.asarray(x).dtype == np.float64, name
     assert float(orbs[0].inclination) == 1.7 and float(orbs[0].arg_lat) == 1.2
+
+
+def test_padded_table_interpolates_exactly_as_the_table():
+    """Padding to power-of-two sizes changes no value, inside the knots and past both ends
+    (the end pieces extrapolate from the true last knot, not from the padding)."""
+    srcs = [circular_orbit(550e3, 1.7, 0.1 * k, 0.5 * k) for k in range(3)]
+    orb = tabulate_orbits(srcs, 2461000.5, 1000.0, 10.0).orbit
+    pad = padded_orbit(orb)
+    assert pad.r.shape[:2] == (4, 128) and int(pad.n) == orb.t.shape[0]
+    rng = np.random.default_rng(3)
+    t = np.r_[rng.uniform(-30.0, 1040.0, 200), np.asarray(orb.t)[-1], 1060.0]
+    sat = rng.integers(0, 3, t.size)
+    for f in (orbit_position, orbit_state):
+        want = jax.jit(f)(orb, jnp.asarray(t), jnp.asarray(sat))
+        got = jax.jit(f)(pad, jnp.asarray(t), jnp.asarray(sat))
+        for w, g in zip(jax.tree.leaves(want), jax.tree.leaves(got), strict=True):
+            np.testing.assert_array_equal(np.asarray(g), np.asarray(w))
