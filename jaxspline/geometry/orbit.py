@@ -85,7 +85,6 @@ class HermiteOrbit(NamedTuple):
       t: knot times [M] [s], equally spaced.
       r, v, a: position [M, 3] [m], velocity [M, 3] [m/s], acceleration [M, 3] [m/s^2]
         at the knots (from SGP4; accelerations from the two-body + J2 model).
-
       n: knots in use (int scalar; the tables beyond are padding, never read), or None
         for all M (:func:`padded_orbit`).
 

@@ -12,7 +12,15 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-__all__ = ["batched", "map_chunked", "pad_rows", "padded_size", "ragged_positions", "round_up"]
+__all__ = [
+    "batched",
+    "map_chunked",
+    "pad_last",
+    "pad_rows",
+    "padded_size",
+    "ragged_positions",
+    "round_up",
+]
 
 
 def batched(fn, signature: str | None = None, excluded=frozenset()):
@@ -73,6 +81,20 @@ def padded_size(n: int, maximum: int | None = None, multiple: int = 1) -> int:
     if maximum is not None:
         size = min(maximum, size)
     return round_up(size, multiple)
+
+
+def pad_last(x, size: int) -> np.ndarray:
+    """``x`` (host) with zeros appended along its last axis up to ``size`` (a padded
+    table: indices past the true length are never read).
+
+    Args:
+      x: array-like [..., n], n <= size.
+      size: length wanted.
+    Returns:
+      numpy array [..., size], the dtype of x.
+    """
+    x = np.asarray(x)
+    return np.pad(x, [(0, 0)] * (x.ndim - 1) + [(0, size - x.shape[-1])])
 
 
 def pad_rows(x, size: int):

@@ -24,7 +24,7 @@ import numpy as np
 from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxspline.kernels._batch import padded_size, ragged_positions, round_up
+from jaxspline.kernels._batch import pad_last, padded_size, ragged_positions, round_up
 from jaxspline.screen.options import options_dtype
 from jaxspline.screen.pair_models import model_arrays
 from jaxspline.screen.transitions import (
@@ -336,8 +336,7 @@ def _device_table(options, model, dtype, order, mesh):
     nv_pad = padded_size(max(order.size, _MIN_TABLE))
 
     def put(a, dt=None):
-        a = np.asarray(a)
-        a = np.pad(a, [(0, 0)] * (a.ndim - 1) + [(0, nv_pad - a.shape[-1])])
+        a = pad_last(a, nv_pad)
         return jax.device_put(jnp.asarray(a, dt), rep)
 
     pair, fields, params = model_arrays(model, options, dtype, order)

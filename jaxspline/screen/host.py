@@ -22,7 +22,7 @@ import numpy as np
 from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxspline.kernels._batch import padded_size
+from jaxspline.kernels._batch import pad_last, padded_size
 from jaxspline.screen.options import RouteOptions, options_dtype, validate_options
 from jaxspline.screen.pair_models import model_arrays
 from jaxspline.screen.transitions import Transitions, candidate_runs, device_mesh
@@ -60,12 +60,7 @@ class Screener:
         # field-major [F, N]: each channel's column is one contiguous vector; N padded to a
         # power of two, so tables of similar size share the compiled program
         n_pad = padded_size(np.asarray(options.t_start).shape[0])
-        self.table = tuple(
-            jax.device_put(
-                jnp.asarray(np.pad(a, [(0, 0)] * (a.ndim - 1) + [(0, n_pad - a.shape[-1])])), rep
-            )
-            for a in map(np.asarray, table)
-        )
+        self.table = tuple(jax.device_put(jnp.asarray(pad_last(a, n_pad)), rep) for a in table)
         self.params = tuple(jax.device_put(jnp.asarray(a), rep) for a in params)
         self.t_start = np.asarray(options.t_start, np.float64)
         self.t_end = np.asarray(options.t_end, np.float64)
