@@ -34,6 +34,12 @@ _TIMEOUT_S = 300
 # "page:line"; a page's failure (its traceback) is recorded and the next page runs
 DRIVER = """
 import json, os, sys, traceback
+cache = os.environ.get("JAXSPLINE_CACHE_DIR", "").strip()
+if cache.lower() not in ("", "off", "0", "none"):  # the run's XLA cache (tests/conftest.py)
+    import jax
+    jax.config.update("jax_compilation_cache_dir", cache)
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
 pages = json.load(open(sys.argv[1], encoding="utf-8"))
 result = {}
 for page in pages:
