@@ -34,6 +34,7 @@ layer but those of ``PENDING_LAYERS``.
 from __future__ import annotations
 
 import ast
+import functools
 import re
 from pathlib import Path
 
@@ -86,6 +87,16 @@ MODULES = list(_modules())
 KNOWN = {m for m, _, _ in MODULES}
 
 
+def _tree(path: Path) -> ast.Module:
+    """The syntax tree of ``path`` (several tests walk every module: parsed once per text)."""
+    return _parse(path.read_text())
+
+
+@functools.lru_cache(maxsize=None)
+def _parse(text: str) -> ast.Module:
+    return ast.parse(text)
+
+
 def _from_target(module: str, is_pkg: bool, node: ast.ImportFrom) -> str:
     """The absolute module ``from ... import`` reads from (relative imports resolved)."""
     if not node.level:
@@ -104,7 +115,7 @@ def imports_of(module: str, path: Path, is_pkg: bool, known=None) -> set[str]:
     """
     known = KNOWN if known is None else known
     found = set()
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(_tree(path)):
         if isinstance(node, ast.Import):
             found.update(a.name for a in node.names)
         elif isinstance(node, ast.ImportFrom):
@@ -118,7 +129,7 @@ def imports_of(module: str, path: Path, is_pkg: bool, known=None) -> set[str]:
 def private_imports(module: str, path: Path, is_pkg: bool) -> list[str]:
     """``from x import _y`` of ``module`` where x is another module of the package."""
     bad = []
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(_tree(path)):
         if isinstance(node, ast.ImportFrom) and node.module != "__future__":
             target = _from_target(module, is_pkg, node)
             if target.split(".")[0] != "jaxspline" or target == module:
@@ -237,14 +248,14 @@ def test_functions_stay_short(layer):
     long = {
         module: found
         for module, path in in_layer
-        if (found := _long_functions(ast.parse(path.read_text()), MAX_FUNCTION_LINES))
+        if (found := _long_functions(_tree(path), MAX_FUNCTION_LINES))
     }
     assert long == {}, f"functions over {MAX_FUNCTION_LINES} lines: {long}"
 
 
 def test_the_facade_functions_stay_short():
     path = ROOT / "__init__.py"
-    assert _long_functions(ast.parse(path.read_text()), MAX_FUNCTION_LINES) == []
+    assert _long_functions(_tree(path), MAX_FUNCTION_LINES) == []
 
 
 def test_only_layers_are_exempt_from_the_function_rule():
