@@ -87,21 +87,22 @@ PLAN_GROWTH = 1.3
 #: search (the default job's: ~half of its 950), in :func:`mandatory_seconds`.
 TYPICAL_PLAN_SHARE = 0.5
 
-# CPU seconds of the repair's steps, per observation of the plan, measured on the
+# CPU seconds of the repair's steps, per observation of the plan, fitted to the
 # default job (~500 observations, a third on per-channel satellites: 22.5 s for three
-# rounds with the flown joins) and on a 12-satellite 12 h day of 20,000 targets
-# (~4,500 observations, 4 of the 12 satellites per-channel: 28.7 s for one round of
-# refinement and check; the rates cover it by ~20 %), 2-core machine, compiled
-# programs in the cache; the first calls (loading their programs, one set per maneuver
-# model: 0.6 and 3.0 s for a 12-target scenario with three models, as much as the
-# default job's) on both:
-CHECK_S_PER_OBS = 2.4e-3  # one independent check (plan_check), per round
+# rounds with the flown joins and two refills) and to a 12-satellite 12 h day of
+# 20,000 targets (~4,500 observations, 4 of the 12 satellites per-channel: 27 s for
+# one round of refinement and check), 2-core machine, compiled programs in the cache;
+# the first calls (loading their programs, one set per maneuver model: 0.6 and 3.0 s
+# for a 12-target scenario with three models, as much as the default job's) on both:
+CHECK_S_PER_OBS = 1.8e-3  # one independent check (plan_check), per round
 CHECK_FIRST_S = 0.8  # its first call
-JOINS_S_PER_OBS = 2.0e-3  # one flown-join check (reject_unflyable), per round
+JOINS_S_PER_OBS = 2.4e-3  # one flown-join check (reject_unflyable), per round
 JOINS_FIRST_S = 3.0  # its first call
-REFINE_S_PER_OBS = 4.4e-3  # one start-time refinement, per round
+REFINE_S_PER_OBS = 3.4e-3  # one start-time refinement, per round
 REFINE_FIRST_S = 2.5  # its first call
-REFILL_OVERHEAD_S = 0.5  # a refill's greedy pass and restore, besides its budget
+#: [s] a refill's greedy pass and restore besides its budget, and the refinement after
+#: it on a plan of a new size (the default job's second round: ~2 s more than a warm one)
+REFILL_OVERHEAD_S = 2.0
 _ROUNDS_WITH_JOINS = 3  # repair rounds with the flown joins (two refills, the last check)
 _MANDATORY_ROUNDS = 2  # check and join rounds with no refill: a rejection, then the last
 
