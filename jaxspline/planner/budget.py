@@ -10,19 +10,24 @@ the only stage that can stop at any time, so it gets what the others leave:
   :data:`RESERVE_MIN_S`) kept for the check and the output, plus one for the
   refinement (:data:`REFINE_SHARE`, at most :data:`REFINE_MAX_S`);
 * with one (``jaxspline plan``): :func:`deadline_budget`, once the problem is built.
-  The repair is estimated from the problem's size (:func:`repair_seconds`: CPU
-  seconds per target that has an option, measured on the default job), the outputs
-  by the caller (:attr:`StageDeadline.after_s`); both are scaled by the pace of the
-  call so far (:meth:`StageDeadline.pace`: a loaded machine runs them slower). The
-  search ends that long before the limit, but gets at least :data:`SEARCH_MIN_SHARE`
-  of the time left: when the estimates do not fit, the later stages leave out what
-  does not fit (the repair its refinement and refills, the outputs their optional
-  files), they never leave out a check.
+  The repair works on the plan, so its estimate (:func:`repair_seconds`: CPU seconds
+  per observation of the plan, measured on the default job and on a 12-satellite
+  day) is made twice: first for a plan of every target that has an option (the
+  plan is not known yet), then once more when the search's greedy start is built
+  (:attr:`Budget.retime`, called by :func:`jaxspline.search.solve`), for
+  :data:`PLAN_GROWTH` times the greedy start's observations (the search adds some).
+  The outputs are estimated by the caller (:attr:`StageDeadline.after_s`). Both are
+  scaled by the pace of the call so far (:meth:`StageDeadline.pace`: a loaded machine
+  runs them slower). The search ends that long before the limit, but gets at least
+  :data:`SEARCH_MIN_SHARE` of the time left at its start: when the estimates do not
+  fit, the later stages leave out what does not fit (the repair its refinement and
+  refills, the outputs their optional files), they never leave out a check.
 
 One more check before the search starts: when the stages before it have used the
 limit up (their compile allowance lets them run past it), the checks the repair can
-never leave out (:func:`mandatory_seconds`, at the pace) would end the run more than
-:data:`LATE_MAX_S` past the limit; a time-bound call then stops with
+never leave out (:func:`mandatory_seconds`, at the pace, for a plan of
+:data:`TYPICAL_PLAN_SHARE` of the targets that have an option) would end the run more
+than :data:`LATE_MAX_S` past the limit; a time-bound call then stops with
 :class:`jaxspline.planner.deadline.TimeLimitError` (exit 3 of ``jaxspline plan``, with
 the estimate and the remedy) rather than plan that late.
 
@@ -34,6 +39,7 @@ run whatever the clock says, so such runs stay reproducible.
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -43,19 +49,21 @@ from jaxspline.planner.deadline import StageDeadline, TimeLimitError, suggested_
 
 __all__ = [
     "CHECK_FIRST_S",
-    "CHECK_S_PER_TARGET",
+    "CHECK_S_PER_OBS",
     "JOINS_FIRST_S",
-    "JOINS_S_PER_TARGET",
+    "JOINS_S_PER_OBS",
     "LATE_MAX_S",
+    "PLAN_GROWTH",
     "REFINE_FIRST_S",
     "REFINE_MAX_S",
     "REFINE_MIN_S",
     "REFINE_SHARE",
-    "REFINE_S_PER_TARGET",
+    "REFINE_S_PER_OBS",
     "REFILL_OVERHEAD_S",
     "RESERVE_MIN_S",
     "RESERVE_SHARE",
     "SEARCH_MIN_SHARE",
+    "TYPICAL_PLAN_SHARE",
     "Budget",
     "deadline_budget",
     "default_budget",
@@ -71,19 +79,30 @@ REFINE_MAX_S = 10.0  # [s] ... at most (warm: ~1-3 s a round; a cold compile 6-1
 REFINE_MIN_S = 10.0  # [s] refinement runs only with this much time left (cold compile: 6-12 s)
 SEARCH_MIN_SHARE = 0.25  # share of the time left at its start the search always gets
 LATE_MAX_S = 20.0  # [s] past the limit the checks after the search may end, at most
+#: The plan size the repair's estimate assumes, as a multiple of the greedy start's
+#: observations (the search's later stages add observations: +21 % in a 30 s search
+#: of a 20,000-target 12-satellite day).
+PLAN_GROWTH = 1.3
+#: Share of the targets that have an option that a plan is taken to observe before the
+#: search (the default job's: ~half of its 950), in :func:`mandatory_seconds`.
+TYPICAL_PLAN_SHARE = 0.5
 
-# CPU seconds of the repair's steps, per target that has an option (the plan's size is
-# not known before the search; the default job plans ~half of its 950 such targets),
-# measured on the default job (2-core machine, compiled programs in the cache); the
-# first calls (loading their programs, one set per maneuver model: 0.6 and 3.0 s for a
-# 12-target scenario with three models, as much as the default job's) on both:
-CHECK_S_PER_TARGET = 0.9e-3  # one independent check (plan_check), per round
+# CPU seconds of the repair's steps, per observation of the plan, fitted to the
+# default job (~500 observations, a third on per-channel satellites: 22.5 s for three
+# rounds with the flown joins and two refills) and to a 12-satellite 12 h day of
+# 20,000 targets (~4,500 observations, 4 of the 12 satellites per-channel: 27 s for
+# one round of refinement and check), 2-core machine, compiled programs in the cache;
+# the first calls (loading their programs, one set per maneuver model: 0.6 and 3.0 s
+# for a 12-target scenario with three models, as much as the default job's) on both:
+CHECK_S_PER_OBS = 1.8e-3  # one independent check (plan_check), per round
 CHECK_FIRST_S = 0.8  # its first call
-JOINS_S_PER_TARGET = 1.2e-3  # one flown-join check (reject_unflyable), per round
+JOINS_S_PER_OBS = 2.4e-3  # one flown-join check (reject_unflyable), per round
 JOINS_FIRST_S = 3.0  # its first call
-REFINE_S_PER_TARGET = 1.1e-3  # one start-time refinement, per round
+REFINE_S_PER_OBS = 3.4e-3  # one start-time refinement, per round
 REFINE_FIRST_S = 2.5  # its first call
-REFILL_OVERHEAD_S = 0.5  # a refill's greedy pass and restore, besides its budget
+#: [s] a refill's greedy pass and restore besides its budget, and the refinement after
+#: it on a plan of a new size (the default job's second round: ~2 s more than a warm one)
+REFILL_OVERHEAD_S = 2.0
 _ROUNDS_WITH_JOINS = 3  # repair rounds with the flown joins (two refills, the last check)
 _MANDATORY_ROUNDS = 2  # check and join rounds with no refill: a rejection, then the last
 
@@ -92,18 +111,22 @@ class Budget(NamedTuple):
     """The clock of one :func:`jaxspline.plan` call after the stages before the search.
 
     Attributes:
-      search_end: when the search stops [s, ``time.monotonic``].
+      search_end: when the search stops [s, ``time.monotonic``] (until :attr:`retime`).
       repair_end: when the repair's optional steps (refinement, refills) must end
         [s, monotonic]; None: they run whatever the clock says (iteration-capped runs
         set this when they pass it on).
       refining: the start-time refinement runs (refine steps and a per-channel satellite).
       split: the split, for ``plan.json`` (empty without a deadline).
+      retime: None, or ``retime(observations) -> search_end``: the search's end
+        re-estimated for a greedy start of that many observations (module docstring);
+        it updates :attr:`split`.
     """
 
     search_end: float
     repair_end: float | None
     refining: bool
     split: dict
+    retime: Callable[[int], float] | None = None
 
 
 def _refining(sc) -> bool:
@@ -129,30 +152,36 @@ def default_budget(sc, limit: float, t0: float) -> Budget:
     return Budget(t0 + limit - reserve, t0 + limit, refining, {})
 
 
-def repair_seconds(ctx: PlanContext, flown_joins: bool, refining: bool, refill_s: float) -> float:
-    """Estimated CPU seconds of the repair (module docstring) for the problem of ``ctx``.
+def _targets(ctx: PlanContext) -> int:
+    """The targets that have an option: the most observations a plan can have."""
+    return int(np.unique(ctx.opportunities.options.route).size)
+
+
+def repair_seconds(observations: float, flown_joins: bool, refining: bool, refill_s: float):
+    """Estimated CPU seconds of the repair (module docstring) of a plan of ``observations``.
 
     Args:
-      ctx: PlanContext (stages 1-4).
+      observations: the plan's size (observations).
       flown_joins: the flown joins are checked (three rounds, two refills).
       refining: the start-time refinement runs (each round with the joins).
       refill_s: the budget of one refill [s].
     Returns:
       float [s].
     """
-    n = int(np.unique(ctx.opportunities.options.route).size)
+    n = float(observations)
     rounds = _ROUNDS_WITH_JOINS if flown_joins else 1
-    need = CHECK_FIRST_S + rounds * CHECK_S_PER_TARGET * n
+    need = CHECK_FIRST_S + rounds * CHECK_S_PER_OBS * n
     if flown_joins:
-        need += JOINS_FIRST_S + rounds * JOINS_S_PER_TARGET * n + refill_s + REFILL_OVERHEAD_S
+        need += JOINS_FIRST_S + rounds * JOINS_S_PER_OBS * n + refill_s + REFILL_OVERHEAD_S
     if refining:
-        need += REFINE_FIRST_S + rounds * REFINE_S_PER_TARGET * n
+        need += REFINE_FIRST_S + rounds * REFINE_S_PER_OBS * n
     return need
 
 
 def mandatory_seconds(ctx: PlanContext, flown_joins: bool, after_s: float = 0.0) -> float:
     """Estimated CPU seconds of what follows the search and is never left out: the
-    independent check and the flown-join check (two rounds each), plus ``after_s``.
+    independent check and the flown-join check (two rounds each) of a plan of
+    :data:`TYPICAL_PLAN_SHARE` of the targets that have an option, plus ``after_s``.
 
     Args:
       ctx: PlanContext (stages 1-4).
@@ -161,10 +190,10 @@ def mandatory_seconds(ctx: PlanContext, flown_joins: bool, after_s: float = 0.0)
     Returns:
       float [s].
     """
-    n = int(np.unique(ctx.opportunities.options.route).size)
-    need = CHECK_FIRST_S + _MANDATORY_ROUNDS * CHECK_S_PER_TARGET * n + after_s
+    n = TYPICAL_PLAN_SHARE * _targets(ctx)
+    need = CHECK_FIRST_S + _MANDATORY_ROUNDS * CHECK_S_PER_OBS * n + after_s
     if flown_joins:
-        need += JOINS_FIRST_S + _MANDATORY_ROUNDS * JOINS_S_PER_TARGET * n
+        need += JOINS_FIRST_S + _MANDATORY_ROUNDS * JOINS_S_PER_OBS * n
     return need
 
 
@@ -201,11 +230,12 @@ def deadline_budget(
     Args:
       ctx: PlanContext (stages 1-4).
       deadline: the call's StageDeadline (its ``after_s``: the caller's outputs); its
-        ``split`` is set here.
+        ``split`` is set here, and again by the budget's :attr:`Budget.retime`.
       flown_joins: the flown joins are checked.
       refill_s: the budget of one refill [s].
       capped: an iteration-capped run (its search and repair run whole whatever the
-        clock says, so it is not refused for :data:`LATE_MAX_S` either).
+        clock says, so it is not refused for :data:`LATE_MAX_S` either, and its
+        search's end is not re-estimated).
     Returns:
       Budget.
     Raises:
@@ -213,20 +243,33 @@ def deadline_budget(
         :data:`LATE_MAX_S` past the limit (module docstring).
     """
     refining = _refining(ctx.scenario)
-    pace = deadline.pace()
-    repair = repair_seconds(ctx, flown_joins, refining, refill_s) * pace
     if not capped:
-        _refuse_late(deadline, pace * mandatory_seconds(ctx, flown_joins, deadline.must_s))
-    outputs = deadline.after_s * pace
+        _refuse_late(
+            deadline, deadline.pace() * mandatory_seconds(ctx, flown_joins, deadline.must_s)
+        )
+    targets = _targets(ctx)
     now = time.monotonic()
-    left = max(deadline.end - now, 0.0)
-    search = max(left - repair - outputs, SEARCH_MIN_SHARE * left)
-    deadline.split = {
-        "before_search_s": round(now - deadline.t0, 2),
-        "search_s": round(search, 2),
-        "reserve_s": {"repair": round(repair, 2), "outputs": round(outputs, 2)},
-    }
-    return Budget(now + search, deadline.end - outputs, refining, deadline.split)
+    earliest = now + SEARCH_MIN_SHARE * max(deadline.end - now, 0.0)
+    deadline.split = {"before_search_s": round(now - deadline.t0, 2)}
+
+    def retime(observations: int) -> float:
+        """The search's end for a plan of ``observations`` (the greedy start's, grown by
+        :data:`PLAN_GROWTH`; at most every target that has an option)."""
+        size = min(PLAN_GROWTH * observations, targets)
+        pace = deadline.pace()
+        repair = repair_seconds(size, flown_joins, refining, refill_s) * pace
+        outputs = deadline.after_s * pace
+        end = max(deadline.end - repair - outputs, earliest)
+        deadline.split.update(
+            search_s=round(end - now, 2),
+            reserve_s={"repair": round(repair, 2), "outputs": round(outputs, 2)},
+            observations=round(size),
+        )
+        return end
+
+    end = retime(targets)
+    return Budget(end, deadline.end - deadline.after_s * deadline.pace(), refining,
+                  deadline.split, None if capped else retime)  # fmt: skip
 
 
 def refine_steps(pc, budget: Budget, max_iters, say) -> int:

@@ -488,20 +488,29 @@ def _cpus() -> int:
         return os.cpu_count() or 1
 
 
-def _search(pb, deadline, seed, max_iters, pc, clock):
-    """Stage 5 with a progress bar over the search budget."""
-    clock.bar = clock.search_bar(deadline - time.monotonic())
+def _search(pb, budget: Budget, seed, max_iters, pc, clock):
+    """Stage 5 with a progress bar over the search budget (re-sized when the budget's
+    ``retime`` moves the search's end)."""
+    clock.bar = clock.search_bar(budget.search_end - time.monotonic())
     clock.bar_t0 = time.monotonic()
+
+    def retime(observations: int) -> float:
+        end = budget.retime(observations)
+        if clock.bar is not None:
+            clock.bar.total = round(max(end - clock.bar_t0, 0.0), 1)
+        return end
+
     try:
         return solve(
             pb,
-            deadline,
+            budget.search_end,
             seed=seed,
             lagrangian_share=pc.lagrangian_share,
             exact_max_options=pc.exact_max_options,
             max_iters=max_iters,
             bound_worker=pc.bound_worker and _cpus() >= _WORKER_MIN_CPUS,
             report=clock.say,
+            retime=None if budget.retime is None else retime,
         )
     finally:
         if clock.bar is not None:
@@ -568,7 +577,7 @@ def _search_and_repair(ctx: PlanContext, budget: Budget, seed, max_iters, flown_
         )
 
     with search_clock.catch_signals(stopping, abort_on_second=True) as stop:
-        res = _search(ctx.problem, budget.search_end, seed, max_iters, pc, clock)
+        res = _search(ctx.problem, budget, seed, max_iters, pc, clock)
         tl = res.timeline
         clock.lap("search", f"value {tl.value:.6g}, bound {res.bound:.6g} ({res.bound_status})")
         steps, t_steps = refine_steps(pc, budget, max_iters, clock.say), time.monotonic()

@@ -2,16 +2,18 @@
 
 ``plan.json`` and ``plan.csv`` are always written: they are the plan. The other files
 are optional products; :func:`output_seconds` estimates each from the scenario's size
-(CPU seconds per item, measured on the default job: 6 satellites, 6 h, 1,700 targets,
-about 500 observations, 12,960 attitude states on a 2-core machine: 0.5 s for
-``plan.json``/``plan.csv``, 1.3 s the page, 1.6 s the CZML, 7 s the attitude history
-and AEM files, 4 s the figures and 2 s attitude.png), so the planner
-can keep their time out of the search (:attr:`jaxspline.planner.deadline.StageDeadline.after_s`).
-When the time left is short all the same (a loaded machine, a search that was given
-its minimum share), :func:`jaxspline.products.outputs.write_plan_outputs` writes them
-in the order of :data:`PRODUCTS` as long as each one's estimate, at the call's pace,
-fits before the limit, and records each one left out with the way to get it
-(:data:`REMEDIES`) in ``plan.json``'s ``report["time_limit"]["skipped"]``.
+(CPU seconds per item, measured on a 2-core machine on the default job: 6 satellites,
+6 h, 1,700 targets, about 500 observations, 12,960 attitude states: 3.1 s for
+``plan.json``/``plan.csv`` and ``plan.czml``, 2.5 s the page, 13.6 s the attitude
+history and AEM files, 5.4 s the figures with attitude.png; and on a 12-satellite 12 h
+day of 20,000 targets: 19 s the plan files and ``plan.czml``, 5.3 s the page), so the
+planner can keep their time out of the search
+(:attr:`jaxspline.planner.deadline.StageDeadline.after_s`, :data:`RESERVE_FACTOR`
+times the estimate). When the time left is short all the same (a loaded machine, a
+search that was given its minimum share), :func:`jaxspline.products.outputs.write_plan_outputs`
+writes them in the order of :data:`PRODUCTS` as long as each one's estimate, at the
+call's pace, fits before the limit, and records each one left out with the way to get
+it (:data:`REMEDIES`) in ``plan.json``'s ``report["time_limit"]["skipped"]``.
 """
 
 from __future__ import annotations
@@ -44,23 +46,22 @@ REMEDIES = {
     "figures": "give a longer --time-limit",
 }
 
-PLAN_FILES_FIXED_S = 0.2  # plan.json (with its view section) and plan.csv [s]
-PLAN_FILES_S_PER_TARGET = 2e-4  # ... per target [s]
-PAGE_FIXED_S = 0.5  # plan.html [s]
-PAGE_S_PER_TARGET = 4.5e-4  # ... per target [s]
-CZML_S_PER_TARGET = 3e-4  # plan.czml, per target [s]
+PLAN_FILES_FIXED_S = 0.5  # plan.json (with its view section) and plan.csv [s]
+PLAN_FILES_S_PER_TARGET = 3e-4  # ... per target [s]
+PAGE_FIXED_S = 2.2  # plan.html [s]
+PAGE_S_PER_TARGET = 2e-4  # ... per target [s]
+CZML_S_PER_TARGET = 6e-4  # plan.czml, per target [s]
 CZML_S_PER_SAT_HOUR = 0.03  # ... per satellite and hour of the horizon [s]
-AEM_S_PER_STATE = 5.5e-4  # attitude history and its AEM files, per attitude state [s]
+AEM_S_PER_STATE = 1.1e-3  # attitude history and its AEM files, per attitude state [s]
 PLOTS_FIXED_S = 3.0  # the PNG figures (matplotlib, the world map) [s]
 PLOTS_S_PER_SAT_HOUR = 0.02  # ... per satellite and hour [s]
 ATTITUDE_PLOT_S_PER_STATE = 1.7e-4  # attitude.png, per attitude state [s]
-#: What the search keeps free for the outputs, as a multiple of their estimate. The
-#: estimates are each product's own CPU seconds; the writing phase also pays for the
-#: attitude history's set-up and imports, and the stages before it (repair, attitude)
-#: run over theirs, so with the plain estimate the figures, written last, never fitted
-#: in the default job. Whether each product is written is still decided on its own
-#: estimate against the time really left.
-RESERVE_FACTOR = 2.5
+#: What the search keeps free for the outputs, as a multiple of their estimate: the
+#: estimates cover each product's measured CPU seconds (by 0-20 %), the factor what a
+#: run adds to them (a product's first call on a new size, a slower disk). Whether
+#: each product is written is still decided on its own estimate against the time
+#: really left.
+RESERVE_FACTOR = 1.3
 
 
 def output_seconds(sc, *, plots: bool, html: bool, aem: bool, aem_step: float) -> dict:

@@ -2,7 +2,7 @@
 
 1. greedy construction (:func:`greedy`; always completed, even past the deadline), by
    value; when a battery binds, also by value per Wh (:class:`EnergyRank`), the better
-   plan kept;
+   plan kept; a caller's ``retime`` then sets the deadline from its size;
 2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
    target prices, repaired plans, and the upper bound (:func:`lagrangian`);
 3. exact branch and bound when the instance is tiny (``exact_max_options``);
@@ -79,6 +79,7 @@ def solve(
     max_iters: int | None = None,
     bound_worker: bool = False,
     report=None,
+    retime=None,
 ) -> SearchResult:
     """Run the search stages (module docstring) until ``deadline``.
 
@@ -96,6 +97,10 @@ def solve(
         function of the problem, ``seed`` and ``max_iters`` alone. None: the deadline
         alone.
       report: callable ``report(stage, message)`` receiving progress lines, or None.
+      retime: optional callable ``retime(observations) -> deadline``, called once when
+        the greedy start is built (time-bound runs only) with its number of
+        observations: the search runs until the deadline it returns (the caller's
+        reserve for the later stages, re-estimated from the plan's size).
     Returns:
       SearchResult.
     """
@@ -115,6 +120,9 @@ def solve(
         if tl2.score() > tl.score():
             tl, order = tl2, order2
         del tl2, order2  # the losing greedy's timeline (its cache: ~90 MB at 80 M pairs)
+    if retime is not None and max_iters is None:
+        deadline = retime(pb.n_targets - tl.assigned.count(-1))
+        tail = min(_EARLIEST_MAX, _EARLIEST_SHARE * max(0.0, deadline - now))
     stats = {"greedy_value": tl.value}
     say("greedy", f"value {tl.value:.6g}")
     t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())

@@ -107,15 +107,12 @@ def _ctx(n_targets, refining, duration=3600.0):
 
 
 def test_repair_estimate_grows_with_the_steps_that_run():
-    ctx = _ctx(1000, refining=True)
-    plain = bd.repair_seconds(ctx, False, False, 2.0)
-    assert plain == pytest.approx(bd.CHECK_FIRST_S + bd.CHECK_S_PER_TARGET * 1000)
-    joins = bd.repair_seconds(ctx, True, False, 2.0)
+    plain = bd.repair_seconds(1000, False, False, 2.0)
+    assert plain == pytest.approx(bd.CHECK_FIRST_S + bd.CHECK_S_PER_OBS * 1000)
+    joins = bd.repair_seconds(1000, True, False, 2.0)
     assert joins > plain + bd.JOINS_FIRST_S + 2.0
-    assert bd.repair_seconds(ctx, True, True, 2.0) > joins + bd.REFINE_FIRST_S
-    assert bd.repair_seconds(_ctx(2000, True), True, True, 2.0) > bd.repair_seconds(
-        ctx, True, True, 2.0
-    )
+    assert bd.repair_seconds(1000, True, True, 2.0) > joins + bd.REFINE_FIRST_S
+    assert bd.repair_seconds(2000, True, True, 2.0) > bd.repair_seconds(1000, True, True, 2.0)
 
 
 def test_search_leaves_the_reserve_scaled_by_the_pace(monkeypatch):
@@ -125,12 +122,33 @@ def test_search_leaves_the_reserve_scaled_by_the_pace(monkeypatch):
     clock.cpu += 5.0  # pace 2
     ctx = _ctx(1000, refining=False)
     b = bd.deadline_budget(ctx, d, flown_joins=False, refill_s=2.0)
-    repair = 2.0 * bd.repair_seconds(ctx, False, False, 2.0)
+    repair = 2.0 * bd.repair_seconds(1000, False, False, 2.0)  # every target planned
     assert b.search_end == pytest.approx(d.end - repair - 10.0)
     assert b.repair_end == pytest.approx(d.end - 10.0)  # the outputs' share is kept
     assert b.split["reserve_s"] == {"repair": round(repair, 2), "outputs": 10.0}
     assert b.split["before_search_s"] == 10.0 and d.split is b.split
     assert not b.refining
+
+
+def test_the_greedy_start_moves_the_search_end_to_what_its_plan_needs(monkeypatch):
+    clock = _Clock(monkeypatch)
+    d = dl.StageDeadline(clock.wall, 100.0, after_s=5.0)
+    clock.wall += 10.0
+    clock.cpu += 10.0  # pace 1
+    b = bd.deadline_budget(_ctx(20000, refining=True), d, flown_joins=False, refill_s=2.0)
+    clock.wall += 5.0
+    clock.cpu += 5.0
+    end = b.retime(4000)  # the greedy start: a fifth of the targets
+    size = bd.PLAN_GROWTH * 4000
+    repair = bd.repair_seconds(size, False, True, 2.0)
+    assert end == pytest.approx(d.end - repair - 5.0) and end > b.search_end
+    assert d.split["observations"] == size and d.split["search_s"] == pytest.approx(90 - repair - 5)
+    assert d.split["reserve_s"]["repair"] == round(repair, 2)
+    assert b.retime(10**6) == pytest.approx(b.search_end)  # never past every target planned
+    clock.wall += 40.0  # a loaded machine: the estimate at pace 2 does not fit
+    assert b.retime(4000) == pytest.approx(10.0 + 1000.0 + bd.SEARCH_MIN_SHARE * 90.0)
+    capped = bd.deadline_budget(_ctx(20, False), d, flown_joins=False, refill_s=2.0, capped=True)
+    assert capped.retime is None  # iteration-capped runs keep their clock-free search
 
 
 def test_search_gets_its_minimum_share_when_the_reserve_does_not_fit(monkeypatch):
@@ -199,9 +217,8 @@ def test_a_call_whose_checks_would_end_far_past_the_limit_stops_before_the_searc
     ctx = _ctx(2000, refining=False)
     need = bd.mandatory_seconds(ctx, True, 0.5)
     first = bd.CHECK_FIRST_S + bd.JOINS_FIRST_S  # loading the checks' programs
-    assert need == pytest.approx(
-        2 * (bd.CHECK_S_PER_TARGET + bd.JOINS_S_PER_TARGET) * 2000 + first + 0.5
-    )
+    n = bd.TYPICAL_PLAN_SHARE * 2000
+    assert need == pytest.approx(2 * (bd.CHECK_S_PER_OBS + bd.JOINS_S_PER_OBS) * n + first + 0.5)
     assert 25.0 + need - 10.0 > bd.LATE_MAX_S
     with pytest.raises(dl.TimeLimitError, match="would end .* past the limit; 3 targets") as e:
         bd.deadline_budget(ctx, d, flown_joins=True, refill_s=2.0)

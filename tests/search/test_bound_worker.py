@@ -141,3 +141,22 @@ def test_lagrangian_phase_gives_way_after_an_iteration(problem):
     res = lagrangian(tl, math.inf, None, max_iters=50, give_way=give_way)
     assert res.iterations == 1 and len(asked) == 1
     assert tl.value >= start and res.bound >= tl.value - 1e-9
+
+
+def test_retime_moves_the_search_end_once_the_greedy_start_is_built(problem):
+    # the caller's reserve re-estimated from the plan's size: a deadline an hour away
+    # becomes one a second after the greedy start, for the worker as for the LNS
+    asked, start = [], Timeline(problem)
+    greedy(start, math.inf)
+    greedy_obs = problem.n_targets - start.assigned.count(-1)
+
+    def retime(observations):
+        asked.append(observations)
+        return time.monotonic() + 1.0
+
+    t0 = time.monotonic()
+    res = solve(problem, t0 + 3600.0, seed=3, bound_worker=True, retime=retime)
+    assert asked == [greedy_obs] and time.monotonic() - t0 < 30.0
+    assert res.bound >= res.timeline.value - 1e-9
+    solve(problem, math.inf, seed=3, max_iters=10, retime=retime)  # capped: no clock
+    assert asked == [greedy_obs]
