@@ -92,7 +92,7 @@ def _tree(path: Path) -> ast.Module:
     return _parse(path.read_text())
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _parse(text: str) -> ast.Module:
     return ast.parse(text)
 
