@@ -335,9 +335,8 @@ def _device_table(options, model, dtype, order, mesh):
     rep = NamedSharding(mesh, P())
     nv_pad = padded_size(max(order.size, _MIN_TABLE))
 
-    def put(a, dt=None):
-        a = pad_last(a, nv_pad)
-        return jax.device_put(jnp.asarray(a, dt), rep)
+    def put(a):
+        return jax.device_put(pad_last(a, nv_pad), rep)
 
     pair, fields, params = model_arrays(model, options, dtype, order)
     tab = (
@@ -347,7 +346,7 @@ def _device_table(options, model, dtype, order, mesh):
         put(np.asarray(options.route)[order]),
         put(order.astype(np.int64)),
     )
-    params = tuple(jax.device_put(jnp.asarray(a), rep) for a in params)
+    params = tuple(jax.device_put(a, rep) for a in params)
     return tab, pair, params, put
 
 

@@ -17,7 +17,6 @@ from __future__ import annotations
 import functools
 
 import jax
-import jax.numpy as jnp
 import numpy as np
 from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
@@ -60,8 +59,8 @@ class Screener:
         # field-major [F, N]: each channel's column is one contiguous vector; N padded to a
         # power of two, so tables of similar size share the compiled program
         n_pad = padded_size(np.asarray(options.t_start).shape[0])
-        self.table = tuple(jax.device_put(jnp.asarray(pad_last(a, n_pad)), rep) for a in table)
-        self.params = tuple(jax.device_put(jnp.asarray(a), rep) for a in params)
+        self.table = tuple(jax.device_put(pad_last(a, n_pad), rep) for a in table)
+        self.params = tuple(jax.device_put(a, rep) for a in params)
         self.t_start = np.asarray(options.t_start, np.float64)
         self.t_end = np.asarray(options.t_end, np.float64)
         self.program = _chunk_program(pair)

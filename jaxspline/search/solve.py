@@ -110,7 +110,7 @@ def solve(
     tl = Timeline(pb)
     order = greedy_order(tl)
     now = time.monotonic()
-    tail = min(_EARLIEST_MAX, _EARLIEST_SHARE * max(0.0, deadline - now))
+    tail = _tail(deadline, now)
     greedy(tl, math.inf, order)  # always complete: a plan even when the budget is spent
     er = EnergyRank(pb)
     if any(er.binds(tl, k) for k in range(pb.n_sats)):  # energy is scarce: value per Wh
@@ -122,7 +122,7 @@ def solve(
         del tl2, order2  # the losing greedy's timeline (its cache: ~90 MB at 80 M pairs)
     if retime is not None and max_iters is None:
         deadline = retime(pb.n_targets - tl.assigned.count(-1))
-        tail = min(_EARLIEST_MAX, _EARLIEST_SHARE * max(0.0, deadline - now))
+        tail = _tail(deadline, now)
     stats = {"greedy_value": tl.value}
     say("greedy", f"value {tl.value:.6g}")
     t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())
@@ -139,6 +139,11 @@ def solve(
     finally:
         if worker is not None:
             worker.stop()
+
+
+def _tail(deadline: float, now: float) -> float:
+    """Time kept for the earliest-start pass of a search ending at ``deadline`` [s]."""
+    return min(_EARLIEST_MAX, _EARLIEST_SHARE * max(0.0, deadline - now))
 
 
 class _Budget(NamedTuple):
