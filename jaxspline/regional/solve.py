@@ -40,6 +40,11 @@ BOUND_COLLECT_S = 1.0
 BOUND_WAIT_S = 5.0
 #: Most of the search time spent on reaching regions' minimum coverage first.
 MIN_PHASE_SHARE = 0.5
+#: The most of a short time limit the reserve and the bound's lead may take (shares of
+#: the limit): under ``reserve_min_s / RESERVE_MAX_SHARE`` seconds the fixed minimums would
+#: leave the greedy no time at all.
+RESERVE_MAX_SHARE = 0.4
+BOUND_MAX_SHARE = 0.2
 
 
 @dataclass(frozen=True)
@@ -48,8 +53,10 @@ class SolveConfig:
 
     Attributes:
       reserve_frac, reserve_min_s: time kept back for writing and checking the solution
-        (the larger of ``reserve_frac * time_limit`` and ``reserve_min_s``) [s].
-      bound_frac, bound_min_s: time for the bound (the larger of the two) [s].
+        (the larger of ``reserve_frac * time_limit`` and ``reserve_min_s``, at most
+        :data:`RESERVE_MAX_SHARE` of the limit) [s].
+      bound_frac, bound_min_s: time for the bound (the larger of the two, at most
+        :data:`BOUND_MAX_SHARE` of the limit) [s].
       roll_step_deg: roll grid step [deg].
     """
 
@@ -236,8 +243,11 @@ def solve_case(
     if not time_limit > 0:
         raise ValueError(f"time_limit: must be > 0, got {time_limit!r}")
     t0 = time.perf_counter() if t_start is None else t_start
-    end = t0 + time_limit - max(config.reserve_frac * time_limit, config.reserve_min_s)
-    bound_s = max(config.bound_frac * time_limit, config.bound_min_s)
+    reserve = max(config.reserve_frac * time_limit, config.reserve_min_s)
+    end = t0 + time_limit - min(reserve, RESERVE_MAX_SHARE * time_limit)
+    bound_s = min(
+        max(config.bound_frac * time_limit, config.bound_min_s), BOUND_MAX_SHARE * time_limit
+    )
 
     def log(msg):
         if progress:
