@@ -268,20 +268,20 @@ def law_states(scene, sat, law, t0, t, jerk: bool = True):
     if t.size == 0:
         z = np.zeros((0, 3))
         return np.zeros((0, 4)), z, z, z
+    n = t.size
+    if jerk:  # the three instants in one batch (every row is evaluated on its own)
+        sat, law, t0 = np.tile(sat, 3), np.tile(law, (3, 1)), np.tile(t0, 3)
+        t = np.concatenate([t, t + JERK_STEP_S, t - JERK_STEP_S])
     keep = np.stack([law[:, 8] != LAW_NADIR] * 2 + [law[:, 8] == LAW_POINTING], -1)
-
-    def at(tt):
-        state = evaluate(state_batched, scene, sat, law[:, :8], t0, tt)
-        ang, rate, acc = (np.where(keep, x, 0.0) for x in state)
-        b, w, wd = frame_rates(scene, sat, tt)
-        x = np.concatenate([ang, rate, acc, w, wd, b.reshape(-1, 9)], -1)
-        return evaluate(_compose_v, scene, sat, x, t0, tt)
-
-    q, omega, eps = at(t)
+    state = evaluate(state_batched, scene, sat, law[:, :8], t0, t)
+    ang, rate, acc = (np.where(keep, x, 0.0) for x in state)
+    b, w, wd = frame_rates(scene, sat, t)
+    x = np.concatenate([ang, rate, acc, w, wd, b.reshape(-1, 9)], -1)
+    q, omega, eps = evaluate(_compose_v, scene, sat, x, t0, t)
     if not jerk:
         return q, omega, eps, np.zeros_like(eps)
-    d = (at(t + JERK_STEP_S)[2] - at(t - JERK_STEP_S)[2]) / (2.0 * JERK_STEP_S)
-    return q, omega, eps, d
+    d = (eps[n : 2 * n] - eps[2 * n :]) / (2.0 * JERK_STEP_S)
+    return q[:n], omega[:n], eps[:n], d
 
 
 def state_angles(scene, sat, q, omega, eps, t):
