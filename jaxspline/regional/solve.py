@@ -243,11 +243,8 @@ def solve_case(
     if not time_limit > 0:
         raise ValueError(f"time_limit: must be > 0, got {time_limit!r}")
     t0 = time.perf_counter() if t_start is None else t_start
-    reserve = max(config.reserve_frac * time_limit, config.reserve_min_s)
-    end = t0 + time_limit - min(reserve, RESERVE_MAX_SHARE * time_limit)
-    bound_s = min(
-        max(config.bound_frac * time_limit, config.bound_min_s), BOUND_MAX_SHARE * time_limit
-    )
+    reserve, bound_s = _shares(time_limit, config)
+    end = t0 + time_limit - reserve
 
     def log(msg):
         if progress:
@@ -289,6 +286,14 @@ def solve_case(
     }
     log(f"bound {bound:.5f} (gap {bound - best.value:.5f}, {bound_its} iterations)")
     return {"actions": actions}, stats
+
+
+def _shares(time_limit: float, config: SolveConfig) -> tuple[float, float]:
+    """(reserve, the bound's lead) [s] of a run of ``time_limit`` seconds (:class:`SolveConfig`),
+    each capped at its share of the limit (:data:`RESERVE_MAX_SHARE`, :data:`BOUND_MAX_SHARE`)."""
+    reserve = max(config.reserve_frac * time_limit, config.reserve_min_s)
+    bound_s = max(config.bound_frac * time_limit, config.bound_min_s)
+    return min(reserve, RESERVE_MAX_SHARE * time_limit), min(bound_s, BOUND_MAX_SHARE * time_limit)
 
 
 def _final_bound(worker, prob, value: float, info, bound_s: float, log):
