@@ -8,7 +8,10 @@ degree-7 join check (:func:`jaxspline.planner.flown_joins.reject_unflyable`). On
 1. **refine** (per-channel satellites, when asked and the set of observations grew):
    :func:`jaxspline.planner.refine_starts.refine_starts` on the current set, always from
    the search's table; the refined table is in force only if the whole plan passes the
-   check in it, else the search's table is;
+   check in it, else the search's table is. After the last refill (no refill can follow)
+   it is in force only if the plan it leaves after the join rejections is worth at least
+   the one the search's table leaves (both are settled; refined times can make joins
+   fail that the grid times pass);
 2. **check** in the table in force; each violation names one observation (the later
    one of a failing transition, see :mod:`jaxspline.planner.plan_check`), which is
    dropped, until the check passes;
@@ -219,6 +222,15 @@ def repair(
             _skip(skipped, say, "start-time refinement after a refill")
         elif refine and not clock.stop_requested():
             (opp, det), refined = _refine(ctx, chosen, int(refine_steps))
+            if opp is not ctx.opportunities and flown_joins and refills_left == 0:
+                opp, tail = _last_round(ctx, chosen, opp, det, refined)
+                say("refine", f"{len(refined)} per-channel satellites, kept: {tail.kept}")
+                chosen, det, joins = tail.chosen, tail.details, tail.joins
+                found, rounds = found + tail.found, rounds + tail.rounds - 1
+                withdrawn[tail.withdrawn] = True
+                for reason, n in tail.dropped.items():
+                    dropped[reason] += n
+                break
             kept = opp is not ctx.opportunities
             say("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
         refine = False
@@ -251,6 +263,56 @@ def repair(
         chosen, opp, det, dropped, found, refined, joins, refilled, rounds, withdrawn,
         tuple(skipped),
     )  # fmt: skip
+
+
+class _Tail(NamedTuple):
+    """The rounds after the last refill, run to their end (:func:`_settle`)."""
+
+    chosen: list
+    details: dict
+    joins: dict
+    dropped: dict
+    found: int
+    rounds: int
+    withdrawn: list
+    kept: bool = False
+
+
+def _settle(ctx: PlanContext, opp, chosen, det) -> _Tail:
+    """Check and drop, then reject failing joins and check again, until a round rejects
+    no join: the rounds of the repair once no refill is left, on the table ``opp``."""
+    dropped = dict.fromkeys(DROP_REASONS, 0)
+    found = rounds = 0
+    withdrawn = []
+    while True:
+        rounds += 1
+        chosen, det, n = _drop_until_clean(ctx, opp, chosen, det, dropped)
+        found += n
+        bad, joins = reject_unflyable(ctx.scenario, ctx.scene, opp, chosen)
+        if not bad:
+            return _Tail(chosen, det, joins, dropped, found, rounds, withdrawn)
+        found += len(bad)
+        dropped["joins"] += len(bad)
+        withdrawn += list(bad)
+        gone = set(bad)
+        chosen = [c for c in chosen if c not in gone]
+        det = None
+
+
+def _last_round(ctx: PlanContext, chosen, opp_r, det_r, refined):
+    """The last refinement (no refill follows it) is kept only if the plan it leaves after
+    the join rejections is worth at least the one the search's table leaves: refined
+    times can make joins fail that the search's grid times pass. Returns (the table
+    in force, its :class:`_Tail`); marks ``refined`` accordingly."""
+    on_r = _settle(ctx, opp_r, chosen, det_r)
+    on_s = _settle(ctx, ctx.opportunities, chosen, None)
+    value = ctx.problem.target_value
+    target = ctx.problem.option_target
+    worth = [sum(value[target[c]] for c in t.chosen) for t in (on_r, on_s)]
+    kept = worth[0] >= worth[1]
+    for v in refined.values():
+        v["kept"] = kept
+    return (opp_r, on_r._replace(kept=True)) if kept else (ctx.opportunities, on_s)
 
 
 def _skip(skipped: list, say, what: str) -> None:

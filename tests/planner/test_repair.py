@@ -104,3 +104,33 @@ def test_repair_drops_at_most_one_observation_per_violation(seed):
     assert bad == [] and det["violations"] == []
     # a forced option costs itself and the observations its transitions blame
     assert len(before - set(rep.chosen)) <= 2 * len(forced)
+
+
+@pytest.mark.parametrize("refined_loses_more", [True, False])
+def test_the_last_refinement_stays_only_if_its_joins_lose_no_more(monkeypatch, refined_loses_more):
+    """After the last refill, the refined table stays in force only if the plan it leaves
+    after the join rejections is worth at least the search table's (joins faked here: on
+    one table they fail the two most valuable observations, on the other the least)."""
+    import jaxspline.planner.repair as rp
+
+    sc, prep, tl = _searched(0)
+    chosen = [c for c in tl.assigned if c >= 0]
+    pb, opp_s = prep.problem, prep.opportunities
+    opp_r = Opportunities(opp_s.options, opp_s.speed, opp_s.params)  # the "refined" table
+    by_value = sorted(chosen, key=lambda c: pb.target_value[pb.option_target[c]])
+    cheap, dear = by_value[:1], by_value[-2:]
+    lose_r, lose_s = (dear, cheap) if refined_loses_more else (cheap, dear)
+
+    def reject(scenario, scene, opp, plan):
+        return [c for c in (lose_r if opp is opp_r else lose_s) if c in plan], {"joins": 0}
+
+    monkeypatch.setattr(rp, "reject_unflyable", reject)
+    refined = {"agile": {"kept": True}}
+    opp, tail = rp._last_round(prep, chosen, opp_r, None, refined)
+    keep_r = not refined_loses_more
+    lost = lose_r if keep_r else lose_s
+    assert (opp is opp_r) == keep_r and tail.kept == keep_r
+    assert refined["agile"]["kept"] == keep_r
+    assert tail.chosen == [c for c in chosen if c not in lost]
+    assert tail.dropped["joins"] == len(lost) and sorted(tail.withdrawn) == sorted(lost)
+    assert tail.rounds == 2  # one round rejects, the next finds nothing more
