@@ -31,6 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from jaxspline.kernels._batch import map_chunked
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 from jaxspline.screen.options import RouteOptions, options_dtype, validate_options
 
@@ -59,6 +60,9 @@ class StepsReport(NamedTuple):
     peak_rate: np.ndarray
     peak_accel: np.ndarray
     bad_steps: tuple[int, ...] = ()
+
+
+_TRANSITION_CHUNK = 16  # transitions per compiled trajectory call (padded)
 
 
 def _transfer(a1, b1, a2, b2, T, limits, t):
@@ -215,12 +219,17 @@ def _maneuver_violations(
     blame: set[int] = set()
     peak_rate = peak_rate.copy()
     peak_accel = np.zeros(peak_rate.shape[0])
+    gaps = s.ts[1:] - s.te[:-1]
+    flown = np.flatnonzero(gaps > 0)
+    t, traj = _trajectories(s, cfg, flown)
+    row = {int(k): i for i, k in enumerate(flown)}
     for k in range(s.ts.shape[0] - 1):
-        T = s.ts[k + 1] - s.te[k]
+        T = gaps[k]
         if not T > 0:
             found = [f"steps {k} -> {k + 1} overlap or touch: T = {T!r} s (needs T > 0)"]
         else:
-            found, peaks = _transition_violations(k, T, s, cfg)
+            i = row[k]
+            found, peaks = _transition_violations(k, t[i], [x[i] for x in traj], s, cfg)
             for ch, pr, pa in peaks:
                 peak_rate[ch] = max(peak_rate[ch], pr)
                 peak_accel[ch] = max(peak_accel[ch], pa)
@@ -230,27 +239,37 @@ def _maneuver_violations(
     return v, blame, peak_rate, peak_accel
 
 
-def _transition_violations(k: int, T, s: _Steps, cfg: _Settings):
-    """Rebuild the maneuver of transition ``k -> k + 1`` (duration ``T`` > 0) from the
-    end state of step k to the start state of step k+1, sample it and check every
-    channel. Returns the violations and, per channel with a trajectory, ``(channel,
-    peak |rate|, peak |accel|)``; a channel with no trajectory in exactly T is a
-    violation with no peaks."""
-    t = np.linspace(0.0, T, cfg.samples)
-    a1, b1, a2, b2 = s.ea[k], s.er[k], s.sa[k + 1], s.sr[k + 1]
+def _trajectories(s: _Steps, cfg: _Settings, ks: np.ndarray):
+    """The rebuilt maneuvers of the transitions ``k -> k + 1`` of ``ks`` (each with a
+    duration T > 0), from the end state of step k to the start state of step k+1:
+    their sample times [n, samples] (``np.linspace(0, T, samples)`` each) and
+    (angle, rate, accel) [n, C, samples] in float64, computed in the steps' dtype in
+    chunks of :data:`_TRANSITION_CHUNK` transitions (one compiled shape)."""
+    T = s.ts[ks + 1] - s.te[ks]
+    t = np.linspace(0.0, T, cfg.samples, axis=-1)
+    if ks.size == 0:
+        return t, [np.zeros((0, cfg.rate.shape[0], cfg.samples))] * 3
     dtype = cfg.dtype
-    f, fd, fdd = (
-        np.asarray(x, np.float64)
-        for x in _transfer(
-            a1[:, None].astype(dtype),
-            b1[:, None].astype(dtype),
-            a2[:, None].astype(dtype),
-            b2[:, None].astype(dtype),
-            dtype.type(T),
-            AxisLimits(cfg.rate[:, None].astype(dtype), cfg.accel[:, None].astype(dtype)),
-            t[None, :].astype(dtype),
-        )
-    )
+    lim = AxisLimits(cfg.rate[:, None].astype(dtype), cfg.accel[:, None].astype(dtype))
+    ends = (s.ea[ks], s.er[ks], s.sa[ks + 1], s.sr[ks + 1])
+    args = [x[:, :, None].astype(dtype) for x in ends]
+    args += [T[:, None, None].astype(dtype), t[:, None, :].astype(dtype)]
+
+    def run(a1, b1, a2, b2, dur, tt):
+        return _transfer(a1, b1, a2, b2, dur, lim, tt)
+
+    return t, [np.asarray(x, np.float64) for x in map_chunked(run, args, _TRANSITION_CHUNK)]
+
+
+def _transition_violations(k: int, t, traj, s: _Steps, cfg: _Settings):
+    """Check every channel of the rebuilt maneuver of transition ``k -> k + 1``: ``traj``
+    = its (angle, rate, accel) [C, samples] at the times ``t`` (:func:`_trajectories`).
+    Returns the violations and, per channel with a trajectory, ``(channel, peak |rate|,
+    peak |accel|)``; a channel with no trajectory in exactly T is a violation with no
+    peaks."""
+    T = t[-1]
+    a1, b1, a2, b2 = s.ea[k], s.er[k], s.sa[k + 1], s.sr[k + 1]
+    f, fd, fdd = traj
     v: list[str] = []
     peaks = []
     for ch in range(cfg.rate.shape[0]):
