@@ -135,9 +135,7 @@ def _drop_until_clean(ctx: PlanContext, opp, chosen, det, dropped):
         found += len(det["violations"])
         for c in bad:
             dropped[_CHECK_REASON.get(det["reasons"][c], "check")] += 1
-        gone = set(bad)
-        chosen = [c for c in chosen if c not in gone]
-        det = None
+        chosen, det = _without(chosen, bad), None
 
 
 def drop_failing(ctx: PlanContext, chosen, opp=None):
@@ -160,7 +158,8 @@ def drop_failing(ctx: PlanContext, chosen, opp=None):
 def _refill(pb, chosen, withdrawn, seconds, iters, seed):
     """Re-search of the problem ``pb`` from the plan ``chosen`` without the ``withdrawn``
     options: a greedy pass fills the freed time, then a short LNS (``iters`` iterations
-    or until ``seconds`` have passed).
+    or until ``seconds`` have passed). The repair runs the LNS in its first refill only:
+    a later one would pack new joins that the last round can only drop.
 
     Returns (option ids of the plan, observations added).
     """
@@ -223,13 +222,10 @@ def repair(
         elif refine and not clock.stop_requested():
             (opp, det), refined = _refine(ctx, chosen, int(refine_steps))
             if opp is not ctx.opportunities and flown_joins and refills_left == 0:
-                opp, tail = _last_round(ctx, chosen, opp, det, refined)
+                opp, tail = _last_round(ctx, chosen, opp, det, refined)  # nothing refills after
                 say("refine", f"{len(refined)} per-channel satellites, kept: {tail.kept}")
                 chosen, det, joins = tail.chosen, tail.details, tail.joins
-                found, rounds = found + tail.found, rounds + tail.rounds - 1
-                withdrawn[tail.withdrawn] = True
-                for reason, n in tail.dropped.items():
-                    dropped[reason] += n
+                found, rounds = _absorb(tail, withdrawn, dropped, found, rounds)
                 break
             kept = opp is not ctx.opportunities
             say("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
@@ -244,17 +240,13 @@ def repair(
         found += len(bad)
         dropped["joins"] += len(bad)
         withdrawn[bad] = True
-        gone = set(bad)
-        chosen = [c for c in chosen if c not in gone]
-        det = None
+        chosen, det = _without(chosen, bad), None
         if refills_left > 0 and time.monotonic() >= end:
             refills_left = 0
             _skip(skipped, say, "refill")
         if refills_left > 0 and not clock.stop_requested():
             refills_left -= 1
-            # LNS in the first refill only: a later one would pack new joins that the
-            # last round can only drop
-            iters = refill_iters if refills_left == _REFILL_ROUNDS - 1 else 0
+            iters = refill_iters if refills_left == _REFILL_ROUNDS - 1 else 0  # see _refill
             seconds = min(refill_s, end - time.monotonic())
             chosen, gain = _refill(ctx.problem, chosen, withdrawn, seconds, iters, seed + rounds)
             refilled += gain
@@ -294,9 +286,23 @@ def _settle(ctx: PlanContext, opp, chosen, det) -> _Tail:
         found += len(bad)
         dropped["joins"] += len(bad)
         withdrawn += list(bad)
-        gone = set(bad)
-        chosen = [c for c in chosen if c not in gone]
-        det = None
+        chosen, det = _without(chosen, bad), None
+
+
+def _without(chosen, bad) -> list:
+    """``chosen`` without the option ids ``bad`` (order kept)."""
+    gone = set(bad)
+    return [c for c in chosen if c not in gone]
+
+
+def _absorb(tail: _Tail, withdrawn, dropped: dict, found: int, rounds: int):
+    """Add the settled rounds ``tail`` to the repair's account: marks its rejected options
+    in ``withdrawn`` and adds its drops to ``dropped`` (both in place). Returns the
+    violations found and the rounds run, the tail's included."""
+    withdrawn[tail.withdrawn] = True
+    for reason, n in tail.dropped.items():
+        dropped[reason] += n
+    return found + tail.found, rounds + tail.rounds - 1
 
 
 def _last_round(ctx: PlanContext, chosen, opp_r, det_r, refined):
