@@ -230,17 +230,12 @@ def repair(
             kept = opp is not ctx.opportunities
             say("refine", f"{len(refined)} per-channel satellites, kept: {kept}")
         refine = False
-        chosen, det, n = _drop_until_clean(ctx, opp, chosen, det, dropped)
+        (chosen, det, joins), n, rejected = _round(
+            ctx, opp, chosen, det, dropped, withdrawn, flown_joins
+        )
         found += n
-        if not flown_joins:
+        if not rejected:
             break
-        bad, joins = reject_unflyable(ctx.scenario, ctx.scene, opp, chosen)
-        if not bad:
-            break
-        found += len(bad)
-        dropped["joins"] += len(bad)
-        withdrawn[bad] = True
-        chosen, det = _without(chosen, bad), None
         if refills_left > 0 and time.monotonic() >= end:
             refills_left = 0
             _skip(skipped, say, "refill")
@@ -266,27 +261,39 @@ class _Tail(NamedTuple):
     dropped: dict
     found: int
     rounds: int
-    withdrawn: list
+    withdrawn: np.ndarray
     kept: bool = False
 
 
-def _settle(ctx: PlanContext, opp, chosen, det) -> _Tail:
-    """Check and drop, then reject failing joins and check again, until a round rejects
-    no join: the rounds of the repair once no refill is left, on the table ``opp``."""
-    dropped = dict.fromkeys(DROP_REASONS, 0)
-    found = rounds = 0
-    withdrawn = []
-    while True:
-        rounds += 1
-        chosen, det, n = _drop_until_clean(ctx, opp, chosen, det, dropped)
-        found += n
-        bad, joins = reject_unflyable(ctx.scenario, ctx.scene, opp, chosen)
-        if not bad:
-            return _Tail(chosen, det, joins, dropped, found, rounds, withdrawn)
-        found += len(bad)
+def _round(ctx: PlanContext, opp, chosen, det, dropped: dict, withdrawn, flown_joins: bool):
+    """Steps 2 and 3 of a round, without the refill: check and drop until clean, then
+    (``flown_joins``) drop the observations whose joins fail, counting them in
+    ``dropped`` and marking their options in ``withdrawn`` (both in place). Returns
+    ((chosen, check details or None after a rejection, join summary or {}), violations
+    found, whether a join was rejected)."""
+    chosen, det, found = _drop_until_clean(ctx, opp, chosen, det, dropped)
+    if not flown_joins:
+        return (chosen, det, {}), found, False
+    bad, joins = reject_unflyable(ctx.scenario, ctx.scene, opp, chosen)
+    if bad:
         dropped["joins"] += len(bad)
-        withdrawn += list(bad)
+        withdrawn[bad] = True
         chosen, det = _without(chosen, bad), None
+    return (chosen, det, joins), found + len(bad), bool(bad)
+
+
+def _settle(ctx: PlanContext, opp, chosen, det) -> _Tail:
+    """Rounds without refill (:func:`_round`) until one rejects no join: the end of the
+    repair once no refill is left, on the table ``opp``, on an account of its own."""
+    dropped = dict.fromkeys(DROP_REASONS, 0)
+    withdrawn = np.zeros(ctx.problem.n_options, bool)
+    found = rounds = 0
+    rejected = True
+    while rejected:
+        rounds += 1
+        (chosen, det, joins), n, rejected = _round(ctx, opp, chosen, det, dropped, withdrawn, True)
+        found += n
+    return _Tail(chosen, det, joins, dropped, found, rounds, withdrawn)
 
 
 def _without(chosen, bad) -> list:
@@ -299,7 +306,7 @@ def _absorb(tail: _Tail, withdrawn, dropped: dict, found: int, rounds: int):
     """Add the settled rounds ``tail`` to the repair's account: marks its rejected options
     in ``withdrawn`` and adds its drops to ``dropped`` (both in place). Returns the
     violations found and the rounds run, the tail's included."""
-    withdrawn[tail.withdrawn] = True
+    withdrawn |= tail.withdrawn
     for reason, n in tail.dropped.items():
         dropped[reason] += n
     return found + tail.found, rounds + tail.rounds - 1
