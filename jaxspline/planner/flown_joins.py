@@ -75,6 +75,7 @@ SAMPLING_MARGIN = 2e-3
 NO_LIMIT = float(np.finfo(np.float64).max)  # a norm that is not limited (finite for validation)
 NADIR = -1  # observation index of the nadir law
 _JOIN_CHUNK = 1 << 11  # joins per compiled plan / check call (fixed shape: one compile)
+_CHECK_CHUNK_MIN = 1 << 5  # the check's smallest call: 32, 128, 512 or 2048 joins (_check_chunk)
 _SAMPLE_CHUNK = 1 << 15  # join samples per compiled evaluation
 
 
@@ -188,6 +189,18 @@ def _eval_rows(q_ref, coeffs, T, t):
     return maneuver_eval(Maneuver(q_ref, coeffs, T), t)
 
 
+def _check_chunk_size(n: int) -> int:
+    """Joins per check call for n joins: the smallest of 2048, 512, 128, 32 that holds them.
+
+    The sampled check is the costly kernel of a small plan's joins; its rows are
+    computed independently, with the same bits at each of these sizes.
+    """
+    size = _JOIN_CHUNK
+    while size > _CHECK_CHUNK_MIN and size // 4 >= n:
+        size //= 4
+    return size
+
+
 def _check_rows(scene, sats, sat, law0, s0, law1, s1, ta, tb):
     """Plan and check joins [ta, tb] between laws (law0 from s0, law1 from s1); all [n] rows.
 
@@ -206,7 +219,7 @@ def _check_rows(scene, sats, sat, law0, s0, law1, s1, ta, tb):
     man = Maneuver(*map_chunked(_plan_rows, ends, _JOIN_CHUNK))
     lims = [join_limits(s) for s in sats]
     norm = np.array([list(x[0]) for x in lims], np.float64).reshape(-1, 3)[sat]
-    chk = map_chunked(_check_chunk, [*ends, *norm.T], _JOIN_CHUNK)
+    chk = map_chunked(_check_chunk, [*ends, *norm.T], _check_chunk_size(n))
     peaks = np.stack([np.asarray(x, np.float64) for x in chk[:3]], -1)
     ratio = np.where(np.isinf(norm), 0.0, peaks / norm)
     pc = np.flatnonzero(np.array([x[1] is not None for x in lims], bool)[sat])
