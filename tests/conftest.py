@@ -36,16 +36,39 @@ _CACHE_ENV = "JAXSPLINE_CACHE_DIR"
 _OWN_CACHE = _CACHE_ENV not in os.environ
 if _OWN_CACHE:
     os.environ[_CACHE_ENV] = tempfile.mkdtemp(prefix="jaxspline-test-xla-")
-import jax  # noqa: E402
-
-jax.config.update("jax_enable_x64", True)
-if os.environ[_CACHE_ENV].strip().lower() not in ("", "off", "0", "none"):
-    jax.config.update("jax_compilation_cache_dir", os.environ[_CACHE_ENV])
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+import pytest  # noqa: E402
 
 
+@pytest.hookimpl(trylast=True)
+def pytest_configure(config):
+    """float64 and the run's cache in every process that collects and runs tests; not in
+    the xdist controller, which only hands them out (importing JAX there would delay the
+    workers' start by a second)."""
+    distributing = config.getoption("dist", "no") != "no" and not config.option.collectonly
+    if distributing and not os.environ.get("PYTEST_XDIST_WORKER"):
+        return
+    import jax
+
+    jax.config.update("jax_enable_x64", True)
+    if os.environ[_CACHE_ENV].strip().lower() not in ("", "off", "0", "none"):
+        jax.config.update("jax_compilation_cache_dir", os.environ[_CACHE_ENV])
+        jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
+        jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+
+
+@pytest.hookimpl(trylast=True)
 def pytest_unconfigure(config):
-    """The process that made the run's cache folder removes it."""
+    """The process that made the run's cache folder removes it; an xdist worker then ends.
+
+    A worker has sent its results to the controller (``pytest_sessionfinish``) by now, and
+    the controller waits for its process to end. Exiting normally, JAX's exit handler
+    frees the worker's compiled programs one by one (4-5 s for a worker of the full
+    suite) and the interpreter then frees every object; ``os._exit`` leaves both to the
+    operating system.
+    """
     if _OWN_CACHE:
         shutil.rmtree(os.environ[_CACHE_ENV], ignore_errors=True)
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        sys.stdout.flush()
+        sys.stderr.flush()
+        os._exit(0)
