@@ -109,7 +109,7 @@ def runs(tmp_path_factory):
     code_no_plots = main(args)
     out = d / "out"
     # the default: flown joins and AEMs (their kernels compile now: time for them)
-    code = main(["plan", str(scen), "-o", str(out), "--time-limit", "60", "--max-iters", "300"])
+    code = main(["plan", str(scen), "-o", str(out), "--time-limit", "60", "--max-iters", "30"])
     return {"scen": scen, "out": out, "code": code, "no_plots": (code_no_plots, no_plots)}
 
 
