@@ -95,6 +95,9 @@ geometry_batched = jax.jit(jax.vmap(_geometry, in_axes=(None, 0, 0, 0, 0)))
 """``aim_geometry`` batched over (sat, law, t0, t) for :func:`evaluate`."""
 state_batched = jax.jit(jax.vmap(_state, in_axes=(None, 0, 0, 0, 0)))
 """``aim_state`` (angles, rates, accelerations) batched like :data:`geometry_batched`."""
+# one program a table size (run eagerly, each of their operations compiles on its own)
+_aim_params = jax.jit(aim_params)
+_aim_points = jax.jit(jax.vmap(aim_point))
 
 
 _BUCKETED: list = []  # [(scene, its padded copy)] of the last call (one entry)
@@ -157,10 +160,10 @@ def aim_laws(sc: Scenario):
     g0 = np.asarray(geodetic_to_ecef(tg.lat, tg.lon, tg.alt))
     d = strip_direction(tg.lat, tg.lon, tg.azimuth)
     is_strip = tg.kind == STRIP
-    p_point = np.asarray(aim_params(g0))
+    p_point = np.asarray(_aim_params(g0))
     laws = []
     for speed in sc.planner.scan_speeds:
-        p = np.where(is_strip[:, None], np.asarray(aim_params(g0, d, speed)), p_point)
+        p = np.where(is_strip[:, None], np.asarray(_aim_params(g0, d, speed)), p_point)
         laws.append((float(speed), p, np.where(is_strip, tg.length / speed, tg.duration)))
     return laws
 
@@ -179,7 +182,7 @@ def reference_points(sc: Scenario) -> np.ndarray:
     tg = sc.targets
     _, p, _ = aim_laws(sc)[0]
     half = (tg.length / 2.0) / np.linalg.norm(p[:, :3], axis=-1)
-    mid = np.asarray(jax.vmap(aim_point)(to_device(p), to_device(half))[0])
+    mid = np.asarray(_aim_points(to_device(p), to_device(half))[0])
     return np.where((tg.kind == STRIP)[:, None], mid, p[:, :3])
 
 
