@@ -29,6 +29,7 @@ the antimeridian is one connected strip.
 from __future__ import annotations
 
 import jax.numpy as jnp
+import numpy as np
 
 from jaxspline.geometry.frames import R_EARTH, WGS84_E2, WGS84_F
 from jaxspline.geometry.pointing import roll_look_direction
@@ -107,6 +108,8 @@ def unwrap_lon(lon, ref_lon):
     """Longitude moved by whole turns to within half a turn of ``ref_lon`` (generic).
 
     ``lon + 360 round((ref - lon) / 360)``: exactly ``lon`` when no turn is added.
+    numpy arrays in, a numpy array out (the same bits: each step is one IEEE operation),
+    without the small program JAX compiles for every new shape of an eager call.
 
     Args:
       lon: float [...], longitude [deg].
@@ -114,7 +117,9 @@ def unwrap_lon(lon, ref_lon):
     Returns:
       float [...], unwrapped longitude [deg].
     """
-    return lon + FULL_TURN_DEG * jnp.round((ref_lon - lon) / FULL_TURN_DEG)
+    host = isinstance(lon, np.ndarray) and isinstance(ref_lon, np.ndarray)
+    xp = np if host else jnp
+    return lon + FULL_TURN_DEG * xp.round((ref_lon - lon) / FULL_TURN_DEG)
 
 
 def orient(ax, ay, bx, by, px, py):
