@@ -104,6 +104,10 @@ def test_signal_before_any_plan_leaves_nothing(env):
     assert not out.exists() or not any(out.iterdir())
 
 
+# a sweep of real signals over the repair and the writing (~9 CPU-s): the default run
+# checks a real signal in the search above and a signal while writing in-process
+# (test_cli_errors.py, tests/products/test_outputs.py)
+@pytest.mark.slow
 def test_signals_while_repairing_and_writing_leave_whole_files(env):
     """SIGTERM from the repair on, every 0.3 s until the process exits: whatever phase a
     signal lands in, every output that exists parses whole and no temporary file stays."""
