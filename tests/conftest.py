@@ -62,8 +62,8 @@ def pytest_unconfigure(config):
 
     A worker has sent its results to the controller (``pytest_sessionfinish``) by now, and
     the controller waits for its process to end. Exiting normally, JAX's exit handler
-    frees the worker's compiled programs one by one (4-5 s for a worker of the full
-    suite) and the interpreter then frees every object; ``os._exit`` leaves both to the
+    frees the worker's thousands of compiled programs one by one and the interpreter then
+    frees every object, seconds at the end of every run; ``os._exit`` leaves both to the
     operating system.
     """
     if _OWN_CACHE:
