@@ -338,7 +338,8 @@ def run_size(label, scenario, time_limit, max_rss_gb, max_wall_min, workdir: Pat
     """Plan one size in a subprocess (plots and AEM files off) and collect its figures."""
     args = [str(scenario)] if scenario is not None else []
     args += ["--no-aem", "--no-plots", "--time-limit", f"{time_limit:g}"]
-    res = run_plan(label, args, workdir, (max_rss_gb, max_wall_min))
+    # one folder, log and time file a run (a size may run at several limits)
+    res = run_plan(f"{label}_{time_limit:g}s", args, workdir, (max_rss_gb, max_wall_min))
     return {
         "size": label,
         "scenario": repo_relative(str(scenario)) if scenario is not None else "(packaged default)",
@@ -456,7 +457,11 @@ def scale_table(report: dict) -> list[str]:
     lines = section("runs", runs_lines) + section("stages", stage_lines)
     lines.append(
         "\nScenarios: "
-        + "; ".join(f"{r['size']} = `{r.get('made_by') or r.get('scenario', '-')}`" for r in runs)
+        + "; ".join(  # one entry a size (a size may run at several limits)
+            dict.fromkeys(
+                f"{r['size']} = `{r.get('made_by') or r.get('scenario', '-')}`" for r in runs
+            )
+        )
     )
     for r in runs:
         if r.get("killed"):
