@@ -474,7 +474,7 @@ class PlannerConfig:
       exact_max_options: instances with at most this many options are solved exactly
         (branch and bound over the per-satellite timelines), at most
         :data:`MAX_EXACT_OPTIONS`.
-      lagrangian_share: share of the search budget for the Lagrangian / DP phase.
+      lagrangian_share: search share of the Lagrangian phase (none in timed runs with the worker).
       bound_worker: on a machine with at least two CPUs, iterate the bound (and repair
         its paths into plans for a time-limited LNS) in a second process (BoundWorker).
       refine_steps: optax steps of start-time refinement of per-channel satellites'

@@ -124,7 +124,7 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
     battery_margin_wh = 10.0            # battery level kept >= this [Wh]
     shadow_guard_steps = 0              # battery steps of sunlight required around a step
     exact_max_options = 60              # solve exactly up to this many options (<= 500)
-    lagrangian_share = 0.3              # search budget share of the Lagrangian phase
+    lagrangian_share = 0.3              # search share of the Lagrangian phase (no worker)
     bound_worker = true                 # iterate the bound on a second CPU during the search
     refine_steps = 100                  # optax steps refining per-channel start times (0 = off)
     time_limit_s = 30.0                 # default search budget [s]

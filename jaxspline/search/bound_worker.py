@@ -194,13 +194,6 @@ class BoundWorker:
         self._seen, value, assigned = got
         return (value, assigned) if value > above else None
 
-    def offered(self) -> float:
-        """Value of the latest plan the worker published (-inf: none yet), without
-        taking it."""
-        if self._shared is None or self._shared.meta[0] < 1.0:
-            return -math.inf
-        return float(self._shared.meta[1])
-
     @property
     def plans(self) -> bool:
         """Whether the worker publishes plans (``plans`` of the constructor)."""

@@ -206,9 +206,7 @@ class Prices:
         return True
 
 
-def lagrangian(
-    tl: Timeline, deadline: float, order_fill, max_iters=None, report=None, dp=None, give_way=None
-):
+def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report=None, dp=None):
     """Lagrangian phase with repaired plans (see module docstring).
 
     The step target is the best repaired plan's value; ``tl`` ends at the best plan.
@@ -220,9 +218,6 @@ def lagrangian(
       max_iters: cap on the subgradient iterations (None: the deadline alone).
       report: callable ``report(iteration, bound, best_value)`` or None.
       dp: the problem's :func:`dp_prepare` (None: prepared here).
-      give_way: optional callable ``give_way(best_value)`` asked after every iteration;
-        True ends the phase (status ``TIME``): a better plan waits elsewhere (the bound
-        worker's, :func:`jaxspline.search.solve`).
     Returns:
       BoundResult.
     """
@@ -247,8 +242,6 @@ def lagrangian(
             break
         if report is not None:
             report(pr.it, pr.ub, best_w)
-        if give_way is not None and give_way(best_w):
-            break
     tl.restore(best)
     return BoundResult(best, pr.ub, pr.it, status)
 

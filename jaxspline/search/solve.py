@@ -4,7 +4,8 @@
    value; when a battery binds, also by value per Wh (:class:`EnergyRank`), the better
    plan kept; a caller's ``retime`` then sets the deadline from its size;
 2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
-   target prices, repaired plans, and the upper bound (:func:`lagrangian`);
+   target prices, repaired plans, and the upper bound (:func:`lagrangian`); left out
+   when a bound worker that publishes plans runs (below);
 3. exact branch and bound when the instance is tiny (``exact_max_options``);
 4. large-neighbourhood search until the deadline (:func:`lns`);
 5. earliest-start pass (:func:`earliest_pass`).
@@ -12,10 +13,10 @@
 With ``bound_worker``, a forked process iterates the bound alone over the whole search
 budget (:class:`BoundWorker`, sharing the DP layout the Lagrangian phase uses) and the
 smaller of the two bounds is reported. Without ``max_iters`` the worker also repairs its
-DP paths into plans now and then: the Lagrangian phase ends as soon as the worker has a
-better plan than the phase's best, and the LNS continues from such a plan whenever it
-beats the LNS's best (``stats.worker_plans``: how many were taken); the last one is
-looked at once more before the earliest-start pass.
+DP paths into plans now and then, so it does all the phase would do, on the other CPU:
+the phase is left out and the LNS starts at once from the greedy start; it continues
+from a worker's plan whenever that beats the LNS's best (``stats.worker_plans``: how
+many were taken); the last one is looked at once more before the earliest-start pass.
 """
 
 from __future__ import annotations
@@ -30,9 +31,7 @@ from jaxspline.search import clock
 from jaxspline.search.bound_worker import BoundWorker
 from jaxspline.search.dp import dp_prepare
 from jaxspline.search.exact import exact_search
-from jaxspline.search.lagrangian import (
-    lagrangian,
-)
+from jaxspline.search.lagrangian import BoundResult, lagrangian
 from jaxspline.search.lns import adopt, earliest_pass, greedy, greedy_order, lns
 from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.memory import trim_heap
@@ -97,10 +96,10 @@ def solve(
         function of the problem, ``seed`` and ``max_iters`` alone. None: the deadline
         alone.
       report: callable ``report(stage, message)`` receiving progress lines, or None.
-      retime: optional callable ``retime(observations) -> deadline``, called once when
+      retime: optional callable ``retime(per_sat) -> deadline``, called once when
         the greedy start is built (time-bound runs only) with its number of
-        observations: the search runs until the deadline it returns (the caller's
-        reserve for the later stages, re-estimated from the plan's size).
+        observations on each satellite: the search runs until the deadline it returns
+        (the caller's reserve for the later stages, re-estimated from the plan's size).
     Returns:
       SearchResult.
     """
@@ -121,7 +120,7 @@ def solve(
             tl, order = tl2, order2
         del tl2, order2  # the losing greedy's timeline (its cache: ~90 MB at 80 M pairs)
     if retime is not None and max_iters is None:
-        deadline = retime(pb.n_targets - tl.assigned.count(-1))
+        deadline = retime([len(line) for line in tl.lines])
         tail = _tail(deadline, now)
     stats = {"greedy_value": tl.value}
     say("greedy", f"value {tl.value:.6g}")
@@ -164,15 +163,18 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     takes it out, so the LNS runs without it resident.
     """
     deadline, now, tail, t_dp, cap, max_iters = budget
-    res = lagrangian(
-        tl,
-        t_dp,
-        order,
-        max_iters=cap,
-        report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
-        dp=shared.pop() if shared else None,
-        give_way=(lambda v: worker.offered() > v) if worker is not None and worker.plans else None,
-    )
+    if worker is not None and worker.plans:  # the worker's bound and plans stand for the phase
+        shared.clear()
+        res = BoundResult(list(tl.assigned), math.inf, 0, BoundStatus.TIME)
+    else:
+        res = lagrangian(
+            tl,
+            t_dp,
+            order,
+            max_iters=cap,
+            report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
+            dp=shared.pop() if shared else None,
+        )
     stats.update(
         lagrangian_value=tl.value,
         lagrangian_iterations=res.iterations,
