@@ -442,7 +442,9 @@ def scale_table(report: dict) -> list[str]:
         "the search's own bound iterations, *worker it.* those of the bound worker on the "
         "second CPU, *LNS it.* the search's; *load* is the machine's load average when the "
         "run started. *plain bound*: the search's own Lagrangian phase (per-satellite "
-        "path relaxation, its share of the budget); *strengthened bound*: the worker's "
+        "path relaxation), which a time-limited run with the worker leaves out (-; "
+        "converged plain and strengthened bounds side by side: BOUND.md); "
+        "*strengthened bound*: the worker's "
         "(a run of one target's options credited once), *worker status* whether it "
         "converged, *DP it/s* its iterations per second; *LNS moves/s* the search's LNS "
         "iterations per second of its LNS stage, wall and CPU (the planner process alone).",

@@ -15,9 +15,7 @@ the only stage that can stop at any time, so it gets what the others leave:
   day) is made twice: first for a plan of every target that has an option (the
   plan is not known yet), then once more when the search's greedy start is built
   (:attr:`Budget.retime`, called by :func:`jaxspline.search.solve`), for
-  :data:`PLAN_GROWTH` times the greedy start's observations (the search adds some);
-  the refinement's part counts the observations of the per-channel satellites only,
-  the only ones it works on.
+  :data:`PLAN_GROWTH` times the greedy start's observations (the search adds some).
   The outputs are estimated by the caller (:attr:`StageDeadline.after_s`). Both are
   scaled by the pace of the call so far (:meth:`StageDeadline.pace`: a loaded machine
   runs them slower). The search ends that long before the limit, but gets at least
@@ -41,7 +39,7 @@ run whatever the clock says, so such runs stay reproducible.
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable
 from typing import NamedTuple
 
 import numpy as np
@@ -89,17 +87,18 @@ PLAN_GROWTH = 1.3
 #: search (the default job's: ~half of its 950), in :func:`mandatory_seconds`.
 TYPICAL_PLAN_SHARE = 0.5
 
-# CPU seconds of the repair's steps, per observation of the plan (the refinement's: per
-# observation of the per-channel satellites), fitted to the default job (~500
-# observations, three rounds with the flown joins and two refills), to the 12 x 12 h
-# scale preset and to the constellation day (one round of refinement and check), 2-core
-# machine, compiled programs in the cache, with a margin; the first calls (loading their
-# programs, one set per maneuver model) on top:
-CHECK_S_PER_OBS = 0.6e-3  # one independent check (plan_check), per round
+# CPU seconds of the repair's steps, per observation of the plan, fitted to the
+# default job (~500 observations, a third on per-channel satellites: 22.5 s for three
+# rounds with the flown joins and two refills) and to a 12-satellite 12 h day of
+# 20,000 targets (~4,500 observations, 4 of the 12 satellites per-channel: 27 s for
+# one round of refinement and check), 2-core machine, compiled programs in the cache;
+# the first calls (loading their programs, one set per maneuver model: 0.6 and 3.0 s
+# for a 12-target scenario with three models, as much as the default job's) on both:
+CHECK_S_PER_OBS = 1.8e-3  # one independent check (plan_check), per round
 CHECK_FIRST_S = 0.8  # its first call
 JOINS_S_PER_OBS = 2.4e-3  # one flown-join check (reject_unflyable), per round
 JOINS_FIRST_S = 3.0  # its first call
-REFINE_S_PER_OBS = 2.0e-3  # one start-time refinement, per round and refined observation
+REFINE_S_PER_OBS = 3.4e-3  # one start-time refinement, per round
 REFINE_FIRST_S = 2.5  # its first call
 #: [s] a refill's greedy pass and restore besides its budget, and the refinement after
 #: it on a plan of a new size (the default job's second round: ~2 s more than a warm one)
@@ -118,26 +117,21 @@ class Budget(NamedTuple):
         set this when they pass it on).
       refining: the start-time refinement runs (refine steps and a per-channel satellite).
       split: the split, for ``plan.json`` (empty without a deadline).
-      retime: None, or ``retime(per_sat) -> search_end``: the search's end
-        re-estimated for a greedy start of ``per_sat[k]`` observations on satellite k
-        (module docstring); it updates :attr:`split`.
+      retime: None, or ``retime(observations) -> search_end``: the search's end
+        re-estimated for a greedy start of that many observations (module docstring);
+        it updates :attr:`split`.
     """
 
     search_end: float
     repair_end: float | None
     refining: bool
     split: dict
-    retime: Callable[[Sequence[int]], float] | None = None
+    retime: Callable[[int], float] | None = None
 
 
 def _refining(sc) -> bool:
     pc = sc.planner
     return pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sc.satellites)
-
-
-def _refiners(sc) -> np.ndarray:
-    """Per satellite (scenario order), whether the start-time refinement works on it."""
-    return np.array([not s.maneuver.rest_to_rest for s in sc.satellites], bool)
 
 
 def default_budget(sc, limit: float, t0: float) -> Budget:
@@ -163,13 +157,7 @@ def _targets(ctx: PlanContext) -> int:
     return int(np.unique(ctx.opportunities.options.route).size)
 
 
-def repair_seconds(
-    observations: float,
-    flown_joins: bool,
-    refining: bool,
-    refill_s: float,
-    refined: float | None = None,
-):
+def repair_seconds(observations: float, flown_joins: bool, refining: bool, refill_s: float):
     """Estimated CPU seconds of the repair (module docstring) of a plan of ``observations``.
 
     Args:
@@ -177,8 +165,6 @@ def repair_seconds(
       flown_joins: the flown joins are checked (three rounds, two refills).
       refining: the start-time refinement runs (each round with the joins).
       refill_s: the budget of one refill [s].
-      refined: the observations the refinement works on, those of the per-channel
-        satellites (None: all of them).
     Returns:
       float [s].
     """
@@ -188,8 +174,7 @@ def repair_seconds(
     if flown_joins:
         need += JOINS_FIRST_S + rounds * JOINS_S_PER_OBS * n + refill_s + REFILL_OVERHEAD_S
     if refining:
-        m = n if refined is None else float(refined)
-        need += REFINE_FIRST_S + rounds * REFINE_S_PER_OBS * m
+        need += REFINE_FIRST_S + rounds * REFINE_S_PER_OBS * n
     return need
 
 
@@ -263,21 +248,16 @@ def deadline_budget(
             deadline, deadline.pace() * mandatory_seconds(ctx, flown_joins, deadline.must_s)
         )
     targets = _targets(ctx)
-    refiners = _refiners(ctx.scenario)
     now = time.monotonic()
     earliest = now + SEARCH_MIN_SHARE * max(deadline.end - now, 0.0)
     deadline.split = {"before_search_s": round(now - deadline.t0, 2)}
 
-    def retime(per_sat) -> float:
-        """The search's end for a plan of ``per_sat`` observations a satellite (the
-        greedy start's, grown by :data:`PLAN_GROWTH`; at most every target that has an
-        option), the refinement counted on the per-channel satellites' share."""
-        per_sat = np.asarray(per_sat, np.float64)
-        total = float(per_sat.sum())
-        size = min(PLAN_GROWTH * total, targets)
-        share = float(per_sat[refiners].sum()) / total if total > 0 else 0.0
+    def retime(observations: int) -> float:
+        """The search's end for a plan of ``observations`` (the greedy start's, grown by
+        :data:`PLAN_GROWTH`; at most every target that has an option)."""
+        size = min(PLAN_GROWTH * observations, targets)
         pace = deadline.pace()
-        repair = repair_seconds(size, flown_joins, refining, refill_s, share * size) * pace
+        repair = repair_seconds(size, flown_joins, refining, refill_s) * pace
         outputs = deadline.after_s * pace
         end = max(deadline.end - repair - outputs, earliest)
         deadline.split.update(
@@ -287,10 +267,7 @@ def deadline_budget(
         )
         return end
 
-    # before the greedy start: every target that has an option, spread like the options
-    sat = ctx.opportunities.options.sat
-    sat = np.zeros(1, np.int64) if sat is None else np.asarray(sat)
-    end = retime(np.bincount(sat, minlength=refiners.size))
+    end = retime(targets)
     return Budget(end, deadline.end - deadline.after_s * deadline.pace(), refining,
                   deadline.split, None if capped else retime)  # fmt: skip
 

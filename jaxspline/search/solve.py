@@ -96,10 +96,10 @@ def solve(
         function of the problem, ``seed`` and ``max_iters`` alone. None: the deadline
         alone.
       report: callable ``report(stage, message)`` receiving progress lines, or None.
-      retime: optional callable ``retime(per_sat) -> deadline``, called once when
+      retime: optional callable ``retime(observations) -> deadline``, called once when
         the greedy start is built (time-bound runs only) with its number of
-        observations on each satellite: the search runs until the deadline it returns
-        (the caller's reserve for the later stages, re-estimated from the plan's size).
+        observations: the search runs until the deadline it returns (the caller's
+        reserve for the later stages, re-estimated from the plan's size).
     Returns:
       SearchResult.
     """
@@ -120,7 +120,7 @@ def solve(
             tl, order = tl2, order2
         del tl2, order2  # the losing greedy's timeline (its cache: ~90 MB at 80 M pairs)
     if retime is not None and max_iters is None:
-        deadline = retime([len(line) for line in tl.lines])
+        deadline = retime(pb.n_targets - tl.assigned.count(-1))
         tail = _tail(deadline, now)
     stats = {"greedy_value": tl.value}
     say("greedy", f"value {tl.value:.6g}")

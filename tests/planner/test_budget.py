@@ -98,16 +98,11 @@ def test_process_start_is_before_now():
     assert 0.0 <= time.monotonic() - start < 86400.0 * 365
 
 
-def _ctx(n_targets, refining, duration=3600.0, also_rest_to_rest=False):
-    """The fields of a PlanContext the budget reads: one satellite (per-channel when
-    ``refining``), plus a rest-to-rest one with the same options when
-    ``also_rest_to_rest``."""
-    sats = [SimpleNamespace(maneuver=SimpleNamespace(rest_to_rest=not refining))]
-    sats += [SimpleNamespace(maneuver=SimpleNamespace(rest_to_rest=True))] * also_rest_to_rest
-    sc = SimpleNamespace(planner=SimpleNamespace(refine_steps=50), satellites=sats)
-    route = np.repeat(np.arange(n_targets), 3 * len(sats))
-    sat = np.tile(np.repeat(np.arange(len(sats)), 3), n_targets)
-    opts = SimpleNamespace(route=route, sat=sat)
+def _ctx(n_targets, refining, duration=3600.0):
+    """The fields of a PlanContext the budget reads."""
+    per_channel = SimpleNamespace(maneuver=SimpleNamespace(rest_to_rest=not refining))
+    sc = SimpleNamespace(planner=SimpleNamespace(refine_steps=50), satellites=[per_channel])
+    opts = SimpleNamespace(route=np.repeat(np.arange(n_targets), 3))
     return SimpleNamespace(scenario=sc, opportunities=SimpleNamespace(options=opts))
 
 
@@ -143,36 +138,17 @@ def test_the_greedy_start_moves_the_search_end_to_what_its_plan_needs(monkeypatc
     b = bd.deadline_budget(_ctx(20000, refining=True), d, flown_joins=False, refill_s=2.0)
     clock.wall += 5.0
     clock.cpu += 5.0
-    end = b.retime([4000])  # the greedy start: a fifth of the targets
+    end = b.retime(4000)  # the greedy start: a fifth of the targets
     size = bd.PLAN_GROWTH * 4000
     repair = bd.repair_seconds(size, False, True, 2.0)
     assert end == pytest.approx(d.end - repair - 5.0) and end > b.search_end
     assert d.split["observations"] == size and d.split["search_s"] == pytest.approx(90 - repair - 5)
     assert d.split["reserve_s"]["repair"] == round(repair, 2)
-    assert b.retime([10**6]) == pytest.approx(b.search_end)  # never past every target planned
+    assert b.retime(10**6) == pytest.approx(b.search_end)  # never past every target planned
     clock.wall += 40.0  # a loaded machine: the estimate at pace 2 does not fit
-    assert b.retime([10000]) == pytest.approx(10.0 + 1000.0 + bd.SEARCH_MIN_SHARE * 90.0)
+    assert b.retime(4000) == pytest.approx(10.0 + 1000.0 + bd.SEARCH_MIN_SHARE * 90.0)
     capped = bd.deadline_budget(_ctx(20, False), d, flown_joins=False, refill_s=2.0, capped=True)
     assert capped.retime is None  # iteration-capped runs keep their clock-free search
-
-
-def test_the_refinement_is_counted_on_the_per_channel_satellites_alone(monkeypatch):
-    # a per-channel and a rest-to-rest satellite: the refinement works on the first's
-    # observations only, the check on all of them
-    clock = _Clock(monkeypatch)
-    d = dl.StageDeadline(clock.wall, 1000.0, after_s=5.0)
-    clock.wall += 10.0
-    clock.cpu += 10.0  # pace 1
-    ctx = _ctx(20000, refining=True, also_rest_to_rest=True)
-    b = bd.deadline_budget(ctx, d, flown_joins=False, refill_s=2.0)
-    both = bd.repair_seconds(20000, False, True, 2.0, refined=10000)  # options half and half
-    assert b.search_end == pytest.approx(d.end - both - 5.0)
-    end = b.retime([1000, 3000])
-    size = bd.PLAN_GROWTH * 4000
-    repair = bd.repair_seconds(size, False, True, 2.0, refined=size / 4)
-    assert end == pytest.approx(d.end - repair - 5.0)
-    assert repair < bd.repair_seconds(size, False, True, 2.0)  # all refined: more
-    assert repair > bd.repair_seconds(size, False, False, 2.0)  # none refined: less
 
 
 def test_search_gets_its_minimum_share_when_the_reserve_does_not_fit(monkeypatch):

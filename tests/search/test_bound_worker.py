@@ -132,7 +132,7 @@ def test_retime_moves_the_search_end_once_the_greedy_start_is_built(problem):
     # becomes one a second after the greedy start, for the worker as for the LNS
     asked, start = [], Timeline(problem)
     greedy(start, math.inf)
-    greedy_obs = [len(line) for line in start.lines]  # observations a satellite
+    greedy_obs = problem.n_targets - start.assigned.count(-1)
 
     def retime(observations):
         asked.append(observations)
