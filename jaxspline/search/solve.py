@@ -160,7 +160,8 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     """Stages 2-5 of :func:`solve` and the bound worker's result.
 
     ``shared`` holds the DP layout the worker shares (or nothing): the Lagrangian phase
-    takes it out, so the LNS runs without it resident.
+    takes it out (or it is dropped where the phase is left out), so the LNS runs without
+    it resident.
     """
     deadline, now, tail, t_dp, cap, max_iters = budget
     if worker is not None and worker.plans:  # the worker's bound and plans stand for the phase
