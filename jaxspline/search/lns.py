@@ -9,8 +9,9 @@
   an option of an unscheduled target picked with probability proportional to its
   value, that option then forced in; 20 %: around a random scheduled observation),
   then re-insert the removed targets anywhere together with the unscheduled targets that
-  have options in the window, heaviest first with 20 % noise (the same greedy pass,
-  on insertion costs with 30 % noise); threshold acceptance
+  have an option in the free time the destroy left (only those options are tried: the
+  rest of the satellite's timeline did not change), heaviest first with 20 % noise
+  (the same greedy pass, on insertion costs with 30 % noise); threshold acceptance
   (a step may lose up to ``temp * U(0, 1)`` value early on, nothing at the end); the
   best plan is kept. Where a battery binds, the moves weigh energy
   (:mod:`jaxspline.search.lns_energy`): targets by value times value per Wh,
@@ -24,6 +25,7 @@ from __future__ import annotations
 
 import bisect
 import itertools
+import math
 import time
 
 from jaxspline.search import clock
@@ -36,7 +38,7 @@ __all__ = ["adopt", "earliest_pass", "greedy", "greedy_order", "lns"]
 _RAD_TARGET = (30.0, 60.0, 90.0, 150.0)  # destroy half-widths [s] around an unscheduled target
 _RAD_RANDOM = (60.0, 120.0, 240.0)  # ... around a random scheduled observation
 _P_TARGETED = 0.8  # share of targeted destroy moves
-_POOL_LOOKBACK = 400.0  # [s] options starting this long before a window are re-offered
+_POOL_REACH = 400.0  # [s] waiting targets are offered from options this close to a window
 _ORDER_NOISE = 0.2  # relative noise of the re-insertion order
 _REPORT_EVERY = 5.0  # [s] between progress reports
 _REFRESH_EVERY = 16  # iterations between refreshes of the unscheduled list
@@ -94,6 +96,17 @@ def _destroy(tl: Timeline, k: int, lo: float, hi: float):
     for c in removed:
         tl.remove(c)
     return removed if (not removed or tl.removal_ok(k, a)) else None
+
+
+def _gap(tl: Timeline, k: int, lo: float):
+    """The free time ``(g0, g1)`` around ``lo`` on satellite k: from the end of the
+    observation before it to the start of the one after it (+-inf: none)."""
+    starts, ends = tl.line_starts[k], tl.line_ends[k]
+    pos = bisect.bisect_left(starts, lo)
+    return (
+        ends[pos - 1] if pos > 0 else -math.inf,
+        starts[pos] if pos < len(starts) else math.inf,
+    )
 
 
 class _Walk:
@@ -163,16 +176,25 @@ def _force(tl: Timeline, forced: int, removed, er: EnergyRank, rng):
     return removed
 
 
-def _reinsert(tl: Timeline, er: EnergyRank, k: int, lo: float, hi: float, removed, rng):
-    """Re-insert the removed targets anywhere and the waiting targets with options of
-    satellite k in the window on k, heaviest (or most value per Wh) first, noisy."""
+def _reinsert(tl: Timeline, er: EnergyRank, k: int, lo: float, hi: float, removed, gap, rng):
+    """Re-insert the removed targets anywhere and the waiting targets with an option in
+    the free time ``gap`` the destroy left on satellite k (within :data:`_POOL_REACH`
+    of the window) on k, options starting in that free time only, heaviest (or most
+    value per Wh) first, noisy."""
     pb = tl.pb
     moved = {pb.option_target[c] for c in removed}
     pool = set(moved)
-    a = pb.sat_lo[k] + bisect.bisect_left(pb.sat_starts[k], lo - _POOL_LOOKBACK)
-    b = pb.sat_lo[k] + bisect.bisect_right(pb.sat_starts[k], hi)
-    assigned = tl.assigned
-    pool.update(t for t in pb.option_target[a:b] if assigned[t] < 0)
+    assigned, option_target, option_end = tl.assigned, pb.option_target, pb.option_end
+    g0, g1 = gap
+    first, starts = pb.sat_lo[k], pb.sat_starts[k]
+    span = first + bisect.bisect_left(starts, g0), first + bisect.bisect_left(starts, g1)
+    a = first + bisect.bisect_left(starts, max(g0, lo - _POOL_REACH))
+    b = first + bisect.bisect_left(starts, min(g1, hi + _POOL_REACH))
+    pool.update(
+        option_target[c]
+        for c in range(a, b)
+        if option_end[c] <= g1 and assigned[option_target[c]] < 0
+    )
     if er.binds(tl, k):
         pool = er.order(pool, rng)
     else:
@@ -180,7 +202,7 @@ def _reinsert(tl: Timeline, er: EnergyRank, k: int, lo: float, hi: float, remove
             pool, key=lambda t: (-pb.target_value[t] * (1 + _ORDER_NOISE * rng.random()), t)
         )
     # the greedy on noisy costs; only satellite k has new room for a target that was waiting
-    greedy_pass(pool, lambda t: tl.insert_choices(t, rng, None if t in moved else k), tl.insert)
+    greedy_pass(pool, lambda t: tl.insert_choices(t, rng, None if t in moved else span), tl.insert)
 
 
 def _move(tl: Timeline, w: _Walk, mark: int, rng) -> bool:
@@ -193,9 +215,10 @@ def _move(tl: Timeline, w: _Walk, mark: int, rng) -> bool:
     if removed is None:
         tl.undo_to(mark)
         return False
+    gap = _gap(tl, k, lo)
     if forced >= 0:
         removed = _force(tl, forced, removed, w.er, rng)
-    _reinsert(tl, w.er, k, lo, hi, removed, rng)
+    _reinsert(tl, w.er, k, lo, hi, removed, gap, rng)
     return True
 
 

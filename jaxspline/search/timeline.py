@@ -410,7 +410,7 @@ class Timeline:
                 self.levels[k], self.debt[k], self.stale[k] = lv, debt, stale
             self.saved.clear()
 
-    def insert_choices(self, t: int, rng=None, sat: int | None = None):
+    def insert_choices(self, t: int, rng=None, span=None):
         """Target t's options that fit now and their insertion costs (one greedy decision).
 
         The cost of an option is the timeline time it consumes (:meth:`check`) plus
@@ -420,7 +420,8 @@ class Timeline:
         Args:
           t: int, target index.
           rng: ``random.Random`` for randomized costs, or None.
-          sat: only options of this satellite (None: every satellite).
+          span: ``(lo, hi)``, only the option ids ``lo <= c < hi`` (satellite k's options
+            are the ids ``sat_lo[k]:sat_hi[k]``, in start order); None: every option.
         Returns:
           (options, costs), two lists in ``target_options`` order; empty when the target
           is already imaged.
@@ -431,10 +432,8 @@ class Timeline:
         if self.assigned[t] >= 0:
             return options, costs
         opts = self.target_options[t]
-        if sat is not None:  # ascending ids, grouped by satellite: one slice
-            opts = opts[
-                bisect.bisect_left(opts, pb.sat_lo[sat]) : bisect.bisect_left(opts, pb.sat_hi[sat])
-            ]
+        if span is not None:  # ascending ids: one slice
+            opts = opts[bisect.bisect_left(opts, span[0]) : bisect.bisect_left(opts, span[1])]
         line_starts, line_ends, bisect_left = self.line_starts, self.line_ends, bisect.bisect_left
         for c in opts:
             k, s = option_sat[c], option_start[c]
@@ -456,17 +455,17 @@ class Timeline:
             costs.append(cost)
         return options, costs
 
-    def best_insert(self, t: int, rng=None, sat: int | None = None) -> bool:
+    def best_insert(self, t: int, rng=None, span=None) -> bool:
         """Insert target t at its cheapest feasible option (:meth:`insert_choices`).
 
         Args:
           t: int, target index.
           rng: ``random.Random`` for randomized costs, or None.
-          sat: only options of this satellite (None: every satellite).
+          span: ``(lo, hi)``, only the option ids ``lo <= c < hi``; None: every option.
         Returns:
           bool, whether the target was inserted.
         """
-        options, costs = self.insert_choices(t, rng, sat)
+        options, costs = self.insert_choices(t, rng, span)
         k = first_least(costs)
         if k >= 0:
             self.insert(options[k])

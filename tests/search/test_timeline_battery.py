@@ -251,14 +251,18 @@ def test_timeline_check_matches_brute_force(seed):
             assert (got is not None) == (level >= pb.battery.margin_wh), (c, level)
             assert tl.battery_failed == (got is None)
             battery_cut += got is None
-        for t in range(pb.n_targets):  # the greedy's candidates are check's feasible options
-            for k in (None, *range(pb.n_sats)):
+        # the greedy's candidates are check's feasible options, in every id span asked
+        spans = [(0, pb.n_options), *zip(pb.sat_lo, pb.sat_hi, strict=True)]
+        spans.append((pb.n_options // 3, 2 * pb.n_options // 3))
+        for t in range(pb.n_targets):
+            for span in (None, *spans):
+                lo, hi = span or (0, pb.n_options)
                 want = [
                     (c, cost + 0.02 * pb.option_end[c])
                     for c in pb.target_options[t]
-                    if (k is None or pb.option_sat[c] == k) and (cost := tl.check(c)) is not None
+                    if lo <= c < hi and (cost := tl.check(c)) is not None
                 ]
-                assert list(zip(*tl.insert_choices(t, sat=k), strict=True)) == want
+                assert list(zip(*tl.insert_choices(t, span=span), strict=True)) == want
         for k in range(pb.n_sats):  # the stored maneuvers and the refreshed levels, exactly
             line = tl.lines[k]
             starts = [pb.option_start[x] for x in line]
