@@ -68,7 +68,7 @@ class SlewTable(NamedTuple):
           float, required time [s].
         """
         k = math.ceil(self.size * math.sqrt(min(max(theta, 0.0), math.pi) / math.pi) - 1e-12)
-        return float(self.time[min(k, self.size)])
+        return self.time.item(min(k, self.size))  # a Python float, no numpy scalar
 
 
 def _cell(theta, size: int):
