@@ -210,15 +210,14 @@ class Timeline:
 
     def _battery_ok(self, k, c, n_in, q, n_out, n_old):
         """Battery test of inserting c (maneuver n_in) before q (maneuver n_out, was n_old)."""
-        pb = self.pb
-        bat = pb.battery
+        bat = self.pb.battery
+        changes = self._changes(k, c, n_in, q, n_out, n_old)
         lv = self.levels[k]
         if lv is not None:
-            k0 = bat.slew_step(pb.option_start[c], n_in)
-            de = self._energy(k, c, n_in, n_out)
-            if lv.tail_min[k0] - self.debt[k] - de >= bat.margin_wh:
+            k0 = min(lo for lo, _, _ in changes)
+            if lv.tail_min[k0] - self.debt[k] - self._added_wh(changes) >= bat.margin_wh:
                 return True
-        ok = bat.change_ok(k, self._levels(k), self._changes(k, c, n_in, q, n_out, n_old))
+        ok = bat.change_ok(k, self._levels(k), changes)
         if ok is None:
             ok = bool(bat.profile(k, *self._timeline_loads(k, extra=c)).min() >= bat.margin_wh)
         return ok
@@ -239,11 +238,10 @@ class Timeline:
                 out.append((a_old, a_new, -p.slew_w))
         return out
 
-    def _energy(self, k, c, n_in, n_out):
-        pb = self.pb
-        if not pb.battery.has(k):
-            return 0.0
-        return pb.battery.extra_energy(k, pb.option_end[c] - pb.option_start[c], n_in + n_out)
+    def _added_wh(self, changes):
+        """Energy the load changes ``(lo, hi, watts)`` add: their positive part [Wh]."""
+        steps_w = sum((hi - lo) * w for lo, hi, w in changes if w > 0.0 and hi > lo)
+        return steps_w * self.pb.battery.dt / 3600.0
 
     # ------------------------------------------------------------ moves
     def check(self, c: int):
@@ -315,7 +313,9 @@ class Timeline:
         self.stale[k] = True
         n_in = pb.option_first[c] if pos == 0 else self.need(line[pos - 1], c)
         n_out = self.need(c, line[pos]) if pos < len(line) else 0.0
-        self.debt[k] += self._energy(k, c, n_in, n_out)
+        if pb.battery.has(k):  # the load the insertion adds, exactly as the profile counts it
+            q, n_old = (line[pos], self.maneuvers[k][pos]) if pos < len(line) else (-1, 0.0)
+            self.debt[k] += self._added_wh(self._changes(k, c, n_in, q, n_out, n_old))
         line.insert(pos, c)
         self.line_starts[k].insert(pos, pb.option_start[c])
         self.line_ends[k].insert(pos, pb.option_end[c])
@@ -351,9 +351,14 @@ class Timeline:
         del man[pos]
         if pos < len(line):  # the successor's maneuver, now from the predecessor
             q = line[pos]
+            n_was = man[pos]
             man[pos] = pb.option_first[q] if pos == 0 else self.need(line[pos - 1], q)
-            if pb.battery.has(k):  # it may get longer
-                self.debt[k] += pb.battery.extra_energy(k, 0.0, man[pos])
+            if pb.battery.has(k):  # its maneuver window may start earlier: the only added load
+                bat = pb.battery
+                a_new = bat.slew_step(pb.option_start[q], man[pos])
+                a_old = bat.slew_step(pb.option_start[q], n_was)
+                if a_new < a_old:
+                    self.debt[k] += self._added_wh(((a_new, a_old, bat.powers[k].slew_w),))
         self.assigned[t] = -1
         self.value -= pb.target_value[t]
         self.n_observations -= 1

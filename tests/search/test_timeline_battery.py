@@ -225,6 +225,25 @@ def _brute_insert(tl, c, lit, n_steps):
     return True, float(lev.min())
 
 
+def _removal_compared(tl, k, pos, ok, lit, n_steps) -> bool:
+    """Assert ``ok`` (``Timeline.removal_ok`` after a removal at ``pos``) against the
+    re-simulated timeline; False where the level is too close to the margin to tell."""
+    pb = tl.pb
+    line = tl.lines[k]
+    fits = pos >= len(line) or (
+        pb.option_start[line[pos]] - (pb.option_end[line[pos - 1]] if pos else 0.0)
+        >= tl.maneuver_into(k, pos)
+    )
+    obs = [
+        (pb.option_start[x], pb.option_end[x], tl.maneuver_into(k, i)) for i, x in enumerate(line)
+    ]
+    level = float(_resimulate(pb.battery.powers[k], lit[k], obs, n_steps).min())
+    if fits and abs(level - pb.battery.margin_wh) <= TIE:
+        return False
+    assert ok == (fits and level >= pb.battery.margin_wh), (k, pos, level)
+    return True
+
+
 # three random instances by default, three more as slow variants
 @pytest.mark.parametrize(
     "seed", [0, 1, 2, *(pytest.param(s, marks=pytest.mark.slow) for s in range(3, 6))]
@@ -237,7 +256,7 @@ def test_timeline_check_matches_brute_force(seed):
     pb, lit = _problem(rng, n_steps)
     tl = Timeline(pb)
     py = random.Random(seed)
-    compared = battery_cut = 0
+    compared = battery_cut = removals = 0
     for _step in range(60):
         for c in range(pb.n_options):
             fits, level = _brute_insert(tl, c, lit, n_steps)
@@ -290,13 +309,61 @@ def test_timeline_check_matches_brute_force(seed):
             k = py.choice([k for k in range(pb.n_sats) if tl.lines[k]])
             pos = py.randrange(len(tl.lines[k]))
             tl.remove(tl.lines[k][pos])
-            if not tl.removal_ok(k, pos):
+            ok = tl.removal_ok(k, pos)
+            removals += _removal_compared(tl, k, pos, ok, lit, n_steps)
+            if not ok:
                 tl.undo_to(mark)
         elif tl.n_observations:
             tl.undo_to(0)
+        _assert_debt_bounds(tl, lit, n_steps)
         if py.random() < 0.5:
             tl.commit()
-    assert compared > 1000 and battery_cut > 50
+    assert compared > 1000 and battery_cut > 50 and removals > 5
+
+
+def _assert_debt_bounds(tl, lit, n_steps):
+    """The kept (past) battery profiles less the debt never exceed the current suffix
+    minima, re-simulated."""
+    pb = tl.pb
+    for k in range(pb.n_sats):
+        past = tl.levels[k]
+        if past is None:
+            continue
+        obs = [
+            (pb.option_start[x], pb.option_end[x], tl.maneuver_into(k, i))
+            for i, x in enumerate(tl.lines[k])
+        ]
+        now = _resimulate(pb.battery.powers[k], lit[k], obs, n_steps)
+        suffix_min = np.minimum.accumulate(now[::-1])[::-1]
+        assert np.all(past.tail_min - tl.debt[k] <= suffix_min + 1e-9), k
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_debt_bounds_the_profile_through_removals(seed):
+    """Full timelines lose observations one by one with their profiles kept: a removal
+    lengthens the successor's maneuver when the new pair needs more time, and the debt
+    must cover that load (the O(1) tests of ``check`` and ``removal_ok`` rely on it)."""
+    rng = np.random.default_rng(300 + seed)
+    n_steps = int(rng.integers(60, 240))
+    pb, lit = _problem(rng, n_steps)
+    tl = Timeline(pb)
+    py = random.Random(seed)
+    longer = 0
+    for _round in range(8):
+        while ok := [c for c in range(pb.n_options) if tl.check(c) is not None]:
+            tl.insert(py.choice(ok))
+        for k in range(pb.n_sats):
+            tl.battery_level(k)  # fresh profiles, no debt
+        tl.commit()
+        for _ in range(tl.n_observations // 2):
+            k = py.choice([k for k in range(pb.n_sats) if tl.lines[k]])
+            pos = py.randrange(len(tl.lines[k]))
+            before = tl.maneuvers[k][pos + 1] if pos + 1 < len(tl.lines[k]) else math.inf
+            tl.remove(tl.lines[k][pos])
+            longer += pos < len(tl.lines[k]) and tl.maneuvers[k][pos] > before
+            _assert_debt_bounds(tl, lit, n_steps)
+        tl.undo_to(0) if py.random() < 0.5 else tl.commit()
+    assert longer >= 3
 
 
 @pytest.mark.parametrize("seed", range(3))
