@@ -288,20 +288,3 @@ class BatteryModel:
         if deficit <= 0.0:
             return True
         return bool(lv.tail_raw[z] - spill_z - deficit >= m)
-
-    def extra_energy(self, sat: int, imaging_s: float, slew_s: float) -> float:
-        """Upper bound of the load added by imaging and maneuvers.
-
-        Each of at most two windows is widened to whole steps.
-
-        Args:
-          sat: int, satellite index.
-          imaging_s: imaging time [s].
-          slew_s: maneuver time [s].
-        Returns:
-          float, energy [Wh].
-        """
-        p = self.powers[sat]
-        return (
-            p.imaging_w * (imaging_s + 2.0 * self.dt) + p.slew_w * (slew_s + 4.0 * self.dt)
-        ) / 3600.0
