@@ -230,13 +230,20 @@ class Timeline:
         s0, e0, s1 = self._win[c]
         out = [(s0, e0, p.imaging_w), (bat.slew_step(pb.option_start[c], n_in), s1, p.slew_w)]
         if q >= 0:
-            a_new = bat.slew_step(pb.option_start[q], n_out)
-            a_old = bat.slew_step(pb.option_start[q], n_old)
-            if a_new < a_old:
-                out.append((a_new, a_old, p.slew_w))
-            elif a_old < a_new:
-                out.append((a_old, a_new, -p.slew_w))
+            out += self._slew_change(k, q, n_old, n_out)
         return out
+
+    def _slew_change(self, k, q, was, now):
+        """Load change of q's maneuver window when its maneuver goes from ``was`` to
+        ``now`` s: ``[(lo, hi, watts)]``, empty when it starts in the same step."""
+        bat = self.pb.battery
+        a_new = bat.slew_step(self.pb.option_start[q], now)
+        a_old = bat.slew_step(self.pb.option_start[q], was)
+        if a_new < a_old:
+            return [(a_new, a_old, bat.powers[k].slew_w)]
+        if a_old < a_new:
+            return [(a_old, a_new, -bat.powers[k].slew_w)]
+        return []
 
     def _added_wh(self, changes):
         """Energy the load changes ``(lo, hi, watts)`` add: their positive part [Wh]."""
@@ -354,11 +361,7 @@ class Timeline:
             n_was = man[pos]
             man[pos] = pb.option_first[q] if pos == 0 else self.need(line[pos - 1], q)
             if pb.battery.has(k):  # its maneuver window may start earlier: the only added load
-                bat = pb.battery
-                a_new = bat.slew_step(pb.option_start[q], man[pos])
-                a_old = bat.slew_step(pb.option_start[q], n_was)
-                if a_new < a_old:
-                    self.debt[k] += self._added_wh(((a_new, a_old, bat.powers[k].slew_w),))
+                self.debt[k] += self._added_wh(self._slew_change(k, q, n_was, man[pos]))
         self.assigned[t] = -1
         self.value -= pb.target_value[t]
         self.n_observations -= 1

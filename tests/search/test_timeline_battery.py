@@ -362,7 +362,10 @@ def test_debt_bounds_the_profile_through_removals(seed):
             tl.remove(tl.lines[k][pos])
             longer += pos < len(tl.lines[k]) and tl.maneuvers[k][pos] > before
             _assert_debt_bounds(tl, lit, n_steps)
-        tl.undo_to(0) if py.random() < 0.5 else tl.commit()
+        if py.random() < 0.5:
+            tl.undo_to(0)
+        else:
+            tl.commit()
     assert longer >= 3
 
 
