@@ -11,11 +11,12 @@ the only stage that can stop at any time, so it gets what the others leave:
   refinement (:data:`REFINE_SHARE`, at most :data:`REFINE_MAX_S`);
 * with one (``jaxspline plan``): :func:`deadline_budget`, once the problem is built.
   The repair works on the plan, so its estimate (:func:`repair_seconds`: CPU seconds
-  per observation of the plan, measured on the default job and on a 12-satellite
-  day) is made twice: first for a plan of every target that has an option (the
-  plan is not known yet), then once more when the search's greedy start is built
-  (:attr:`Budget.retime`, called by :func:`jaxspline.search.solve`), for
-  :data:`PLAN_GROWTH` times the greedy start's observations (the search adds some).
+  per round and per observation of the plan, measured on the default job, the
+  12 x 12 h preset and the constellation day) is made twice: first for a plan of every
+  target that has an option (the plan is not known yet), then once more when the
+  search's greedy start is built (:attr:`Budget.retime`, called by
+  :func:`jaxspline.search.solve`), for :data:`PLAN_GROWTH` times the greedy start's
+  observations (the search adds some).
   The outputs are estimated by the caller (:attr:`StageDeadline.after_s`). Both are
   scaled by the pace of the call so far (:meth:`StageDeadline.pace`: a loaded machine
   runs them slower). The search ends that long before the limit, but gets at least
@@ -49,6 +50,7 @@ from jaxspline.planner.deadline import StageDeadline, TimeLimitError, suggested_
 
 __all__ = [
     "CHECK_FIRST_S",
+    "CHECK_ROUND_S",
     "CHECK_S_PER_OBS",
     "JOINS_FIRST_S",
     "JOINS_S_PER_OBS",
@@ -57,6 +59,7 @@ __all__ = [
     "REFINE_FIRST_S",
     "REFINE_MAX_S",
     "REFINE_MIN_S",
+    "REFINE_ROUND_S",
     "REFINE_SHARE",
     "REFINE_S_PER_OBS",
     "REFILL_OVERHEAD_S",
@@ -87,18 +90,23 @@ PLAN_GROWTH = 1.3
 #: search (the default job's: ~half of its 950), in :func:`mandatory_seconds`.
 TYPICAL_PLAN_SHARE = 0.5
 
-# CPU seconds of the repair's steps, per observation of the plan, fitted to the
-# default job (~500 observations, a third on per-channel satellites: 22.5 s for three
-# rounds with the flown joins and two refills) and to a 12-satellite 12 h day of
-# 20,000 targets (~4,500 observations, 4 of the 12 satellites per-channel: 27 s for
-# one round of refinement and check), 2-core machine, compiled programs in the cache;
-# the first calls (loading their programs, one set per maneuver model: 0.6 and 3.0 s
-# for a 12-target scenario with three models, as much as the default job's) on both:
-CHECK_S_PER_OBS = 1.8e-3  # one independent check (plan_check), per round
+# CPU seconds of the repair's steps: a fixed part per round (each round's plan is a new
+# size, so its programs load from the compile cache again) plus a part per observation,
+# fitted to the default job (517 observations, a third on per-channel satellites,
+# flown joins: three rounds and two refills, 22 s estimated against 14-17 s measured)
+# and to warm calls on a 12-satellite 12 h preset plan (2,955 observations, 1,161 of
+# them per-channel: refinement 1.8 s, check 0.7 s), which the per-observation parts
+# cover twice over; the 12 h preset's repair took 5.7 s of the 11 s estimated, the
+# constellation day's (13,403 observations) 18 s of 28 s, 2-core machine, compiled
+# programs in the cache. The first calls load their programs, one set per maneuver
+# model (0.6 and 3.0 s for a 12-target scenario with three models):
+CHECK_S_PER_OBS = 3e-4  # one independent check (plan_check), per round and observation
+CHECK_ROUND_S = 0.8  # ... per round
 CHECK_FIRST_S = 0.8  # its first call
 JOINS_S_PER_OBS = 2.4e-3  # one flown-join check (reject_unflyable), per round
 JOINS_FIRST_S = 3.0  # its first call
-REFINE_S_PER_OBS = 3.4e-3  # one start-time refinement, per round
+REFINE_S_PER_OBS = 1.2e-3  # one start-time refinement, per round and observation
+REFINE_ROUND_S = 1.15  # ... per round
 REFINE_FIRST_S = 2.5  # its first call
 #: [s] a refill's greedy pass and restore besides its budget, and the refinement after
 #: it on a plan of a new size (the default job's second round: ~2 s more than a warm one)
@@ -170,11 +178,11 @@ def repair_seconds(observations: float, flown_joins: bool, refining: bool, refil
     """
     n = float(observations)
     rounds = _ROUNDS_WITH_JOINS if flown_joins else 1
-    need = CHECK_FIRST_S + rounds * CHECK_S_PER_OBS * n
+    need = CHECK_FIRST_S + rounds * (CHECK_ROUND_S + CHECK_S_PER_OBS * n)
     if flown_joins:
         need += JOINS_FIRST_S + rounds * JOINS_S_PER_OBS * n + refill_s + REFILL_OVERHEAD_S
     if refining:
-        need += REFINE_FIRST_S + rounds * REFINE_S_PER_OBS * n
+        need += REFINE_FIRST_S + rounds * (REFINE_ROUND_S + REFINE_S_PER_OBS * n)
     return need
 
 
@@ -182,6 +190,8 @@ def mandatory_seconds(ctx: PlanContext, flown_joins: bool, after_s: float = 0.0)
     """Estimated CPU seconds of what follows the search and is never left out: the
     independent check and the flown-join check (two rounds each) of a plan of
     :data:`TYPICAL_PLAN_SHARE` of the targets that have an option, plus ``after_s``.
+    It leaves out the per-round part (:data:`CHECK_ROUND_S`): a run is refused only
+    when even this lower estimate ends it far past the limit.
 
     Args:
       ctx: PlanContext (stages 1-4).

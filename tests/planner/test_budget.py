@@ -108,7 +108,7 @@ def _ctx(n_targets, refining, duration=3600.0):
 
 def test_repair_estimate_grows_with_the_steps_that_run():
     plain = bd.repair_seconds(1000, False, False, 2.0)
-    assert plain == pytest.approx(bd.CHECK_FIRST_S + bd.CHECK_S_PER_OBS * 1000)
+    assert plain == pytest.approx(bd.CHECK_FIRST_S + bd.CHECK_ROUND_S + bd.CHECK_S_PER_OBS * 1000)
     joins = bd.repair_seconds(1000, True, False, 2.0)
     assert joins > plain + bd.JOINS_FIRST_S + 2.0
     assert bd.repair_seconds(1000, True, True, 2.0) > joins + bd.REFINE_FIRST_S
@@ -145,8 +145,8 @@ def test_the_greedy_start_moves_the_search_end_to_what_its_plan_needs(monkeypatc
     assert d.split["observations"] == size and d.split["search_s"] == pytest.approx(90 - repair - 5)
     assert d.split["reserve_s"]["repair"] == round(repair, 2)
     assert b.retime(10**6) == pytest.approx(b.search_end)  # never past every target planned
-    clock.wall += 40.0  # a loaded machine: the estimate at pace 2 does not fit
-    assert b.retime(4000) == pytest.approx(10.0 + 1000.0 + bd.SEARCH_MIN_SHARE * 90.0)
+    clock.wall += 40.0  # a loaded machine: the estimate at pace 3 does not fit
+    assert b.retime(15000) == pytest.approx(10.0 + 1000.0 + bd.SEARCH_MIN_SHARE * 90.0)
     capped = bd.deadline_budget(_ctx(20, False), d, flown_joins=False, refill_s=2.0, capped=True)
     assert capped.retime is None  # iteration-capped runs keep their clock-free search
 
