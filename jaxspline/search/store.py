@@ -30,7 +30,6 @@ __all__ = ["PIECE_PAIRS", "TRIM_PAIRS", "NearPairs", "PairsBuilder", "start_orde
 _INDEX = np.int32  # option ids of the stored pairs (< 2**31 options)
 _NEED = np.float32  # stored required times [s], rounded up
 _SRC_BITS = 32  # a pair's sort key while building: (row << _SRC_BITS) | source
-_SRC_MASK = (1 << _SRC_BITS) - 1
 #: Pairs of one sorted piece kept by :class:`PairsBuilder` (2 MB of int32 + float32).
 PIECE_PAIRS = 1 << 18
 #: Pairs placed by :meth:`PairsBuilder.build` between two heap trims (64 MB of pieces).
@@ -50,11 +49,17 @@ def start_order(start, sat) -> np.ndarray:
 
 
 def _round_up32(need) -> np.ndarray:
-    """float32 copy of ``need`` that is never below it."""
+    """float32 copy of ``need`` that is never below it: each value rounded down by the
+    cast moves up one float32 step (``np.nextafter`` towards +inf, done on the bits: +1
+    for a positive value, -1 for a negative one; 6x faster than ``nextafter``)."""
     need = np.asarray(need, np.float64)
     n32 = need.astype(_NEED)
-    low = n32.astype(np.float64) < need
-    n32[low] = np.nextafter(n32[low], _NEED(np.inf))
+    up = n32 < need
+    bits = n32.view(np.int32)
+    bits += up
+    neg = np.signbit(n32) & up
+    if neg.any():
+        bits -= 2 * neg
     return n32
 
 
@@ -194,24 +199,30 @@ class PairsBuilder:
         """Sort the open satellite's pairs by (row, source) and keep them compact."""
         if not self._open:
             return
-        # one int64 key a pair, (row << 32) | source, built chunk by chunk (chunks freed)
-        keys, needs = [], []
-        while self._open:
-            s, d, w = self._open.pop(0)
-            keys.append((self.row_of[d] << _SRC_BITS) | s.astype(np.int64))
-            needs.append(w)
-        key, need = np.concatenate(keys), np.concatenate(needs)
-        del keys, needs
-        order = np.argsort(key, kind="stable")  # the order of lexsort((src, row))
+        src, dst, need = (np.concatenate(c) for c in zip(*self._open, strict=True))
+        self._open = []
+        order = self._row_order(src, dst)
         for a in range(0, order.size, PIECE_PAIRS):
             part = order[a : a + PIECE_PAIRS]
-            k = key[part]
-            row = k >> _SRC_BITS
+            row = self.row_of[dst[part]]
             cut = np.flatnonzero(np.r_[True, row[1:] != row[:-1]])
             rows, counts = row[cut], np.diff(np.r_[cut, row.size])
             self.counts[rows] += counts
-            src = (k & _SRC_MASK).astype(_INDEX)
-            self._pieces.append((rows, counts, src, need[part]))
+            self._pieces.append((rows, counts, src[part], need[part]))
+
+    def _row_order(self, src, dst) -> np.ndarray:
+        """The order of the pairs ``(src, dst)`` by (row of ``dst``, ``src``).
+
+        The planner's screen streams a satellite's pairs by source, each source's
+        destinations ascending, and a satellite's option ids increase with their rows:
+        then a stable sort of the destination ids is the order (timsort, on runs already
+        sorted). Otherwise one int64 key a pair, ``(row << 32) | src``.
+        """
+        lo, hi = int(dst.min()), int(dst.max())
+        if np.all(src[1:] >= src[:-1]) and np.all(np.diff(self.row_of[lo : hi + 1]) > 0):
+            return np.argsort(dst, kind="stable")
+        key = (self.row_of[dst] << _SRC_BITS) | src.astype(np.int64)
+        return np.argsort(key, kind="stable")  # the order of lexsort((src, row))
 
     def build(self) -> NearPairs:
         """The table (closes the open satellite); the builder is emptied."""

@@ -11,9 +11,10 @@ from jaxspline.search import store
 from jaxspline.search.store import NearPairs, PairsBuilder, start_order
 
 
-def _random_pairs(rng, n_sats=3, per_sat=60, density=0.3):
+def _random_pairs(rng, n_sats=3, per_sat=60, density=0.3, ids_by_start=True):
     sat = np.repeat(np.arange(n_sats), per_sat)
-    start = np.concatenate([np.sort(rng.uniform(0, 1e4, per_sat)) for _ in range(n_sats)])
+    starts = [rng.uniform(0, 1e4, per_sat) for _ in range(n_sats)]
+    start = np.concatenate([np.sort(s) for s in starts] if ids_by_start else starts)
     ref = {}
     for k in range(n_sats):
         ids = np.flatnonzero(sat == k)
@@ -24,18 +25,28 @@ def _random_pairs(rng, n_sats=3, per_sat=60, density=0.3):
     return sat, start, ref
 
 
-@pytest.mark.parametrize("seed, piece", [(0, None), (1, None), (2, 7), (3, 1)])
-def test_streamed_table_answers_like_a_dict(seed, piece, monkeypatch):
+@pytest.mark.parametrize(
+    "seed, piece, stream",
+    [(0, None, "shuffled"), (1, None, "shuffled"), (2, 7, "shuffled"), (3, 1, "shuffled"),
+     (4, None, "by source"), (5, 7, "by source"), (6, None, "by source, ids not by start")],
+)  # fmt: skip
+def test_streamed_table_answers_like_a_dict(seed, piece, stream, monkeypatch):
+    # "by source": the planner's stream (sources ascending, each one's destinations
+    # ascending, ids by start within a satellite), which the builder sorts by
+    # destination alone; the other two take its general (row, source) sort
     if piece is not None:  # pieces smaller than a row: rows split over several pieces
         monkeypatch.setattr(store, "PIECE_PAIRS", piece)
     rng = np.random.default_rng(seed)
-    sat, start, ref = _random_pairs(rng)
+    sat, start, ref = _random_pairs(rng, ids_by_start=stream != "by source, ids not by start")
     n = sat.size
     rows = start_order(start, sat)
     b = PairsBuilder(n, rows)
-    for k in range(3):  # one satellite at a time, its pairs in shuffled chunks
+    for k in range(3):  # one satellite at a time, its pairs in chunks
         mine = [(i, j, w) for (i, j), w in ref.items() if sat[j] == k]
-        rng.shuffle(mine)
+        if stream == "shuffled":
+            rng.shuffle(mine)
+        else:
+            mine.sort()
         for part in np.array_split(np.arange(len(mine)), 7):
             b.add(*(np.array([mine[p][c] for p in part]) for c in range(3)))
         b.close()
@@ -70,6 +81,21 @@ def test_streamed_table_answers_like_a_dict(seed, piece, monkeypatch):
     assert sorted(zip(table.src[idx].tolist(), d.tolist(), strict=True)) == sorted(
         (i, j) for (i, j) in ref if j in set(some.tolist())
     )
+
+
+def test_needs_round_up_to_the_next_float32():
+    # against numpy's nextafter: every value the cast rounds down moves up one step
+    rng = np.random.default_rng(0)
+    need = np.concatenate([
+        rng.uniform(-300.0, 300.0, 20000), rng.uniform(-1e-40, 1e-40, 2000),
+        [0.0, -0.0, np.inf, -np.inf, 1e-300, -1e-300, 3.0, -3.0, 0.1, -0.1],
+    ])  # fmt: skip
+    got = store._round_up32(need)
+    want = need.astype(np.float32)
+    low = want.astype(np.float64) < need
+    want[low] = np.nextafter(want[low], np.float32(np.inf))
+    np.testing.assert_array_equal(got.view(np.int32), want.view(np.int32))
+    assert np.all(got.astype(np.float64) >= need) and low.sum() > 10000
 
 
 def test_rejects_inconsistent_arrays():
