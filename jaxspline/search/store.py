@@ -199,30 +199,73 @@ class PairsBuilder:
         """Sort the open satellite's pairs by (row, source) and keep them compact."""
         if not self._open:
             return
-        src, dst, need = (np.concatenate(c) for c in zip(*self._open, strict=True))
-        self._open = []
-        order = self._row_order(src, dst)
+        chunks, self._open = self._open, []
+        if self._by_source(chunks):
+            self._transpose(chunks)
+        else:
+            self._sort(chunks)
+
+    def _by_source(self, chunks) -> bool:
+        """Whether ``chunks`` come by source, as the planner's screen streams them (sources
+        ascending within and across chunks), with option ids increasing with their rows
+        over the destinations' span (a satellite's ids, in start order)."""
+        last = -1
+        for s, _, _ in chunks:
+            if s[0] < last or np.any(s[1:] < s[:-1]):
+                return False
+            last = s[-1]
+        lo = min(int(d.min()) for _, d, _ in chunks)
+        hi = max(int(d.max()) for _, d, _ in chunks)
+        return bool(np.all(np.diff(self.row_of[lo : hi + 1]) > 0))
+
+    def _transpose(self, chunks) -> None:
+        """Pieces of chunks that come by source (:meth:`_by_source`): each destination's
+        pair count first, then each chunk (freed once placed) stably sorted by destination
+        and scattered into the satellite's rows, which leaves every row's sources in
+        stream order, ascending."""
+        lo = min(int(d.min()) for _, d, _ in chunks)
+        span = max(int(d.max()) for _, d, _ in chunks) - lo + 1
+        ptr = np.zeros(span + 1, np.int64)
+        for _, d, _ in chunks:
+            ptr[1:] += np.bincount(d - lo, minlength=span)
+        np.cumsum(ptr, out=ptr)
+        src, need = np.empty(int(ptr[-1]), _INDEX), np.empty(int(ptr[-1]), _NEED)
+        fill = ptr[:-1].copy()  # next free position of each destination
+        while chunks:
+            s, d, w = chunks.pop(0)
+            o = np.argsort(d, kind="stable")
+            d = d[o] - lo
+            cut = np.flatnonzero(np.r_[True, d[1:] != d[:-1]])
+            seg = np.diff(np.r_[cut, d.size])
+            head = d[cut]
+            at = np.repeat(fill[head] - cut, seg) + np.arange(d.size)
+            src[at], need[at] = s[o], w[o]
+            fill[head] += seg
+        rows = self.row_of[lo : lo + span]
+        for a in range(0, src.size, PIECE_PAIRS):
+            b = min(a + PIECE_PAIRS, src.size)
+            r0 = int(np.searchsorted(ptr, a, "right")) - 1
+            r1 = int(np.searchsorted(ptr, b - 1, "right"))
+            counts = np.minimum(ptr[r0 + 1 : r1 + 1], b) - np.maximum(ptr[r0:r1], a)
+            some = counts > 0
+            self.counts[rows[r0:r1][some]] += counts[some]
+            self._pieces.append(
+                (rows[r0:r1][some], counts[some], src[a:b].copy(), need[a:b].copy())
+            )
+
+    def _sort(self, chunks) -> None:
+        """Pieces of chunks in any order: one int64 key a pair, ``(row << 32) | src``."""
+        src, dst, need = (np.concatenate(c) for c in zip(*chunks, strict=True))
+        chunks.clear()
+        key = (self.row_of[dst] << _SRC_BITS) | src.astype(np.int64)
+        order = np.argsort(key, kind="stable")  # the order of lexsort((src, row))
         for a in range(0, order.size, PIECE_PAIRS):
             part = order[a : a + PIECE_PAIRS]
-            row = self.row_of[dst[part]]
+            row = key[part] >> _SRC_BITS
             cut = np.flatnonzero(np.r_[True, row[1:] != row[:-1]])
             rows, counts = row[cut], np.diff(np.r_[cut, row.size])
             self.counts[rows] += counts
             self._pieces.append((rows, counts, src[part], need[part]))
-
-    def _row_order(self, src, dst) -> np.ndarray:
-        """The order of the pairs ``(src, dst)`` by (row of ``dst``, ``src``).
-
-        The planner's screen streams a satellite's pairs by source, each source's
-        destinations ascending, and a satellite's option ids increase with their rows:
-        then a stable sort of the destination ids is the order (timsort, on runs already
-        sorted). Otherwise one int64 key a pair, ``(row << 32) | src``.
-        """
-        lo, hi = int(dst.min()), int(dst.max())
-        if np.all(src[1:] >= src[:-1]) and np.all(np.diff(self.row_of[lo : hi + 1]) > 0):
-            return np.argsort(dst, kind="stable")
-        key = (self.row_of[dst] << _SRC_BITS) | src.astype(np.int64)
-        return np.argsort(key, kind="stable")  # the order of lexsort((src, row))
 
     def build(self) -> NearPairs:
         """The table (closes the open satellite); the builder is emptied."""
