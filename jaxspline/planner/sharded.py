@@ -52,7 +52,7 @@ import numpy as np
 
 from jaxspline.search import Timeline, clock, greedy, lns, solve
 from jaxspline.search.dp import dp_paths
-from jaxspline.search.lagrangian import BoundResult, Prices
+from jaxspline.search.lagrangian import BOUND_MU_MIN, BoundResult, Prices
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 from jaxspline.search.store import NearPairs
@@ -114,7 +114,7 @@ class _ShardPrices(Prices):
     """:class:`Prices` whose DP covers the owned satellites and whose totals are gathered."""
 
     def __init__(self, pb: Problem, sat_ids, n_sats: int, allgather):
-        super().__init__(pb, energy=False, merge_repeats=True)
+        super().__init__(pb, energy=False, merge_repeats=True, mu_min=BOUND_MU_MIN)
         self.sat_ids = np.asarray(sat_ids, np.int64)
         self.n_sats = int(n_sats)
         self.allgather = allgather
