@@ -30,6 +30,7 @@ rotation angle (:mod:`jaxspline.geometry.frames`). :func:`satellite_tracks` and
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
@@ -237,6 +238,16 @@ def _target_packets(result) -> list:
     tg, obs = result.scenario.targets, result.observations
     imaged = np.zeros(len(tg), bool)
     imaged[np.asarray(obs.target, np.int64)] = True
+    outline = Color(rgba=[0, 0, 0, 255])
+    points = {  # two styles, each built (and validated) once and shared by its targets
+        flag: Point(
+            color=Color(rgba=list(IMAGED_RGBA if flag else NOT_IMAGED_RGBA)),
+            pixelSize=IMAGED_PIXELS if flag else TARGET_PIXELS,
+            outlineColor=outline,
+            outlineWidth=1.0,
+        )
+        for flag in (True, False)
+    }
     out = []
     for i in range(len(tg)):
         kind = "strip" if int(tg.kind[i]) == 1 else "point"
@@ -255,12 +266,7 @@ def _target_packets(result) -> list:
                         float(tg.alt[i]),
                     ]
                 ),
-                point=Point(
-                    color=Color(rgba=list(IMAGED_RGBA if imaged[i] else NOT_IMAGED_RGBA)),
-                    pixelSize=IMAGED_PIXELS if imaged[i] else TARGET_PIXELS,
-                    outlineColor=Color(rgba=[0, 0, 0, 255]),
-                    outlineWidth=1.0,
-                ),
+                point=points[bool(imaged[i])],
             )
         )
     return out
@@ -324,8 +330,9 @@ def _footprint_packets(result, horizon) -> list:
     return out
 
 
+@functools.cache
 def _footprint_fill(color: str):
-    """The translucent fill of a footprint during imaging."""
+    """The translucent fill of a footprint during imaging (one per color, shared)."""
     from czml3.properties import Color, Material, SolidColorMaterial
 
     rgba = _rgba(color, FOOTPRINT_ALPHA)
