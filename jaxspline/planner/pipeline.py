@@ -82,11 +82,8 @@ __all__ = ["build_problem", "plan"]
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
-#: ... on a satellite of more than _LARGE_SAT options, whose screen has programs of its own
-#: (its table pads to a larger power of two) and whose chunks' dispatch would dominate
-#: (constellation day: 2^13 -> 2^18 took the screen's kernels from 60 s to 32 s)
-_NEAR_CHUNK_LARGE = 1 << 18
-_LARGE_SAT = 1 << 14
+_NEAR_CHUNK_LARGE = 1 << 18  # ... on satellites of more than _LARGE_SAT options (docs/scale.md)
+_LARGE_SAT = 1 << 14  # their tables pad past the shared programs' size anyway
 _JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
 _PAIRS, _CANDS = "target-satellite pairs", "candidate options"  # the stages' work units
 _REFILL_S = 2.0  # [s] budget of one refill after join rejections
@@ -240,11 +237,9 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None):
     ``gap <= max_gap`` is widened by ``_WINDOW_GUARD`` and the pairs are then cut with
     the planner's own test ``t_end[i] > t_start[j] - far - slack`` (strict), so the
     result does not depend on how either side rounds. ``join_filter(src, dst) -> bool``
-    (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go
-    straight into a :class:`jaxspline.search.store.PairsBuilder`: memory is the
-    compact table plus one satellite's compact rows, whatever the candidate count.
-    ``tick(share done)`` (the clock of :class:`jaxspline.planner.deadline.StageDeadline`)
-    is called after every chunk.
+    (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go straight
+    into a :class:`jaxspline.search.store.PairsBuilder` (the table plus one satellite).
+    ``tick(share done)`` (a StageDeadline's clock) is called after every chunk.
 
     Returns:
       (NearPairs, pairs removed by ``join_filter``).
