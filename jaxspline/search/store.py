@@ -200,31 +200,32 @@ class PairsBuilder:
         if not self._open:
             return
         chunks, self._open = self._open, []
-        if self._by_source(chunks):
-            self._transpose(chunks)
-        else:
+        ids = self._by_source(chunks)
+        if ids is None:
             self._sort(chunks)
+        else:
+            self._transpose(chunks, *ids)
 
-    def _by_source(self, chunks) -> bool:
-        """Whether ``chunks`` come by source, as the planner's screen streams them (sources
-        ascending within and across chunks), with option ids increasing with their rows
-        over the destinations' span (a satellite's ids, in start order)."""
+    def _by_source(self, chunks):
+        """The destinations' id range ``(lo, hi)`` when ``chunks`` come by source, as the
+        planner's screen streams them (sources ascending within and across chunks), with
+        option ids increasing with their rows over that range (a satellite's ids, in start
+        order); else None."""
         last = -1
         for s, _, _ in chunks:
             if s[0] < last or np.any(s[1:] < s[:-1]):
-                return False
+                return None
             last = s[-1]
         lo = min(int(d.min()) for _, d, _ in chunks)
         hi = max(int(d.max()) for _, d, _ in chunks)
-        return bool(np.all(np.diff(self.row_of[lo : hi + 1]) > 0))
+        return (lo, hi) if np.all(np.diff(self.row_of[lo : hi + 1]) > 0) else None
 
-    def _transpose(self, chunks) -> None:
-        """Pieces of chunks that come by source (:meth:`_by_source`): each destination's
-        pair count first, then each chunk (freed once placed) stably sorted by destination
-        and scattered into the satellite's rows, which leaves every row's sources in
-        stream order, ascending."""
-        lo = min(int(d.min()) for _, d, _ in chunks)
-        span = max(int(d.max()) for _, d, _ in chunks) - lo + 1
+    def _transpose(self, chunks, lo: int, hi: int) -> None:
+        """Pieces of chunks that come by source (:meth:`_by_source`, destinations in
+        ``lo..hi``): each destination's pair count first, then each chunk (freed once
+        placed) stably sorted by destination and scattered into the satellite's rows,
+        which leaves every row's sources in stream order, ascending."""
+        span = hi - lo + 1
         ptr = np.zeros(span + 1, np.int64)
         for _, d, _ in chunks:
             ptr[1:] += np.bincount(d - lo, minlength=span)
