@@ -28,7 +28,10 @@ it published, writes it into an array shared with the parent (no pipe: neither s
 ever waits). The search adopts it when it beats its own
 (:meth:`BoundWorker.plan`, polled by the LNS). What the search finds then depends on the
 timing of the two processes, so an iteration-capped search (reproducible) never asks
-for plans.
+for plans. Once the bound has converged, the worker's CPU would idle until the
+deadline: the worker then improves its last repaired plan by an LNS of its own
+(:meth:`_Repairs.walk`) and publishes it the same way, every :data:`_WALK_SLICE_S`
+seconds in which it got better.
 
 The child ignores SIGINT (a Ctrl-C reaches the whole process group; the parent decides)
 and is terminated when the parent stops early or gives up waiting.
@@ -39,12 +42,13 @@ from __future__ import annotations
 import gc
 import math
 import multiprocessing as mp
+import random
 import signal
 import time
 import warnings
 
 from jaxspline.search.lagrangian import BoundResult, plan_from_paths, upper_bound
-from jaxspline.search.lns import greedy_order
+from jaxspline.search.lns import greedy, greedy_order, lns
 from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
@@ -55,6 +59,9 @@ __all__ = ["BoundWorker"]
 _GRACE_S = 30.0  # [s] the parent waits this long past the deadline for the last iteration
 _PLAN_FIRST_IT = 4  # the worker's first plan repair follows this many iterations
 _PLAN_RATIO = 3.0  # DP CPU time between two repairs, in units of the last repair's
+_WALK_SLICE_S = 2.0  # [s] the converged worker's LNS publishes its plan this often
+_WALK_END_S = 0.5  # [s] its last publication comes this long before the deadline
+_WALK_SEED = 7919  # its random stream (the search's LNS has its own)
 
 
 class _Shared:
@@ -106,6 +113,20 @@ class _Repairs:
         self.mark = time.process_time()
         self.cost = self.mark - now
 
+    def walk(self) -> None:
+        """After the bound converged: improve the last repaired plan (the greedy's when
+        there was none) by an LNS of its own until the deadline, publishing it after every
+        slice of :data:`_WALK_SLICE_S` seconds in which it beat the last publication."""
+        if self.tl is None:
+            self.tl = Timeline(self.pb)
+            greedy(self.tl, self.deadline)
+        rng = random.Random(_WALK_SEED)
+        while (now := time.monotonic()) < self.deadline - _WALK_END_S:
+            lns(self.tl, min(self.deadline - _WALK_END_S, now + _WALK_SLICE_S), rng)
+            if self.tl.value > self.best:
+                self.best = self.tl.value
+                self.shared.publish(self.tl.value, self.tl.assigned)
+
 
 def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, shared):
     """Child: iterate the bound (publishing plans into ``shared`` unless None), send
@@ -119,6 +140,8 @@ def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, s
     )
     conn.send((float(res.bound), int(res.iterations), res.status.value, float(res.seconds)))
     conn.close()
+    if hook is not None and res.status == BoundStatus.CONVERGED:  # the core is free: search too
+        hook.walk()
 
 
 class BoundWorker:

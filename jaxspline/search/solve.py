@@ -17,6 +17,8 @@ DP paths into plans now and then, so it does all the phase would do, on the othe
 the phase is left out and the LNS starts at once from the greedy start; it continues
 from a worker's plan whenever that beats the LNS's best (``stats.worker_plans``: how
 many were taken); the last one is looked at once more before the earliest-start pass.
+Once its bound converged, the worker runs an LNS of its own and publishes its plans the
+same way (:class:`BoundWorker`).
 """
 
 from __future__ import annotations

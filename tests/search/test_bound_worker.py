@@ -36,6 +36,7 @@ PLAN_VALUE = 100.0
 CAP = 60  # worker iterations
 SEARCH_ITERS = 400
 TIMED_S = 3.0  # the worker converges in ~1 s here and may hand a plan over
+WALK_S = 3.0  # the converged worker's own search in the walk test
 
 
 @pytest.fixture(scope="module")
@@ -144,3 +145,32 @@ def test_retime_moves_the_search_end_once_the_greedy_start_is_built(problem):
     assert res.bound >= res.timeline.value - 1e-9
     solve(problem, math.inf, seed=3, max_iters=10, retime=retime)  # capped: no clock
     assert asked == [greedy_obs]
+
+
+class _Record:
+    """Stands in for the shared plan: records every publication."""
+
+    def __init__(self):
+        self.plans = []
+
+    def publish(self, value, assigned):
+        self.plans.append((value, list(assigned)))
+
+
+def test_converged_worker_searches_on_and_publishes_better_feasible_plans(problem):
+    # what the worker does once its bound converged: an LNS of its own from the greedy
+    # start (no repaired plan yet), publishing strictly better plans, ending in time
+    from jaxspline.search.bound_worker import _WALK_END_S, _Repairs
+
+    start = Timeline(problem)
+    greedy(start, math.inf)
+    shared = _Record()
+    deadline = time.monotonic() + WALK_S
+    _Repairs(problem, shared, deadline).walk()
+    assert time.monotonic() <= deadline - _WALK_END_S + 1.0
+    assert shared.plans, "the walk published nothing"
+    values = [v for v, _ in shared.plans]
+    assert values == sorted(set(values))  # each publication beats the one before
+    assert values[0] >= start.value
+    for value, assigned in shared.plans:
+        assert _feasible_value(problem, assigned) == value
