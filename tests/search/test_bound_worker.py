@@ -174,3 +174,21 @@ def test_converged_worker_searches_on_and_publishes_better_feasible_plans(proble
     assert values[0] >= start.value
     for value, assigned in shared.plans:
         assert _feasible_value(problem, assigned) == value
+
+
+def test_searching_worker_stops_its_bound_at_its_own_step_floor(problem):
+    # a worker that publishes plans converges at SEARCH_MU_MIN, then searches: its
+    # bound is the in-process bound at that floor, bit for bit, reached in fewer
+    # iterations than the bound alone needs
+    from jaxspline.search.bound_worker import SEARCH_MU_MIN
+    from jaxspline.search.status import BoundStatus
+
+    cap = 10 * CAP
+    ref = upper_bound(problem, PLAN_VALUE, math.inf, cap, energy=False, mu_min=SEARCH_MU_MIN)
+    alone = upper_bound(problem, PLAN_VALUE, math.inf, cap, energy=False)
+    got = BoundWorker(problem, PLAN_VALUE, time.monotonic() + 600.0, cap, plans=True).result()
+    assert got is not None
+    assert ref.status == alone.status == BoundStatus.CONVERGED
+    assert (got.bound, got.iterations, got.status) == (ref.bound, ref.iterations, ref.status)
+    assert ref.iterations < alone.iterations
+    assert ref.bound >= alone.bound
