@@ -51,6 +51,7 @@ import warnings
 
 from jaxspline.search.lagrangian import BOUND_MU_MIN, BoundResult, plan_from_paths, upper_bound
 from jaxspline.search.lns import greedy, greedy_order, lns
+from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
@@ -127,8 +128,10 @@ class _Repairs:
             self.tl = Timeline(self.pb)
             greedy(self.tl, self.deadline)
         rng = random.Random(_WALK_SEED)
+        rank = EnergyRank(self.pb, self.tl.target_options)  # once, not every slice
         while (now := time.monotonic()) < self.deadline - _WALK_END_S:
-            lns(self.tl, min(self.deadline - _WALK_END_S, now + _WALK_SLICE_S), rng)
+            end = min(self.deadline - _WALK_END_S, now + _WALK_SLICE_S)
+            lns(self.tl, end, rng, rank=rank)
             if self.tl.value > self.best:
                 self.best = self.tl.value
                 self.shared.publish(self.tl.value, self.tl.assigned)

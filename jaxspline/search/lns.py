@@ -123,8 +123,9 @@ class _Walk:
       improved: number of improvements of the best plan.
     """
 
-    def __init__(self, tl: Timeline, has):
-        self.has, self.er = has, EnergyRank(tl.pb, tl.target_options)
+    def __init__(self, tl: Timeline, has, er: EnergyRank | None = None):
+        self.has = has
+        self.er = EnergyRank(tl.pb, tl.target_options) if er is None else er
         self.best_key = (tl.value, tl.n_observations)
         self.best = list(tl.assigned)
         self.improved = 0
@@ -262,7 +263,9 @@ def _accept(tl: Timeline, w: _Walk, base, mark: int, thr: float, it: int, rng):
     tl.commit()
 
 
-def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None, incoming=None) -> int:
+def lns(
+    tl: Timeline, deadline: float, rng, max_iters=None, report=None, incoming=None, rank=None
+) -> int:
     """Large-neighbourhood search until ``deadline`` (or ``max_iters``).
 
     Args:
@@ -276,6 +279,8 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None, incomin
         seconds: ``(value, assigned)`` of a feasible plan worth more than ``value``
         (per target its option id, -1: none), which the walk then continues from as its
         best plan, or None (the bound worker's plans, :meth:`BoundWorker.plan`).
+      rank: the :class:`EnergyRank` of ``tl``'s problem and options, for a caller that
+        runs the LNS in several calls (one pass over every option); None: built here.
     Returns:
       int, the number of iterations.
     """
@@ -284,7 +289,7 @@ def lns(tl: Timeline, deadline: float, rng, max_iters=None, report=None, incomin
     has = [t for t in range(pb.n_targets) if tl.target_options[t]]
     if not has:
         return 0
-    w = _Walk(tl, has)
+    w = _Walk(tl, has, rank)
     it = 0
     last = polled = time.monotonic()
     while (max_iters is None or it < max_iters) and clock.now() < deadline:
