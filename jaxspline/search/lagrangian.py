@@ -127,7 +127,12 @@ class Prices:
     """
 
     def __init__(
-        self, pb: Problem, energy=False, merge_repeats=False, dp=None, mu_min: float = _MU_MIN
+        self,
+        pb: Problem,
+        energy: bool = False,
+        merge_repeats: bool = False,
+        dp=None,
+        mu_min: float = _MU_MIN,
     ):
         self.pb = pb
         self.mu_min = float(mu_min)
