@@ -249,10 +249,9 @@ class PairsBuilder:
             r1 = int(np.searchsorted(ptr, b - 1, "right"))
             counts = np.minimum(ptr[r0 + 1 : r1 + 1], b) - np.maximum(ptr[r0:r1], a)
             some = counts > 0
-            self.counts[rows[r0:r1][some]] += counts[some]
-            self._pieces.append(
-                (rows[r0:r1][some], counts[some], src[a:b].copy(), need[a:b].copy())
-            )
+            held, counts = rows[r0:r1][some], counts[some]
+            self.counts[held] += counts
+            self._pieces.append((held, counts, src[a:b].copy(), need[a:b].copy()))
 
     def _sort(self, chunks) -> None:
         """Pieces of chunks in any order: one int64 key a pair, ``(row << 32) | src``."""
