@@ -11,12 +11,14 @@ the only stage that can stop at any time, so it gets what the others leave:
   refinement (:data:`REFINE_SHARE`, at most :data:`REFINE_MAX_S`);
 * with one (``jaxspline plan``): :func:`deadline_budget`, once the problem is built.
   The repair works on the plan, so its estimate (:func:`repair_seconds`: CPU seconds
-  per round and per observation of the plan, measured on the default job, the
+  per round and per observation of the plan, the refinement's per observation of a
+  per-channel satellite, the only ones it moves; measured on the default job, the
   12 x 12 h preset and the constellation day) is made twice: first for a plan of every
-  target that has an option (the plan is not known yet), then once more when the
-  search's greedy start is built (:attr:`Budget.retime`, called by
-  :func:`jaxspline.search.solve`), for :data:`PLAN_GROWTH` times the greedy start's
-  observations (the search adds some).
+  target that has an option, split between the satellites as their options are (the
+  plan is not known yet), then once more when the search's greedy start is built
+  (:attr:`Budget.retime`, called by :func:`jaxspline.search.solve` with the start's
+  observations per satellite), for :data:`PLAN_GROWTH` times them (the search adds
+  some).
   The outputs are estimated by the caller (:attr:`StageDeadline.after_s`). Both are
   scaled by the pace of the call so far (:meth:`StageDeadline.pace`: a loaded machine
   runs them slower). The search ends that long before the limit, but gets at least
@@ -93,19 +95,19 @@ TYPICAL_PLAN_SHARE = 0.5
 # CPU seconds of the repair's steps: a fixed part per round (each round's plan is a new
 # size, so its programs load from the compile cache again) plus a part per observation,
 # fitted to the default job (517 observations, a third on per-channel satellites,
-# flown joins: three rounds and two refills, 22 s estimated against 14-17 s measured)
-# and to warm calls on a 12-satellite 12 h preset plan (2,955 observations, 1,161 of
-# them per-channel: refinement 1.8 s, check 0.7 s), which the per-observation parts
-# cover twice over; the 12 h preset's repair took 5.7 s of the 11 s estimated, the
-# constellation day's (13,403 observations) 18 s of 28 s, 2-core machine, compiled
-# programs in the cache. The first calls load their programs, one set per maneuver
-# model (0.6 and 3.0 s for a 12-target scenario with three models):
+# flown joins: three rounds and two refills, 14-17 s measured) and to warm calls on
+# the 12 x 12 h preset (3,490 observations, 1,446 per-channel: refinement 3.8 s, check
+# 1.8 s) and the constellation day (11,945 observations, 5,561 per-channel: refinement
+# 9.7 s, check 5.3 s), 2-core machine, compiled programs in the cache; the parts per
+# observation exceed these by 20-50 %. The first calls load their programs, one set
+# per maneuver model (0.6 and 3.0 s for a 12-target scenario with three models):
 CHECK_S_PER_OBS = 3e-4  # one independent check (plan_check), per round and observation
 CHECK_ROUND_S = 0.8  # ... per round
 CHECK_FIRST_S = 0.8  # its first call
 JOINS_S_PER_OBS = 2.4e-3  # one flown-join check (reject_unflyable), per round
 JOINS_FIRST_S = 3.0  # its first call
-REFINE_S_PER_OBS = 1.2e-3  # one start-time refinement, per round and observation
+#: one start-time refinement, per round and observation of a per-channel satellite
+REFINE_S_PER_OBS = 1.5e-3
 REFINE_ROUND_S = 1.15  # ... per round
 REFINE_FIRST_S = 2.5  # its first call
 #: [s] a refill's greedy pass and restore besides its budget, and the refinement after
@@ -125,9 +127,9 @@ class Budget(NamedTuple):
         set this when they pass it on).
       refining: the start-time refinement runs (refine steps and a per-channel satellite).
       split: the split, for ``plan.json`` (empty without a deadline).
-      retime: None, or ``retime(observations) -> search_end``: the search's end
-        re-estimated for a greedy start of that many observations (module docstring);
-        it updates :attr:`split`.
+      retime: None, or ``retime(per_sat) -> search_end``: the search's end re-estimated
+        for a greedy start of ``per_sat`` observations per satellite (module
+        docstring); it updates :attr:`split`.
     """
 
     search_end: float
@@ -138,8 +140,7 @@ class Budget(NamedTuple):
 
 
 def _refining(sc) -> bool:
-    pc = sc.planner
-    return pc.refine_steps > 0 and any(not s.maneuver.rest_to_rest for s in sc.satellites)
+    return sc.planner.refine_steps > 0 and bool(_refined_satellites(sc).any())
 
 
 def default_budget(sc, limit: float, t0: float) -> Budget:
@@ -160,12 +161,20 @@ def default_budget(sc, limit: float, t0: float) -> Budget:
     return Budget(t0 + limit - reserve, t0 + limit, refining, {})
 
 
+def _refined_satellites(sc) -> np.ndarray:
+    """Per satellite whether the start-time refinement moves its observations (a
+    per-channel satellite: its maneuvers are not rest-to-rest)."""
+    return np.array([not s.maneuver.rest_to_rest for s in sc.satellites], bool)
+
+
 def _targets(ctx: PlanContext) -> int:
     """The targets that have an option: the most observations a plan can have."""
     return int(np.unique(ctx.opportunities.options.route).size)
 
 
-def repair_seconds(observations: float, flown_joins: bool, refining: bool, refill_s: float):
+def repair_seconds(
+    observations: float, flown_joins: bool, refining: bool, refill_s: float, refined=None
+):
     """Estimated CPU seconds of the repair (module docstring) of a plan of ``observations``.
 
     Args:
@@ -173,16 +182,19 @@ def repair_seconds(observations: float, flown_joins: bool, refining: bool, refil
       flown_joins: the flown joins are checked (three rounds, two refills).
       refining: the start-time refinement runs (each round with the joins).
       refill_s: the budget of one refill [s].
+      refined: the observations the refinement moves (those of per-channel
+        satellites); None: all of them.
     Returns:
       float [s].
     """
     n = float(observations)
+    m = n if refined is None else float(refined)
     rounds = _ROUNDS_WITH_JOINS if flown_joins else 1
     need = CHECK_FIRST_S + rounds * (CHECK_ROUND_S + CHECK_S_PER_OBS * n)
     if flown_joins:
         need += JOINS_FIRST_S + rounds * JOINS_S_PER_OBS * n + refill_s + REFILL_OVERHEAD_S
     if refining:
-        need += REFINE_FIRST_S + rounds * (REFINE_ROUND_S + REFINE_S_PER_OBS * n)
+        need += REFINE_FIRST_S + rounds * (REFINE_ROUND_S + REFINE_S_PER_OBS * m)
     return need
 
 
@@ -262,12 +274,18 @@ def deadline_budget(
     earliest = now + SEARCH_MIN_SHARE * max(deadline.end - now, 0.0)
     deadline.split = {"before_search_s": round(now - deadline.t0, 2)}
 
-    def retime(observations: int) -> float:
-        """The search's end for a plan of ``observations`` (the greedy start's, grown by
-        :data:`PLAN_GROWTH`; at most every target that has an option)."""
+    moved = _refined_satellites(ctx.scenario)
+
+    def retime(per_sat) -> float:
+        """The search's end for a plan of ``per_sat`` observations per satellite (the
+        greedy start's, grown by :data:`PLAN_GROWTH`; at most every target that has an
+        option)."""
+        per_sat = np.asarray(per_sat, np.float64)
+        observations = float(per_sat.sum())
         size = min(PLAN_GROWTH * observations, targets)
+        refined = size * (per_sat[moved].sum() / observations if observations else 0.0)
         pace = deadline.pace()
-        repair = repair_seconds(size, flown_joins, refining, refill_s) * pace
+        repair = repair_seconds(size, flown_joins, refining, refill_s, refined) * pace
         outputs = deadline.after_s * pace
         end = max(deadline.end - repair - outputs, earliest)
         deadline.split.update(
@@ -277,7 +295,8 @@ def deadline_budget(
         )
         return end
 
-    end = retime(targets)
+    sats = np.asarray(ctx.opportunities.options.sat, np.int64)
+    end = retime(targets * np.bincount(sats, minlength=moved.size) / max(sats.size, 1))
     return Budget(end, deadline.end - deadline.after_s * deadline.pace(), refining,
                   deadline.split, None if capped else retime)  # fmt: skip
 

@@ -494,8 +494,8 @@ def _search(pb, budget: Budget, seed, max_iters, pc, clock):
     clock.bar = clock.search_bar(budget.search_end - time.monotonic())
     clock.bar_t0 = time.monotonic()
 
-    def retime(observations: int) -> float:
-        end = budget.retime(observations)
+    def retime(per_sat) -> float:
+        end = budget.retime(per_sat)
         if clock.bar is not None:
             clock.bar.total = round(max(end - clock.bar_t0, 0.0), 1)
         return end

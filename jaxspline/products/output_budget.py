@@ -3,12 +3,13 @@
 ``plan.json`` and ``plan.csv`` are always written: they are the plan. The other files
 are optional products; :func:`output_seconds` estimates each from the scenario's size
 (CPU seconds per item, measured on a 2-core machine on the default job: 6 satellites,
-6 h, 1,700 targets, about 500 observations, 12,960 attitude states: 3.1 s for
-``plan.json``/``plan.csv`` and ``plan.czml``, 2.5 s the page, 13.6 s the attitude
-history and AEM files, 5.4 s the figures with attitude.png; and on a 12-satellite 12 h
-day of 20,000 targets and 4,900 observations: 2.3 s the plan files, 9.9 s
-``plan.czml``, 3.7 s the page), so the
-planner can keep their time out of the search
+6 h, 1,700 targets, about 500 observations, 12,960 attitude states: 0.5 s for
+``plan.json``/``plan.csv``, 1.1 s ``plan.czml``, 1.6 s the page, 13.6 s the attitude
+history and AEM files, 5.4 s the figures with attitude.png; on the 12 x 12 h preset,
+5,000 targets and 3,490 observations: 1.3 s the plan files, 4.4 s ``plan.czml``,
+3.2 s the page; on the constellation day, 24 satellites, 24 h, 20,000 targets and
+11,945 observations: 4.3 s, 16.4 s and 6.3 s), so the planner can keep their time out
+of the search
 (:attr:`jaxspline.planner.deadline.StageDeadline.after_s`, :data:`RESERVE_FACTOR`
 times the estimate). When the time left is short all the same (a loaded machine, a
 search that was given its minimum share), :func:`jaxspline.products.outputs.write_plan_outputs`
@@ -48,11 +49,11 @@ REMEDIES = {
 }
 
 PLAN_FILES_FIXED_S = 0.5  # plan.json (with its view section) and plan.csv [s]
-PLAN_FILES_S_PER_TARGET = 3e-4  # ... per target [s]
+PLAN_FILES_S_PER_TARGET = 2e-4  # ... per target [s]
 PAGE_FIXED_S = 2.2  # plan.html [s]
 PAGE_S_PER_TARGET = 2e-4  # ... per target [s]
-CZML_S_PER_TARGET = 4.5e-4  # plan.czml, per target [s]
-CZML_S_PER_SAT_HOUR = 0.03  # ... per satellite and hour of the horizon [s]
+CZML_S_PER_TARGET = 1.5e-4  # plan.czml, per target [s]
+CZML_S_PER_SAT_HOUR = 0.026  # ... per satellite and hour of the horizon [s]
 AEM_S_PER_STATE = 1.1e-3  # attitude history and its AEM files, per attitude state [s]
 PLOTS_FIXED_S = 3.0  # the PNG figures (matplotlib, the world map) [s]
 PLOTS_S_PER_SAT_HOUR = 0.02  # ... per satellite and hour [s]

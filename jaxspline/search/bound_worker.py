@@ -120,6 +120,15 @@ class _Repairs:
         self.mark = time.process_time()
         self.cost = self.mark - now
 
+    def start(self, order, above: float) -> None:
+        """Build the greedy plan of ``order`` and publish it when worth more than ``above``
+        (it is then the plan the walk starts from while no repair beat it)."""
+        tl = Timeline(self.pb)
+        greedy(tl, self.deadline, order)
+        if tl.value > above:
+            self.tl, self.order, self.best = tl, greedy_order(tl), tl.value
+            self.shared.publish(tl.value, tl.assigned)
+
     def walk(self) -> None:
         """After the bound converged: improve the last repaired plan (the greedy's when
         there was none) by an LNS of its own until the deadline, publishing it after every
@@ -137,13 +146,18 @@ class _Repairs:
                 self.shared.publish(self.tl.value, self.tl.assigned)
 
 
-def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, shared):
-    """Child: iterate the bound (publishing plans into ``shared`` unless None), send
+def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, plans):
+    """Child: iterate the bound (with ``plans``, ``(shared, first)``: first the greedy
+    plan of order ``first`` unless None, then plans published into ``shared``), send
     (bound, iterations, status, seconds)."""
     gc.disable()  # never finalize the parent's (JAX) objects in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    hook = None if shared is None else _Repairs(pb, shared, deadline)
+    hook = None
+    if plans is not None:
+        hook = _Repairs(pb, plans[0], deadline)
+        if plans[1] is not None:
+            hook.start(plans[1], plan_value)
     res = upper_bound(
         pb,
         plan_value,
@@ -174,16 +188,28 @@ class BoundWorker:
         None: the child prepares it).
       plans: also repair the DP paths into plans now and then (module docstring) and
         publish them for :meth:`plan`.
+      first: with ``plans``, a target order the child first builds a greedy plan in
+        (:func:`jaxspline.search.greedy`), publishing it when it is worth more than
+        ``plan_value``, before it iterates the bound (the search's second greedy start,
+        by value per Wh, built on this core while the search's LNS runs); None: none.
     """
 
     def __init__(
-        self, pb: Problem, plan_value: float, deadline: float, max_iters=None, dp=None, plans=False
+        self,
+        pb: Problem,
+        plan_value: float,
+        deadline: float,
+        max_iters=None,
+        dp=None,
+        plans=False,
+        first=None,
     ):
         ctx = mp.get_context("fork")
         self._conn, child = ctx.Pipe(duplex=False)
         self._shared = _Shared(ctx, pb.n_targets) if plans else None
         self._seen = 0
-        args = (child, pb, plan_value, deadline, max_iters, dp, self._shared)
+        hook = None if self._shared is None else (self._shared, first)
+        args = (child, pb, plan_value, deadline, max_iters, dp, hook)
         self._proc = ctx.Process(target=_run, args=args, daemon=True)
         trim_heap()  # the child maps the parent's resident pages: no free ones among them
         with warnings.catch_warnings():  # JAX warns of any fork; the child runs no JAX

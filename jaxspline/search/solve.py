@@ -2,7 +2,8 @@
 
 1. greedy construction (:func:`greedy`; always completed, even past the deadline), by
    value; when a battery binds, also by value per Wh (:class:`EnergyRank`), the better
-   plan kept; a caller's ``retime`` then sets the deadline from its size;
+   plan kept (built by the worker, below, when it publishes plans); a caller's
+   ``retime`` then sets the deadline from its size;
 2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
    target prices, repaired plans, and the upper bound (:func:`lagrangian`); left out
    when a bound worker that publishes plans runs (below);
@@ -17,6 +18,9 @@ DP paths into plans now and then, so it does all the phase would do, on the othe
 the phase is left out and the LNS starts at once from the greedy start; it continues
 from a worker's plan whenever that beats the LNS's best (``stats.worker_plans``: how
 many were taken); the last one is looked at once more before the earliest-start pass.
+Such a worker also prepares its DP layout and builds the value-per-Wh greedy start
+itself, first, so the search's core goes straight from the first greedy to the LNS
+(on the constellation day: ~12 s of 2-core time).
 Once its bound converged, the worker runs an LNS of its own and publishes its plans the
 same way (:class:`BoundWorker`).
 """
@@ -98,9 +102,9 @@ def solve(
         function of the problem, ``seed`` and ``max_iters`` alone. None: the deadline
         alone.
       report: callable ``report(stage, message)`` receiving progress lines, or None.
-      retime: optional callable ``retime(observations) -> deadline``, called once when
-        the greedy start is built (time-bound runs only) with its number of
-        observations: the search runs until the deadline it returns (the caller's
+      retime: optional callable ``retime(per_sat) -> deadline``, called once when the
+        greedy start is built (time-bound runs only) with its number of observations
+        per satellite: the search runs until the deadline it returns (the caller's
         reserve for the later stages, re-estimated from the plan's size).
     Returns:
       SearchResult.
@@ -114,15 +118,20 @@ def solve(
     tail = _tail(deadline, now)
     greedy(tl, math.inf, order)  # always complete: a plan even when the budget is spent
     er = EnergyRank(pb)
+    # a worker that publishes plans builds the second greedy start on its core
+    offload = bool(bound_worker and pb.n_options and max_iters is None)
+    second = None
     if any(er.binds(tl, k) for k in range(pb.n_sats)):  # energy is scarce: value per Wh
-        tl2 = Timeline(pb)
-        order2 = er.order(order, None)
-        greedy(tl2, deadline - tail, order2)
-        if tl2.score() > tl.score():
-            tl, order = tl2, order2
-        del tl2, order2  # the losing greedy's timeline (its cache: ~90 MB at 80 M pairs)
+        second = er.order(order, None)
+        if not offload:
+            tl2 = Timeline(pb)
+            greedy(tl2, deadline - tail, second)
+            if tl2.score() > tl.score():
+                tl, order = tl2, second
+            del tl2  # the losing greedy's timeline (its cache: ~90 MB at 80 M pairs)
+            second = None
     if retime is not None and max_iters is None:
-        deadline = retime(pb.n_targets - tl.assigned.count(-1))
+        deadline = retime([len(line) for line in tl.lines])
         tail = _tail(deadline, now)
     stats = {"greedy_value": tl.value}
     say("greedy", f"value {tl.value:.6g}")
@@ -131,9 +140,12 @@ def solve(
     worker, shared = None, []
     if bound_worker and pb.n_options:
         w_cap = None if cap is None else _WORKER_ITERS * cap
-        shared.append(dp_prepare(pb))  # one DP layout: the worker's and the Lagrangian phase's
-        plans = max_iters is None  # plans from the worker depend on timing
-        worker = BoundWorker(pb, tl.value, deadline - tail, w_cap, shared[0], plans=plans)
+        if not offload:  # one DP layout: the worker's and the Lagrangian phase's
+            shared.append(dp_prepare(pb))
+        # plans from the worker depend on timing; such a worker stands for the phase and
+        # prepares the DP layout on its own core
+        worker = BoundWorker(pb, tl.value, deadline - tail, w_cap, shared[0] if shared else None,
+                             plans=offload, first=second)  # fmt: skip
     try:
         budget = _Budget(deadline, now, tail, t_dp, cap, max_iters)
         return _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, shared, say)

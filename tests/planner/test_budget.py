@@ -98,11 +98,15 @@ def test_process_start_is_before_now():
     assert 0.0 <= time.monotonic() - start < 86400.0 * 365
 
 
-def _ctx(n_targets, refining, duration=3600.0):
-    """The fields of a PlanContext the budget reads."""
-    per_channel = SimpleNamespace(maneuver=SimpleNamespace(rest_to_rest=not refining))
-    sc = SimpleNamespace(planner=SimpleNamespace(refine_steps=50), satellites=[per_channel])
-    opts = SimpleNamespace(route=np.repeat(np.arange(n_targets), 3))
+def _ctx(n_targets, refining, duration=3600.0, rigid=0):
+    """The fields of a PlanContext the budget reads: one satellite, per-channel when
+    ``refining``, then ``rigid`` rest-to-rest ones; three options a target, on
+    satellites in turn."""
+    sat = SimpleNamespace(maneuver=SimpleNamespace(rest_to_rest=not refining))
+    rest = [SimpleNamespace(maneuver=SimpleNamespace(rest_to_rest=True))] * rigid
+    sc = SimpleNamespace(planner=SimpleNamespace(refine_steps=50), satellites=[sat, *rest])
+    n = 3 * n_targets
+    opts = SimpleNamespace(route=np.repeat(np.arange(n_targets), 3), sat=np.arange(n) % (1 + rigid))
     return SimpleNamespace(scenario=sc, opportunities=SimpleNamespace(options=opts))
 
 
@@ -113,6 +117,11 @@ def test_repair_estimate_grows_with_the_steps_that_run():
     assert joins > plain + bd.JOINS_FIRST_S + 2.0
     assert bd.repair_seconds(1000, True, True, 2.0) > joins + bd.REFINE_FIRST_S
     assert bd.repair_seconds(2000, True, True, 2.0) > bd.repair_seconds(1000, True, True, 2.0)
+    # the refinement moves only the per-channel satellites' observations
+    none_moved = bd.repair_seconds(1000, True, True, 2.0, refined=0)
+    assert none_moved == pytest.approx(joins + bd.REFINE_FIRST_S + 3 * bd.REFINE_ROUND_S)
+    half = bd.repair_seconds(1000, True, True, 2.0, refined=500)
+    assert half == pytest.approx(none_moved + 3 * 500 * bd.REFINE_S_PER_OBS)
 
 
 def test_search_leaves_the_reserve_scaled_by_the_pace(monkeypatch):
@@ -135,18 +144,24 @@ def test_the_greedy_start_moves_the_search_end_to_what_its_plan_needs(monkeypatc
     d = dl.StageDeadline(clock.wall, 100.0, after_s=5.0)
     clock.wall += 10.0
     clock.cpu += 10.0  # pace 1
-    b = bd.deadline_budget(_ctx(20000, refining=True), d, flown_joins=False, refill_s=2.0)
+    ctx = _ctx(20000, refining=True, rigid=3)  # one per-channel satellite of four
+    b = bd.deadline_budget(ctx, d, flown_joins=False, refill_s=2.0)
+    first = bd.repair_seconds(20000, False, True, 2.0, refined=5000)  # options split 1:3
+    assert b.search_end == pytest.approx(d.end - first - 5.0)
     clock.wall += 5.0
     clock.cpu += 5.0
-    end = b.retime(4000)  # the greedy start: a fifth of the targets
+    end = b.retime([1000, 1000, 1000, 1000])  # the greedy start: a fifth of the targets
     size = bd.PLAN_GROWTH * 4000
-    repair = bd.repair_seconds(size, False, True, 2.0)
+    repair = bd.repair_seconds(size, False, True, 2.0, refined=size / 4)
     assert end == pytest.approx(d.end - repair - 5.0) and end > b.search_end
     assert d.split["observations"] == size and d.split["search_s"] == pytest.approx(90 - repair - 5)
     assert d.split["reserve_s"]["repair"] == round(repair, 2)
-    assert b.retime(10**6) == pytest.approx(b.search_end)  # never past every target planned
+    rigid_only = b.retime([0, 2000, 1000, 1000])  # nothing to refine: a smaller reserve
+    assert rigid_only == pytest.approx(d.end - repair - 5.0 + size / 4 * bd.REFINE_S_PER_OBS)
+    every = bd.repair_seconds(20000, False, True, 2.0)  # never past every target planned
+    assert b.retime([10**6, 0, 0, 0]) == pytest.approx(d.end - every - 5.0)
     clock.wall += 40.0  # a loaded machine: the estimate at pace 3 does not fit
-    assert b.retime(15000) == pytest.approx(10.0 + 1000.0 + bd.SEARCH_MIN_SHARE * 90.0)
+    assert b.retime([15000, 0, 0, 0]) == pytest.approx(10.0 + 1000.0 + bd.SEARCH_MIN_SHARE * 90.0)
     capped = bd.deadline_budget(_ctx(20, False), d, flown_joins=False, refill_s=2.0, capped=True)
     assert capped.retime is None  # iteration-capped runs keep their clock-free search
 

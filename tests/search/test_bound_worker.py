@@ -103,6 +103,23 @@ def test_worker_publishes_feasible_plans_below_its_bound(problem):
     assert w.plan(-math.inf) is None  # handed out once
 
 
+def test_worker_first_builds_and_publishes_the_greedy_start_it_is_given(problem):
+    # the reference: the same greedy in this process, in the reverse of the value order
+    order = [t for t in range(problem.n_targets) if problem.target_options[t]][::-1]
+    ref = Timeline(problem)
+    greedy(ref, math.inf, order)
+    few = 2  # iterations: fewer than the first repair needs, so the greedy's is the only plan
+    w = BoundWorker(problem, 0.0, time.monotonic() + 600.0, few, plans=True, first=order)
+    assert w.result() is not None
+    value, assigned = w.plan(-math.inf)
+    assert assigned == ref.assigned and value == ref.value > 0.0
+    assert _feasible_value(problem, assigned) == value
+    # worth no more than the plan the search already has: not published
+    w = BoundWorker(problem, ref.value, time.monotonic() + 600.0, few, plans=True, first=order)
+    w.result()
+    assert w.plan(-math.inf) is None
+
+
 def test_worker_without_plans_publishes_none(problem):
     w = BoundWorker(problem, PLAN_VALUE, time.monotonic() + 600.0, 8)
     w.result()
@@ -135,8 +152,9 @@ def test_retime_moves_the_search_end_once_the_greedy_start_is_built(problem):
     greedy(start, math.inf)
     greedy_obs = problem.n_targets - start.assigned.count(-1)
 
-    def retime(observations):
-        asked.append(observations)
+    def retime(per_sat):
+        assert len(per_sat) == problem.n_sats
+        asked.append(sum(per_sat))
         return time.monotonic() + 1.0
 
     t0 = time.monotonic()
