@@ -80,8 +80,9 @@ CANDIDATE_BYTES = 1024
 #: [bytes] per candidate near pair: the store (8), the bound's cost (4) and slack
 #: (docs/scale.md *Memory*: 12 bytes a near pair).
 PAIR_BYTES = 16
-#: [bytes] per candidate near pair of the largest satellite: the sort of its pairs.
-SORT_PAIR_BYTES = 32
+#: [bytes] per candidate near pair of the largest satellite: the sort of its pairs (32),
+#: and the next satellite's streamed pairs (12) held while it sorts in the background.
+SORT_PAIR_BYTES = 44
 #: [bytes] every stage adds whatever its size: its compiled programs and work buffers
 #: (the default job's stages each add 30-170 MB).
 STAGE_BYTES = 256 << 20

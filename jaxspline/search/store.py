@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import bisect
 import math
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
@@ -178,11 +179,15 @@ class PairsBuilder:
     freed heap pages handed back to the OS every :data:`TRIM_PAIRS` pairs
     (:func:`jaxspline.search.memory.trim_heap`), so the final table fills as the pieces
     go (peak: 8 bytes a pair plus about 64 MB, where moving whole satellites would
-    hold 16 bytes a pair).
+    hold 16 bytes a pair). With ``background``, a closed satellite is sorted in a
+    thread while the caller streams the next one (both held at once: 12 bytes a pair
+    of the one streaming besides the sort's); :meth:`build` waits for it.
     """
 
-    def __init__(self, n: int, rows):
+    def __init__(self, n: int, rows, background: bool = False):
         self.n = int(n)
+        self._pool = ThreadPoolExecutor(1) if background else None
+        self._job = None  # the closing satellite's sort in the background, or None
         self.rows = np.asarray(rows, np.int64)
         self.row_of = np.empty(self.n, np.int64)
         self.row_of[self.rows] = np.arange(self.n)
@@ -196,10 +201,25 @@ class PairsBuilder:
             self._open.append((np.asarray(src, _INDEX), np.asarray(dst, _INDEX), _round_up32(need)))
 
     def close(self) -> None:
-        """Sort the open satellite's pairs by (row, source) and keep them compact."""
+        """Sort the open satellite's pairs by (row, source) and keep them compact; with
+        ``background``, in a thread while the caller screens the next satellite (the
+        sort's numpy steps release the GIL), after the previous satellite's sort."""
         if not self._open:
             return
         chunks, self._open = self._open, []
+        self._wait()
+        if self._pool is None:
+            self._close(chunks)
+        else:
+            self._job = self._pool.submit(self._close, chunks)
+
+    def _wait(self) -> None:
+        """Wait for the background sort (its error, if any, raised here)."""
+        job, self._job = self._job, None
+        if job is not None:
+            job.result()
+
+    def _close(self, chunks) -> None:
         ids = self._by_source(chunks)
         if ids is None:
             self._sort(chunks)
@@ -269,7 +289,12 @@ class PairsBuilder:
 
     def build(self) -> NearPairs:
         """The table (closes the open satellite); the builder is emptied."""
-        self.close()
+        try:
+            self.close()
+            self._wait()
+        finally:
+            if self._pool is not None:
+                self._pool.shutdown()
         ptr = np.zeros(self.n + 1, np.int64)
         np.cumsum(self.counts, out=ptr[1:])
         src = np.empty(int(ptr[-1]), _INDEX)

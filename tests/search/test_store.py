@@ -26,21 +26,24 @@ def _random_pairs(rng, n_sats=3, per_sat=60, density=0.3, ids_by_start=True):
 
 
 @pytest.mark.parametrize(
-    "seed, piece, stream",
-    [(0, None, "shuffled"), (1, None, "shuffled"), (2, 7, "shuffled"), (3, 1, "shuffled"),
-     (4, None, "by source"), (5, 7, "by source"), (6, None, "by source, ids not by start")],
+    "seed, piece, stream, background",
+    [(0, None, "shuffled", False), (1, None, "shuffled", False), (2, 7, "shuffled", False),
+     (3, 1, "shuffled", False), (4, None, "by source", False), (5, 7, "by source", False),
+     (6, None, "by source, ids not by start", False), (7, 7, "by source", True),
+     (8, 7, "shuffled", True)],
 )  # fmt: skip
-def test_streamed_table_answers_like_a_dict(seed, piece, stream, monkeypatch):
+def test_streamed_table_answers_like_a_dict(seed, piece, stream, background, monkeypatch):
     # "by source": the planner's stream (sources ascending, each one's destinations
     # ascending, ids by start within a satellite), which the builder sorts by
-    # destination alone; the other two take its general (row, source) sort
+    # destination alone; the other two take its general (row, source) sort;
+    # "background": each satellite sorted in a thread while the next one is added
     if piece is not None:  # pieces smaller than a row: rows split over several pieces
         monkeypatch.setattr(store, "PIECE_PAIRS", piece)
     rng = np.random.default_rng(seed)
     sat, start, ref = _random_pairs(rng, ids_by_start=stream != "by source, ids not by start")
     n = sat.size
     rows = start_order(start, sat)
-    b = PairsBuilder(n, rows)
+    b = PairsBuilder(n, rows, background=background)
     for k in range(3):  # one satellite at a time, its pairs in chunks
         mine = [(i, j, w) for (i, j), w in ref.items() if sat[j] == k]
         if stream == "shuffled":
@@ -81,6 +84,18 @@ def test_streamed_table_answers_like_a_dict(seed, piece, stream, monkeypatch):
     assert sorted(zip(table.src[idx].tolist(), d.tolist(), strict=True)) == sorted(
         (i, j) for (i, j) in ref if j in set(some.tolist())
     )
+
+
+def test_a_background_sort_error_reaches_the_caller(monkeypatch):
+    def fail(self, chunks):
+        raise MemoryError("sort")
+
+    monkeypatch.setattr(PairsBuilder, "_close", fail)
+    b = PairsBuilder(4, np.arange(4), background=True)
+    b.add(np.array([0]), np.array([1]), np.array([2.0]))
+    b.close()  # submitted: the error waits for the next close or build
+    with pytest.raises(MemoryError, match="sort"):
+        b.build()
 
 
 def test_needs_round_up_to_the_next_float32():
