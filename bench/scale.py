@@ -18,12 +18,17 @@ scenario TOML; ``SIZE:SECONDS`` gives that size its own planning budget (the oth
 ``--time-limit``). A field missing from ``plan.json`` (an older or newer planner, or a
 killed run) is shown as "-".
 
-Memory guard: the child's process tree is polled every ``POLL_S`` (proportional set
-size of every process in it, from ``/proc``: pages a fork shares count once); above ``--max-rss-gb``
-the whole process group is killed (SIGKILL) and the run is reported as killed with the
-last stage it finished. The child may overshoot by what it allocates in one poll
-interval. ``RLIMIT_AS`` is no use here: XLA reserves far more address space than it
-touches. A wall-clock cap (``--max-wall-min``) kills a run the same way.
+Memory guard: the child's process tree is polled every ``POLL_S``. Its proportional
+set size (every process in it, from ``/proc``: pages a fork shares count once) costs a
+walk of each process's page tables (~0.1 s for a 4.6 GB planner, which it also stalls),
+so it is read at most once in :data:`PSS_COST_RATIO` times the last read's duration; in
+between, the estimate is the last PSS plus the growth of the tree's resident set since
+(cheap to read; a page that becomes resident adds at most one page to either). Above
+``--max-rss-gb`` the PSS is read at once, and if it is above too, the whole process
+group is killed (SIGKILL) and the run is reported as killed with the last stage it
+finished. The child may overshoot by what it allocates in one poll interval.
+``RLIMIT_AS`` is no use here: XLA reserves far more address space than it touches.
+A wall-clock cap (``--max-wall-min``) kills a run the same way.
 """
 
 from __future__ import annotations
@@ -46,6 +51,10 @@ DAY_TOML = REPO / "jaxspline" / "data" / "constellation_day.toml"
 GENERATOR = REPO / "scripts" / "make_scale_scenario.py"
 SIZES = ("default", "12x12h", "day")
 POLL_S = 0.1
+#: A PSS read is followed by at least this many times its own duration without one
+#: (the poller's page-table walks: at most ~2 % of the time; the bench's day run had
+#: 0.75 CPU-s a second for its search with a read every 0.1 s).
+PSS_COST_RATIO = 50.0
 MAX_RSS_GB = 8.0  # default guard: a third of the shared 24 GB machine
 MAX_WALL_MIN = 60.0
 TIME_BIN = "/usr/bin/time"
@@ -118,11 +127,12 @@ def _children_proc(pid: int) -> list[int]:
     return out
 
 
-def _rss_proc(pid: int) -> int:
+def _rss_proc(pid: int, pss: bool = True) -> int:
     """Memory of one process [bytes]: its proportional set size (shared pages split
     among the processes mapping them, so a fork's copy-on-write pages count once),
-    else its resident set; 0 once it is gone."""
-    for path, key in ((f"/proc/{pid}/smaps_rollup", "Pss:"), (f"/proc/{pid}/status", "VmRSS:")):
+    else (or without ``pss``) its resident set; 0 once it is gone."""
+    files = ((f"/proc/{pid}/smaps_rollup", "Pss:"),) if pss else ()
+    for path, key in (*files, (f"/proc/{pid}/status", "VmRSS:")):
         try:
             with open(path) as fh:
                 for line in fh:
@@ -133,7 +143,7 @@ def _rss_proc(pid: int) -> int:
     return 0
 
 
-def tree_rss_bytes(pid: int) -> int:
+def tree_rss_bytes(pid: int, pss: bool = True) -> int:
     """Memory of ``pid`` and all its descendants [bytes] (:func:`_rss_proc` summed; 0
     once it is gone)."""
     total, todo, seen = 0, [pid], set()
@@ -142,9 +152,33 @@ def tree_rss_bytes(pid: int) -> int:
         if p in seen:
             continue
         seen.add(p)
-        total += _rss_proc(p)
+        total += _rss_proc(p, pss)
         todo += _children_proc(p)
     return total
+
+
+class _TreeMemory:
+    """The guard's estimate of a process tree's PSS (module docstring)."""
+
+    def __init__(self, pid: int):
+        self.pid, self.peak, self.next = pid, 0, 0.0
+        self.pss = self.rss = 0
+
+    def read(self) -> int:
+        """Read the PSS (and the resident set it goes with) now [bytes]."""
+        t = time.monotonic()
+        self.rss = tree_rss_bytes(self.pid, pss=False)
+        self.pss = tree_rss_bytes(self.pid)
+        self.next = time.monotonic() + PSS_COST_RATIO * (time.monotonic() - t)
+        self.peak = max(self.peak, self.pss)
+        return self.pss
+
+    def estimate(self, limit: float) -> int:
+        """The PSS now, or an upper estimate of it while that is at most ``limit``."""
+        if time.monotonic() >= self.next:
+            return self.read()
+        guess = self.pss + max(0, tree_rss_bytes(self.pid, pss=False) - self.rss)
+        return guess if guess <= limit else self.read()
 
 
 # ------------------------------------------------------------------ one run
@@ -156,15 +190,15 @@ def run_guarded(cmd, log: Path, max_rss_bytes: float, max_wall_s: float, env=Non
       (None, or why).
     """
     t0 = time.monotonic()
-    peak, killed = 0, None
+    killed = None
     with open(log, "wb") as fh:
         proc = subprocess.Popen(
             cmd, stdout=fh, stderr=subprocess.STDOUT, env=env, start_new_session=True
         )
+        memory = _TreeMemory(proc.pid)
         try:
             while proc.poll() is None:
-                rss = tree_rss_bytes(proc.pid)
-                peak = max(peak, rss)
+                rss = memory.estimate(max_rss_bytes)
                 if rss > max_rss_bytes:
                     killed = f"RSS {rss / 2**30:.3g} GB > {max_rss_bytes / 2**30:g} GB"
                 elif time.monotonic() - t0 > max_wall_s:
@@ -182,7 +216,7 @@ def run_guarded(cmd, log: Path, max_rss_bytes: float, max_wall_s: float, env=Non
     return {
         "exit": proc.returncode,
         "wall_s": round(time.monotonic() - t0, 2),
-        "polled_peak_rss_mb": round(peak / 2**20, 1),
+        "polled_peak_rss_mb": round(memory.peak / 2**20, 1),
         "killed": killed,
     }
 

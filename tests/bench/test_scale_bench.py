@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import sys
+import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -41,6 +42,32 @@ def test_guard_wall_cap_and_normal_exit(tmp_path):
     ok = scale.run_guarded([sys.executable, "-c", "print('hi')"], tmp_path / "b", 2**40, 60.0)
     assert ok == {**ok, "exit": 0, "killed": None}
     assert (tmp_path / "b").read_text().strip() == "hi"
+
+
+def test_guard_reads_the_costly_pss_rarely_and_at_once_past_the_limit(monkeypatch):
+    # a fake tree: PSS reads take 10 ms; the resident set is PSS + 1 GB of shared pages
+    state = {"pss": 1 << 30, "reads": 0}
+
+    def fake(pid, pss=True):
+        if pss:
+            state["reads"] += 1
+            time.sleep(0.01)
+            return state["pss"]
+        return state["pss"] + (1 << 30)
+
+    monkeypatch.setattr(scale, "tree_rss_bytes", fake)
+    mem, limit = scale._TreeMemory(1), 3 << 30
+    t0 = time.monotonic()
+    while time.monotonic() - t0 < 1.0:
+        assert mem.estimate(limit) == 1 << 30  # no growth: the last PSS
+    # one read every >= 0.5 s (50 x 10 ms), not one a poll
+    assert 2 <= state["reads"] <= 3
+    state["pss"] = 2 << 30  # grows by 1 GB: the estimate follows the resident set
+    reads = state["reads"]
+    assert mem.estimate(limit) == 2 << 30 and state["reads"] == reads
+    state["pss"] = 4 << 30  # past the limit: read at once
+    assert mem.estimate(limit) == 4 << 30 and state["reads"] == reads + 1
+    assert mem.peak == 4 << 30
 
 
 def test_tree_rss_counts_descendants_and_is_zero_when_gone():
