@@ -237,10 +237,8 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None):
     ``gap <= max_gap`` is widened by ``_WINDOW_GUARD`` and the pairs are then cut with
     the planner's own test ``t_end[i] > t_start[j] - far - slack`` (strict), so the
     result does not depend on how either side rounds. ``join_filter(src, dst) -> bool``
-    (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go straight
-    into a :class:`jaxspline.search.store.PairsBuilder` (the table plus two satellites:
-    one sorted in a background thread while the next one's chunks stream in; on the
-    constellation day the screening takes 30.6 s instead of 34.5 s).
+    (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go into a
+    :class:`jaxspline.search.store.PairsBuilder` (one satellite sorted in a thread).
     ``tick(share done)`` (a StageDeadline's clock) is called after every chunk.
 
     Returns:
