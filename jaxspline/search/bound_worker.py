@@ -146,18 +146,16 @@ class _Repairs:
                 self.shared.publish(self.tl.value, self.tl.assigned)
 
 
-def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, plans):
-    """Child: iterate the bound (with ``plans``, ``(shared, first)``: first the greedy
-    plan of order ``first`` unless None, then plans published into ``shared``), send
-    (bound, iterations, status, seconds)."""
+def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, shared, first):
+    """Child: iterate the bound (publishing plans into ``shared`` unless None, the greedy
+    plan of order ``first`` first unless None), send (bound, iterations, status,
+    seconds)."""
     gc.disable()  # never finalize the parent's (JAX) objects in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    hook = None
-    if plans is not None:
-        hook = _Repairs(pb, plans[0], deadline)
-        if plans[1] is not None:
-            hook.start(plans[1], plan_value)
+    hook = None if shared is None else _Repairs(pb, shared, deadline)
+    if hook is not None and first is not None:
+        hook.start(first, plan_value)
     res = upper_bound(
         pb,
         plan_value,
@@ -208,8 +206,7 @@ class BoundWorker:
         self._conn, child = ctx.Pipe(duplex=False)
         self._shared = _Shared(ctx, pb.n_targets) if plans else None
         self._seen = 0
-        hook = None if self._shared is None else (self._shared, first)
-        args = (child, pb, plan_value, deadline, max_iters, dp, hook)
+        args = (child, pb, plan_value, deadline, max_iters, dp, self._shared, first)
         self._proc = ctx.Process(target=_run, args=args, daemon=True)
         trim_heap()  # the child maps the parent's resident pages: no free ones among them
         with warnings.catch_warnings():  # JAX warns of any fork; the child runs no JAX

@@ -173,13 +173,12 @@ class _Budget(NamedTuple):
 def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, shared, say):
     """Stages 2-5 of :func:`solve` and the bound worker's result.
 
-    ``shared`` holds the DP layout the worker shares (or nothing): the Lagrangian phase
-    takes it out (or it is dropped where the phase is left out), so the LNS runs without
-    it resident.
+    ``shared`` holds the DP layout the worker shares with the Lagrangian phase, or
+    nothing (no worker, or one that publishes plans: it prepares its own and the phase is
+    left out); the phase takes it out, so the LNS runs without it resident.
     """
     deadline, now, tail, t_dp, cap, max_iters = budget
     if worker is not None and worker.plans:  # the worker's bound and plans stand for the phase
-        shared.clear()
         res = BoundResult(list(tl.assigned), math.inf, 0, BoundStatus.TIME)
     else:
         res = lagrangian(
