@@ -281,13 +281,14 @@ def _from_rest(sc, o, ids) -> RouteOptions:
 
 def _battery_findings(battery, k, s, pl: _PlanRows, m, man):
     """The battery profile of satellite ``k`` (``s``, plan rows ``m``, required maneuver
-    times ``man`` [s]) with margin 0. Returns (levels, findings: when it drops below
-    0 Wh, the last observation starting at or before that instant - the first one when
+    times ``man`` [s]) with margin 0: the model's level must stay >= ``clamp_wh``, what
+    it may exceed the reference's by. Returns (levels, findings: when it drops below
+    that, the last observation starting at or before that instant - the first one when
     none does - reason "battery")."""
     lev = battery.profile(k, pl.t0[m], pl.t1[m], man)
     f = _Findings([], [])
-    if lev.min() < 0.0:
-        kv = int(np.argmax(lev < 0.0))
+    if lev.min() < battery.clamp_wh:
+        kv = int(np.argmax(lev < battery.clamp_wh))
         before = m[pl.t0[m] <= kv * battery.dt]
         i = before[-1] if before.size else m[0]
         f.bad.append((int(pl.chosen[i]), "battery"))

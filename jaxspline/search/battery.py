@@ -8,19 +8,25 @@ never drop below zero.
 Here the horizon is cut into the uniform grid of the ephemeris (step ``dt``); in each
 step ``[k dt, (k+1) dt]``:
 
-* load = idle + imaging if the step meets an observation + slew if it meets a
-  maneuver window (intervals widened outward to whole steps);
+* load = idle + imaging times the step's overlap with the observations + slew times its
+  overlap with the maneuver windows (exact shares, :meth:`BatteryModel.loads`);
 * charge only if the satellite is sunlit at every grid instant from ``k - guard`` to
   ``k + 1 + guard`` (a shadow-entry timing error of up to ``guard`` steps never
   credits charge the reference would not give);
 * ``b_{k+1} = min(capacity, b_k + (charge - load) dt)``.
 
-Every step's load is >= and its charge <= the reference's on each sub-interval, so
-the level is a lower bound of the reference's up to what the capacity clamp can
-shift inside one step; ``margin_wh`` covers that. With ``S_k`` the unclamped
-cumulative level, the clamped one is ``S_k - M_k``, ``M_k = max(0, max_{j<=k} (S_j -
-capacity))`` (the energy spilled at capacity so far), so a profile is a few
-vectorized numpy passes.
+Every step's load energy equals and its charge is <= the reference's, so the level at
+the grid instants is a lower bound of the reference's up to what the capacity clamp can
+shift inside one step (the reference clamps after each segment, the step model once:
+at most one step's load energy, ``(idle + imaging + slew) dt``, and the difference
+never grows past it, since each clamp of the reference resets it) and what the
+reference dips inside a step (another step's load at most): the model keeps its level
+``clamp_wh`` (twice that energy) above the caller's margin. An earlier version charged
+every step an observation or a maneuver window meets in full: on the unseen 12 x 12 h
+instance its eigen-axis satellites' plans used ~22 % more energy in the model than in
+the reference (docs/scale.md). With ``S_k`` the unclamped cumulative level, the clamped
+one is ``S_k - M_k``, ``M_k = max(0, max_{j<=k} (S_j - capacity))`` (the energy spilled
+at capacity so far), so a profile is a few vectorized numpy passes.
 
 Incremental test of a load change (:meth:`BatteryModel.change_ok`). A change adds
 ``d_k`` (any sign) to the load of the steps of a window ``[a, z)`` of a profile with
@@ -77,14 +83,22 @@ class BatteryModel:
       sunlit: bool [S, n+1], sunlit at grid instants ``k dt``, k = 0..n.
       powers: list of S :class:`jaxspline.readers.mission.Power` or None (no battery rule).
       dt: grid step [s].
-      margin_wh: the level must stay >= this [Wh].
+      margin_wh: the reference's level must stay >= this [Wh].
       guard: shadow guard [steps].
+
+    Attributes:
+      clamp_wh: what the model's level at the grid instants may exceed the reference's
+        level at any instant by (module docstring): twice the largest load energy of
+        one step, ``2 (idle + imaging + slew) dt`` [Wh].
+      margin_wh: the level the model keeps, ``margin_wh + clamp_wh`` [Wh].
     """
 
     def __init__(self, sunlit, powers, dt: float, margin_wh: float = 0.0, guard: int = 0):
         self.powers = list(powers)
         self.dt = float(dt)
-        self.margin_wh = float(margin_wh)
+        watts = [p.idle_w + p.imaging_w + p.slew_w for p in self.powers if p is not None]
+        self.clamp_wh = 2.0 * max(watts, default=0.0) * self.dt / 3600.0
+        self.margin_wh = float(margin_wh) + self.clamp_wh
         n = sunlit.shape[1] - 1
         self.n = n
         lit = np.asarray(sunlit, bool)
@@ -121,49 +135,74 @@ class BatteryModel:
     def loads(self, sat: int, starts, ends, maneuver):
         """Extra load energy per step [Wh] (imaging + slew) of these observations of ``sat``.
 
+        Exact: each step carries ``imaging_w`` times its overlap with the observations
+        and ``slew_w`` times its overlap with the maneuver windows ``[start - maneuver,
+        start)`` (clipped to the horizon).
+
         Args:
           sat: satellite index.
           starts: observation start times [s].
           ends: observation end times [s].
-          maneuver: maneuver durations [s] ending at each start.
+          maneuver: maneuver durations [s] ending at each start (inf: from the horizon
+            start).
         """
-        starts = np.asarray(starts, np.float64)
-        s0, e0, s1 = self.step_windows(starts, ends)
-        return self.step_loads(sat, s0, e0, self.slew_steps(starts, maneuver), s1)
-
-    def slew_steps(self, starts, maneuver) -> np.ndarray:
-        """First step of each maneuver window ``[start - maneuver, start)`` (:meth:`loads`).
-
-        Args:
-          starts: float [K], observation starts [s].
-          maneuver: float [K], maneuver times [s] (inf: from the horizon start).
-        Returns:
-          int64 [K].
-        """
-        t = np.asarray(starts, np.float64) - np.asarray(maneuver, np.float64)
-        return np.clip(np.floor(t / self.dt + _EPS_STEPS), 0, self.n).astype(np.int64)
-
-    def step_loads(self, sat: int, s0, e0, m0, s1) -> np.ndarray:
-        """:meth:`loads` from the observations' step windows.
-
-        Args:
-          sat: satellite index.
-          s0: int [K], first step of each observation's imaging load.
-          e0: int [K], end (exclusive) of its imaging load: the steps ``[s0, e0)``.
-          m0: int [K], first step of the maneuver into it.
-          s1: int [K], end (exclusive) of that maneuver's load: the steps ``[m0, s1)``.
-        Returns:
-          float [n], load energy per step [Wh].
-        """
-        k = len(s0)
-        if not k:
-            return np.zeros(self.n)
         p = self.powers[sat]
-        h = self.dt / 3600.0
-        w = np.repeat([p.imaging_w * h, -p.imaging_w * h, p.slew_w * h, -p.slew_w * h], k)
-        # one sequential pass in the order of four np.add.at calls (same sums, bit for bit)
-        d = np.bincount(np.concatenate((s0, e0, m0, s1)), w, minlength=self.n + 1)
-        return np.cumsum(d)[: self.n]
+        s = np.asarray(starts, np.float64)
+        e = np.asarray(ends, np.float64)
+        m = np.asarray(maneuver, np.float64)
+        if not s.size:
+            return np.zeros(self.n)
+        a = np.concatenate((s, np.maximum(s - m, 0.0))) / self.dt
+        b = np.concatenate((e, s)) / self.dt
+        w = np.repeat([p.imaging_w, p.slew_w], s.size) * (self.dt / 3600.0)
+        return self._overlaps(a, b, w)
+
+    def _overlaps(self, a, b, w) -> np.ndarray:
+        """Per step k, ``sum_i w_i |[a_i, b_i) & [k, k + 1)|`` (intervals in steps).
+
+        ``C(x) = sum_i w_i |[a_i, b_i) & [0, x)|`` is piecewise linear with kinks at the
+        ends; at whole ``x`` it is a cumulative count and sum of the ends passed, so
+        the steps' shares are ``C(k + 1) - C(k)``: two bincounts, no loop.
+        """
+        n = self.n
+        a = np.clip(a, 0.0, n)
+        b = np.clip(b, 0.0, n)
+        keep = b > a
+        a, b, w = a[keep], b[keep], w[keep]
+        ends = np.concatenate((a, b))
+        sign = np.concatenate((w, -w))
+        idx = np.minimum(np.floor(ends).astype(np.int64) + 1, n + 1)
+        cnt = np.cumsum(np.bincount(idx, sign, minlength=n + 2))[: n + 1]
+        tot = np.cumsum(np.bincount(idx, sign * ends, minlength=n + 2))[: n + 1]
+        c = np.arange(n + 1) * cnt - tot  # C(k), k = 0..n
+        return np.maximum(np.diff(c), 0.0)
+
+    def segments(self, t0: float, t1: float, watts: float) -> list:
+        """A load of ``watts`` on ``[t0, t1)`` [s] as :meth:`change_ok` changes
+        ``(lo, hi, watts)``: the whole steps inside, and the steps it meets in part with
+        the watts scaled by their overlap (:meth:`loads`' exact shares).
+
+        Args:
+          t0: float, start [s] (clipped to the horizon).
+          t1: float, end [s].
+          watts: float, power (negative: a load taken off).
+        Returns:
+          list of ``(lo, hi, watts)``, empty when the interval is.
+        """
+        n = self.n
+        a = min(max(t0 / self.dt, 0.0), n)
+        b = min(max(t1 / self.dt, 0.0), n)
+        if b <= a:
+            return []
+        i = min(math.floor(a), n - 1)
+        j = max(math.ceil(b) - 1, i)  # the last step it meets
+        if i == j:
+            return [(i, i + 1, watts * (b - a))]
+        out = [(i, i + 1, watts * (i + 1 - a))]
+        if j > i + 1:
+            out.append((i + 1, j, watts))
+        out.append((j, j + 1, watts * (b - j)))
+        return out
 
     def profile(self, sat: int, starts, ends, maneuver):
         """Battery level at the grid instants 0..n for these observations.
@@ -210,36 +249,6 @@ class BatteryModel:
             np.minimum.accumulate(level[::-1])[::-1],
             np.minimum.accumulate(raw[::-1])[::-1],
         )
-
-    def step_windows(self, starts, ends):
-        """Step windows of observations, as :meth:`loads` charges them.
-
-        Args:
-          starts: float [K], observation start times [s].
-          ends: float [K], observation end times [s].
-        Returns:
-          three int64 [K] arrays ``(s0, e0, s1)`` of step indices: imaging loads the
-          steps ``[s0, e0)``, the maneuver into the observation ends before step ``s1``.
-        """
-        n, dt = self.n, self.dt
-        s = np.asarray(starts, np.float64)
-        e = np.asarray(ends, np.float64)
-        s0 = np.clip(np.floor(s / dt + _EPS_STEPS), 0, n).astype(np.int64)
-        e0 = np.clip(np.ceil(e / dt - _EPS_STEPS), 0, n).astype(np.int64)
-        s1 = np.clip(np.ceil(s / dt - _EPS_STEPS), 0, n).astype(np.int64)
-        return s0, e0, s1
-
-    def slew_step(self, start: float, maneuver: float) -> int:
-        """First step of the maneuver window ``[start - maneuver, start)``, as in :meth:`loads`.
-
-        Args:
-          start: observation start [s].
-          maneuver: maneuver time [s] (inf: from the horizon start).
-        Returns:
-          int.
-        """
-        t = start - maneuver
-        return min(max(math.floor(t / self.dt + _EPS_STEPS), 0), self.n) if t > 0.0 else 0
 
     def change_ok(self, sat: int, lv: Levels, changes) -> bool | None:
         """Whether the profile ``lv`` stays >= the margin after a load change.

@@ -94,11 +94,6 @@ class Timeline:
         self.debt = [0.0] * n_s
         self.stale = [True] * n_s
         self.battery_failed = False
-        # per option, the step windows (s0, e0, s1): arrays for the battery refresh, Python
-        # int tuples for the per-option insertion check (_changes)
-        self._s0, self._e0, self._s1 = pb.battery.step_windows(pb.option_start, pb.option_end)
-        self._win = list(zip(self._s0.tolist(), self._e0.tolist(), self._s1.tolist(), strict=True))
-        self._starts = np.asarray(pb.option_start, np.float64)
         self.value = 0.0
         self.n_observations = 0
         self.tat = 0.0
@@ -176,9 +171,7 @@ class Timeline:
         """Satellite k's current battery Levels (recomputed when stale)."""
         if self.stale[k] or self.levels[k] is None:
             bat = self.pb.battery
-            line = np.array(self.lines[k], np.int64)
-            m0 = bat.slew_steps(self._starts[line], self.maneuvers[k])
-            loads = bat.step_loads(k, self._s0[line], self._e0[line], m0, self._s1[line])
+            loads = bat.loads(k, self.line_starts[k], self.line_ends[k], self.maneuvers[k])
             self.levels[k] = bat.levels_of(k, loads)
             self.debt[k] = 0.0
             self.stale[k] = False
@@ -214,7 +207,7 @@ class Timeline:
         changes = self._changes(k, c, n_in, q, n_out, n_old)
         lv = self.levels[k]
         if lv is not None:
-            k0 = min(lo for lo, _, _ in changes)
+            k0 = min((lo for lo, _, _ in changes), default=bat.n)
             if lv.tail_min[k0] - self.debt[k] - self._added_wh(changes) >= bat.margin_wh:
                 return True
         ok = bat.change_ok(k, self._levels(k), changes)
@@ -227,23 +220,21 @@ class Timeline:
         pb = self.pb
         bat = pb.battery
         p = bat.powers[k]
-        s0, e0, s1 = self._win[c]
-        out = [(s0, e0, p.imaging_w), (bat.slew_step(pb.option_start[c], n_in), s1, p.slew_w)]
+        s = pb.option_start[c]
+        out = bat.segments(s, pb.option_end[c], p.imaging_w)
+        out += bat.segments(s - n_in, s, p.slew_w)
         if q >= 0:
             out += self._slew_change(k, q, n_old, n_out)
         return out
 
     def _slew_change(self, k, q, was, now):
         """Load change of q's maneuver window when its maneuver goes from ``was`` to
-        ``now`` s: ``[(lo, hi, watts)]``, empty when it starts in the same step."""
+        ``now`` s: ``[(lo, hi, watts)]``, empty when it does not change."""
         bat = self.pb.battery
-        a_new = bat.slew_step(self.pb.option_start[q], now)
-        a_old = bat.slew_step(self.pb.option_start[q], was)
-        if a_new < a_old:
-            return [(a_new, a_old, bat.powers[k].slew_w)]
-        if a_old < a_new:
-            return [(a_old, a_new, -bat.powers[k].slew_w)]
-        return []
+        s = self.pb.option_start[q]
+        if now > was:
+            return bat.segments(s - now, s - was, bat.powers[k].slew_w)
+        return bat.segments(s - was, s - now, -bat.powers[k].slew_w)
 
     def _added_wh(self, changes):
         """Energy the load changes ``(lo, hi, watts)`` add: their positive part [Wh]."""

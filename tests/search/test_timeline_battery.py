@@ -35,39 +35,37 @@ def _random_model(rng, n, n_sats=1, charge_max=400.0):
             lit[k, a : a + int(rng.integers(5, n // 3))] = False
     powers = []
     for _ in range(n_sats):
-        cap = float(rng.uniform(5.0, 40.0))
+        cap = float(rng.uniform(8.0, 40.0))
         powers.append(
             Power(
                 capacity_wh=cap,
-                initial_wh=float(rng.uniform(0.2, 1.0)) * cap,
+                initial_wh=float(rng.uniform(0.5, 1.0)) * cap,  # >= 4 Wh: above the margin
                 idle_w=float(rng.uniform(0.0, 60.0)),
                 imaging_w=float(rng.uniform(50.0, 600.0)),
                 slew_w=float(rng.uniform(20.0, 400.0)),
                 charge_w=float(rng.uniform(0.0, charge_max)),
             )
         )
-    m = float(rng.uniform(0.0, 3.0))
+    m = float(rng.uniform(0.0, 1.0))  # + clamp_wh (at most 2.9 Wh here) stays < 4 Wh
     return BatteryModel(lit, powers, DT, margin_wh=m, guard=0), lit
 
 
-def _steps(s, e, man):
-    """Step windows of one observation (imaging, slew), from the rules' step conventions."""
-    img = (math.floor(s / DT + 1e-9), math.ceil(e / DT - 1e-9))
-    slew = (math.floor((s - man) / DT + 1e-9) if s - man > 0 else 0, math.ceil(s / DT - 1e-9))
-    return img, slew
+def _share(a, b, i):
+    """Seconds of [a, b) inside step i."""
+    return max(0.0, min(b, (i + 1) * DT) - max(a, i * DT))
 
 
 def _resimulate(p, lit, obs, n):
-    """Level at every grid instant; obs = [(start, end, maneuver)], step by step."""
-    load = np.zeros(n)
+    """Level at every grid instant; obs = [(start, end, maneuver)], step by step, each
+    step loaded by its exact overlap with the observations and maneuver windows."""
+    load = np.zeros(n)  # [J] per step
     for s, e, man in obs:
-        (a, b), (c, d) = _steps(s, e, man)
-        load[max(a, 0) : min(b, n)] += p.imaging_w
-        load[max(c, 0) : min(d, n)] += p.slew_w
+        for i in range(n):
+            load[i] += p.imaging_w * _share(s, e, i) + p.slew_w * _share(max(s - man, 0.0), s, i)
     b, out = p.initial_wh, [p.initial_wh]
     for i in range(n):
         charge = p.charge_w if (lit[i] and lit[i + 1]) else 0.0
-        b = min(p.capacity_wh, b + (charge - p.idle_w - load[i]) * DT / 3600.0)
+        b = min(p.capacity_wh, b + ((charge - p.idle_w) * DT - load[i]) / 3600.0)
         out.append(b)
     return np.array(out)
 
@@ -87,26 +85,24 @@ def _random_obs(rng, n, count):
     return out
 
 
-def test_loads_sum_in_the_order_of_add_at():
-    """BatteryModel.loads == four sequential np.add.at passes (imaging starts, ends, slew
-    starts, ends), bit for bit, on random observations (steps shared and clipped)."""
+def test_loads_are_the_exact_overlaps():
+    """BatteryModel.loads == per step the imaging and slew power times the seconds of
+    the step inside the observations / maneuver windows (clipped), summed in a loop."""
     rng = np.random.default_rng(7)
     for _ in range(300):
         n = int(rng.integers(20, 200))
         bm, _ = _random_model(rng, n)
-        p, h = bm.powers[0], DT / 3600.0
+        p = bm.powers[0]
         obs = _random_obs(rng, n, int(rng.integers(0, 12)))
         starts, ends, man = (
             (np.array(x, float) for x in zip(*obs, strict=True)) if obs else ([],) * 3
         )
         man = np.asarray(man) * rng.uniform(0.0, 3.0)  # maneuvers reaching past the start
-        s0, e0, s1 = bm.step_windows(starts, ends)
-        d = np.zeros(n + 1)
-        np.add.at(d, s0, p.imaging_w * h)
-        np.add.at(d, e0, -p.imaging_w * h)
-        np.add.at(d, bm.slew_steps(starts, man), p.slew_w * h)
-        np.add.at(d, s1, -p.slew_w * h)
-        np.testing.assert_array_equal(bm.loads(0, starts, ends, man), np.cumsum(d)[:n])
+        ref = np.zeros(n)
+        for s, e, m in zip(starts, ends, man, strict=True):
+            for i in range(n):
+                ref[i] += p.imaging_w * _share(s, e, i) + p.slew_w * _share(max(s - m, 0.0), s, i)
+        np.testing.assert_allclose(bm.loads(0, starts, ends, man), ref / 3600.0, atol=1e-12)
 
 
 def test_change_ok_matches_resimulation():
