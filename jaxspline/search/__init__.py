@@ -3,7 +3,8 @@
 Its input is a :class:`Problem` of plain arrays (built by :mod:`jaxspline.planner`), so
 it imports nothing of the package outside this folder. Inside, imports point one way:
 ``store`` / ``battery`` -> ``problem`` -> ``dp`` / ``timeline`` / ``energy`` / ``mip`` ->
-``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` -> ``bound_worker`` -> ``solve``
+``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` / ``sweep`` -> ``bound_worker`` ->
+``solve``
 (:func:`solve`, the stages run until a deadline); ``memory`` (the heap trim) comes
 first. ``clock`` is the search's one time
 source; ``construct`` is the one greedy strategy (``greedy_pass``), used by ``timeline``,
@@ -48,4 +49,6 @@ from jaxspline.search.problem import Problem as Problem
 from jaxspline.search.solve import SearchResult as SearchResult
 from jaxspline.search.solve import solve as solve
 from jaxspline.search.status import BoundStatus as BoundStatus
+from jaxspline.search.sweep import sweep as sweep
+from jaxspline.search.sweep import sweeps as sweeps
 from jaxspline.search.timeline import Timeline as Timeline

@@ -7,7 +7,10 @@
 2. Lagrangian phase (``lagrangian_share`` of the budget): per-satellite exact DP under
    target prices, repaired plans, and the upper bound (:func:`lagrangian`); left out
    when a bound worker that publishes plans runs (below);
-3. exact branch and bound when the instance is tiny (``exact_max_options``);
+3. satellite sweeps (:func:`sweeps`): every satellite's timeline replaced by its best
+   DP path over the targets the others leave it, while that gains (always, on the one
+   DP layout: the Lagrangian phase's, else prepared here);
+   exact branch and bound when the instance is tiny (``exact_max_options``);
 4. large-neighbourhood search until the deadline (:func:`lns`);
 5. earliest-start pass (:func:`earliest_pass`).
 
@@ -43,6 +46,7 @@ from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
+from jaxspline.search.sweep import sweeps
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["SearchResult", "solve"]
@@ -178,6 +182,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     left out); the phase takes it out, so the LNS runs without it resident.
     """
     deadline, now, tail, t_dp, cap, max_iters = budget
+    dp = (shared.pop() if shared else dp_prepare(pb)) if pb.n_options else None
     if worker is not None and worker.plans:  # the worker's bound and plans stand for the phase
         res = BoundResult(list(tl.assigned), math.inf, 0, BoundStatus.TIME)
     else:
@@ -187,13 +192,20 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
             order,
             max_iters=cap,
             report=lambda it, ub, lb: say("bound", f"it {it}: bound {ub:.6g}, best plan {lb:.6g}"),
-            dp=shared.pop() if shared else None,
+            dp=dp,
         )
     stats.update(
         lagrangian_value=tl.value,
         lagrangian_iterations=res.iterations,
         lagrangian_bound=res.bound,
     )
+    if dp is not None and res.status != BoundStatus.OPTIMAL:
+        t_sw = time.monotonic()
+        rounds = sweeps(tl, dp, deadline - tail, random.Random(seed))
+        stats.update(sweep_rounds=rounds, sweep_value=tl.value,
+                     sweep_seconds=round(time.monotonic() - t_sw, 3))  # fmt: skip
+        say("sweep", f"{rounds} rounds: value {tl.value:.6g}")
+    del dp
     trim_heap()  # the bound phase's freed arrays: the LNS runs without them resident
     exact = False
     if pb.n_options <= exact_max_options:

@@ -123,6 +123,7 @@ def plan_json(out):
         "memory_estimate_mb",
         "lns_seconds",
         "lns_cpu_seconds",
+        "sweep_seconds",
     )
     for name in measured:  # not the plan
         data["stats"].pop(name, None)

@@ -1,0 +1,139 @@
+"""Satellite sweeps: each satellite's observations replaced by its best path alone.
+
+A plan built target by target (the greedy start, a repaired plan) leaves each
+satellite's timeline far from the best one that satellite could fly over the targets
+the others leave it. :func:`sweep` computes, in one pass of the bound's per-satellite
+DP (:func:`jaxspline.search.dp.dp_paths`), every satellite's maximum-value sequence
+over its options of targets that no *other* satellite images (its own included,
+repeats in a row credited once), and then, satellite by satellite in random order,
+replaces the satellite's observations by that path when the path is worth more:
+
+* the path's options are inserted with the timeline's full check (maneuvers, battery);
+  an option of a target imaged meanwhile (by a satellite swept earlier in the round, or
+  by the path itself) is skipped;
+* on a satellite whose battery has a rule, the path ignores energy, so its options go in
+  by value per Wh (imaging plus the maneuver from the path's predecessor), not in time
+  order: what the battery refuses is what pays least for its energy;
+* the satellite keeps the new timeline only when the plan's score did not drop.
+
+So a sweep never lowers the plan's score, and one round costs one DP over all
+satellites plus the insertions. :func:`sweeps` repeats rounds until one gains nothing.
+On the unseen 12 x 12 h instance (367 k options) rounds of ~0.5 s take the greedy start
+from 32,814 to 37,445 in 7 s, where the LNS needs about a minute for the same value
+(docs/scale.md).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from jaxspline.search import clock
+from jaxspline.search.dp import DPData, dp_paths
+from jaxspline.search.timeline import Timeline
+
+__all__ = ["sweep", "sweeps"]
+
+_WH = 1.0 / 3600.0  # [Wh / J]
+_MIN_WH = 1e-9  # [Wh] floor of an energy in a value-per-Wh ratio
+_MAX_ROUNDS = 30  # rounds of :func:`sweeps` at most (the gains fall fast: ~10 on large plans)
+
+
+def _offered(tl: Timeline) -> np.ndarray | None:
+    """bool [N], the options on offer in ``tl`` (None: all of them)."""
+    pb = tl.pb
+    if tl.target_options is pb.target_options:
+        return None
+    mask = np.zeros(pb.n_options, bool)
+    ids = [c for opts in tl.target_options for c in opts]
+    mask[np.asarray(ids, np.int64)] = True
+    return mask
+
+
+def _weights(tl: Timeline, offered) -> np.ndarray:
+    """Option values of the sweep's DP: the target's value where no other satellite
+    images it and the option is on offer, else a value below any path's."""
+    pb = tl.pb
+    tv = np.asarray(pb.target_value, np.float64)
+    ot = np.asarray(pb.option_target, np.int64)
+    osat = np.asarray(pb.option_sat, np.int64)
+    assigned = np.asarray(tl.assigned, np.int64)
+    owner = np.where(assigned >= 0, osat[np.maximum(assigned, 0)], -1)[ot]
+    ok = (owner < 0) | (owner == osat)
+    if offered is not None:
+        ok &= offered
+    # never on a best path: a path through it is worth less than the empty one
+    shut = -(float(tv.sum()) + 1.0)
+    return np.where(ok, tv[ot], shut)
+
+
+def _energy_order(tl: Timeline, k: int, path: list) -> list:
+    """The options of satellite k's path by value per Wh (imaging + maneuver from the
+    path's predecessor), most first; ties keep time order."""
+    pb = tl.pb
+    p = pb.battery.powers[k]
+    keys = []
+    for i, c in enumerate(path):
+        man = pb.option_first[c] if i == 0 else tl.need(path[i - 1], c)
+        wh = (p.imaging_w * (pb.option_end[c] - pb.option_start[c]) + p.slew_w * man) * _WH
+        keys.append(-pb.target_value[pb.option_target[c]] / max(wh, _MIN_WH))
+    return [path[i] for i in sorted(range(len(path)), key=keys.__getitem__)]
+
+
+def sweep(tl: Timeline, d: DPData, rng, offered=None) -> float:
+    """One round over every satellite (module docstring); returns the value gained.
+
+    Args:
+      tl: Timeline, changed in place (its log committed).
+      d: the problem's :func:`jaxspline.search.dp.dp_prepare`.
+      rng: ``random.Random``: the order of the satellites.
+      offered: bool [N] options on offer, as :func:`sweeps` finds them (None: computed).
+    Returns:
+      float, the plan's value after the round minus before (>= 0 unless the count or
+      the end-time tie-break paid for it).
+    """
+    pb = tl.pb
+    if offered is None:
+        offered = _offered(tl)
+    paths, vals = dp_paths(pb, d, _weights(tl, offered), merge_repeats=True)
+    v0 = tl.value
+    sats = list(range(pb.n_sats))
+    rng.shuffle(sats)
+    tl.commit()
+    for k in sats:
+        own = sum(pb.target_value[pb.option_target[c]] for c in tl.lines[k])
+        if vals[k] <= own or not paths[k]:
+            continue
+        base = tl.score()
+        for c in list(tl.lines[k]):
+            tl.remove(c)
+        path = paths[k]
+        if pb.battery.has(k):
+            path = _energy_order(tl, k, path)
+        for c in path:
+            if tl.check(c) is not None:
+                tl.insert(c)
+        if tl.score() < base:
+            tl.undo_to(0)
+        tl.commit()
+    return tl.value - v0
+
+
+def sweeps(tl: Timeline, d: DPData, deadline: float, rng, max_rounds: int = _MAX_ROUNDS) -> int:
+    """Sweep rounds until one gains nothing, ``max_rounds`` or the deadline.
+
+    Args:
+      tl: Timeline, changed in place.
+      d: the problem's :func:`jaxspline.search.dp.dp_prepare`.
+      deadline: float, ``time.monotonic()`` value after which no round starts [s].
+      rng: ``random.Random``.
+      max_rounds: cap on the rounds.
+    Returns:
+      int, the rounds run.
+    """
+    offered = _offered(tl)
+    rounds = 0
+    while rounds < max_rounds and clock.now() < deadline:
+        rounds += 1
+        if sweep(tl, d, rng, offered) <= 0.0:
+            break
+    return rounds
