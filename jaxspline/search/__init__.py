@@ -25,6 +25,7 @@ from jaxspline.search.battery import BatteryModel as BatteryModel
 from jaxspline.search.battery import Levels as Levels
 from jaxspline.search.bound_worker import BoundWorker as BoundWorker
 from jaxspline.search.dp import DPData as DPData
+from jaxspline.search.dp import NeedPrice as NeedPrice
 from jaxspline.search.dp import backtrack as backtrack
 from jaxspline.search.dp import dp_forward as dp_forward
 from jaxspline.search.dp import dp_paths as dp_paths

@@ -4,10 +4,10 @@ The search proper (greedy, LNS) is single-threaded Python; the bound's per-satel
 DP is numpy. On a machine with a second core, :class:`BoundWorker` forks a process
 that iterates :func:`jaxspline.search.lagrangian.upper_bound` over the same
 :class:`Problem` until the search's deadline, and hands back its bound. The worker
-relaxes the battery (the search's own Lagrangian phase prices its budgets): the
-per-pair energy terms would be derived anew in every iteration, and the relaxed bound is
-the looser one by little (docs/scale.md). It credits a run of consecutive options of
-one target once (``merge_repeats``, the strengthened relaxation of
+relaxes the battery (the search's own Lagrangian phase prices its budgets): on the
+unseen 12 x 12 h instance the priced bound converged 0.37 % lower (45,659 against
+45,827) at 2.4 times the time an iteration (0.51 against 0.21 s). It credits a run of
+consecutive options of one target once (``merge_repeats``, the strengthened relaxation of
 :mod:`jaxspline.search.lagrangian`). The fork shares the problem's arrays copy-on-write
 (nothing is pickled on the way in), and with them the DP's block layout when the parent
 prepared it (``dp``: the search's own Lagrangian phase uses the same one, so it is

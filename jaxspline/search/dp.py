@@ -25,7 +25,7 @@ import numpy as np
 
 from jaxspline.search.problem import Problem
 
-__all__ = ["DPData", "backtrack", "dp_forward", "dp_paths", "dp_prepare"]
+__all__ = ["DPData", "NeedPrice", "backtrack", "dp_forward", "dp_paths", "dp_prepare"]
 
 _PATH_TOL = 1e-9  # tolerance of the path back-tracking
 _CHUNK_BLOCKS = 64  # the most blocks whose absorbs one forward step applies at once
@@ -97,6 +97,34 @@ class DPData:
     max_pairs: int = 0
     steps: list | None = None
     chunks: list | None = None
+
+
+@dataclass(frozen=True)
+class NeedPrice:
+    """Near-pair costs proportional to the pair's required time, priced by destination:
+    pair ``i -> j`` costs ``rate[j] * max(need - tol, 0)``.
+
+    The DP derives them block by block where it reads the pairs (:func:`dp_forward`,
+    :func:`backtrack`), so no array the size of the pair table is made.
+
+    Attributes:
+      rate: float [N], price per second of required time into each option.
+      need: float32 [P], the pairs' required times (``pb.pairs.need``).
+      tol: seconds taken off each required time before pricing.
+    """
+
+    rate: np.ndarray
+    need: np.ndarray
+    tol: float
+
+    def of(self, pairs, dst_rate: np.ndarray) -> np.ndarray:
+        """Costs of the pairs ``pairs`` (a slice or positions) whose destinations' rates
+        are ``dst_rate`` (the same arithmetic wherever the DP asks: float64 throughout)."""
+        out = self.need[pairs].astype(np.float64)
+        out -= self.tol
+        np.maximum(out, 0.0, out=out)
+        out *= dst_rate
+        return out
 
 
 def _block_bounds(so: np.ndarray, width: float) -> list:
@@ -231,6 +259,13 @@ def _chunks(d: DPData, n_sats: int, far_min: float) -> list:
     return chunks
 
 
+def _rates(arc: NeedPrice, d: DPData, ga: int, rows_at, n_pairs: int) -> np.ndarray:
+    """Each pair's destination rate in the block starting at ``order[ga]`` (its rows
+    ``rows_at``, ``n_pairs`` pairs)."""
+    counts = np.diff(np.append(rows_at, n_pairs))
+    return np.repeat(arc.rate[d.order[ga : ga + counts.size]], counts)
+
+
 def dp_forward(
     pb: Problem, d: DPData, w: np.ndarray, arc=None, merge_repeats: bool = False
 ) -> np.ndarray:
@@ -245,7 +280,8 @@ def dp_forward(
       pb: Problem.
       d: its :func:`dp_prepare`.
       w: float [N], option values.
-      arc: optional float [P], the cost of each near pair (``pb.pairs`` order).
+      arc: optional float [P], the cost of each near pair (``pb.pairs`` order), or a
+        :class:`NeedPrice` deriving them.
       merge_repeats: an option reached from an option of its own target through a near
         pair adds nothing (its value ``w`` is that pair's cost): consecutive repeats of
         a target count once (see :mod:`jaxspline.search.lagrangian`).
@@ -259,6 +295,7 @@ def dp_forward(
     w_o = w[order]
     w_rep = w[d.repeat_dst] if merge_repeats else None
     buf = np.empty(d.max_pairs)
+    priced = isinstance(arc, NeedPrice)
     for b0, b1, aa, az, cuts, mpos, g0, g1, vpos in d.chunks:
         m = np.full((b1 - b0 + 1) * n_s, -np.inf)  # running maxima before / after each block
         m[:n_s] = run
@@ -272,7 +309,10 @@ def dp_forward(
             v = val[ga - g0 : gb - g0]
             if pz > pa:
                 pv = np.take(best, src[pa:pz], out=buf[: pz - pa], mode="clip")
-                if arc is not None:
+                if priced:
+                    rates = _rates(arc, d, ga, rows_at, pz - pa)
+                    np.subtract(pv, arc.of(slice(pa, pz), rates), out=pv)
+                elif arc is not None:
                     np.subtract(pv, arc[pa:pz], out=pv)
                 if merge_repeats and rz > ra:
                     pv[rloc] -= w_rep[ra:rz]
@@ -327,7 +367,9 @@ def _near_step(pb: Problem, d: DPData, w, best, arc, merge_repeats, node, rest):
     idx = np.arange(int(cnt.sum()), dtype=np.int64) + np.repeat(q0 - seg, cnt)
     s = pb.pairs.src[idx]
     cv = best[s]
-    if arc is not None:
+    if isinstance(arc, NeedPrice):
+        cv -= arc.of(idx, np.repeat(arc.rate[node], cnt))
+    elif arc is not None:
         cv -= arc[idx]
     if merge_repeats:  # a repeat of the node's target costs the node's value
         m = d.target[s] == np.repeat(d.target[node], cnt)

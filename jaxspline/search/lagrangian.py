@@ -5,10 +5,10 @@ into one longest-path problem per satellite over its options in start order
 (:func:`dp_paths`): ``best[j] = w_j - lam_t(j) + max(base_j, far predecessors, near
 compatible predecessors)``, far ones (gap >= ``far[sat]``, always compatible) through
 a running maximum, near ones through the screened feasible pairs. In
-:func:`lagrangian` the battery enters as interval energy budgets priced by ``nu >= 0``
-(:mod:`jaxspline.search.energy`: options and near pairs pay for their energy, the
-bound gains ``sum nu``); otherwise it is dropped.
-``UB(lam) = sum_k DP_k(lam) + sum_t lam_t (+ sum_I nu_I)``.
+:func:`lagrangian` the battery enters as energy budgets from the horizon start priced by
+``nu >= 0`` (:mod:`jaxspline.search.energy`: options and near pairs pay for their
+energy, the bound gains each price times its budget); otherwise it is dropped.
+``UB(lam) = sum_k DP_k(lam) + sum_t lam_t (+ sum_b nu_b B_b / unit_b)``.
 
 Weak duality with repeats. The rules let a plan image a target more than once (it
 counts once), and dropping a repeat is not always possible (an observation can be
@@ -120,7 +120,8 @@ class Prices:
     ``lam`` holds the target prices, then (``energy``) the prices of the energy budgets
     the unpriced DP optimum overdraws (:mod:`jaxspline.search.energy`).
     ``lam += mu (UB - plan_value) / |g|^2 g`` with ``g = takers - 1`` (targets) and
-    ``g = scaled usage - 1`` (budgets), projected on ``[0, w]`` / ``[0, inf)``; after
+    ``g = (usage - budget) / unit`` (budgets, in observations' worth of energy),
+    projected on ``[0, w]`` / ``[0, inf)``; after
     :data:`_STALL_ITERS` iterations without a better bound ``mu`` halves and the prices
     restart from the best ones seen, until ``mu < mu_min`` (converged). ``dp``: the
     problem's :func:`dp_prepare`, where the caller has it (None: prepared here).
@@ -148,12 +149,16 @@ class Prices:
                 paths, _ = dp_paths(
                     pb, self.d, self.target_value[self.option_target], None, used := []
                 )
-                self.en.restrict(self._energy_usage(paths, used) > 1.0)
+                self.en.restrict(self.en.subgradient(paths, used) > 0.0)
             if not self.en.m:
                 self.en = None
         m = self.en.m if self.en is not None else 0
-        # prices: targets (in [0, w]) then energy budgets (>= 0, see search.energy)
+        # prices: targets (in [0, w]) then energy budgets (>= 0, see search.energy); the
+        # bound gains each price times its constraint's right-hand side
         self.hi = np.r_[self.target_value, np.full(m, np.inf)]
+        self.rhs = np.ones(self.hi.size)
+        if m:
+            self.rhs[self.target_value.size :] = self.en.budget / self.en.unit
         self.lam = np.zeros(self.hi.size)
         self.best_lam = self.lam.copy()
         self.ub, self.mu, self.stall, self.it = math.inf, 1.0, 0, 0
@@ -173,7 +178,7 @@ class Prices:
 
     def _record(self, vals, paths):
         """Bound of this iteration from the satellites' DP values (satellite order)."""
-        bound = float(sum(vals) + self.lam.sum())
+        bound = float(sum(vals) + self.lam @ self.rhs)
         if bound < self.ub - _GAP_TOL:
             self.ub, self.best_lam, self.stall = bound, self.lam.copy(), 0
         else:
@@ -191,17 +196,10 @@ class Prices:
         return cnt
 
     def _subgradient(self) -> np.ndarray:
-        cnt = self._takers(self.paths)
+        g = self._takers(self.paths) - 1.0
         if self.used is None:
-            return cnt - 1.0
-        return np.r_[cnt, self._energy_usage(self.paths, self.used)] - 1.0
-
-    def _energy_usage(self, paths, used) -> np.ndarray:
-        nodes = np.zeros(self.pb.n_options, bool)
-        nodes[[c for p in paths for c in p]] = True
-        arcs = np.zeros(self.en.n_near, bool)
-        arcs[used] = True
-        return self.en.usage(nodes, arcs)
+            return g
+        return np.r_[g, self.en.subgradient(self.paths, self.used)]
 
     def step(self, plan_value: float) -> bool:
         """Move the prices toward ``plan_value``, a value some plan reaches; False when the

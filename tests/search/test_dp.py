@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from test_timeline_battery import _problem
 
-from jaxspline.search.dp import backtrack, dp_forward, dp_prepare
+from jaxspline.search.dp import NeedPrice, backtrack, dp_forward, dp_prepare
 
 TOL = 1e-9  # the back-tracking's tolerance (dp._PATH_TOL)
 
@@ -117,3 +117,33 @@ def test_backtrack_matches_brute_force_and_reference_walk(seed):
                 assert got == pytest.approx(value, abs=1e-9)
         on_paths = {j for p in paths for j in p}
         assert all(pb.pairs.src[q] in on_paths for q in used)
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_need_priced_pairs_match_brute_force(seed):
+    """Pair costs derived block by block (``NeedPrice``: rate of the destination times
+    the required time less a tolerance) give the brute-force optimum of the same costs
+    written out pair by pair here, and a path worth it."""
+    rng = np.random.default_rng(900 + seed)
+    steps, far = (rng.integers(40, 120), 25.0) if seed % 2 else (rng.integers(30, 60), 80.0)
+    pb, _ = _problem(rng, int(steps), n_sats=3, n_targets=12, far=far, repeats=0.5)
+    d = dp_prepare(pb)
+    w = rng.normal(2, 2, pb.n_options)
+    rate = rng.uniform(0.0, 0.2, pb.n_options)
+    rate[rng.random(pb.n_options) < 0.3] = 0.0
+    tol = 0.1
+    dst = np.repeat(pb.pairs.rows, np.diff(pb.pairs.ptr))
+    need = pb.pairs.need.astype(np.float64)
+    written = rate[dst] * np.maximum(need - tol, 0.0)
+    priced = NeedPrice(rate, pb.pairs.need, tol)
+    for merge in (False, True):
+        best = dp_forward(pb, d, w, priced, merge)
+        used = []
+        paths, values = backtrack(pb, d, w, best, priced, used, merge)
+        for k, (path, value) in enumerate(zip(paths, values, strict=True)):
+            assert value == pytest.approx(_brute_force(pb, w, written, merge, k), abs=1e-9)
+            if path:
+                got = sum(w[j] for j in path)
+                for i, j in itertools.pairwise(path):
+                    got += _transition(pb, w, written, merge, i, j)[0]
+                assert got == pytest.approx(value, abs=1e-9)
