@@ -13,11 +13,10 @@ import random
 
 import numpy as np
 import pytest
-from test_timeline_battery import DT, _problem, _resimulate
+from test_timeline_battery import DT, _problem, _resimulate, assemble
 
-from jaxspline.search import BatteryModel, Problem, Timeline, greedy
+from jaxspline.search import BatteryModel, Timeline, greedy
 from jaxspline.search.dp import dp_prepare
-from jaxspline.search.store import NearPairs
 from jaxspline.search.sweep import sweep, sweeps
 
 
@@ -38,33 +37,9 @@ def _no_repeat_problem(rng, n_sats=3, n_targets=40, horizon=600.0, far=40.0):
         gap = opts[j][1] - opts[i][2]
         if sat[i] == sat[j] and 0.0 <= gap < far and rng.random() < 0.8:
             near[i * n + j] = float(rng.uniform(0.0, gap))  # stored pairs are feasible
-    target_options = [[] for _ in range(n_targets)]
-    for i, o in enumerate(opts):
-        target_options[o[3]].append(i)
-    lo = [sat.index(k) if k in sat else n for k in range(n_sats)]
-    hi = [n - sat[::-1].index(k) if k in sat else n for k in range(n_sats)]
-    keys = np.fromiter(near, np.int64, len(near))
-    need = np.fromiter(near.values(), np.float64, len(near))
     n_steps = int(horizon / DT)
-    return Problem(
-        n_sats=n_sats,
-        target_value=[float(w) for w in rng.integers(1, 6, n_targets)],
-        option_target=[o[3] for o in opts],
-        option_sat=sat,
-        option_start=[o[1] for o in opts],
-        option_end=[o[2] for o in opts],
-        option_first=[float(rng.uniform(0.0, 30.0)) for _ in opts],
-        option_start_los=[(0.0, 0.0, 1.0)] * n,
-        option_end_los=[(0.0, 0.0, 1.0)] * n,
-        tables=[None] * n_sats,
-        pairs=NearPairs.from_arrays(n, keys // n, keys % n, need),
-        far=[far] * n_sats,
-        battery=BatteryModel(np.ones((n_sats, n_steps + 1), bool), [None] * n_sats, DT),
-        target_options=target_options,
-        sat_lo=lo,
-        sat_hi=hi,
-        sat_starts=[[o[1] for o in opts[a:b]] for a, b in zip(lo, hi, strict=True)],
-    )
+    battery = BatteryModel(np.ones((n_sats, n_steps + 1), bool), [None] * n_sats, DT)
+    return assemble(rng, opts, near, n_sats, n_targets, far, battery)
 
 
 def _fits(pb, seq) -> list | None:

@@ -148,6 +148,39 @@ def test_change_ok_matches_resimulation():
     assert decided > 3500 and spilled > 1000 and 500 < low < 3500
 
 
+def assemble(rng, opts, near, n_sats, n_targets, far, battery) -> Problem:
+    """A Problem from sorted options ``(sat, start, end, target)`` and near pairs
+    ``{i * n + j: need}`` (random values 1-5 and first maneuvers 0-30 s from ``rng``)."""
+    n = len(opts)
+    sat = [o[0] for o in opts]
+    target_options = [[] for _ in range(n_targets)]
+    for i, o in enumerate(opts):
+        target_options[o[3]].append(i)
+    lo = [sat.index(k) if k in sat else n for k in range(n_sats)]
+    hi = [n - sat[::-1].index(k) if k in sat else n for k in range(n_sats)]
+    keys = np.fromiter(near, np.int64, len(near))
+    need = np.fromiter(near.values(), np.float64, len(near))
+    return Problem(
+        n_sats=n_sats,
+        target_value=[float(w) for w in rng.integers(1, 6, n_targets)],
+        option_target=[o[3] for o in opts],
+        option_sat=sat,
+        option_start=[o[1] for o in opts],
+        option_end=[o[2] for o in opts],
+        option_first=[float(rng.uniform(0.0, 30.0)) for _ in opts],
+        option_start_los=[(0.0, 0.0, 1.0)] * n,
+        option_end_los=[(0.0, 0.0, 1.0)] * n,
+        tables=[None] * n_sats,
+        pairs=NearPairs.from_arrays(n, keys // n, keys % n, need),
+        far=[far] * n_sats,
+        battery=battery,
+        target_options=target_options,
+        sat_lo=lo,
+        sat_hi=hi,
+        sat_starts=[[o[1] for o in opts[a:b]] for a, b in zip(lo, hi, strict=True)],
+    )
+
+
 def _problem(rng, n_steps, n_sats=2, n_targets=60, far=40.0, repeats=0.0):
     """A per-channel-style Problem: random options, random near transition times.
 
@@ -173,32 +206,7 @@ def _problem(rng, n_steps, n_sats=2, n_targets=60, far=40.0, repeats=0.0):
             gap = opts[j][1] - opts[i][2]
             if sat[i] == sat[j] and 0.0 <= gap < far and rng.random() < 0.8:
                 near[i * n + j] = float(rng.uniform(0.0, far))
-    target_options = [[] for _ in range(n_targets)]
-    for i, o in enumerate(opts):
-        target_options[o[3]].append(i)
-    lo = [sat.index(k) if k in sat else n for k in range(n_sats)]
-    hi = [n - sat[::-1].index(k) if k in sat else n for k in range(n_sats)]
-    keys = np.fromiter(near, np.int64, len(near))
-    need = np.fromiter(near.values(), np.float64, len(near))
-    pb = Problem(
-        n_sats=n_sats,
-        target_value=[float(w) for w in rng.integers(1, 6, n_targets)],
-        option_target=[o[3] for o in opts],
-        option_sat=sat,
-        option_start=[o[1] for o in opts],
-        option_end=[o[2] for o in opts],
-        option_first=[float(rng.uniform(0.0, 30.0)) for _ in opts],
-        option_start_los=[(0.0, 0.0, 1.0)] * n,
-        option_end_los=[(0.0, 0.0, 1.0)] * n,
-        tables=[None] * n_sats,
-        pairs=NearPairs.from_arrays(n, keys // n, keys % n, need),
-        far=[far] * n_sats,
-        battery=bm,
-        target_options=target_options,
-        sat_lo=lo,
-        sat_hi=hi,
-        sat_starts=[[o[1] for o in opts[a:b]] for a, b in zip(lo, hi, strict=True)],
-    )
+    pb = assemble(rng, opts, near, n_sats, n_targets, far, bm)
     return pb, lit
 
 
