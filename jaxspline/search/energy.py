@@ -84,17 +84,21 @@ class EnergyBudgets:
                     "ib": np.searchsorted(ends * bat.dt, e[lo:hi], side="left"),
                     "e": img,
                     "slew_wh": p.slew_w * _WH,
-                    "kept": budget > 0.0,
                     "off": sum(b.size for b in budgets),
                     "n_ends": ends.size,
                 }
             )
             budgets.append(budget)
             units.append(np.full(ends.size, unit))
-        self.budget = np.concatenate(budgets) if budgets else np.zeros(0)
-        self.unit = np.concatenate(units) if units else np.zeros(0)
+        budget = np.concatenate(budgets) if budgets else np.zeros(0)
+        self._n_all = budget.size
+        # kept constraint -> its place among all; a budget <= 0 is one the empty plan
+        # already breaks (the model then refuses every insertion): priced, it would pull
+        # the bound below that plan's value, so it is left out like any other
+        self._index = np.flatnonzero(budget > 0.0)
+        self.budget = budget[self._index]
+        self.unit = (np.concatenate(units) if units else np.zeros(0))[self._index]
         self.m = self.budget.size
-        self._index = np.arange(self.m)  # kept constraint -> its place among all
 
     def restrict(self, keep: np.ndarray) -> None:
         """Keep only the constraints where ``keep`` (bool [m]) is True (any subset of
@@ -106,7 +110,7 @@ class EnergyBudgets:
 
     def _full(self, x: np.ndarray) -> np.ndarray:
         """A vector over the kept constraints, spread over all of them (0 elsewhere)."""
-        out = np.zeros(sum(sk["n_ends"] for sk in self.sats))
+        out = np.zeros(self._n_all)
         out[self._index] = x
         return out
 
@@ -141,7 +145,7 @@ class EnergyBudgets:
         q = np.asarray(used, np.int64)
         dst = self.rows[np.searchsorted(self.ptr, q, side="right") - 1]
         slew = np.maximum(self.need[q].astype(np.float64) - _SLEW_TOL, 0.0)
-        usage = np.zeros(sum(sk["n_ends"] for sk in self.sats))
+        usage = np.zeros(self._n_all)
         for sk in self.sats:
             lo, hi, n_e = sk["lo"], sk["hi"], sk["n_ends"]
             mine = np.asarray(paths[sk["k"]], np.int64) - lo
