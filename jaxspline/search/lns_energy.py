@@ -29,7 +29,7 @@ import numpy as np
 
 from jaxspline.search.timeline import Timeline
 
-__all__ = ["EnergyRank", "make_room"]
+__all__ = ["EnergyRank", "make_room", "option_wh"]
 
 _TIGHT_S = 60.0  # [s] imaging + slewing whose energy above the margin marks a binding battery
 _SLEW_REF_S = 30.0  # [s] maneuver per observation when ranking targets by value per Wh
@@ -38,6 +38,22 @@ _FULL_TOL = 1e-9  # [Wh] a level this close to capacity counts as full
 _WH = 1.0 / 3600.0  # [Wh / J]
 _TOURNAMENT = 3  # observations drawn when a destroy move starts at a cheap one
 _MIN_WH = 1e-9  # [Wh] floor of an energy in a value-per-Wh ratio
+
+
+def option_wh(pb, c: int, maneuver: float) -> float:
+    """Imaging plus slew energy of option c after a maneuver of ``maneuver`` s.
+
+    Args:
+      pb: :class:`jaxspline.search.Problem`.
+      c: int, option id.
+      maneuver: float [s].
+    Returns:
+      float [Wh] (0 for a satellite without a power model).
+    """
+    p = pb.battery.powers[pb.option_sat[c]]
+    if p is None:
+        return 0.0
+    return (p.imaging_w * (pb.option_end[c] - pb.option_start[c]) + p.slew_w * maneuver) * _WH
 
 
 class EnergyRank:
@@ -64,19 +80,8 @@ class EnergyRank:
         self._dens = self._mean = self._sats = None  # target_weights' constants, once needed
 
     def option_wh(self, c: int, maneuver: float) -> float:
-        """Imaging plus slew energy of option c after a maneuver of ``maneuver`` s.
-
-        Args:
-          c: int, option id.
-          maneuver: float [s].
-        Returns:
-          float [Wh] (0 for a satellite without a power model).
-        """
-        pb = self.pb
-        p = pb.battery.powers[pb.option_sat[c]]
-        if p is None:
-            return 0.0
-        return (p.imaging_w * (pb.option_end[c] - pb.option_start[c]) + p.slew_w * maneuver) * _WH
+        """:func:`option_wh` of this rank's problem."""
+        return option_wh(self.pb, c, maneuver)
 
     def removal_wh(self, tl: Timeline, k: int, i: int) -> float:
         """Energy freed by removing position i of satellite k's timeline.

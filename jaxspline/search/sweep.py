@@ -35,11 +35,11 @@ import numpy as np
 
 from jaxspline.search import clock
 from jaxspline.search.dp import DPData, dp_paths
+from jaxspline.search.lns_energy import option_wh
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["sweep", "sweeps"]
 
-_WH = 1.0 / 3600.0  # [Wh / J]
 _MIN_WH = 1e-9  # [Wh] floor of an energy in a value-per-Wh ratio
 _MAX_ROUNDS = 30  # rounds of :func:`sweeps` at most (the gains fall fast: ~10 on large plans)
 #: a time-limited run's sweeps stop at a round that gained less than this share of the
@@ -81,11 +81,10 @@ def _energy_order(tl: Timeline, k: int, path: list) -> list:
     """The options of satellite k's path by value per Wh (imaging + maneuver from the
     path's predecessor), most first; ties keep time order."""
     pb = tl.pb
-    p = pb.battery.powers[k]
     keys = []
     for i, c in enumerate(path):
         man = pb.option_first[c] if i == 0 else tl.need(path[i - 1], c)
-        wh = (p.imaging_w * (pb.option_end[c] - pb.option_start[c]) + p.slew_w * man) * _WH
+        wh = option_wh(pb, c, man)
         keys.append(-pb.target_value[pb.option_target[c]] / max(wh, _MIN_WH))
     return [path[i] for i in sorted(range(len(path)), key=keys.__getitem__)]
 
