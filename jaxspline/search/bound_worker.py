@@ -23,7 +23,8 @@ iteration that lowers the bound, from :data:`_PLAN_FIRST_IT` iterations on, once
 iterations since its last repair took :data:`_PLAN_RATIO` times that repair's CPU time)
 the worker repairs that iteration's paths into a feasible plan
 (:func:`jaxspline.search.lagrangian.plan_from_paths`: every insertion re-checked, battery
-included) in a timeline of its own, and when the plan is worth more than the last one
+included) in a timeline of its own, sweeps it (:func:`jaxspline.search.sweeps`, while a
+round pays :data:`_SWEEP_MIN_RATE`), and when the plan is worth more than the last one
 it published, writes it into an array shared with the parent (no pipe: neither side
 ever waits). The search adopts it when it beats its own
 (:meth:`BoundWorker.plan`, polled by the LNS). What the search finds then depends on the
@@ -49,12 +50,14 @@ import signal
 import time
 import warnings
 
+from jaxspline.search.dp import dp_prepare
 from jaxspline.search.lagrangian import BOUND_MU_MIN, BoundResult, plan_from_paths, upper_bound
 from jaxspline.search.lns import greedy, greedy_order, lns
 from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
+from jaxspline.search.sweep import sweeps
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["SEARCH_MU_MIN", "BoundWorker"]
@@ -69,6 +72,12 @@ SEARCH_MU_MIN = 1e-2
 _WALK_SLICE_S = 2.0  # [s] the converged worker's LNS publishes its plan this often
 _WALK_END_S = 0.5  # [s] its last publication comes this long before the deadline
 _WALK_SEED = 7919  # its random stream (the search's LNS has its own)
+_SWEEP_SEED = 104729  # the random stream of the sweeps after each repair
+#: a repaired plan's sweeps (:func:`jaxspline.search.sweeps`) stop at a round that gains
+#: less than this share of the plan's value per second: the LNS's pace from such a plan
+#: on the constellation day (85,467 to 86,746 in 15 s); the first rounds there gain
+#: 0.1-0.3 %/s
+_SWEEP_MIN_RATE = 1e-3
 
 
 class _Shared:
@@ -99,8 +108,9 @@ class _Shared:
 class _Repairs:
     """Child side: repair the DP paths into plans now and then (module docstring)."""
 
-    def __init__(self, pb: Problem, shared: _Shared, deadline: float):
-        self.pb, self.shared, self.deadline = pb, shared, deadline
+    def __init__(self, pb: Problem, shared: _Shared, deadline: float, dp):
+        self.pb, self.shared, self.deadline, self.dp = pb, shared, deadline, dp
+        self.rng = random.Random(_SWEEP_SEED)
         self.tl = self.order = None
         self.best = -math.inf
         self.mark = time.process_time()  # CPU clock at the end of the last repair
@@ -114,6 +124,7 @@ class _Repairs:
             self.tl = Timeline(self.pb)
             self.order = greedy_order(self.tl)
         plan_from_paths(self.tl, paths, self.order, self.deadline)
+        sweeps(self.tl, self.dp, self.deadline, self.rng, min_rate=_SWEEP_MIN_RATE)
         if self.tl.value > self.best:
             self.best = self.tl.value
             self.shared.publish(self.tl.value, self.tl.assigned)
@@ -153,7 +164,9 @@ def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, s
     gc.disable()  # never finalize the parent's (JAX) objects in the child
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
-    hook = None if shared is None else _Repairs(pb, shared, deadline)
+    if dp is None:
+        dp = dp_prepare(pb)
+    hook = None if shared is None else _Repairs(pb, shared, deadline, dp)
     if hook is not None and first is not None:
         hook.start(first, plan_value)
     res = upper_bound(

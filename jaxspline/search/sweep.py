@@ -128,10 +128,17 @@ def sweep(tl: Timeline, d: DPData, rng, offered=None) -> float:
     return tl.value - v0
 
 
-def sweeps(tl: Timeline, d: DPData, deadline: float, rng, max_rounds: int = _MAX_ROUNDS) -> int:
+def sweeps(
+    tl: Timeline,
+    d: DPData,
+    deadline: float,
+    rng,
+    max_rounds: int = _MAX_ROUNDS,
+    min_rate: float = _MIN_RATE,
+) -> int:
     """Sweep rounds until one gains nothing, ``max_rounds`` or the deadline; with a finite
-    deadline also once a round gained less than :data:`_MIN_RATE` of the plan's value
-    per second of it (the LNS's pace then beats the sweeps'). With an infinite one
+    deadline also once a round gained less than ``min_rate`` of the plan's value per
+    second of it (the LNS's pace then beats the sweeps'). With an infinite one
     (iteration-capped runs) the rounds do not depend on the clock.
 
     Args:
@@ -140,6 +147,8 @@ def sweeps(tl: Timeline, d: DPData, deadline: float, rng, max_rounds: int = _MAX
       deadline: float, ``time.monotonic()`` value after which no round starts [s].
       rng: ``random.Random``.
       max_rounds: cap on the rounds.
+      min_rate: share of the plan's value per second below which a time-limited run's
+        rounds stop (default :data:`_MIN_RATE`).
     Returns:
       int, the rounds run.
     """
@@ -151,6 +160,6 @@ def sweeps(tl: Timeline, d: DPData, deadline: float, rng, max_rounds: int = _MAX
         gain = sweep(tl, d, rng, offered)
         if gain <= 0.0:
             break
-        if math.isfinite(deadline) and gain < _MIN_RATE * tl.value * (time.monotonic() - t0):
+        if math.isfinite(deadline) and gain < min_rate * tl.value * (time.monotonic() - t0):
             break
     return rounds
