@@ -72,17 +72,20 @@ def _best_alone(pb, assigned, k) -> float:
     return max([0.0, *best.values()])
 
 
+@pytest.mark.parametrize("empty", [False, True])
 @pytest.mark.parametrize("seed", [0, 1, 2, 3])
-def test_sweeps_end_with_every_satellite_at_its_best_sequence(seed):
+def test_sweeps_end_with_every_satellite_at_its_best_sequence(seed, empty):
     """No battery, no repeats: when the sweeps stop, each satellite's plan is worth what
     the best sequence over the targets the others leave it is worth (from a greedy start
-    in random target order, where some satellite is below it)."""
+    in random target order, where some satellite is below it, or from the empty plan,
+    as the search's start)."""
     rng = np.random.default_rng(seed)
     pb = _no_repeat_problem(rng)
     tl = Timeline(pb)
     order = list(range(pb.n_targets))
     random.Random(seed).shuffle(order)  # a start far from each satellite's best
-    greedy(tl, math.inf, order)
+    if not empty:
+        greedy(tl, math.inf, order)
     start = tl.value
     rounds = sweeps(tl, dp_prepare(pb), math.inf, random.Random(seed))
     assert 1 <= rounds < 30
