@@ -128,14 +128,7 @@ def solve(
     order = greedy_order(tl)
     now = time.monotonic()
     tail = _tail(deadline, now)
-    dp = dp_prepare(pb) if pb.n_options else None
-    if dp is not None:  # the start: sweeps from the empty plan ...
-        t_sw = time.monotonic()
-        rounds = sweeps(tl, dp, deadline - tail, random.Random(f"{seed}:start"))
-        say("start", f"{rounds} sweeps from the empty plan: value {tl.value:.6g}")
-        start_sweeps = {"start_sweep_rounds": rounds, "start_sweep_value": tl.value,
-                        "start_sweep_seconds": round(time.monotonic() - t_sw, 3)}  # fmt: skip
-    greedy(tl, math.inf, order)  # ... filled greedily: always complete, even past the budget
+    dp, start_stats = _start(tl, order, deadline - tail, seed, say)
     er = EnergyRank(pb)
     # a worker that publishes plans builds the second greedy start on its core
     offload = bool(bound_worker and pb.n_options and max_iters is None)
@@ -152,7 +145,7 @@ def solve(
     if retime is not None and max_iters is None:
         deadline = retime([len(line) for line in tl.lines])
         tail = _tail(deadline, now)
-    stats = {"greedy_value": tl.value, **(start_sweeps if dp is not None else {})}
+    stats = {"greedy_value": tl.value, **start_stats}
     say("greedy", f"value {tl.value:.6g}")
     t_dp = time.monotonic() + lagrangian_share * max(0.0, deadline - tail - time.monotonic())
     cap = None if max_iters is None else max(10, max_iters // 10)
@@ -169,6 +162,24 @@ def solve(
     finally:
         if worker is not None:
             worker.stop()
+
+
+def _start(tl: Timeline, order, deadline: float, seed: int, say):
+    """Stage 1 (module docstring) up to the value-per-Wh greedy: sweeps from the empty
+    plan of ``tl`` until ``deadline``, then the greedy fill in ``order`` (always
+    complete). Returns the problem's DP layout (None: no options) and the sweeps'
+    statistics."""
+    pb = tl.pb
+    dp = dp_prepare(pb) if pb.n_options else None
+    stats = {}
+    if dp is not None:
+        t_sw = time.monotonic()
+        rounds = sweeps(tl, dp, deadline, random.Random(f"{seed}:start"))
+        say("start", f"{rounds} sweeps from the empty plan: value {tl.value:.6g}")
+        stats = {"start_sweep_rounds": rounds, "start_sweep_value": tl.value,
+                 "start_sweep_seconds": round(time.monotonic() - t_sw, 3)}  # fmt: skip
+    greedy(tl, math.inf, order)  # always complete: a plan even when the budget is spent
+    return dp, stats
 
 
 def _most_bind(er: EnergyRank, tl: Timeline) -> bool:
