@@ -124,6 +124,7 @@ def plan_json(out):
         "lns_seconds",
         "lns_cpu_seconds",
         "sweep_seconds",
+        "start_sweep_seconds",
     )
     for name in measured:  # not the plan
         data["stats"].pop(name, None)
