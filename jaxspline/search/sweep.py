@@ -61,13 +61,12 @@ def _offered(tl: Timeline) -> np.ndarray | None:
     return mask
 
 
-def _weights(tl: Timeline, offered) -> np.ndarray:
+def _weights(tl: Timeline, d: DPData, offered) -> np.ndarray:
     """Option values of the sweep's DP: the target's value where no other satellite
-    images it and the option is on offer, else a value below any path's."""
-    pb = tl.pb
-    tv = np.asarray(pb.target_value, np.float64)
-    ot = np.asarray(pb.option_target, np.int64)
-    osat = np.asarray(pb.option_sat, np.int64)
+    images it and the option is on offer, else a value below any path's (the options'
+    targets and satellites from the DP layout ``d``, not the problem's lists)."""
+    tv = np.asarray(tl.pb.target_value, np.float64)
+    ot, osat = d.target, d.sat
     assigned = np.asarray(tl.assigned, np.int64)
     owner = np.where(assigned >= 0, osat[np.maximum(assigned, 0)], -1)[ot]
     ok = (owner < 0) | (owner == osat)
@@ -105,7 +104,7 @@ def sweep(tl: Timeline, d: DPData, rng, offered=None) -> float:
     pb = tl.pb
     if offered is None:
         offered = _offered(tl)
-    paths, vals = dp_paths(pb, d, _weights(tl, offered), merge_repeats=True)
+    paths, vals = dp_paths(pb, d, _weights(tl, d, offered), merge_repeats=True)
     v0 = tl.value
     sats = list(range(pb.n_sats))
     rng.shuffle(sats)
