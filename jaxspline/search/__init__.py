@@ -3,7 +3,8 @@
 Its input is a :class:`Problem` of plain arrays (built by :mod:`jaxspline.planner`), so
 it imports nothing of the package outside this folder. Inside, imports point one way:
 ``store`` / ``battery`` -> ``problem`` -> ``dp`` / ``timeline`` / ``energy`` / ``mip`` ->
-``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` / ``sweep`` -> ``bound_worker`` ->
+``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` / ``sweep`` -> ``bound_worker`` /
+``floor`` (how low the relaxation's bound can go) ->
 ``solve``
 (:func:`solve`, the stages run until a deadline); ``memory`` (the heap trim) comes
 first. ``clock`` is the search's one time
@@ -32,6 +33,8 @@ from jaxspline.search.dp import dp_paths as dp_paths
 from jaxspline.search.dp import dp_prepare as dp_prepare
 from jaxspline.search.dp_jax import JaxDP as JaxDP
 from jaxspline.search.exact import exact_search as exact_search
+from jaxspline.search.floor import RelaxationFloor as RelaxationFloor
+from jaxspline.search.floor import relaxation_floor as relaxation_floor
 from jaxspline.search.lagrangian import BoundResult as BoundResult
 from jaxspline.search.lagrangian import lagrangian as lagrangian
 from jaxspline.search.lagrangian import plan_from_paths as plan_from_paths
