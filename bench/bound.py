@@ -13,7 +13,10 @@ for each horizon H, the 12 x 12 h preset cut to H hours
   counted as that many passes); ``equal`` says its values match numpy's bit for bit;
 * the bound iterated to convergence (:func:`jaxspline.search.upper_bound`, battery
   relaxed, iteration cap ``BOUND_ITERS``): plain and strengthened (``merge_repeats``),
-  value, iterations, seconds.
+  value, iterations, seconds;
+* the strengthened relaxation's *floor* (:func:`jaxspline.search.relaxation_floor`,
+  ``FW_ITERS`` Frank-Wolfe steps): a fractional plan's value, below which no bound of
+  that relaxation can go.
 
 Writes ``bound.json`` and ``BOUND.md``.
 """
@@ -35,10 +38,11 @@ GENERATOR = REPO / "scripts" / "make_scale_scenario.py"
 BOUND_ITERS = 3000  # cap of the converged bound (it converges in a few hundred)
 DP_BATCH = 64  # value vectors of one batched JAX forward pass
 PLAN_VALUE = 1.0  # step-size target of the bound runs (any value gives a valid bound)
+FW_ITERS = 200  # Frank-Wolfe steps of the floor
 COLUMNS = (
     "hours|options|near pairs|blocks|numpy DP it/s|numpy fwd it/s|JAX fwd it/s|"
     f"JAX DP it/s|JAX fwd x{DP_BATCH} passes/s|JAX compile s|equal|plain bound|it|s|"
-    "strengthened bound|it|s"
+    "strengthened bound|it|s|floor|s"
 ).split("|")
 
 
@@ -73,7 +77,7 @@ def bench_one(hours: float, seconds: float, workdir: Path) -> dict:
     """All figures of one horizon (module docstring)."""
     import jax
 
-    from jaxspline.search import dp_forward, dp_paths, dp_prepare, upper_bound
+    from jaxspline.search import dp_forward, dp_paths, dp_prepare, relaxation_floor, upper_bound
     from jaxspline.search.dp_jax import JaxDP
 
     pb, build_s = _problem(hours, workdir)
@@ -111,6 +115,8 @@ def bench_one(hours: float, seconds: float, workdir: Path) -> dict:
             "status": res.status.value,
             "seconds": round(time.perf_counter() - t0, 2),
         }
+    fl = relaxation_floor(pb, PLAN_VALUE, math.inf, BOUND_ITERS, FW_ITERS, dp=d)
+    out["floor"] = {"floor": fl.floor, "seconds": round(fl.seconds, 2)}
     return out
 
 
@@ -146,11 +152,13 @@ def bound_table(report: dict) -> list[str]:
         f"values as numpy bit for bit; x{DP_BATCH}: that many value vectors in one scan, "
         "counted as that many passes). Bounds iterated to convergence, battery relaxed: "
         "*plain* is the per-satellite path relaxation, *strengthened* credits a run of "
-        "one target's options once (`merge_repeats`).",
+        "one target's options once (`merge_repeats`); *floor*: the value of a fractional "
+        f"plan of the strengthened relaxation ({FW_ITERS} Frank-Wolfe steps, "
+        "`relaxation_floor`): no bound of that relaxation can go below it.",
         *header(*COLUMNS),
     ]
     for r in report.get("runs", []):
-        p, s = r.get("plain", {}), r.get("strengthened", {})
+        p, s, f = r.get("plain", {}), r.get("strengthened", {}), r.get("floor", {})
         lines.append(
             row(
                 [
@@ -176,6 +184,8 @@ def bound_table(report: dict) -> list[str]:
                     cell(s.get("bound"), "{:.1f}"),
                     cell(s.get("iterations"), "{:d}"),
                     cell(s.get("seconds"), "{:.1f}"),
+                    cell(f.get("floor"), "{:.1f}"),
+                    cell(f.get("seconds"), "{:.1f}"),
                 ]
             )
         )
