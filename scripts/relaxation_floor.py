@@ -1,10 +1,13 @@
 """How low the path relaxation's bound can go on a scenario, and how high it is.
 
 Usage: python scripts/relaxation_floor.py [SCENARIO.toml] [--plan-value V]
-       [--time-limit S] [--max-iters N] [--fw-iters N] [--json OUT.json] [--force]
+       [--time-limit S] [--max-iters N] [--fw-iters N] [--joins] [--json OUT.json]
+       [--force]
 
-Screens the scenario like ``jaxspline plan`` (stages 1-4), iterates the strengthened
-Lagrangian bound (battery dropped, as the bound worker does) and then builds a
+Screens the scenario like ``jaxspline bound`` and ``jaxspline plan --no-aem`` (stages
+1-4; ``--joins``: also the flown-join screening of a plan with AEM files, which keeps
+fewer transitions), iterates the strengthened Lagrangian bound (battery dropped, as the
+bound worker does: a plan's bound that prices the battery may be lower) and then builds a
 fractional plan of the same relaxation by Frank-Wolfe steps
 (:func:`jaxspline.search.floor.relaxation_floor`). The fractional plan's value is the
 *floor*: the relaxation's optimum is at least that, so no price vector, however well
@@ -20,11 +23,12 @@ import argparse
 import json
 import math
 import time
+from pathlib import Path
 
 from jaxspline.planner.files import atomic_write_text
 
 
-def measure(scenario, plan_value, time_limit, max_iters, fw_iters) -> dict:
+def measure(scenario, plan_value, time_limit, max_iters, fw_iters, joins=False) -> dict:
     """Floor and bound of ``scenario`` (path or None: the built-in one) as a dict."""
     from jaxspline.planner.pipeline import build_problem
     from jaxspline.readers.scenario import default_scenario, load_scenario
@@ -33,7 +37,7 @@ def measure(scenario, plan_value, time_limit, max_iters, fw_iters) -> dict:
 
     t0 = time.monotonic()
     sc = default_scenario() if scenario is None else load_scenario(scenario)
-    pb = build_problem(sc).problem
+    pb = build_problem(sc, joins=joins).problem
     built = time.monotonic() - t0
     if plan_value is None:  # the step size's target: a greedy plan's value
         tl = Timeline(pb)
@@ -44,6 +48,7 @@ def measure(scenario, plan_value, time_limit, max_iters, fw_iters) -> dict:
     return {
         "scenario": sc.name,
         "options": int(pb.n_options),
+        "joins": bool(joins),
         "floor": res.floor,
         "bound": res.bound,
         "bound_iterations": res.iterations,
@@ -71,6 +76,9 @@ def main(argv=None) -> int:
     )
     ap.add_argument("--max-iters", type=int, default=None, help="cap on the bound's iterations")
     ap.add_argument("--fw-iters", type=int, default=200, help="Frank-Wolfe steps (200)")
+    ap.add_argument(
+        "--joins", action="store_true", help="screen transitions with the flown joins too"
+    )
     ap.add_argument("--json", default=None, help="write the result here")
     ap.add_argument("--force", action="store_true", help="overwrite --json")
     args = ap.parse_args(argv)
@@ -81,7 +89,11 @@ def main(argv=None) -> int:
         ap.error(f"--time-limit: must be a positive number of seconds, got {args.time_limit}")
     if args.plan_value is not None and not (math.isfinite(args.plan_value) and args.plan_value > 0):
         ap.error(f"--plan-value: must be a positive finite value, got {args.plan_value}")
-    r = measure(args.scenario, args.plan_value, args.time_limit, args.max_iters, args.fw_iters)
+    if args.json is not None and Path(args.json).exists() and not args.force:
+        ap.error(f"--json: {args.json!r} exists (--force overwrites it)")
+    r = measure(
+        args.scenario, args.plan_value, args.time_limit, args.max_iters, args.fw_iters, args.joins
+    )
     print(
         f"{r['scenario']}: floor {r['floor']:.1f} <= relaxation optimum <= bound "
         f"{r['bound']:.1f} ({r['bound_iterations']} iterations, {r['fw_iterations']} "

@@ -21,8 +21,10 @@ plan's paths when those are worth more, then runs Frank-Wolfe steps: the linear 
 is the DP itself at option values ``w_t [cov_t < 1]`` (the supergradient of f), the step
 is the best of a grid of :data:`_GRID` lengths (f is concave and piecewise linear, so
 the iterate never loses value). The oracle's prices ``w_t [cov_t >= 1]`` are in
-``[0, w]``, so each oracle call also gives a valid bound. Battery dropped, as in
-:func:`upper_bound`.
+``[0, w]``, so each oracle call also gives a valid bound. The battery is dropped, as in
+:func:`upper_bound` and the bound worker: a bound that prices the battery's budgets (the
+search's own Lagrangian phase, :mod:`jaxspline.search.energy`) relaxes less and may go
+below this floor.
 """
 
 from __future__ import annotations

@@ -101,3 +101,35 @@ def test_floor_is_below_the_exact_lp_and_the_bound_above(seed):
         assert res.floor > opt + TOL
     seeded = relaxation_floor(pb, opt, max_iters=200, fw_iters=60, plan_paths=paths)
     assert opt - TOL <= seeded.floor <= lp + TOL
+
+
+def _script():
+    """scripts/relaxation_floor.py as a module."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[2] / "scripts" / "relaxation_floor.py"
+    spec = importlib.util.spec_from_file_location("relaxation_floor_script", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod, path.parent / "example_scenario.toml"
+
+
+def test_script_writes_floor_below_bound_and_refuses_to_overwrite(tmp_path, capsys):
+    import json
+
+    mod, example = _script()
+    out = tmp_path / "floor.json"
+    args = [str(example), "--max-iters", "30", "--fw-iters", "10", "--json", str(out)]
+    assert mod.main(args) == 0
+    r = json.loads(out.read_text())
+    assert 0.0 < r["floor"] <= r["bound"] + TOL and r["bound_iterations"] <= 30
+    assert "floor" in capsys.readouterr().out
+    before = out.read_text()
+    with pytest.raises(SystemExit):  # refused before any work, file untouched
+        mod.main(args)
+    assert "--json" in capsys.readouterr().err and out.read_text() == before
+    for flag, bad in (("--fw-iters", "-1"), ("--time-limit", "nan")):
+        with pytest.raises(SystemExit):
+            mod.main([str(example), flag, bad])
+        assert flag in capsys.readouterr().err
