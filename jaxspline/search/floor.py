@@ -36,7 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jaxspline.search.dp import dp_paths, dp_prepare
-from jaxspline.search.lagrangian import BOUND_MU_MIN, upper_bound
+from jaxspline.search.lagrangian import BOUND_MU_MIN, run_targets, upper_bound
 from jaxspline.search.problem import Problem
 
 __all__ = ["RelaxationFloor", "relaxation_floor"]
@@ -66,20 +66,19 @@ class RelaxationFloor:
     seconds: float
 
 
-def _runs(pb: Problem, path) -> np.ndarray:
-    """Per target the number of runs of its options on ``path`` (float [T])."""
-    t = np.asarray(pb.option_target, np.int64)[np.asarray(path, np.int64)]
-    if t.size:
-        t = t[np.r_[True, t[1:] != t[:-1]]]
-    return np.bincount(t, minlength=len(pb.target_value)).astype(np.float64)
+def _runs(target: np.ndarray, path, n_targets: int) -> np.ndarray:
+    """Per target the number of runs of its options on ``path`` (float [T]); ``target``:
+    the options' targets (the DP layout's)."""
+    t = run_targets(target[np.asarray(path, np.int64)])
+    return np.bincount(t, minlength=n_targets).astype(np.float64)
 
 
-def _coverage(pb: Problem, paths_list) -> np.ndarray:
+def _coverage(target: np.ndarray, n_sats: int, paths_list, n_targets: int) -> np.ndarray:
     """Per satellite the mean run counts of its paths over ``paths_list`` (float [K, T])."""
-    cov = np.zeros((pb.n_sats, len(pb.target_value)))
+    cov = np.zeros((n_sats, n_targets))
     for paths in paths_list:
         for k, p in enumerate(paths):
-            cov[k] += _runs(pb, p)
+            cov[k] += _runs(target, p, n_targets)
     return cov / max(len(paths_list), 1)
 
 
@@ -125,18 +124,18 @@ def relaxation_floor(
     def value(cov):
         return float(w @ np.minimum(cov, 1.0))
 
-    covs = _coverage(pb, last)
+    tg, n_t = d.target, w.size
+    covs = _coverage(tg, pb.n_sats, last, n_t)
     if plan_paths is not None:
-        mine = _coverage(pb, [plan_paths])
+        mine = _coverage(tg, pb.n_sats, [plan_paths], n_t)
         if value(mine.sum(0)) > value(covs.sum(0)):
             covs = mine
     cov = covs.sum(0)
-    option_target = np.asarray(pb.option_target, np.int64)
     for _ in range(fw_iters):
         open_w = np.where(cov < _COVERED, w, 0.0)
-        paths, vals = dp_paths(pb, d, open_w[option_target], merge_repeats=True)
+        paths, vals = dp_paths(pb, d, open_w[tg], merge_repeats=True)
         bound = min(bound, float(sum(vals) + (w - open_w).sum()))
-        new = np.stack([_runs(pb, p) for p in paths])
+        new = np.stack([_runs(tg, p, n_t) for p in paths])
         step = new.sum(0) - cov
         gain = [value(cov + g * step) for g in _GRID]
         g = float(_GRID[int(np.argmax(gain))])

@@ -56,7 +56,7 @@ from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 from jaxspline.search.timeline import Timeline
 
-__all__ = ["BoundResult", "lagrangian", "plan_from_paths", "upper_bound"]
+__all__ = ["BoundResult", "lagrangian", "plan_from_paths", "run_targets", "upper_bound"]
 
 _STALL_ITERS = 4  # iterations without a better bound before the step halves
 _MU_MIN = 1e-4  # the iteration stops (stalled) below this step factor
@@ -67,6 +67,14 @@ _MU_MIN = 1e-4  # the iteration stops (stalled) below this step factor
 BOUND_MU_MIN = 1e-3
 _GAP_TOL = 1e-9  # bound - best plan below this: optimal
 _REPAIR_EVERY = 4  # DP iterations per repaired plan (a repair costs ~2 block DPs)
+
+
+def run_targets(targets: np.ndarray) -> np.ndarray:
+    """The targets a path is credited for by the strengthened relaxation: ``targets`` (its
+    options' targets, in time order) with each run of one target kept once."""
+    if targets.size:
+        return targets[np.r_[True, targets[1:] != targets[:-1]]]
+    return targets
 
 
 def plan_from_paths(tl: Timeline, paths, order_fill, deadline: float) -> None:
@@ -190,8 +198,8 @@ class Prices:
         cnt = np.zeros(self.target_value.size)
         for p in paths:
             t = self.option_target[p]
-            if self.merge and t.size:  # a run of one target is one credited visit
-                t = t[np.r_[True, t[1:] != t[:-1]]]
+            if self.merge:  # a run of one target is one credited visit
+                t = run_targets(t)
             np.add.at(cnt, t, 1.0)
         return cnt
 
