@@ -23,8 +23,15 @@ import argparse
 import json
 import math
 import time
-from pathlib import Path
 
+from jaxspline.cli.flags import (
+    MAX_ITERS,
+    check_int,
+    check_output_file,
+    check_path,
+    check_seconds,
+    check_value,
+)
 from jaxspline.planner.files import atomic_write_text
 
 
@@ -79,18 +86,18 @@ def main(argv=None) -> int:
     ap.add_argument(
         "--joins", action="store_true", help="screen transitions with the flown joins too"
     )
-    ap.add_argument("--json", default=None, help="write the result here")
+    ap.add_argument("--json", default=None, help="write the result here (-: standard output)")
     ap.add_argument("--force", action="store_true", help="overwrite --json")
     args = ap.parse_args(argv)
-    for name, v in (("--max-iters", args.max_iters), ("--fw-iters", args.fw_iters)):
-        if v is not None and v < (0 if name == "--fw-iters" else 1):
-            ap.error(f"{name}: must be a positive count, got {v}")
-    if not (math.isfinite(args.time_limit) and args.time_limit > 0):
-        ap.error(f"--time-limit: must be a positive number of seconds, got {args.time_limit}")
-    if args.plan_value is not None and not (math.isfinite(args.plan_value) and args.plan_value > 0):
-        ap.error(f"--plan-value: must be a positive finite value, got {args.plan_value}")
-    if args.json is not None and Path(args.json).exists() and not args.force:
-        ap.error(f"--json: {args.json!r} exists (--force overwrites it)")
+    try:  # every flag by its name, before any work (the CLI's checks)
+        check_path("SCENARIO", args.scenario, kind="file", exists=True)
+        check_value("--plan-value", args.plan_value)
+        check_seconds("--time-limit", args.time_limit)
+        check_int("--max-iters", args.max_iters, 1, MAX_ITERS)
+        check_int("--fw-iters", args.fw_iters, 0, MAX_ITERS)
+        check_output_file("--json", args.json, force=args.force)
+    except (ValueError, OSError) as exc:
+        ap.error(str(exc))
     r = measure(
         args.scenario, args.plan_value, args.time_limit, args.max_iters, args.fw_iters, args.joins
     )
@@ -100,8 +107,11 @@ def main(argv=None) -> int:
         f"Frank-Wolfe steps, {r['seconds']:.0f} s)",
         flush=True,
     )
-    if args.json is not None:
-        atomic_write_text(args.json, json.dumps(r, indent=1) + "\n", force=args.force)
+    text = json.dumps(r, indent=1) + "\n"
+    if args.json == "-":
+        print(text, end="")
+    elif args.json is not None:
+        atomic_write_text(args.json, text, force=args.force)
     return 0
 
 
