@@ -113,7 +113,7 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     import jax.numpy as jnp
     import numpy as np
 
-    from jaxspline.kernels._batch import ragged_positions
+    from jaxspline.kernels.batch import ragged_positions
     from jaxspline.screen import host as screen_host
     from jaxspline.screen import transitions
 

@@ -31,7 +31,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.geometry.frames import OMEGA_EARTH, R_EARTH, SECONDS_PER_DAY, jd_split
-from jaxspline.kernels._validate import check_finite, check_positive, to_device
+from jaxspline.kernels.validate import check_finite, check_positive, to_device
 
 __all__ = [
     "MU_EARTH",

@@ -37,8 +37,8 @@ import numpy as np
 
 from jaxspline.geometry.frames import OMEGA_EARTH, earth_rotation_angle, rot_z
 from jaxspline.geometry.orbit import orbit_state
-from jaxspline.kernels._batch import batched, padded_size
-from jaxspline.kernels._validate import check_finite, check_positive, is_concrete, to_device
+from jaxspline.kernels.batch import batched, padded_size
+from jaxspline.kernels.validate import check_finite, check_positive, is_concrete, to_device
 
 __all__ = [
     "Scene",

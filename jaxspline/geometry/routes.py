@@ -34,8 +34,8 @@ from jaxspline.geometry.frames import (
 )
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.geometry.pointing import Scene, aim_state, off_nadir_flat
-from jaxspline.kernels._batch import map_chunked
-from jaxspline.kernels._validate import check_finite, check_positive
+from jaxspline.kernels.batch import map_chunked
+from jaxspline.kernels.validate import check_finite, check_positive
 
 __all__ = [
     "POINT",

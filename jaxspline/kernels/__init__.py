@@ -7,8 +7,9 @@
 ``join_check`` (their sampled limit check), ``channel_join`` (peaks of the
 channel-wise degree-7 join),
 ``retarget_channel`` / ``retarget`` (minimum-peak control: one channel, 3-D).
-Private helpers: ``_safe`` (numerical guards), ``_validate`` (eager input checks),
-``_batch`` (batching, padding, chunks).
+Helpers every layer shares: ``safe`` (numerical guards, the double-where trick),
+``validate`` (eager input checks at the public boundary), ``batch`` (batching, padding,
+chunked evaluation).
 """
 
 from jaxspline.kernels.attitude import angular_accel_from_mrp as angular_accel_from_mrp
@@ -29,6 +30,13 @@ from jaxspline.kernels.attitude import quat_rate as quat_rate
 from jaxspline.kernels.attitude import quat_rotate as quat_rotate
 from jaxspline.kernels.attitude import quat_to_dcm as quat_to_dcm
 from jaxspline.kernels.attitude import quat_to_mrp as quat_to_mrp
+from jaxspline.kernels.batch import batched as batched
+from jaxspline.kernels.batch import map_chunked as map_chunked
+from jaxspline.kernels.batch import pad_last as pad_last
+from jaxspline.kernels.batch import pad_rows as pad_rows
+from jaxspline.kernels.batch import padded_size as padded_size
+from jaxspline.kernels.batch import ragged_positions as ragged_positions
+from jaxspline.kernels.batch import round_up as round_up
 from jaxspline.kernels.channel_join import DEFAULT_JOIN_SAMPLES as DEFAULT_JOIN_SAMPLES
 from jaxspline.kernels.channel_join import channel_join_peaks as channel_join_peaks
 from jaxspline.kernels.flex import flexible_body_rate as flexible_body_rate
@@ -81,6 +89,10 @@ from jaxspline.kernels.retarget_channel import channel_state as channel_state
 from jaxspline.kernels.retarget_channel import min_peak_channel as min_peak_channel
 from jaxspline.kernels.retarget_channel import min_peak_channel_kernel as min_peak_channel_kernel
 from jaxspline.kernels.retarget_channel import min_peak_linear as min_peak_linear
+from jaxspline.kernels.safe import pos_or_one as pos_or_one
+from jaxspline.kernels.safe import safe_div as safe_div
+from jaxspline.kernels.safe import safe_norm as safe_norm
+from jaxspline.kernels.safe import safe_sqrt as safe_sqrt
 from jaxspline.kernels.slew import KIND_CODES as KIND_CODES
 from jaxspline.kernels.slew import SlewProfile as SlewProfile
 from jaxspline.kernels.slew import bang_bang_time as bang_bang_time
@@ -94,3 +106,14 @@ from jaxspline.kernels.slew import scurve_time_kernel as scurve_time_kernel
 from jaxspline.kernels.slew import slew_profile as slew_profile
 from jaxspline.kernels.slew import slew_profile_kernel as slew_profile_kernel
 from jaxspline.kernels.slew import slew_profile_time as slew_profile_time
+from jaxspline.kernels.validate import as_float_array as as_float_array
+from jaxspline.kernels.validate import broadcast_named as broadcast_named
+from jaxspline.kernels.validate import cast_broadcast as cast_broadcast
+from jaxspline.kernels.validate import check_finite as check_finite
+from jaxspline.kernels.validate import check_nonnegative as check_nonnegative
+from jaxspline.kernels.validate import check_positive as check_positive
+from jaxspline.kernels.validate import common_float as common_float
+from jaxspline.kernels.validate import finite_vector as finite_vector
+from jaxspline.kernels.validate import float_dtype_of as float_dtype_of
+from jaxspline.kernels.validate import is_concrete as is_concrete
+from jaxspline.kernels.validate import to_device as to_device

@@ -27,9 +27,9 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._safe import safe_norm
-from jaxspline.kernels._validate import common_float, finite_vector
+from jaxspline.kernels.batch import batched
+from jaxspline.kernels.safe import safe_norm
+from jaxspline.kernels.validate import common_float, finite_vector
 
 __all__ = [
     "quat_multiply",

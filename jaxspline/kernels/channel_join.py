@@ -21,8 +21,8 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.kernels._safe import safe_norm
 from jaxspline.kernels.joins import HERMITE_MAP
+from jaxspline.kernels.safe import safe_norm
 
 __all__ = ["channel_join_peaks", "DEFAULT_JOIN_SAMPLES"]
 

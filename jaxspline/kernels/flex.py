@@ -47,16 +47,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._safe import pos_or_one
-from jaxspline.kernels._validate import (
+from jaxspline.kernels.batch import batched
+from jaxspline.kernels.safe import pos_or_one
+from jaxspline.kernels.slew import SlewProfile, profile_state_kernel
+from jaxspline.kernels.validate import (
     cast_broadcast,
     check_finite,
     check_nonnegative,
     check_positive,
     is_concrete,
 )
-from jaxspline.kernels.slew import SlewProfile, profile_state_kernel
 
 __all__ = [
     "initial_amplitude",

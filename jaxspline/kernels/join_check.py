@@ -17,16 +17,16 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.kernels._batch import batched, map_chunked
-from jaxspline.kernels._safe import safe_sqrt
-from jaxspline.kernels._validate import (
+from jaxspline.kernels.batch import batched, map_chunked
+from jaxspline.kernels.joins import HERMITE_MAP
+from jaxspline.kernels.limits import AxisLimits, validate_limits
+from jaxspline.kernels.safe import safe_sqrt
+from jaxspline.kernels.validate import (
     as_float_array,
     boundary_states,
     common_float,
     positive_duration,
 )
-from jaxspline.kernels.joins import HERMITE_MAP
-from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 __all__ = ["maneuver_check", "maneuver_check_kernel"]
 

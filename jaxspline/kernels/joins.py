@@ -34,8 +34,8 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.kernels import attitude as _att
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._validate import (
+from jaxspline.kernels.batch import batched
+from jaxspline.kernels.validate import (
     as_float_array,
     boundary_states,
     check_finite,

@@ -6,7 +6,7 @@ from typing import NamedTuple
 
 import jax.numpy as jnp
 
-from jaxspline.kernels._validate import check_positive
+from jaxspline.kernels.validate import check_positive
 
 __all__ = ["AxisLimits", "validate_limits"]
 

@@ -25,7 +25,7 @@ Two API layers:
   with ``jax.jit(jax.vmap(...))``.
 * Public functions (``angle_interval``, ``is_reachable`` ...) validate concrete
   inputs eagerly (ValueError naming the argument), broadcast, and call the kernel
-  batched once (``_batch.batched``: ``jax.jit(jnp.vectorize(kernel))``).
+  batched once (``batch.batched``: ``jax.jit(jnp.vectorize(kernel))``).
 
 Corrections to the paper (verified by the tests against integration, brute force and
 Ruckig): its eq. (3.2) three-link lower bound reads (b - b1)^2, correctly (b + b1)^2; its
@@ -44,9 +44,10 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._safe import safe_div, safe_sqrt
-from jaxspline.kernels._validate import (
+from jaxspline.kernels.batch import batched
+from jaxspline.kernels.limits import AxisLimits, validate_limits
+from jaxspline.kernels.safe import safe_div, safe_sqrt
+from jaxspline.kernels.validate import (
     as_float_array,
     broadcast_named,
     check_finite,
@@ -55,7 +56,6 @@ from jaxspline.kernels._validate import (
     common_float,
     float_dtype_of,
 )
-from jaxspline.kernels.limits import AxisLimits, validate_limits
 
 __all__ = [
     "angle_interval",

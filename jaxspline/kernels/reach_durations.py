@@ -13,11 +13,11 @@ from __future__ import annotations
 
 import jax.numpy as jnp
 
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._safe import safe_div, safe_sqrt
-from jaxspline.kernels._validate import common_float
+from jaxspline.kernels.batch import batched
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.reach import prepare_inputs, rtol_of
+from jaxspline.kernels.safe import safe_div, safe_sqrt
+from jaxspline.kernels.validate import common_float
 
 __all__ = [
     "feasible_durations",

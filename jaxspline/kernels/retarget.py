@@ -73,13 +73,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._validate import (
-    check_finite,
-    check_positive,
-    float_dtype_of,
-    is_concrete,
-)
+from jaxspline.kernels.batch import batched
 from jaxspline.kernels.retarget_channel import (
     ARCSEC,
     AXIS_CHANNEL,
@@ -88,6 +82,12 @@ from jaxspline.kernels.retarget_channel import (
     channel_control_eval,
     control_from_peak,
     unbounded_peak,
+)
+from jaxspline.kernels.validate import (
+    check_finite,
+    check_positive,
+    float_dtype_of,
+    is_concrete,
 )
 
 __all__ = [

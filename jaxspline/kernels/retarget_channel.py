@@ -14,9 +14,10 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._safe import safe_sqrt
-from jaxspline.kernels._validate import (
+from jaxspline.kernels.batch import batched
+from jaxspline.kernels.reach_durations import min_peak_accel_kernel
+from jaxspline.kernels.safe import safe_sqrt
+from jaxspline.kernels.validate import (
     as_float_array,
     broadcast_named,
     check_finite,
@@ -24,7 +25,6 @@ from jaxspline.kernels._validate import (
     float_dtype_of,
     is_concrete,
 )
-from jaxspline.kernels.reach_durations import min_peak_accel_kernel
 
 __all__ = [
     "ARCSEC",

@@ -23,9 +23,9 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._safe import pos_or_one, safe_sqrt
-from jaxspline.kernels._validate import (
+from jaxspline.kernels.batch import batched
+from jaxspline.kernels.safe import pos_or_one, safe_sqrt
+from jaxspline.kernels.validate import (
     cast_broadcast,
     check_finite,
     check_nonnegative,

@@ -42,7 +42,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jaxspline.kernels._batch import map_chunked
+from jaxspline.kernels.batch import map_chunked
 from jaxspline.kernels.join_check import maneuver_check
 from jaxspline.kernels.joins import Maneuver, maneuver_eval, maneuver_plan
 from jaxspline.kernels.limits import AxisLimits

@@ -45,7 +45,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
-from jaxspline.kernels._batch import map_chunked
+from jaxspline.kernels.batch import map_chunked
 from jaxspline.kernels.channel_join import DEFAULT_JOIN_SAMPLES, channel_join_peaks
 from jaxspline.planner.attitude_laws import JERK_STEP_S, LAW_POINTING, law_modes
 from jaxspline.planner.flown_joins import DIRECT_MAX_S, RETURN_S, SAMPLING_MARGIN, join_limits

@@ -39,8 +39,8 @@ from jaxspline.geometry.orbit import HermiteOrbit, padded_orbit
 from jaxspline.geometry.pointing import Scene, aim_geometry, aim_params, aim_point, aim_state
 from jaxspline.geometry.routes import strip_direction
 from jaxspline.geometry.windows import Windows
-from jaxspline.kernels._batch import map_chunked, ragged_positions
-from jaxspline.kernels._validate import to_device
+from jaxspline.kernels.batch import map_chunked, ragged_positions
+from jaxspline.kernels.validate import to_device
 from jaxspline.readers.mission import STRIP, Scenario
 from jaxspline.screen.options import RouteOptions
 

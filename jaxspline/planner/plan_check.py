@@ -31,7 +31,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jaxspline.geometry.frames import angle_between
-from jaxspline.kernels._batch import pad_rows, round_up
+from jaxspline.kernels.batch import pad_rows, round_up
 from jaxspline.kernels.reach_durations import min_transfer_time
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.opportunities import evaluate, geometry_batched, observation_samples

@@ -24,7 +24,7 @@ import numpy as np
 from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxspline.kernels._batch import pad_last, padded_size, ragged_positions, round_up
+from jaxspline.kernels.batch import pad_last, padded_size, ragged_positions, round_up
 from jaxspline.screen.options import options_dtype
 from jaxspline.screen.pair_models import model_arrays
 from jaxspline.screen.transitions import (

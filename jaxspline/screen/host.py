@@ -21,7 +21,7 @@ import numpy as np
 from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxspline.kernels._batch import pad_last, padded_size
+from jaxspline.kernels.batch import pad_last, padded_size
 from jaxspline.screen.options import RouteOptions, options_dtype, validate_options
 from jaxspline.screen.pair_models import model_arrays
 from jaxspline.screen.transitions import Transitions, candidate_runs, device_mesh

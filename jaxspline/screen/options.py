@@ -19,8 +19,8 @@ import numpy as np
 
 from jaxspline.geometry.frames import SECONDS_PER_DAY, gmst, sun_direction
 from jaxspline.geometry.routes import STRIP, RouteSet, sample_aim_states
-from jaxspline.kernels._validate import check_positive
 from jaxspline.kernels.limits import AxisLimits
+from jaxspline.kernels.validate import check_positive
 
 __all__ = [
     "RouteModel",

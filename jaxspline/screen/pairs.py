@@ -74,7 +74,7 @@ from collections.abc import Iterator
 import jax
 import numpy as np
 
-from jaxspline.kernels._validate import check_positive
+from jaxspline.kernels.validate import check_positive
 from jaxspline.screen.fused import fused_chunks
 from jaxspline.screen.host import Screener, host_chunks
 from jaxspline.screen.options import RouteOptions, validate_options

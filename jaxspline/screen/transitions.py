@@ -19,7 +19,7 @@ import jax
 import numpy as np
 from jax.sharding import Mesh
 
-from jaxspline.kernels._batch import ragged_positions
+from jaxspline.kernels.batch import ragged_positions
 from jaxspline.screen.options import RouteOptions
 
 __all__ = ["Transitions", "best_per_source"]

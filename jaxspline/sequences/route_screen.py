@@ -50,8 +50,8 @@ import numpy as np
 from jax.sharding import NamedSharding
 from jax.sharding import PartitionSpec as P
 
-from jaxspline.kernels._batch import round_up
-from jaxspline.kernels._validate import check_positive
+from jaxspline.kernels.batch import round_up
+from jaxspline.kernels.validate import check_positive
 from jaxspline.screen.options import RouteOptions, options_dtype
 from jaxspline.screen.pair_models import model_arrays, validate_model
 from jaxspline.screen.pairs import screen_pairs

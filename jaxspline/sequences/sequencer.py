@@ -46,7 +46,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jaxspline.kernels._batch import ragged_positions
+from jaxspline.kernels.batch import ragged_positions
 from jaxspline.screen.options import RouteOptions
 from jaxspline.search.construct import greedy_pass
 from jaxspline.sequences.stream import (

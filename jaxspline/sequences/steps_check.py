@@ -31,7 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jaxspline.kernels._batch import map_chunked
+from jaxspline.kernels.batch import map_chunked
 from jaxspline.kernels.limits import AxisLimits, validate_limits
 from jaxspline.screen.options import RouteOptions, options_dtype, validate_options
 

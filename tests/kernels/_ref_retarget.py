@@ -12,13 +12,13 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.kernels._validate import check_positive, float_dtype_of
 from jaxspline.kernels.retarget import (
     ARCSEC,
     AttitudeModel,
     _check_inputs,
     _rk4_segment,
 )
+from jaxspline.kernels.validate import check_positive, float_dtype_of
 
 
 class DirectResult(NamedTuple):

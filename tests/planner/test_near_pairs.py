@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 from test_planner import _scenario
 
-from jaxspline.kernels._batch import ragged_positions
+from jaxspline.kernels.batch import ragged_positions
 from jaxspline.planner import pipeline as planner
 from jaxspline.search.store import NearPairs, start_order
 

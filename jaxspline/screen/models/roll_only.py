@@ -37,10 +37,10 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.kernels._batch import batched
-from jaxspline.kernels._safe import safe_sqrt
-from jaxspline.kernels._validate import cast_broadcast, check_finite, check_positive
+from jaxspline.kernels.batch import batched
+from jaxspline.kernels.safe import safe_sqrt
 from jaxspline.kernels.slew import bang_coast_bang_time_kernel
+from jaxspline.kernels.validate import cast_broadcast, check_finite, check_positive
 from jaxspline.screen.models.rest_to_rest import RestToRest
 
 __all__ = [

@@ -41,7 +41,8 @@ def safe_div(num, den, fill=0.0):
     """num / den where den != 0, else ``fill``; finite gradients both ways.
 
     Args:
-      num, den: broadcastable arrays.
+      num: numerator, broadcastable with ``den``.
+      den: denominator.
       fill: value where ``den == 0``.
 
     Returns:
