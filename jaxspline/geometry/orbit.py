@@ -46,6 +46,7 @@ __all__ = [
     "propagate_tle",
     "tle_orbit",
     "OrbitTable",
+    "orbit_period",
     "tabulate_orbits",
 ]
 
@@ -458,6 +459,20 @@ class OrbitTable(NamedTuple):
             np.floor((np.asarray(t, np.float64) - tk[0]) / h).astype(np.int64), 0, tk.size - 2
         )
         return self.ok[sat, k] & self.ok[sat, k + 1]
+
+
+def orbit_period(source) -> float:
+    """The orbital period of a satellite [s]: ``86400 / n`` from a TLE's mean motion ``n``
+    [rev/day] (line 2, columns 53-63), or ``2 pi / n`` of a circular orbit.
+
+    Args:
+      source: :class:`CircularOrbit` or the two TLE lines ``(line1, line2)``.
+    Returns:
+      float [s].
+    """
+    if isinstance(source, CircularOrbit):
+        return float(2.0 * math.pi / float(source.mean_motion))
+    return SECONDS_PER_DAY / float(source[1][52:63])
 
 
 def tabulate_orbits(sources, epoch_jd: float, t_end: float, step: float) -> OrbitTable:

@@ -35,7 +35,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import OMEGA_EARTH, earth_rotation_angle, rot_z
+from jaxspline.geometry.frames import OMEGA_EARTH, R_EARTH, earth_rotation_angle, rot_z
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.kernels.batch import batched, padded_size
 from jaxspline.kernels.validate import check_finite, check_positive, is_concrete, to_device
@@ -55,10 +55,15 @@ __all__ = [
     "roll_frame",
     "roll_look_direction",
     "roll_pointing",
+    "roll_params",
+    "ROLL_LAW",
 ]
 
 #: Largest roll of roll-only pointing (exclusive) [deg].
 RIGHT_ANGLE_DEG = 90.0
+#: Kind code (last entry of an aim law) of a roll held fixed in the track frame.
+ROLL_LAW = 2.0
+_ROLL_SWITCH = 1.5  # kind codes above this are roll laws
 
 
 class Scene(NamedTuple):
@@ -78,10 +83,11 @@ class Scene(NamedTuple):
 def aim_params(target_ecef, direction_ecef=None, speed=0.0):
     """Pack an aim law into the [8] parameter vector used by the kernels.
 
-    ``[x0, y0, z0, dx, dy, dz, speed, is_strip]``: start point (ECEF, m), unit ground
-    direction at the start (ECEF), ground speed of the aim point [m/s], and 1.0 for
-    a strip (yaw from the strip tangent) or 0.0 for a point target (yaw from the
-    relative motion).
+    ``[x0, y0, z0, dx, dy, dz, speed, kind]``: start point (ECEF, m), unit ground
+    direction at the start (ECEF), ground speed of the aim point [m/s], and the law's
+    kind: 1.0 for a strip (yaw from the strip tangent), 0.0 for a point target (yaw
+    from the relative motion). The third kind, a roll held fixed in the track frame
+    (:data:`ROLL_LAW`), is packed by :func:`roll_params`.
 
     Args:
       target_ecef: float [..., 3], start point, Earth-fixed [m].
@@ -101,6 +107,53 @@ def aim_params(target_ecef, direction_ecef=None, speed=0.0):
         strip = jnp.ones(g0.shape[:-1], g0.dtype)
         speed = jnp.broadcast_to(jnp.asarray(speed, g0.dtype), g0.shape[:-1])
     return jnp.concatenate([g0, d, speed[..., None], strip[..., None]], -1)
+
+
+def roll_params(roll):
+    """Pack a roll law: the boresight held at ``roll`` in the track frame (one candidate
+    or broadcasting).
+
+    The law of an area strip (and of every observation of a roll-only satellite): at
+    each instant the look direction is ``nadir + tan(roll) across`` in the local frame
+    of the Earth-fixed track (:func:`roll_frame`), the push-broom detector across the
+    track, so the ground under the strip slides along the track. The packed vector is
+    ``[roll, 0, 0, 0, 0, 0, 0, ROLL_LAW]``; every aim-law kernel (:func:`aim_angles`,
+    :func:`aim_state`, :func:`aim_geometry`) evaluates it, whatever the start ``t0``.
+
+    Args:
+      roll: float [...], roll [rad], positive towards ``across`` (|roll| < 90 deg).
+    Returns:
+      float [..., 8], the aim law p.
+    """
+    r = jnp.asarray(roll)
+    r = r.astype(jnp.result_type(r, float))
+    z = jnp.zeros(r.shape + (6,), r.dtype)
+    kind = jnp.full(r.shape + (1,), ROLL_LAW, r.dtype)
+    return jnp.concatenate([r[..., None], z, kind], -1)
+
+
+def _roll_los(scene: Scene, p, t, sat=None):
+    """Unit look direction (ECI), the unit along-track direction (ECI) and the ground
+    point's elevation sine of roll law p at time t (:func:`roll_params`).
+
+    The satellite's Earth-fixed state is ``Rz(theta) r`` and ``Rz(theta) v - w_E z x
+    pos`` (velocity relative to the rotating Earth, as the track frame asks); the ray
+    meets the sphere of the WGS84 equatorial radius (-1 where it misses).
+    """
+    r, v = orbit_state(scene.orbit, t, sat)
+    theta = earth_rotation_angle(scene.gmst0, t)
+    pos = rot_z(theta, r)
+    vel = rot_z(theta, v) - OMEGA_EARTH * jnp.stack([-pos[1], pos[0], jnp.zeros_like(pos[0])])
+    nadir, along, across = roll_frame(pos, vel)
+    d = nadir + jnp.tan(p[0]) * across
+    d = rot_z(-theta, d / jnp.sqrt(jnp.sum(d * d)))
+    rd = jnp.dot(r, d)
+    disc = rd * rd - (jnp.dot(r, r) - R_EARTH * R_EARTH)
+    hit = disc >= 0.0
+    g = r + (-rd - jnp.sqrt(jnp.where(hit, disc, 0.0))) * d
+    gn = jnp.sqrt(jnp.sum(g * g))
+    elev = jnp.where(hit, jnp.dot(-d, g) / jnp.where(gn > 0, gn, 1.0), -1.0)
+    return d, rot_z(-theta, along), elev
 
 
 def aim_point(p, delta):
@@ -149,7 +202,14 @@ def _frame_los(scene: Scene, p, t0, t, sat=None):
     w_x_los = jnp.stack([-w * los[2], jnp.zeros_like(w), w * los[0]])  # (0, -w, 0) x L
     los_dot = basis @ (g_dot - v) - w_x_los
     sees = jnp.dot(r - g_eci, g_eci)  # > 0 iff the satellite is above the aim point's horizon
-    return los, los_dot, basis @ tan_eci, sees
+    # a roll law (branchless): the held look direction, its image sliding along the track
+    d_roll, along, elev = _roll_los(scene, p, t, sat)
+    roll = p[7] > _ROLL_SWITCH
+    los = jnp.where(roll, basis @ d_roll, los)
+    los_dot = jnp.where(roll, jnp.zeros_like(los_dot), los_dot)
+    tan_o = jnp.where(roll, basis @ along, basis @ tan_eci)
+    sees = jnp.where(roll, elev, sees)
+    return los, los_dot, tan_o, sees
 
 
 def _angles_from(n, s):
@@ -252,7 +312,12 @@ def aim_geometry(scene: Scene, p, t0, t, sat=None):
     cr = jnp.cross(d, -r)
     offn = jnp.arctan2(jnp.linalg.norm(cr), jnp.dot(d, -r))
     elev = jnp.dot(-d, g_eci) / (dn * jnp.linalg.norm(g_eci))
-    return offn, elev, d / dn, -r / rn
+    roll = p[7] > _ROLL_SWITCH  # a roll law (branchless)
+    d_roll, _, elev_roll = _roll_los(scene, p, t, sat)
+    offn_roll = jnp.arctan2(jnp.linalg.norm(jnp.cross(d_roll, -r)), jnp.dot(d_roll, -r))
+    offn = jnp.where(roll, offn_roll, offn)
+    elev = jnp.where(roll, elev_roll, elev)
+    return offn, elev, jnp.where(roll, d_roll, d / dn), -r / rn
 
 
 def _as_t(t, like):
@@ -392,23 +457,25 @@ def boresight(roll, pitch):
 
 
 def roll_frame(pos, vel):
-    """The local frame of roll-only pointing at one sample (one candidate).
+    """The local frame of roll pointing: the track frame of area strips and roll-only satellites.
 
     ``nadir = -p/|p|``, ``along = v - (v.nadir) nadir`` normalized, ``across = along x
     nadir``, from the Earth-fixed position p and the velocity v relative to the rotating
-    Earth (regional_coverage RULES.md, "Geometry").
+    Earth (the regional_coverage benchmark's "Geometry" rule). Generic (numpy or JAX),
+    broadcasting over leading axes.
 
     Args:
-      pos: float [3], Earth-fixed position p [m].
-      vel: float [3], Earth-fixed velocity v relative to the rotating Earth [m/s].
+      pos: float [..., 3], Earth-fixed position p [m].
+      vel: float [..., 3], Earth-fixed velocity v relative to the rotating Earth [m/s].
     Returns:
-      (nadir [3], along [3], across [3]), unit vectors.
+      (nadir [..., 3], along [..., 3], across [..., 3]), unit vectors.
     """
-    r = jnp.sqrt(jnp.sum(pos * pos))
+    xp = np if isinstance(pos, np.ndarray) and isinstance(vel, np.ndarray) else jnp
+    r = xp.sqrt(xp.sum(pos * pos, axis=-1, keepdims=True))
     nadir = -pos / r
-    along = vel - jnp.sum(vel * nadir) * nadir
-    along = along / jnp.sqrt(jnp.sum(along * along))
-    return nadir, along, jnp.cross(along, nadir)
+    along = vel - xp.sum(vel * nadir, axis=-1, keepdims=True) * nadir
+    along = along / xp.sqrt(xp.sum(along * along, axis=-1, keepdims=True))
+    return nadir, along, xp.cross(along, nadir)
 
 
 def roll_look_direction(pos, vel, look_deg):

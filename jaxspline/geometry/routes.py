@@ -38,6 +38,7 @@ from jaxspline.kernels.batch import map_chunked
 from jaxspline.kernels.validate import check_finite, check_positive
 
 __all__ = [
+    "AREA",
     "POINT",
     "STRIP",
     "RouteSet",
@@ -49,6 +50,7 @@ __all__ = [
 
 POINT = 0  # a target imaged from one point
 STRIP = 1  # a target imaged along a strip
+AREA = 2  # a target imaged by strips at a held roll, valued by the share of its samples covered
 
 
 class RouteSpec(NamedTuple):

@@ -3,9 +3,10 @@
 :func:`jaxspline.planner.pipeline.plan` runs the stages (problem, search, repair, the
 optional HiGHS certificate); :func:`assemble_result` only reads their outputs: the
 observations in the re-check's order with their maneuver times and slacks, the value
-and the bound (the search's, capped by the value of the targets that have an option,
-lowered by the HiGHS bound when that is smaller), the battery profiles, the check
-report and the statistics.
+(an area counted by the share of its samples the plan's strips cover,
+:func:`area_report`) and the bound (the search's, capped by the value within reach of
+the options, lowered by the HiGHS bound when that is smaller), the battery profiles,
+the check report and the statistics.
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ from jaxspline.planner.context import PlanContext
 from jaxspline.planner.result import Observations, PlanResult
 from jaxspline.search import BoundStatus
 
-__all__ = ["assemble_result"]
+__all__ = ["area_report", "assemble_result"]
 
 
 def assemble_result(
@@ -42,12 +43,15 @@ def assemble_result(
     """
     sc = ctx.scenario
     det = rep.details
-    obs = _observations(sc.targets, rep.opp, det)
+    obs = _observations(sc.targets, rep.opp, det, ctx.problem.cover)
     value = float(np.sum(obs.value))
-    bound, converged = _search_bound(sc.targets, rep.opp, res)
+    bound, converged = _search_bound(sc.targets, rep.opp, res, ctx.problem.cover)
     mip_stats = None
     if mip is not None:
         mip_stats, bound, converged = _with_certificate(mip, bound, converged)
+    report = _report(rep, obs, flown_joins, interrupted)
+    if ctx.problem.cover is not None:
+        report["areas"] = area_report(sc, ctx.problem.cover, det["order"])
     return PlanResult(
         scenario=sc,
         observations=obs,
@@ -55,18 +59,25 @@ def assemble_result(
         bound=max(bound, value),
         gap=max(bound, value) - value,
         bound_converged=converged,
-        report=_report(rep, obs, flown_joins, interrupted),
+        report=report,
         stats=_stats(ctx, rep, res, mip_stats, peak_rss_mb),
         timings=timings,
         battery=_battery_profiles(sc.satellites, ctx.battery, det),
     )
 
 
-def _observations(tg, opp, det) -> Observations:
+def _observations(tg, opp, det, cover) -> Observations:
     """The checked observations of the options ``opp`` in the re-check's order
-    (``det["order"]``), with its maneuver times and slacks and the targets' values."""
+    (``det["order"]``), with its maneuver times and slacks, the targets' values (an
+    area strip's: what it adds to the earlier ones) and the area strips' rolls."""
     o = opp.options
     idx = np.asarray(det["order"], np.int64)
+    value = np.asarray(tg.value, np.float64)[np.asarray(o.route)[idx]]
+    roll = np.full(idx.size, np.nan)
+    if cover is not None:
+        area = cover.option_group[idx] >= 0
+        value[area] = _strip_values(cover, idx[area], np.asarray(o.t_start)[idx[area]])
+        roll[area] = opp.params[idx[area], 0]
     return Observations(
         sat=np.asarray(o.sat)[idx],
         target=np.asarray(o.route)[idx],
@@ -74,16 +85,83 @@ def _observations(tg, opp, det) -> Observations:
         end=np.asarray(o.t_end)[idx],
         maneuver=det["maneuver"],
         slack=det["slack"],
-        value=np.asarray(tg.value)[np.asarray(o.route)[idx]],
+        value=value,
         speed=opp.speed[idx],
+        roll=roll,
     )
 
 
-def _search_bound(tg, opp, res):
-    """The search's bound capped by the total value of the targets that have an option
-    (every plan images only those), and whether the bound converged. Returns (bound,
-    converged)."""
-    reachable = float(np.sum(np.asarray(tg.value)[np.unique(np.asarray(opp.options.route))]))
+def _strip_values(cover, ids, starts) -> np.ndarray:
+    """The value each area option ``ids`` adds to the ones starting before it."""
+    hit = np.zeros(cover.n_samples, bool)
+    out = np.zeros(ids.size)
+    for j in np.argsort(starts, kind="stable"):
+        c = int(ids[j])
+        s = cover.samples(
+            int(cover.option_group[c]), int(cover.option_a[c]), int(cover.option_b[c])
+        )
+        new = s[~hit[s]]
+        out[j] = float(cover.weight[new].sum())
+        hit[new] = True
+    return out
+
+
+def area_report(sc, cover, chosen) -> list:
+    """Per area what the plan covers of it.
+
+    Args:
+      sc: Scenario; cover: the problem's :class:`jaxspline.search.cover.CoverTable`;
+      chosen: option ids of the plan.
+    Returns:
+      list of dict per area: ``area`` (name), ``priority``, ``samples``,
+      ``samples_covered``, ``covered_share`` (summed weight of its covered samples),
+      ``value`` (priority times the share), ``strips`` (area strips planned that cover
+      it), ``reachable_share`` (the share all its candidate strips cover together: no
+      plan covers more) and ``min_share`` (None: no minimum).
+    """
+    ids = np.asarray([c for c in chosen if cover.option_group[c] >= 0], np.int64)
+    hit = np.zeros(cover.n_samples, bool)
+    strips = np.zeros(cover.n_areas, np.int64)
+    for c in ids.tolist():
+        s = cover.samples(
+            int(cover.option_group[c]), int(cover.option_a[c]), int(cover.option_b[c])
+        )
+        hit[s] = True
+        strips[np.unique(cover.area[s])] += 1
+    reach = np.zeros(cover.n_samples, bool)
+    reach[cover.indices] = True
+    out = []
+    for a, area in enumerate(sc.areas):
+        m = cover.area == a
+        share = float(cover.share[m & hit].sum())
+        out.append(
+            {
+                "area": area.name,
+                "priority": float(sc.targets.value[area.target]),
+                "samples": int(m.sum()),
+                "samples_covered": int((m & hit).sum()),
+                "covered_share": share,
+                "value": float(sc.targets.value[area.target]) * share,
+                "strips": int(strips[a]),
+                "reachable_share": float(cover.share[m & reach].sum()),
+                "min_share": None if np.isnan(area.min_share) else float(area.min_share),
+            }
+        )
+    return out
+
+
+def _search_bound(tg, opp, res, cover):
+    """The search's bound capped by the value within reach of the options (the targets
+    that have one; of an area, the share its candidate strips cover), and whether the
+    bound converged. Returns (bound, converged)."""
+    routes = np.unique(np.asarray(opp.options.route))
+    value = np.asarray(tg.value, np.float64)
+    if cover is None:
+        reachable = float(np.sum(value[routes]))
+    else:
+        areas = set(cover.area_target.tolist())
+        reachable = float(sum(value[r] for r in routes.tolist() if r not in areas))
+        reachable += cover.union_weight()
     bound = min(float(res.bound), reachable)
     return bound, res.bound_status in (BoundStatus.OPTIMAL, BoundStatus.CONVERGED)
 

@@ -41,6 +41,8 @@ class PlanContext:
       orbits: :class:`jaxspline.geometry.orbit.OrbitTable` on the geometry knots.
       battery: :class:`jaxspline.search.BatteryModel` with the planner's margins.
       far: float [S], the always-feasible gap of each satellite [s].
+      areas: :class:`jaxspline.planner.area_options.AreaOptions` of the scenario's areas
+        (their samples, groups and rows), or None.
     """
 
     scenario: Scenario
@@ -51,6 +53,7 @@ class PlanContext:
     orbits: OrbitTable
     battery: BatteryModel
     far: np.ndarray
+    areas: object = None
 
     def usable(self, sat, t) -> np.ndarray:
         """Whether the orbit table is usable for satellites ``sat`` at times ``t``.

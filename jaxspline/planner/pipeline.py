@@ -42,7 +42,10 @@ import jax
 import numpy as np
 
 from jaxspline.geometry.frames import in_shadow, jd_split, sun_direction
+from jaxspline.geometry.orbit import orbit_period
+from jaxspline.geometry.routes import AREA
 from jaxspline.geometry.windows import visibility_windows_all, window_work
+from jaxspline.planner.area_options import area_options, cover_table, merge_options
 from jaxspline.planner.assemble import assemble_result
 from jaxspline.planner.budget import Budget, deadline_budget, default_budget, refine_steps
 from jaxspline.planner.context import PlanContext
@@ -345,7 +348,10 @@ def build_problem(
         fits("options", lambda: option_bytes(sc, *option_counts(sc, windows)))
         cands = check("options", 0, work=lambda: (option_counts(sc, windows)[0], _CANDS))
         opp = build_opportunities(sc, scene, table.usable, windows, tick=cands)
-        clock.lap("options", f"{len(opp)} options")
+        area, window = area_options(sc, table, scene), None
+        if area is not None:
+            opp, window = merge_options(opp, area)
+        clock.lap("options", f"{len(opp)} options" + _area_line(area))
         tick = check("screening", 0, work=lambda: (len(opp), "options"))
         beat = tick or _no_tick  # between the steps before the near pairs (each may be long)
         tables = [s.maneuver.screen_model(s, sc.planner.margins.gap) for s in sats]
@@ -368,9 +374,12 @@ def build_problem(
         clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
         check("screening")
         battery = _battery(sc, sunlit)
-        pb = Problem.build(opp, sats, first, near, far, tables, battery, sc.targets.value, lookup)
+        cover = None if area is None else cover_table(sc, area, window)
+        values = np.where(sc.targets.kind == AREA, 0.0, sc.targets.value)  # areas: in samples
+        rules = {"cover": cover, "max_actions": sc.planner.max_actions, "duty": _duty(sc)}
+        pb = Problem.build(opp, sats, first, near, far, tables, battery, values, lookup, **rules)
         pb.near_slack = slack
-    return PlanContext(sc, pb, opp, windows, scene, table, battery, far)
+    return PlanContext(sc, pb, opp, windows, scene, table, battery, far, areas=area)
 
 
 def _stage_check(deadline: StageDeadline | None, clock):
@@ -407,9 +416,37 @@ def _window_args(sc: Scenario, scene, table) -> tuple:
     tg = sc.targets
     sensors = np.array([s.sensor for s in sc.satellites])
     allowed = (tg.sensor[None, :] == "") | (tg.sensor[None, :] == sensors[:, None])
+    # areas have options of their own (area_options); a model that cannot track a
+    # point images area strips only
+    tracks = np.array([s.maneuver.tracks_points for s in sc.satellites])
+    allowed &= (tg.kind != AREA)[None, :] & tracks[:, None]
     limit_k = np.array([s.off_nadir_max for s in sc.satellites]) - pc.margins.off_nadir
     times = (pc.margins.horizon, tg.t_lo, tg.t_hi, sc.duration)
     return (scene, table.ok, reference_points(sc), allowed, limit_k, *times)
+
+
+def _area_line(area) -> str:
+    """The options line's part on the areas (empty without areas)."""
+    if area is None:
+        return ""
+    g = area.groups
+    samples = sum(len(x) for x in area.grids)
+    return (
+        f" ({len(area)} area strips: {samples} samples, {g.n_passes} passes, "
+        f"{len(g)} roll groups, {area.indices.size} covered entries)"
+    )
+
+
+def _duty(sc: Scenario):
+    """Per satellite ``(orbit period, duty - margin)`` [s], or None (no satellite has a
+    duty rule)."""
+    if all(s.duty is None for s in sc.satellites):
+        return None
+    m = sc.planner.margins.duty
+    return [
+        None if s.duty is None else (orbit_period(s.orbit), float(s.duty) - m)
+        for s in sc.satellites
+    ]
 
 
 def _no_tick(share: float) -> None:
@@ -584,7 +621,7 @@ def _search_and_repair(ctx: PlanContext, budget: Budget, seed, max_iters, flown_
         capped = max_iters is not None
         rep = repair(
             ctx,
-            [c for c in tl.assigned if c >= 0],
+            tl.plan(),
             refine_steps=steps,
             flown_joins=flown_joins,
             refill_s=math.inf if capped else _REFILL_S,

@@ -16,7 +16,12 @@ every constraint of the scenario *without* margins from the kernels:
   satellites' transfers (from rest at zero angles at t = 0 for the first one) are
   checked by sampling their Theorem-1 trajectories (:func:`jaxspline.sequences.check_steps`);
 * battery: the conservative profile (:class:`jaxspline.search.BatteryModel`) with
-  margin 0 stays >= 0.
+  margin 0 stays >= 0;
+* areas: an area's strips keep their edges inside the satellite's edge band (where it
+  has one and a field of view), any number of them may image one area (every other
+  target is imaged once), and a satellite's imaging time in any window of one orbital
+  period ending at an observation's start or end stays within its duty (where it has
+  one); the plan holds at most the planner's ``max_actions`` observations.
 
 Failing observations are reported by index, each with the reason it fails: one
 observation per violated rule (the later observation of a failing transition, the
@@ -31,6 +36,8 @@ from typing import NamedTuple
 import numpy as np
 
 from jaxspline.geometry.frames import angle_between
+from jaxspline.geometry.orbit import orbit_period
+from jaxspline.geometry.routes import AREA
 from jaxspline.kernels.batch import pad_rows, round_up
 from jaxspline.kernels.reach_durations import min_transfer_time
 from jaxspline.planner.context import PlanContext
@@ -43,6 +50,7 @@ __all__ = ["check_plan"]
 _SAMPLES = 201  # Theorem-1 samples per per-channel maneuver
 _TIME_TOL = 1e-6  # [s] slack of the midpoint-window and minimum-duration tests
 _PAD = 1 << 10  # kernel batches are padded to multiples of this (few compiled shapes)
+_BAND_TOL = 1e-9  # [rad] slack of the edge-band test
 
 
 def check_plan(ctx: PlanContext, chosen, opp=None):
@@ -59,7 +67,8 @@ def check_plan(ctx: PlanContext, chosen, opp=None):
       per-observation required maneuver time and slack [s] (exact kernels), the
       battery profile and minimum of every powered satellite that has observations,
       the human-readable violations, the checked order and ``reasons`` (option id ->
-      "geometry", "timing", "repeat", "maneuver" or "battery", the first rule it broke).
+      "geometry", "timing", "repeat", "maneuver", "duty", "cap" or "battery", the first
+      rule it broke).
     """
     sc, battery = ctx.scenario, ctx.battery
     opp = ctx.opportunities if opp is None else opp
@@ -76,6 +85,9 @@ def check_plan(ctx: PlanContext, chosen, opp=None):
         _geometry_findings(ctx, opp, pl),
         _timing_findings(sc, pl),
         _repeat_findings(sc, pl),
+        _band_findings(sc, opp, pl),
+        _duty_findings(sc, pl),
+        _cap_findings(sc, pl),
     ]
     bat_min, levels = {}, {}
     for k, s in enumerate(sc.satellites):
@@ -207,11 +219,11 @@ def _timing_findings(sc, pl: _PlanRows) -> _Findings:
 
 
 def _repeat_findings(sc, pl: _PlanRows) -> _Findings:
-    """Every observation of a target but its earliest one (one violation per repeat):
-    reason "repeat"."""
+    """Every observation of a point or strip target but its earliest one (one violation
+    per repeat; an area takes any number): reason "repeat"."""
     tg = sc.targets
     f = _Findings([], [])
-    dup = np.unique(pl.tgt, return_counts=True)
+    dup = np.unique(pl.tgt[tg.kind[pl.tgt] != AREA], return_counts=True)
     for r in dup[0][dup[1] > 1]:
         again = np.flatnonzero(pl.tgt == r)
         for i in again[np.argsort(pl.t0[again], kind="stable")][1:]:  # keep the earliest
@@ -228,8 +240,10 @@ def _rest_to_rest_maneuvers(sc, o, pl: _PlanRows, s, m):
     chosen, first, prev, gap = pl.chosen, pl.first, pl.prev, pl.gap
     frm = np.where(first[m, None], o.start_nadir[chosen[m]], o.end_los[prev[m]])
     th = angle_between(frm, o.start_los[chosen[m]])
-    need = s.maneuver.slew_time(s, th)
-    man = np.asarray(need, np.float64)
+    need = np.asarray(s.maneuver.slew_time(s, th), np.float64)
+    if not s.maneuver.first_from_nadir:  # the model's first observation needs no slew
+        need = np.where(first[m], 0.0, need)
+    man = need
     f = _Findings([], [])
     for j in np.flatnonzero(gap[m] < need):
         i = m[j]
@@ -277,6 +291,61 @@ def _from_rest(sc, o, ids) -> RouteOptions:
         route=np.concatenate([[int(sc.targets.kind.size)], steps.route]),
         scan_ok=np.ones(ids.size + 1, bool),
     )
+
+
+def _band_findings(sc, opp, pl: _PlanRows) -> _Findings:
+    """Area strips of satellites with an edge band and a field of view whose edges
+    ``|roll| -+ fov / 2`` leave the band (1e-9 rad): reason "geometry"."""
+    f = _Findings([], [])
+    area = sc.targets.kind[pl.tgt] == AREA
+    for i in np.flatnonzero(area):
+        s = sc.satellites[pl.sat[i]]
+        if s.edge_band is None or s.fov is None:
+            continue
+        r = abs(float(opp.params[pl.chosen[i], 0]))
+        lo, hi = (float(x) for x in s.edge_band)
+        if r - s.fov / 2 < lo - _BAND_TOL or r + s.fov / 2 > hi + _BAND_TOL:
+            f.bad.append((int(pl.chosen[i]), "geometry"))
+            f.violations.append(
+                f"{s.name} {sc.targets.name[pl.tgt[i]]}: strip edges outside the edge band"
+            )
+    return f
+
+
+def _duty_findings(sc, pl: _PlanRows) -> _Findings:
+    """Imaging time over a satellite's duty in a window of one orbital period ending at
+    an observation's start or end: the observation ending the window, reason "duty"."""
+    f = _Findings([], [])
+    for k, s in enumerate(sc.satellites):
+        m = np.flatnonzero(pl.sat == k)
+        if s.duty is None or m.size == 0:
+            continue
+        period = orbit_period(s.orbit)
+        a, b = pl.t0[m], pl.t1[m]
+        ends = sorted((float(x), i) for i in range(m.size) for x in (a[i], b[i]))
+        for t, j in ends:
+            used = float(np.sum(np.clip(np.minimum(b, t) - np.maximum(a, t - period), 0.0, None)))
+            if used > s.duty + _TIME_TOL:
+                f.bad.append((int(pl.chosen[m[j]]), "duty"))
+                f.violations.append(
+                    f"{s.name}: {used:.3f} s imaging in the orbit before t = {t:.1f} s > duty "
+                    f"{s.duty:g} s"
+                )
+                break
+    return f
+
+
+def _cap_findings(sc, pl: _PlanRows) -> _Findings:
+    """Observations past the planner's ``max_actions`` (the latest ones): reason "cap"."""
+    f = _Findings([], [])
+    cap = sc.planner.max_actions
+    if cap is None or pl.chosen.size <= cap:
+        return f
+    late = np.argsort(pl.t0, kind="stable")[cap:]
+    for i in late:
+        f.bad.append((int(pl.chosen[i]), "cap"))
+    f.violations.append(f"{pl.chosen.size} observations > max_actions {cap}")
+    return f
 
 
 def _battery_findings(battery, k, s, pl: _PlanRows, m, man):

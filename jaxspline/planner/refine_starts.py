@@ -22,6 +22,7 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
+from jaxspline.geometry.routes import AREA
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.opportunities import Opportunities, option_states
 from jaxspline.screen.options import take_options
@@ -195,12 +196,14 @@ def _quadratic_coef(ctx: PlanContext, ids, t0, h: float, per_ch) -> np.ndarray:
 def _start_windows(sc, opp: Opportunities, grid: _Grid, ids, t0, dur, h: float):
     """The start windows (lo, hi) [K] [s] of the options ``ids`` (starts ``t0``, imaging
     times ``dur``): half a step ``h`` to each side where the neighbouring grid start is
-    an option too, clipped to the target's imaging window and the horizon."""
+    an option too, clipped to the target's imaging window and the horizon (an area
+    strip's is its start alone)."""
     tg = sc.targets
     r = np.asarray(opp.options.route)[ids]
     lo = np.maximum.reduce([t0 - h * grid.has(opp, ids, -1), tg.t_lo[r], np.zeros_like(t0)])
     hi = np.minimum.reduce([t0 + h * grid.has(opp, ids, 1), tg.t_hi[r] - dur, sc.duration - dur])
-    return lo, hi
+    area = tg.kind[r] == AREA  # an area strip stays on its slots (its rows are theirs)
+    return np.where(area, t0, lo), np.where(area, t0, hi)
 
 
 def _padded_model(o, ids, t0, dur, coef, lo, hi):

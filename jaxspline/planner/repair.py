@@ -164,15 +164,12 @@ def _refill(pb, chosen, withdrawn, seconds, iters, seed):
     Returns (option ids of the plan, observations added).
     """
     tl = Timeline(pb, withdrawn)
-    assigned = [-1] * pb.n_targets
-    for c in chosen:
-        assigned[pb.option_target[c]] = c
-    tl.restore(assigned)
+    tl.restore(chosen)
     deadline = time.monotonic() + seconds
     greedy(tl, deadline)
     if iters is None or iters > 0:
         lns(tl, deadline, random.Random(seed), iters)
-    new = [c for c in tl.assigned if c >= 0]
+    new = tl.plan()
     return new, len(new) - len(chosen)
 
 

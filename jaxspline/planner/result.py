@@ -33,8 +33,10 @@ class Observations(NamedTuple):
         observation's end, or from the initial attitude for a satellite's first one):
         the time the satellite's model requires, at most the available gap.
       slack: available gap minus required maneuver time [s] (>= 0 in a valid plan).
-      value: the target's value.
+      value: the target's value; for an area strip, the area's value it adds to the
+        strips before it (in time order), so the values sum to the plan's.
       speed: ground scan speed of a strip [m/s] (0 for points).
+      roll: the roll an area strip holds [rad] (NaN for point and strip targets).
     """
 
     sat: np.ndarray
@@ -45,6 +47,7 @@ class Observations(NamedTuple):
     slack: np.ndarray
     value: np.ndarray
     speed: np.ndarray
+    roll: np.ndarray
 
     def __len__(self) -> int:
         return int(self.sat.shape[0])
@@ -57,7 +60,8 @@ class PlanResult:
     Attributes:
       scenario: the planned :class:`jaxspline.readers.mission.Scenario`.
       observations: :class:`Observations`.
-      value: total value of the plan (each target counted once).
+      value: total value of the plan (each target counted once, an area by the share
+        of its samples covered).
       bound: an upper bound of the best plan's value (Lagrangian / exact DP; the
         battery is relaxed), so ``gap = bound - value`` certifies how far the plan can
         be from the optimum of the option model.
@@ -65,7 +69,9 @@ class PlanResult:
       bound_converged: True when the bound's subgradient iteration stopped by
         convergence (not by the time limit).
       report: independent re-check of the plan: ``{"valid": bool, "checked": int,
-        "violations": [str, ...], "min_slack_s": float, "min_battery_wh": float}``.
+        "violations": [str, ...], "min_slack_s": float, "min_battery_wh": float}``;
+        with areas also ``"areas"``, one dict per area
+        (:func:`jaxspline.planner.assemble.area_report`).
       stats: counts (windows, options, near pairs, search iterations, ...).
       timings: wall time per stage [s].
       battery: per satellite name, ``(t [s], level [Wh])`` of the planned battery
@@ -122,7 +128,7 @@ class PlanResult:
                 {
                     "satellite": sat.name,
                     "target": str(sc.targets.name[r]),
-                    "kind": "strip" if int(sc.targets.kind[r]) == 1 else "point",
+                    "kind": _KINDS[int(sc.targets.kind[r])],
                     "start_utc": _iso(sc.at(o.start[i])),
                     "end_utc": _iso(sc.at(o.end[i])),
                     "start_s": float(o.start[i]),
@@ -134,20 +140,19 @@ class PlanResult:
                     "scan_speed_m_s": float(o.speed[i]),
                 }
             )
-        if sc.areas:  # which area a strip serves and the area's covered fraction
+        if sc.areas:  # an area strip's roll and its area's covered share
             self._area_columns(out)
         return out
 
     def _area_columns(self, rows: list[dict]) -> None:
-        """Add ``area`` (the area a strip serves, "" for other targets) and
-        ``area_covered_fraction`` (that area's covered fraction, ``report["areas"]``,
-        empty before the outputs computed it) to each row of :meth:`rows`."""
-        of = {int(t): a.name for a in self.scenario.areas for t in a.targets}
-        frac = {a["area"]: a["covered_fraction"] for a in self.report.get("areas", [])}
-        for row, r in zip(rows, self.observations.target, strict=True):
-            name = of.get(int(r), "")
-            row["area"] = name
-            row["area_covered_fraction"] = round(frac[name], 6) if name in frac else ""
+        """Add ``roll_deg`` (the roll an area strip holds, "" for other targets) and
+        ``area_covered_share`` (the strip's area's covered share, ``report["areas"]``)
+        to each row of :meth:`rows`."""
+        share = {a["area"]: a["covered_share"] for a in self.report.get("areas", [])}
+        for row, roll in zip(rows, self.observations.roll, strict=True):
+            area = row["kind"] == "area"
+            row["roll_deg"] = round(math.degrees(float(roll)), 6) if area else ""
+            row["area_covered_share"] = round(share[row["target"]], 6) if area else ""
 
     def summary(self) -> dict:
         """Headline figures (JSON-ready).
@@ -220,6 +225,9 @@ class PlanResult:
         w.writeheader()
         w.writerows(rows)
         return atomic_write_text(path, buf.getvalue(), force=force)
+
+
+_KINDS = ("point", "strip", "area")  # by target kind (POINT, STRIP, AREA)
 
 
 def _iso(when) -> str:

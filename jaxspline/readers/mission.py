@@ -31,11 +31,13 @@ import numpy as np
 from jaxspline.geometry.frames import gmst, julian_date
 from jaxspline.geometry.orbit import CircularOrbit, tabulate_orbits
 from jaxspline.geometry.pointing import Scene
-from jaxspline.geometry.routes import POINT, STRIP
+from jaxspline.geometry.routes import AREA, POINT, STRIP
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.screen.models import ManeuverModel, maneuver_model, model_names
 
 __all__ = [
+    "DEFAULT_ROLL_STEP_DEG",
+    "DEFAULT_STRIP_DURATION",
     "DEFAULT_SWATH",
     "MAX_EXACT_OPTIONS",
     "MODELS",
@@ -52,6 +54,9 @@ __all__ = [
 ]
 
 MODELS = model_names()  # the built-in maneuver models
+DEFAULT_ROLL_STEP_DEG = 0.25  # [deg] roll grid of area strips (~3 km at 30 deg from 550 km)
+DEFAULT_STRIP_DURATION = (0.0, 60.0)  # [s] shortest and longest area strip when unnamed
+_SHARE_TOL = 1e-9  # the samples' shares may exceed 1 by rounding this much
 DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
 # the exact search recurses once per option (Python's stack: ~1000 frames); beyond a
 # few hundred options branch and bound cannot finish anyway
@@ -134,8 +139,14 @@ class Satellite:
       flex: :class:`FlexMode` (required for ``"flexible"``).
       power: :class:`Power` or None (no battery constraint).
       swath: ground width imaged across the scan direction [m] (> 0), taken as
-        independent of the viewing angle; area targets are cut into strips this wide,
-        and the CZML draws footprints of this width.
+        independent of the viewing angle; the CZML draws footprints of this width, and
+        without ``fov`` it gives the field of view of area strips.
+      fov: cross-track field of view of area strips [rad] (None: the swath seen from
+        the orbit's altitude at nadir).
+      edge_band: ``(lo, hi)``, the off-nadir angles [rad] an area strip's edges must lie
+        between (None: only the boresight's ``off_nadir_max``).
+      strip_duration: ``(shortest, longest)`` imaging time of an area strip [s].
+      duty: imaging seconds allowed in any window of one orbital period (None: no rule).
     """
 
     name: str
@@ -148,6 +159,10 @@ class Satellite:
     flex: FlexMode | None = None
     power: Power | None = None
     swath: float = DEFAULT_SWATH
+    fov: float | None = None
+    edge_band: tuple | None = None
+    strip_duration: tuple = DEFAULT_STRIP_DURATION
+    duty: float | None = None
 
     def __post_init__(self):
         who = f"satellite {self.name!r}"
@@ -181,7 +196,28 @@ class Satellite:
             )
         _positive(f"{who}: settle", self.settle, allow_zero=True)
         _positive(f"{who}: swath", self.swath)
+        self._check_area_fields(who)
         maneuver.check(self)
+
+    def _check_area_fields(self, who: str) -> None:
+        """The fields of area strips: fov in (0, pi/2), an ordered edge band inside the
+        hemisphere, ordered non-negative strip durations, a positive duty."""
+        if self.fov is not None and not 0.0 < float(self.fov) < math.pi / 2:
+            raise ValueError(f"{who}: fov must be in (0, pi/2), got {self.fov!r}")
+        if self.edge_band is not None:
+            lo, hi = (float(x) for x in self.edge_band)
+            if not 0.0 <= lo < hi < math.pi / 2:
+                raise ValueError(
+                    f"{who}: edge_band must be 0 <= lo < hi < pi/2, got {self.edge_band!r}"
+                )
+        lo, hi = (float(x) for x in self.strip_duration)
+        if not (math.isfinite(hi) and 0.0 <= lo <= hi and hi > 0.0):
+            raise ValueError(
+                f"{who}: strip_duration must be 0 <= shortest <= longest, longest > 0 and "
+                f"finite, got {self.strip_duration!r}"
+            )
+        if self.duty is not None:
+            _positive(f"{who}: duty", self.duty)
 
     @property
     def maneuver(self) -> ManeuverModel:
@@ -195,8 +231,9 @@ class Targets:
 
     Attributes:
       name: str [R].
-      kind: int [R], POINT (0) or STRIP (1).
-      lat, lon: geodetic start point [rad] (the target itself for a point).
+      kind: int [R], POINT (0), STRIP (1) or AREA (2).
+      lat, lon: geodetic start point [rad] (the target itself for a point, the centre
+        of an area).
       alt: height above the WGS84 ellipsoid [m].
       duration: imaging time of a point [s] (0 for strips).
       length: strip length [m] (0 for points); azimuth: strip direction at the start,
@@ -270,7 +307,8 @@ def make_targets(
     All fields broadcast together to R targets (scalars allowed).
 
     Args:
-      kind: int [R], POINT (0) or STRIP (1).
+      kind: int [R], POINT (0), STRIP (1) or AREA (2, its samples in a
+        :class:`Area`).
       lat: float [R], geodetic latitude of the start point [rad], in [-pi/2, pi/2].
       lon: float [R], longitude of the start point [rad].
       alt: float [R], height above the WGS84 ellipsoid [m].
@@ -343,7 +381,12 @@ def _check_target_fields(kind: np.ndarray, out: dict) -> None:
     strips and a duration for points, ordered windows, and a finite non-negative
     ``min_duration`` that a point's duration reaches. Raises ValueError at the first
     target breaking the first rule it breaks."""
-    _reject_first("kind", ~np.isin(kind, (POINT, STRIP)), "must be 0 (point) or 1 (strip)", kind)
+    _reject_first(
+        "kind",
+        ~np.isin(kind, (POINT, STRIP, AREA)),
+        "must be 0 (point), 1 (strip) or 2 (area)",
+        kind,
+    )
     for f in ("lat", "lon", "alt", "duration", "length", "azimuth", "value"):
         _reject_first(f, ~np.isfinite(out[f]), "must be finite", out[f])
     lat, value, length, duration = out["lat"], out["value"], out["length"], out["duration"]
@@ -372,71 +415,54 @@ def _target_names(name, n: int) -> np.ndarray:
 
 @dataclasses.dataclass(frozen=True)
 class Area:
-    """A polygon area target, cut into strip targets of the scenario (plain data).
+    """An area target: a region whose value is its priority times the share of it imaged.
 
-    Built by the product layer (:mod:`jaxspline.readers.areas`, which holds the geometry); the
-    engine plans its strips like any other target and never looks at the polygon.
+    The planner lays the area out as weighted samples (the scenario's own, or a grid of
+    ``spacing`` over the polygon, :func:`jaxspline.geometry.area_grid.area_grid`) and
+    plans strips at a held roll over it (:mod:`jaxspline.planner.area_options`); a sample
+    counts once however often it is imaged. Its priority, imaging window and sensor are
+    those of its row ``target`` of ``scenario.targets`` (kind :data:`AREA`).
 
     Attributes:
-      name: label (unique among the scenario's areas).
+      name: label (unique among the scenario's areas; its target's name).
+      target: index of its row in ``scenario.targets``.
       geometry: GeoJSON geometry dict, ``{"type": "Polygon" | "MultiPolygon",
-        "coordinates": ...}``, positions ``[lon, lat]`` in degrees (RFC 7946).
-      value: priority of the whole area (> 0), split over each cutting's strips by
-        their share of the area.
-      swath: strip width [m] (> 0).
-      targets: int [K], indices of the area's strip targets in ``scenario.targets``.
-      share: float [K], fraction of the polygon's area inside each strip's band (sums
-        to 1 over the strips of one cutting).
-      cutting: int [K], the cutting (ground-track direction, 0..C-1) of each strip.
-      azimuth: float [C], strip direction of each cutting at the area's centre,
-        clockwise from north [rad], in [0, pi) (a strip is scanned either way).
-      passes: int [C], satellite passes over the area whose ground track gave each
-        cutting.
-      objective: ``"strips"`` (cut strips) or ``"coverage"`` (``share``: each strip's
-        marginal covered share, :mod:`jaxspline.readers.coverage_strips`).
-      sample_lonlat, sample_weight, candidates, union: (coverage only) samples (lon, lat)
-        [deg] [N, 2], their area shares [N], strips screened, share all cover (a bound).
+        "coordinates": ...}``, positions ``[lon, lat]`` in degrees (RFC 7946), or None
+        when the samples are given.
+      spacing: sample grid spacing [m] (0 when the samples are given).
+      samples: float [N, 3], the given samples ``(lon [deg], lat [deg], weight)``, each
+        weight the share of the area the sample stands for (summing to at most 1);
+        empty [0, 3] when the planner lays out the grid.
+      min_share: least share of the area a plan must cover (NaN: none).
     """
 
     name: str
-    geometry: dict
-    value: float
-    swath: float
-    targets: np.ndarray
-    share: np.ndarray
-    cutting: np.ndarray
-    azimuth: np.ndarray
-    passes: np.ndarray
-    objective: str = "strips"
-    sample_lonlat: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 2)))
-    sample_weight: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
-    candidates: int = 0
-    union: float = math.nan
+    target: int
+    geometry: dict | None = None
+    spacing: float = 0.0
+    samples: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 3)))
+    min_share: float = math.nan
 
     def __post_init__(self):
         who = f"area {self.name!r}"
-        if not isinstance(self.geometry, dict) or self.geometry.get("type") not in (
-            "Polygon",
-            "MultiPolygon",
+        if self.geometry is not None and (
+            not isinstance(self.geometry, dict)
+            or self.geometry.get("type") not in ("Polygon", "MultiPolygon")
         ):
             raise ValueError(f"{who}: geometry must be a GeoJSON Polygon or MultiPolygon dict")
-        _positive(f"{who}: value", self.value)
-        _positive(f"{who}: swath", self.swath)
-        k = np.shape(self.targets)
-        for f in ("share", "cutting"):
-            if (got := np.shape(getattr(self, f))) != k:
-                raise ValueError(f"{who}: {f} must have shape {k}, got {got}")
-        c, p = np.shape(self.azimuth), np.shape(self.passes)
-        if p != c or len(c) != 1:
-            raise ValueError(f"{who}: azimuth and passes must be [C], got {c}, {p}")
-        cut = np.asarray(self.cutting)
-        if cut.size and (cut.min() < 0 or cut.max() >= c[0]):
-            raise ValueError(f"{who}: cutting must be in [0, {c[0]}), got {cut.tolist()}")
-        if self.objective not in ("strips", "coverage"):
-            raise ValueError(f"{who}: objective must be strips or coverage, got {self.objective!r}")
-        n, w = np.shape(self.sample_lonlat), np.shape(self.sample_weight)
-        if len(n) != 2 or n[1] != 2 or w != n[:1]:
-            raise ValueError(f"{who}: sample_lonlat, sample_weight must be [N, 2], [N]: {n}, {w}")
+        smp = np.asarray(self.samples, np.float64)
+        if smp.ndim != 2 or smp.shape[1] != 3 or not np.all(np.isfinite(smp)):
+            raise ValueError(f"{who}: samples must be finite [N, 3] (lon, lat, weight)")
+        if smp.shape[0] and (np.any(smp[:, 2] < 0) or smp[:, 2].sum() > 1.0 + _SHARE_TOL):
+            raise ValueError(f"{who}: sample weights must be >= 0 and sum to at most 1")
+        object.__setattr__(self, "samples", smp)
+        if smp.shape[0] == 0:
+            if self.geometry is None:
+                raise ValueError(f"{who}: give a polygon (geometry) or the samples")
+            _positive(f"{who}: spacing", self.spacing)
+        m = float(self.min_share)
+        if not (math.isnan(m) or 0.0 <= m <= 1.0):
+            raise ValueError(f"{who}: min_share must be in [0, 1] (NaN: none), got {m!r}")
 
 
 @dataclasses.dataclass(frozen=True)
@@ -446,8 +472,10 @@ class Margins:
     Attributes:
       off_nadir: observations keep off-nadir <= limit - this [rad].
       horizon: sine of the target elevation must exceed this (> 0 is the rule).
-      gap: added to every required rest-to-rest slew time [s] (eigen_axis, flexible).
+      gap: added to every required rest-to-rest slew time [s] (eigen_axis, flexible,
+        roll_only).
       battery_wh: the battery level must stay >= this [Wh].
+      duty: imaging seconds kept below a satellite's duty limit per orbit [s].
       shadow_guard: charging counts only if sunlit this many battery steps around
         a step (covers shadow-entry timing differences).
     """
@@ -457,6 +485,7 @@ class Margins:
     gap: float = 0.0
     battery_wh: float = 0.0
     shadow_guard: int = 0
+    duty: float = 0.0
 
 
 @dataclasses.dataclass(frozen=True)
@@ -480,6 +509,8 @@ class PlannerConfig:
       refine_steps: optax steps of start-time refinement of per-channel satellites'
         sequences (:mod:`jaxspline.planner.refine_starts`; 0 = off).
       default_time_limit: search budget [s] when :func:`plan` gets no time limit.
+      max_actions: most observations of a plan, all satellites together (None: no cap).
+      area_roll_step: roll grid step of area strips [rad].
     """
 
     time_step: float = 5.0
@@ -492,6 +523,8 @@ class PlannerConfig:
     bound_worker: bool = True
     refine_steps: int = 100
     default_time_limit: float = 30.0
+    max_actions: int | None = None
+    area_roll_step: float = math.radians(DEFAULT_ROLL_STEP_DEG)
 
     def __post_init__(self):
         for f in ("time_step", "geometry_step", "default_time_limit"):
@@ -515,6 +548,9 @@ class PlannerConfig:
             raise ValueError(
                 f"planner.lagrangian_share must be in [0, 1), got {self.lagrangian_share!r}"
             )
+        if self.max_actions is not None and int(self.max_actions) < 1:
+            raise ValueError(f"planner.max_actions must be >= 1, got {self.max_actions!r}")
+        _positive("planner.area_roll_step", self.area_roll_step)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -528,7 +564,7 @@ class Scenario:
       satellites: tuple of :class:`Satellite` (unique names).
       targets: :class:`Targets`.
       planner: :class:`PlannerConfig`.
-      areas: tuple of :class:`Area` whose strips are among ``targets`` (unique names).
+      areas: tuple of :class:`Area`, one per target of kind :data:`AREA` (unique names).
     """
 
     name: str
@@ -563,11 +599,11 @@ class Scenario:
             if a.name in seen:
                 raise ValueError(f"areas: duplicate name {a.name!r}")
             seen.add(a.name)
-            idx = np.asarray(a.targets)
-            if idx.size and (idx.min() < 0 or idx.max() >= len(self.targets)):
-                raise ValueError(f"area {a.name!r}: targets must index scenario.targets")
-            if idx.size and np.any(self.targets.kind[idx] != STRIP):
-                raise ValueError(f"area {a.name!r}: targets must be strips")
+            if not 0 <= int(a.target) < len(self.targets) or self.targets.kind[a.target] != AREA:
+                raise ValueError(f"area {a.name!r}: target {a.target!r} is not an area target")
+        rows = sorted(int(a.target) for a in areas)
+        if rows != np.flatnonzero(self.targets.kind == AREA).tolist():
+            raise ValueError("areas: every target of kind AREA needs exactly one Area")
         object.__setattr__(self, "areas", areas)
 
     @property

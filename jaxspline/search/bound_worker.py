@@ -50,6 +50,8 @@ import signal
 import time
 import warnings
 
+import numpy as np
+
 from jaxspline.search.dp import dp_prepare
 from jaxspline.search.lagrangian import BOUND_MU_MIN, BoundResult, plan_from_paths, upper_bound
 from jaxspline.search.lns import greedy, greedy_order, lns
@@ -81,28 +83,30 @@ _SWEEP_MIN_RATE = 1e-3
 
 
 class _Shared:
-    """The plan the worker publishes: per target its option (-1: none), the plan's
-    value and a publication count, in shared memory made before the fork."""
+    """The plan the worker publishes: its options (padded with -1), the plan's value and
+    a publication count, in shared memory made before the fork. ``size``: the most
+    observations a plan can hold (one a point or strip target, every area option)."""
 
-    def __init__(self, ctx, n_targets: int):
+    def __init__(self, ctx, size: int):
         self.lock = ctx.Lock()
-        self.assigned = ctx.RawArray("l", max(1, n_targets))
+        self.plan = ctx.RawArray("l", max(1, size))
         self.meta = ctx.RawArray("d", 2)  # publications, value
-        self.n = n_targets
+        self.n = size
 
-    def publish(self, value: float, assigned) -> None:
+    def publish(self, value: float, plan) -> None:
         """Write a plan (child side)."""
         with self.lock:
-            self.assigned[: self.n] = assigned
+            self.plan[: self.n] = list(plan) + [-1] * (self.n - len(plan))
             self.meta[1] = value
             self.meta[0] += 1.0
 
     def read(self, seen: int):
-        """``(count, value, assigned)`` when more than ``seen`` plans were published, else None."""
+        """``(count, value, plan)`` when more than ``seen`` plans were published, else None."""
         if int(self.meta[0]) <= seen:  # a float's read is atomic enough for this test
             return None
         with self.lock:
-            return int(self.meta[0]), float(self.meta[1]), list(self.assigned[: self.n])
+            plan = [c for c in self.plan[: self.n] if c >= 0]
+            return int(self.meta[0]), float(self.meta[1]), plan
 
 
 class _Repairs:
@@ -127,7 +131,7 @@ class _Repairs:
         sweeps(self.tl, self.dp, self.deadline, self.rng, min_rate=_SWEEP_MIN_RATE)
         if self.tl.value > self.best:
             self.best = self.tl.value
-            self.shared.publish(self.tl.value, self.tl.assigned)
+            self.shared.publish(self.tl.value, self.tl.plan())
         self.mark = time.process_time()
         self.cost = self.mark - now
 
@@ -138,7 +142,7 @@ class _Repairs:
         greedy(tl, self.deadline, order)
         if tl.value > above:
             self.tl, self.order, self.best = tl, greedy_order(tl), tl.value
-            self.shared.publish(tl.value, tl.assigned)
+            self.shared.publish(tl.value, tl.plan())
 
     def walk(self) -> None:
         """After the bound converged: improve the last repaired plan (the greedy's when
@@ -154,7 +158,7 @@ class _Repairs:
             lns(self.tl, end, rng, rank=rank)
             if self.tl.value > self.best:
                 self.best = self.tl.value
-                self.shared.publish(self.tl.value, self.tl.assigned)
+                self.shared.publish(self.tl.value, self.tl.plan())
 
 
 def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, shared, first):
@@ -217,7 +221,10 @@ class BoundWorker:
     ):
         ctx = mp.get_context("fork")
         self._conn, child = ctx.Pipe(duplex=False)
-        self._shared = _Shared(ctx, pb.n_targets) if plans else None
+        size = pb.n_targets
+        if pb.cover is not None:
+            size += int(np.count_nonzero(pb.cover.option_group >= 0))
+        self._shared = _Shared(ctx, size) if plans else None
         self._seen = 0
         args = (child, pb, plan_value, deadline, max_iters, dp, self._shared, first)
         self._proc = ctx.Process(target=_run, args=args, daemon=True)
@@ -262,7 +269,7 @@ class BoundWorker:
         Args:
           above: the value to beat.
         Returns:
-          ``(value, assigned)`` (per target its option id, -1: none) or None.
+          ``(value, plan)`` (the plan's options, :meth:`Timeline.plan`) or None.
         """
         got = None if self._shared is None else self._shared.read(self._seen)
         if got is None:

@@ -60,7 +60,8 @@ class DPData:
       base_order: float [N], ``0`` where ``order[i]`` may be first, else ``-inf``.
       ready: float [N], ``end + far[sat]`` of each option: from then on it is a far
         predecessor of every option of its satellite [s].
-      target: int [N], target of each option.
+      target: int [N], target of each option (an area option: a number of its own,
+        ``n_targets`` and up, so no two of them are a repeat).
       repeat_pos, repeat_dst: positions (``pb.pairs`` order, ascending) and destinations
         of the near pairs joining two options of one target (a repeat);
         repeat_at: int [B + 1], block b's repeats are ``repeat_pos[repeat_at[b]:repeat_at[b + 1]]``.
@@ -170,6 +171,10 @@ def dp_prepare(pb: Problem) -> DPData:
     absorb_sats, absorb_cuts, rows_at, rows_pen, rep = [], [], [], [], []
     ptr, src = pb.pairs.ptr, pb.pairs.src
     tg = np.asarray(pb.option_target, np.int64)
+    if pb.cover is not None:  # area options share no target: never a repeat of each other
+        area = np.flatnonzero(pb.cover.option_group >= 0)
+        tg = tg.copy()
+        tg[area] = pb.n_targets + np.arange(area.size)
     for b, (ga, gb) in enumerate(groups):
         ks = sat[ab[absorb_at[b] : absorb_at[b + 1]]]
         cut = np.flatnonzero(np.r_[True, ks[1:] != ks[:-1]]) if ks.size else ks

@@ -35,6 +35,14 @@ search's Lagrangian phase iterates the plain relaxation (its DP paths seed its r
 plans, which stay as they were); :func:`upper_bound`, the bound worker and the sharded
 bound iterate the strengthened one.
 
+Areas. The relaxation prices samples as it prices targets: an area sample ``s`` of
+weight ``w_s`` has a price ``0 <= lam_s <= w_s``, an area option is credited the
+``w_s - lam_s`` of the samples of its rows (a sample on the border of two of its slots
+twice: the credit only grows, so the bound stays valid), and the bound gains
+``sum_s lam_s``: ``UB = sum_k DP_k + sum_t lam_t + sum_s lam_s``. The argument above holds
+with ``n_s`` the number of the plan's area rows covering s. The subgradient of a sample
+is the number of rows of the DP paths covering it minus one.
+
 Every :data:`_REPAIR_EVERY`-th iteration also repairs the DP paths into a feasible
 plan (each target once, heaviest first, re-checked insertion incl. battery, then greedy
 fill); its value sets the step size.
@@ -49,6 +57,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jaxspline.search import clock
+from jaxspline.search.cover import gather_ranges
 from jaxspline.search.dp import dp_paths, dp_prepare
 from jaxspline.search.energy import EnergyBudgets
 from jaxspline.search.lns import greedy
@@ -80,8 +89,9 @@ def run_targets(targets: np.ndarray) -> np.ndarray:
 def plan_from_paths(tl: Timeline, paths, order_fill, deadline: float) -> None:
     """Replace the plan of ``tl`` by one repaired from DP paths.
 
-    Each target once (heaviest first, earliest option), every insertion re-checked
-    (maneuvers, battery), then a greedy fill: a feasible plan whatever the paths.
+    Each target once (heaviest first, earliest option), then the paths' area options,
+    every insertion re-checked (maneuvers, battery), then a greedy fill: a feasible plan
+    whatever the paths.
 
     Args:
       tl: Timeline (its plan is replaced).
@@ -97,8 +107,15 @@ def plan_from_paths(tl: Timeline, paths, order_fill, deadline: float) -> None:
     )
     for c in chosen:
         if tl.assigned[pb.option_target[c]] < 0 and tl.check(c) is not None:
-            tl.insert(c)
+            if not pb.is_area(c) or tl.cover.gain(*_window(pb, c)) > 0.0:
+                tl.insert(c)
     greedy(tl, deadline, order_fill)
+
+
+def _window(pb: Problem, c: int) -> tuple:
+    """(group, a, b) of area option c."""
+    cv = pb.cover
+    return int(cv.option_group[c]), int(cv.option_a[c]), int(cv.option_b[c])
 
 
 @dataclass(frozen=True)
@@ -106,7 +123,7 @@ class BoundResult:
     """Outcome of :func:`lagrangian`.
 
     Attributes:
-      best: target -> option assignment of the best repaired plan.
+      best: the options of the best repaired plan (:meth:`Timeline.plan`).
       bound: the smallest upper bound seen (``inf`` if no iteration ran).
       iterations: subgradient iterations.
       status: :class:`BoundStatus`: ``OPTIMAL`` (bound met by a plan), ``CONVERGED``
@@ -125,8 +142,9 @@ class BoundResult:
 class Prices:
     """Projected Polyak subgradient iteration on the prices (shared by both users).
 
-    ``lam`` holds the target prices, then (``energy``) the prices of the energy budgets
-    the unpriced DP optimum overdraws (:mod:`jaxspline.search.energy`).
+    ``lam`` holds the target prices, the area samples' prices, then (``energy``) the
+    prices of the energy budgets the unpriced DP optimum overdraws
+    (:mod:`jaxspline.search.energy`).
     ``lam += mu (UB - plan_value) / |g|^2 g`` with ``g = takers - 1`` (targets) and
     ``g = (usage - budget) / unit`` (budgets, in observations' worth of energy),
     projected on ``[0, w]`` / ``[0, inf)``; after
@@ -149,24 +167,30 @@ class Prices:
         self.d = dp_prepare(pb) if dp is None else dp
         self.target_value = np.asarray(pb.target_value, np.float64)
         self.option_target = np.asarray(pb.option_target, np.int64)
+        self.cv = pb.cover
+        sample_w = np.zeros(0) if self.cv is None else self.cv.weight
+        self.n_tg, self.n_sm = self.target_value.size, sample_w.size
+        if self.cv is not None:
+            self.area = np.flatnonzero(self.cv.option_group >= 0)
+            rows = np.array([self.cv.option_rows(int(c)) for c in self.area], np.int64)
+            self.area_rows = rows.reshape(-1, 2)
         self.en = EnergyBudgets(pb) if energy else None
         if self.en is not None:
             if self.en.m:
                 # price only the budgets the unpriced optimum overdraws (any subset is
                 # valid; the others rarely bind and would slow every iteration)
-                paths, _ = dp_paths(
-                    pb, self.d, self.target_value[self.option_target], None, used := []
-                )
+                paths, _ = dp_paths(pb, self.d, self._values(np.zeros(self.n_tg + self.n_sm)),
+                                    None, used := [])  # fmt: skip
                 self.en.restrict(self.en.subgradient(paths, used) > 0.0)
             if not self.en.m:
                 self.en = None
         m = self.en.m if self.en is not None else 0
         # prices: targets (in [0, w]) then energy budgets (>= 0, see search.energy); the
         # bound gains each price times its constraint's right-hand side
-        self.hi = np.r_[self.target_value, np.full(m, np.inf)]
+        self.hi = np.r_[self.target_value, sample_w, np.full(m, np.inf)]
         self.rhs = np.ones(self.hi.size)
         if m:
-            self.rhs[self.target_value.size :] = self.en.budget / self.en.unit
+            self.rhs[self.n_tg + self.n_sm :] = self.en.budget / self.en.unit
         self.lam = np.zeros(self.hi.size)
         self.best_lam = self.lam.copy()
         self.ub, self.mu, self.stall, self.it = math.inf, 1.0, 0, 0
@@ -174,15 +198,24 @@ class Prices:
     def solve_dp(self):
         """DP paths at the current prices; updates the bound. Returns the paths."""
         self.it += 1
-        n_tg = self.target_value.size
-        w = self.target_value[self.option_target] - self.lam[self.option_target]
+        w = self._values(self.lam)
         arc, self.used = None, None
         if self.en is not None:
-            node_pen, arc_pen = self.en.penalties(self.lam[n_tg:])
+            node_pen, arc_pen = self.en.penalties(self.lam[self.n_tg + self.n_sm :])
             w, arc, self.used = w - node_pen, arc_pen, []
         paths, vals = dp_paths(self.pb, self.d, w, arc, self.used, self.merge)
         self._record(vals, paths)
         return paths
+
+    def _values(self, lam: np.ndarray) -> np.ndarray:
+        """Option values at prices ``lam``: ``w_t - lam_t`` of a target's option, the rows'
+        ``w_s - lam_s`` of an area option."""
+        w = self.target_value[self.option_target] - lam[self.option_target]
+        if self.cv is not None and self.area.size:
+            rowv = self.cv.row_values(self.cv.weight - lam[self.n_tg : self.n_tg + self.n_sm])
+            cum = np.concatenate([[0.0], np.cumsum(rowv)])
+            w[self.area] = cum[self.area_rows[:, 1]] - cum[self.area_rows[:, 0]]
+        return w
 
     def _record(self, vals, paths):
         """Bound of this iteration from the satellites' DP values (satellite order)."""
@@ -203,8 +236,25 @@ class Prices:
             np.add.at(cnt, t, 1.0)
         return cnt
 
+    def _sample_takers(self, paths) -> np.ndarray:
+        """Number of the paths' area rows covering each sample (float [N samples])."""
+        cv = self.cv
+        opts = np.asarray([c for p in paths for c in p], np.int64)
+        opts = opts[cv.option_group[opts] >= 0] if opts.size else opts
+        if not opts.size:
+            return np.zeros(self.n_sm)
+        r0, r1 = zip(*(cv.option_rows(int(c)) for c in opts), strict=True)
+        r0, r1 = np.asarray(r0), np.asarray(r1)
+        rows = np.repeat(r0, r1 - r0) + (
+            np.arange(int((r1 - r0).sum())) - np.repeat(np.cumsum(r1 - r0) - (r1 - r0), r1 - r0)
+        )
+        pos, _ = gather_ranges(cv.indptr, rows)
+        return np.bincount(cv.indices[pos], minlength=self.n_sm).astype(np.float64)
+
     def _subgradient(self) -> np.ndarray:
         g = self._takers(self.paths) - 1.0
+        if self.cv is not None:
+            g = np.r_[g, self._sample_takers(self.paths) - 1.0]
         if self.used is None:
             return g
         return np.r_[g, self.en.subgradient(self.paths, self.used)]
@@ -241,7 +291,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
       BoundResult.
     """
     pb = tl.pb
-    best = list(tl.assigned)
+    best = tl.plan()
     best_w = tl.value
     if pb.n_options == 0:
         return BoundResult(best, 0.0, 0, BoundStatus.OPTIMAL)
@@ -252,7 +302,7 @@ def lagrangian(tl: Timeline, deadline: float, order_fill, max_iters=None, report
         if (pr.it - 1) % _REPAIR_EVERY == 0:
             plan_from_paths(tl, paths, order_fill, deadline)
             if tl.value > best_w:
-                best_w, best = tl.value, list(tl.assigned)
+                best_w, best = tl.value, tl.plan()
         if pr.ub - best_w <= _GAP_TOL * max(1.0, pr.ub):
             status = BoundStatus.OPTIMAL
             break

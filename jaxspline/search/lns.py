@@ -18,6 +18,12 @@
   the destroy around the cheapest of a few observations, re-insertion by value per Wh,
   and a forced option that fails on the battery alone gets room by removing the
   observations of least value per Wh that can reach it.
+* Areas: where the problem has area options, their moves
+  (:func:`jaxspline.search.area_moves.area_move`: lazy greedy by marginal coverage,
+  pass re-plans, destroy and repair, local moves) take turns with the moves above, in
+  proportion to the areas' share of the plan's possible value; such a move is kept when
+  the plan's score (:meth:`Timeline.score`: areas' shortfall, value, count) did not drop.
+  :func:`greedy` fills the areas after the targets the same way.
 * Earliest pass: each observation moves to the earliest feasible option of its target.
 """
 
@@ -29,6 +35,7 @@ import math
 import time
 
 from jaxspline.search import clock
+from jaxspline.search.area_moves import AreaWalk, area_index, area_move, fill
 from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
 from jaxspline.search.timeline import Timeline
@@ -47,8 +54,8 @@ _POLL_EVERY = 0.5  # [s] between two looks at the plans offered from outside (``
 
 
 def greedy_order(tl: Timeline):
-    """Targets with options on offer, heaviest first, fewest satellites / options first
-    among equals.
+    """Point and strip targets with options on offer, heaviest first, fewest satellites /
+    options first among equals (an area's options are :func:`greedy`'s second step).
 
     Args:
       tl: Timeline.
@@ -57,7 +64,7 @@ def greedy_order(tl: Timeline):
     """
     pb, options = tl.pb, tl.target_options
     return sorted(
-        (t for t in range(pb.n_targets) if options[t]),
+        (t for t in pb.exclusive_targets() if options[t]),
         key=lambda t: (
             -pb.target_value[t],
             len({pb.option_sat[c] for c in options[t]}),
@@ -68,11 +75,14 @@ def greedy_order(tl: Timeline):
 
 
 def greedy(tl: Timeline, deadline: float, order=None):
-    """Insert the targets greedily (see module docstring) until done or the deadline.
+    """Insert the targets greedily (see module docstring) until done or the deadline,
+    then the area strips by marginal coverage.
 
     The greedy strategy of :func:`jaxspline.search.construct.greedy_pass`: one decision
     per target of ``order``, the target's options that fit as candidates, their
-    :meth:`Timeline.insert_choices` costs.
+    :meth:`Timeline.insert_choices` costs; then, where the problem has areas, the lazy
+    greedy of :func:`jaxspline.search.area_moves.fill` (always complete when the
+    deadline is infinite).
 
     Args:
       tl: Timeline (targets already assigned stay).
@@ -81,6 +91,8 @@ def greedy(tl: Timeline, deadline: float, order=None):
     """
     targets = order if order is not None else greedy_order(tl)
     greedy_pass(targets, tl.insert_choices, tl.insert, deadline)
+    if tl.cover is not None:
+        fill(tl, area_index(tl.pb), deadline)
     tl.commit()
 
 
@@ -118,16 +130,16 @@ class _Walk:
       un: the unscheduled targets (refreshed every :data:`_REFRESH_EVERY` iterations).
       cw: cumulative picking odds of ``un`` (:meth:`EnergyRank.target_weights`).
       dirty: whether the plan changed since ``un`` was refreshed.
-      best_key: (value, count) of the best plan.
-      best: its target -> option assignment.
+      best_key: :func:`_key` of the best plan.
+      best: its options (:meth:`Timeline.plan`).
       improved: number of improvements of the best plan.
     """
 
     def __init__(self, tl: Timeline, has, er: EnergyRank | None = None):
         self.has = has
         self.er = EnergyRank(tl.pb, tl.target_options) if er is None else er
-        self.best_key = (tl.value, tl.n_observations)
-        self.best = list(tl.assigned)
+        self.best_key = _key(tl)
+        self.best = tl.plan()
         self.improved = 0
         self.dirty = False
         self.refresh(tl)
@@ -136,6 +148,13 @@ class _Walk:
         """Recompute the unscheduled targets and their cumulative picking odds."""
         self.un = [t for t in self.has if tl.assigned[t] < 0]
         self.cw = list(itertools.accumulate(self.er.target_weights(tl, self.un)))
+
+
+def _key(tl: Timeline) -> tuple:
+    """What the LNS keeps the best plan by: (value, count), after the areas' shortfall."""
+    if tl.cover is None:
+        return (tl.value, tl.n_observations)
+    return tl.score()[:3]
 
 
 def _window(tl: Timeline, w: _Walk, rng):
@@ -233,14 +252,14 @@ def adopt(tl: Timeline, w, offer) -> bool:
     Returns:
       bool, whether ``tl`` now holds the offered plan.
     """
-    best = tl.value if w is None else w.best_key[0]
+    best = tl.value if w is None else w.best_key[-2]
     if offer is None or offer[0] <= best:
         return False
     tl.restore(offer[1])
     if w is not None:
         w.improved += 1
-        w.best_key = (tl.value, tl.n_observations)
-        w.best = list(tl.assigned)
+        w.best_key = _key(tl)
+        w.best = tl.plan()
         w.refresh(tl)
         w.dirty = False
     return True
@@ -256,15 +275,41 @@ def _accept(tl: Timeline, w: _Walk, base, mark: int, thr: float, it: int, rng):
     if w.dirty and it % _REFRESH_EVERY == 0:
         w.refresh(tl)
         w.dirty = False
-    if (tl.value, tl.n_observations) > w.best_key:
+    _keep_best(tl, w)
+    tl.commit()
+
+
+def _keep_best(tl: Timeline, w: _Walk) -> None:
+    """Keep the plan of ``tl`` as the walk's best when it beats it."""
+    key = _key(tl)
+    if key > w.best_key:
         w.improved += 1
-        w.best_key = (tl.value, tl.n_observations)
-        w.best = list(tl.assigned)
+        w.best_key = key
+        w.best = tl.plan()
+
+
+def _area_step(tl: Timeline, w: _Walk, aw: AreaWalk, deadline: float) -> None:
+    """One area move, kept when the plan's score did not drop, else undone."""
+    base = tl.score()
+    mark = len(tl.log)
+    area_move(tl, aw, deadline)
+    if tl.score() < base:
+        tl.undo_to(mark)
+        return
+    w.dirty |= tl.score() != base
+    _keep_best(tl, w)
     tl.commit()
 
 
 def lns(
-    tl: Timeline, deadline: float, rng, max_iters=None, report=None, incoming=None, rank=None
+    tl: Timeline,
+    deadline: float,
+    rng,
+    max_iters=None,
+    report=None,
+    incoming=None,
+    rank=None,
+    areas=None,
 ) -> int:
     """Large-neighbourhood search until ``deadline`` (or ``max_iters``).
 
@@ -281,13 +326,20 @@ def lns(
         best plan, or None (the bound worker's plans, :meth:`BoundWorker.plan`).
       rank: the :class:`EnergyRank` of ``tl``'s problem and options, for a caller that
         runs the LNS in several calls (one pass over every option); None: built here.
+      areas: the :class:`jaxspline.search.area_moves.AreaWalk` of the area moves, for a
+        caller that keeps it between calls; None: made here (seeded from ``rng``) when
+        the problem has areas.
     Returns:
       int, the number of iterations.
     """
     pb = tl.pb
     t_start = time.monotonic()
-    has = [t for t in range(pb.n_targets) if tl.target_options[t]]
-    if not has:
+    has = [t for t in pb.exclusive_targets() if tl.target_options[t]]
+    if tl.cover is not None and areas is None:
+        ix = area_index(pb)
+        areas = AreaWalk(ix, rng.getrandbits(32)) if ix.windows.g.size else None
+    share = _area_share(tl, has) if areas is not None else 0.0
+    if not has and areas is None:
         return 0
     w = _Walk(tl, has, rank)
     it = 0
@@ -296,7 +348,13 @@ def lns(
         it += 1
         if incoming is not None and time.monotonic() - polled > _POLL_EVERY:
             polled = time.monotonic()
-            adopt(tl, w, incoming(w.best_key[0]))
+            adopt(tl, w, incoming(w.best_key[-2]))
+        if share > 0.0 and (share >= 1.0 or rng.random() < share):
+            _area_step(tl, w, areas, deadline)
+            if report is not None and time.monotonic() - last > _REPORT_EVERY:
+                last = time.monotonic()
+                report(it, w.improved)
+            continue
         base = tl.score()
         mark = len(tl.log)
         if not _move(tl, w, mark, rng):
@@ -309,9 +367,20 @@ def lns(
         if report is not None and time.monotonic() - last > _REPORT_EVERY:
             last = time.monotonic()
             report(it, w.improved)
-    if (tl.value, tl.n_observations) < w.best_key:
+    if _key(tl) < w.best_key:
         tl.restore(w.best)
     return it
+
+
+def _area_share(tl: Timeline, has) -> float:
+    """The share of the LNS's moves made on areas: the areas' covered weight within
+    reach over all value within reach (1 without point or strip targets)."""
+    if not has:
+        return 1.0
+    pb = tl.pb
+    areas = pb.cover.union_weight()
+    points = sum(pb.target_value[t] for t in has)
+    return areas / max(areas + points, 1e-300)
 
 
 def earliest_pass(tl: Timeline, deadline: float):

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from jaxspline.search.battery import BatteryModel
+from jaxspline.search.cover import CoverTable
 from jaxspline.search.store import NearPairs, start_order
 
 __all__ = ["Problem"]
@@ -50,6 +51,14 @@ class Problem:
       lookup: per satellite, True when pairs closer than ``far`` are feasible only if
         they are among the near pairs (per-channel satellites, and every satellite
         whose joins were screened).
+      cover: :class:`jaxspline.search.cover.CoverTable` of the areas (None: no areas;
+        an area's ``target_value`` is 0, its value lies in its samples).
+      max_actions: most observations of a plan, all satellites together (None: no cap).
+      duty: per satellite ``(period, limit)`` [s]: the imaging time in any window of one
+        period ending at an observation's start or end is at most ``limit`` (None, or a
+        None entry: no duty rule).
+      area_index: what the area moves precompute, built once on first use
+        (:func:`jaxspline.search.area_moves.area_index`).
     """
 
     n_sats: int
@@ -71,6 +80,10 @@ class Problem:
     sat_starts: list
     near_slack: float = 0.0
     lookup: list | None = None
+    cover: CoverTable | None = None
+    max_actions: int | None = None
+    duty: list | None = None
+    area_index: object = None
 
     def __post_init__(self):
         if self.lookup is None:  # the model alone decides: tables where there are tables
@@ -129,8 +142,33 @@ class Problem:
         )
         return table.scalar(th)
 
+    def is_area(self, c: int) -> bool:
+        """Whether option c is an area option (it counts through ``cover``)."""
+        return self.cover is not None and self.cover.option_group[c] >= 0
+
+    def exclusive_targets(self) -> list:
+        """The targets imaged at most once (every target but the areas)."""
+        if self.cover is None:
+            return list(range(self.n_targets))
+        areas = set(self.cover.area_target.tolist())
+        return [t for t in range(self.n_targets) if t not in areas]
+
     @classmethod
-    def build(cls, opp, sats, first, near_pairs, far, tables, battery, target_values, lookup=None):
+    def build(
+        cls,
+        opp,
+        sats,
+        first,
+        near_pairs,
+        far,
+        tables,
+        battery,
+        target_values,
+        lookup=None,
+        cover=None,
+        max_actions=None,
+        duty=None,
+    ):
         """Assemble from numpy data.
 
         Args:
@@ -146,6 +184,9 @@ class Problem:
           target_values: per target its value.
           lookup: [S] bool, satellites whose near pairs are authoritative (default:
             the per-channel ones).
+          cover: CoverTable of the areas, or None.
+          max_actions: most observations of a plan, or None.
+          duty: per satellite ``(period, limit)`` [s] or None, or None.
         """
         o = opp.options
         sat = np.asarray(o.sat, np.int64)
@@ -183,4 +224,7 @@ class Problem:
             sat_hi=hi,
             sat_starts=[starts[a:b] for a, b in zip(lo, hi, strict=True)],
             lookup=look.tolist(),
+            cover=cover,
+            max_actions=max_actions,
+            duty=duty,
         )

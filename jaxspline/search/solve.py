@@ -214,7 +214,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     deadline, now, tail, t_dp, cap, max_iters = budget
     dp = shared.pop() if shared else None
     if worker is not None and worker.plans:  # the worker's bound and plans stand for the phase
-        res = BoundResult(list(tl.assigned), math.inf, 0, BoundStatus.TIME)
+        res = BoundResult(tl.plan(), math.inf, 0, BoundStatus.TIME)
     else:
         res = lagrangian(
             tl,
@@ -238,14 +238,14 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     del dp
     trim_heap()  # the bound phase's freed arrays: the LNS runs without them resident
     exact = False
-    if pb.n_options <= exact_max_options:
-        start = list(tl.assigned)
+    if pb.n_options <= exact_max_options and pb.cover is None:
+        start = tl.plan()
         tl.restore([])
         # at most half of what is left: a search that cannot finish still leaves the LNS time
         left = max(0.0, min(deadline, now + _EXACT_MAX_S) - tail - time.monotonic())
         t_exact = time.monotonic() + _EXACT_SHARE * left
         value, exact = exact_search(tl, t_exact)
-        if value < sum(pb.target_value[t] for t, c in enumerate(start) if c >= 0):
+        if value < sum(pb.target_value[pb.option_target[c]] for c in start):
             tl.restore(start)
         stats["exact_proven"] = exact
     its = 0 if exact or res.status == BoundStatus.OPTIMAL else max_iters  # 0: no LNS

@@ -64,12 +64,16 @@ def _offered(tl: Timeline) -> np.ndarray | None:
 def _weights(tl: Timeline, d: DPData, offered) -> np.ndarray:
     """Option values of the sweep's DP: the target's value where no other satellite
     images it and the option is on offer, else a value below any path's (the options'
-    targets and satellites from the DP layout ``d``, not the problem's lists)."""
+    targets and satellites from the DP layout ``d``, not the problem's lists); area
+    options are shut (their moves are :mod:`jaxspline.search.area_moves`')."""
     tv = np.asarray(tl.pb.target_value, np.float64)
     ot, osat = d.target, d.sat
+    area = ot >= tv.size  # area options (their own DP numbers): the area moves' business
+    if area.any():
+        ot = np.where(area, 0, ot)
     assigned = np.asarray(tl.assigned, np.int64)
     owner = np.where(assigned >= 0, osat[np.maximum(assigned, 0)], -1)[ot]
-    ok = (owner < 0) | (owner == osat)
+    ok = ((owner < 0) | (owner == osat)) & ~area
     if offered is not None:
         ok &= offered
     # never on a best path: a path through it is worth less than the empty one
@@ -110,11 +114,11 @@ def sweep(tl: Timeline, d: DPData, rng, offered=None) -> float:
     rng.shuffle(sats)
     tl.commit()
     for k in sats:
-        own = sum(pb.target_value[pb.option_target[c]] for c in tl.lines[k])
+        own = sum(pb.target_value[pb.option_target[c]] for c in tl.lines[k] if not pb.is_area(c))
         if vals[k] <= own or not paths[k]:
             continue
         base = tl.score()
-        for c in list(tl.lines[k]):
+        for c in [c for c in tl.lines[k] if not pb.is_area(c)]:
             tl.remove(c)
         path = paths[k]
         if pb.battery.has(k):

@@ -1,9 +1,12 @@
 """Mutable per-satellite timelines with feasibility checks, battery bounds and an undo log.
 
 A :class:`Timeline` holds, per satellite, its chosen options in start order and, per
-target, the option that images it (each target at most once). :meth:`Timeline.check`
-tests one insertion: no overlap, the transition from the predecessor (or the first
-maneuver) and to the successor fit their gaps, and the battery stays above its margin.
+target, the option that images it (each point or strip target at most once; an area's
+options, any number of them, count the samples they cover, :class:`CoverCounts`).
+:meth:`Timeline.check` tests one insertion: no overlap, the transition from the
+predecessor (or the first maneuver) and to the successor fit their gaps, the imaging
+duty per orbit and the plan's action cap hold (where the problem has them), and the
+battery stays above its margin.
 Each satellite's starts, ends and the maneuver into each observation are kept beside
 its option ids (updated by :meth:`Timeline.insert` and :meth:`Timeline.remove`), so
 a test or a battery refresh reads them instead of re-deriving the transitions.
@@ -32,6 +35,7 @@ import bisect
 import numpy as np
 
 from jaxspline.search.construct import first_least
+from jaxspline.search.cover import CoverCounts
 from jaxspline.search.problem import Problem
 
 __all__ = ["Timeline"]
@@ -59,13 +63,17 @@ class Timeline:
       maneuvers: per satellite, the required time of the maneuver into each of them
         (from the predecessor, or the first maneuver) [s], kept up to date by
         :meth:`insert` and :meth:`remove`.
-      assigned: per target, the option that images it (-1: none).
+      assigned: per target, the option that images it (-1: none; always -1 for an
+        area, whose options count through ``cover``).
+      cover: :class:`CoverCounts` of the plan's area options (None: no areas).
+      n_area: number of area observations.
       levels: per satellite, the battery :class:`Levels` of a past state (None: not
         computed).
       debt: per satellite, an upper bound of the load energy added since [Wh].
       stale: per satellite, whether its timeline changed since ``levels``.
       battery_failed: whether the last :meth:`check` failed on the battery alone.
-      value: total value of the plan.
+      value: total value of the plan (point and strip targets' values plus the covered
+        weight of the areas).
       n_observations: number of observations.
       tat: sum of the observations' end times [s] (tie-break).
       log: undo log of the changes since the last :meth:`commit`.
@@ -90,6 +98,8 @@ class Timeline:
         self.line_ends = [[] for _ in range(n_s)]  # their ends
         self.maneuvers = [[] for _ in range(n_s)]  # the maneuver into each
         self.assigned = [-1] * pb.n_targets
+        self.cover = None if pb.cover is None else CoverCounts(pb.cover)
+        self.n_area = 0
         self.levels = [None] * n_s
         self.debt = [0.0] * n_s
         self.stale = [True] * n_s
@@ -143,12 +153,31 @@ class Timeline:
         return bisect.bisect_left(self.line_starts[self.pb.option_sat[c]], self.pb.option_start[c])
 
     def score(self):
-        """Comparable quality: (value, count, -sum of end times).
+        """Comparable quality: (value, count, -sum of end times); with areas first the
+        areas' summed shortfall below their least share (negated), and the count is the
+        point and strip observations minus the area ones (an area strip that adds
+        nothing only spends an action).
 
         Returns:
           tuple, larger is better.
         """
-        return (round(self.value, 9), self.n_observations, -round(self.tat, 6))
+        if self.cover is None:
+            return (round(self.value, 9), self.n_observations, -round(self.tat, 6))
+        count = self.n_observations - 2 * self.n_area
+        return (
+            -round(self.cover.shortfall(), 12),
+            round(self.value, 9),
+            count,
+            -round(self.tat, 6),
+        )
+
+    def plan(self) -> list:
+        """The option ids of the plan, satellite by satellite in time order.
+
+        Returns:
+          list of int (what :meth:`restore` takes).
+        """
+        return [c for line in self.lines for c in line]
 
     # ------------------------------------------------------------ battery
     def _timeline_loads(self, k, extra=None):
@@ -254,6 +283,8 @@ class Timeline:
         self.battery_failed = False
         if self.assigned[pb.option_target[c]] >= 0:
             return None
+        if pb.max_actions is not None and self.n_observations >= pb.max_actions:
+            return None
         k = pb.option_sat[c]
         pos = self._slot(k, pb.option_start[c], pb.option_end[c])
         return None if pos < 0 else self._fit(c, k, pos)
@@ -291,10 +322,28 @@ class Timeline:
         else:
             q = -1
             n_out = n_old = 0.0
+        if pb.duty is not None and pb.duty[k] is not None and not self._duty_ok(k, pos, s, e):
+            return None
         if pb.battery.has(k) and not self._battery_ok(k, c, n_in, q, n_out, n_old):
             self.battery_failed = True
             return None
         return n_in + (e - s) + n_out - n_old
+
+    def _duty_ok(self, k: int, pos: int, s: float, e: float) -> bool:
+        """Whether inserting ``[s, e]`` at position ``pos`` of satellite k keeps the imaging
+        time in every window ``[T - period, T]`` ending at an observation's start or end
+        within the limit (``pb.duty[k] = (period, limit)``, the margin taken off)."""
+        period, limit = self.pb.duty[k]
+        starts, ends = self.line_starts[k], self.line_ends[k]
+        lo = bisect.bisect_left(ends, s - period)  # the first interval ending in reach
+        hi = bisect.bisect_right(starts, e + period)
+        iv = list(zip(starts[lo:pos], ends[lo:pos], strict=True)) + [(s, e)]
+        iv += list(zip(starts[pos:hi], ends[pos:hi], strict=True))
+        for t in {x for a, b in iv for x in (a, b) if s <= x <= e + period}:
+            used = sum(max(0.0, min(b, t) - max(a, t - period)) for a, b in iv)
+            if used > limit:
+                return False
+        return True
 
     def insert(self, c: int):
         """Insert option c (feasibility is the caller's business: :meth:`check`).
@@ -321,8 +370,12 @@ class Timeline:
         man.insert(pos, n_in)
         if pos + 1 < len(line):
             man[pos + 1] = n_out
-        self.assigned[t] = c
-        self.value += pb.target_value[t]
+        if self.cover is not None and pb.cover.option_group[c] >= 0:
+            self.value += self.cover.change(c, +1)
+            self.n_area += 1
+        else:
+            self.assigned[t] = c
+            self.value += pb.target_value[t]
         self.n_observations += 1
         self.tat += pb.option_end[c]
         self.log.append(("i", c))
@@ -353,8 +406,12 @@ class Timeline:
             man[pos] = pb.option_first[q] if pos == 0 else self.need(line[pos - 1], q)
             if pb.battery.has(k):  # its maneuver window may start earlier: the only added load
                 self.debt[k] += self._added_wh(self._slew_change(k, q, n_was, man[pos]))
-        self.assigned[t] = -1
-        self.value -= pb.target_value[t]
+        if self.cover is not None and pb.cover.option_group[c] >= 0:
+            self.value += self.cover.change(c, -1)
+            self.n_area -= 1
+        else:
+            self.assigned[t] = -1
+            self.value -= pb.target_value[t]
         self.n_observations -= 1
         self.tat -= pb.option_end[c]
         self.log.append(("r", c))
@@ -471,10 +528,11 @@ class Timeline:
         return k >= 0
 
     def restore(self, assigned):
-        """Reset to the given target -> option assignment (-1: unassigned).
+        """Reset to the plan of the given options (what :meth:`plan` returns; -1 entries,
+        as in a target -> option assignment, are skipped).
 
         Args:
-          assigned: list of option ids per target.
+          assigned: list of option ids.
         """
         pb = self.pb
         for k in range(pb.n_sats):
@@ -482,6 +540,9 @@ class Timeline:
             self.maneuvers[k] = []
             self.levels[k], self.debt[k], self.stale[k] = None, 0.0, True
         self.assigned = [-1] * pb.n_targets
+        if self.cover is not None:
+            self.cover = CoverCounts(pb.cover)
+        self.n_area = 0
         self.value, self.n_observations, self.tat = 0.0, 0, 0.0
         for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.option_start[c]):
             self.insert(c)

@@ -7,11 +7,10 @@ name (``Satellite.maneuver`` is the same lookup). Built in:
 * ``per_channel`` (:class:`PerChannel`) - exact-T per-channel transfers (SPEC section 1);
 * ``eigen_axis`` (:class:`EigenAxis`) - rigid rest-to-rest bang-coast-bang slews;
 * ``flexible`` (:class:`Flexible`) - rest-to-rest slews that keep a flexible mode below
-  its tolerance (SPEC section 2).
-
-Not registered: ``roll_only`` (:class:`RollOnly`) - one roll axis, a bang-coast-bang slew
-plus settling, with its kernels and host functions (the regional_coverage adapter's
-slew rule); the planner's observations still need pitch.
+  its tolerance (SPEC section 2);
+* ``roll_only`` (:class:`RollOnly`) - one roll axis, a bang-coast-bang slew plus
+  settling, with its kernels and host functions (the regional_coverage benchmark's
+  slew rule); it images area strips only.
 
 A new model is one file: a class with the members of :class:`ManeuverModel` (for a
 rest-to-rest slew, a :class:`RestToRest` subclass with its ``profile_time``), passed to
@@ -66,6 +65,6 @@ __all__ = [
     "roll_transition_kernel",
 ]
 
-for _model in (PerChannel(), EigenAxis(), Flexible()):
+for _model in (PerChannel(), EigenAxis(), Flexible(), RollOnly()):
     register_model(_model)
 del _model

@@ -29,6 +29,8 @@ __all__ = ["ManeuverModel", "maneuver_model", "model_names", "register_model"]
 FAR_SAFETY = 1.0 + 1e-9
 #: Attitude laws between observations a model may ask for.
 ATTITUDE_LAWS = ("pointing", "zero_yaw")
+#: Frames a model's slews may compare lines of sight in.
+LOS_FRAMES = ("inertial", "earth_fixed")
 
 _REGISTRY: dict[str, ManeuverModel] = {}
 
@@ -47,6 +49,12 @@ class ManeuverModel(Protocol):
       extra_fields: satellite fields only this model reads (e.g. ``("flex",)``).
       attitude_law: ``"pointing"`` (the observation's per-channel law carries on) or
         ``"zero_yaw"`` (line-of-sight pointing with zero yaw) between observations.
+      los_frame: the frame its slews compare lines of sight in: ``"inertial"`` or
+        ``"earth_fixed"`` (the options' ``start_los`` / ``end_los`` are given in it).
+      tracks_points: whether it can image point and strip targets (pitch and yaw
+        tracking); a model without can image area strips only.
+      first_from_nadir: whether its first observation needs the maneuver from nadir
+        (False: the attitude is free before the first observation).
     """
 
     name: str
@@ -54,6 +62,9 @@ class ManeuverModel(Protocol):
     limit_shape: tuple
     extra_fields: tuple
     attitude_law: str
+    los_frame: str
+    tracks_points: bool
+    first_from_nadir: bool
 
     def check(self, sat) -> None:
         """Raise ValueError naming the satellite if a field this model needs is missing."""
@@ -89,6 +100,10 @@ def register_model(model: ManeuverModel) -> ManeuverModel:
         raise ValueError(
             f"model {model.name!r}: attitude_law must be one of {ATTITUDE_LAWS}, "
             f"got {model.attitude_law!r}"
+        )
+    if model.los_frame not in LOS_FRAMES:
+        raise ValueError(
+            f"model {model.name!r}: los_frame must be one of {LOS_FRAMES}, got {model.los_frame!r}"
         )
     old = _REGISTRY.get(model.name)
     if old is not None and type(old) is not type(model):

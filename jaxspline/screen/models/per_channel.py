@@ -30,6 +30,9 @@ class PerChannel:
     rest_to_rest = False
     limit_shape = (3,)
     extra_fields = ()
+    los_frame = "inertial"
+    tracks_points = True
+    first_from_nadir = True
     attitude_law = "pointing"
 
     def __repr__(self) -> str:

@@ -30,6 +30,9 @@ class RestToRest:
     rest_to_rest = True
     limit_shape = ()
     extra_fields = ()
+    los_frame = "inertial"
+    tracks_points = True
+    first_from_nadir = True
     attitude_law = "zero_yaw"
 
     def __repr__(self) -> str:

@@ -25,9 +25,11 @@ The same formula in three forms:
 * host numpy for search loops that cannot afford a JAX dispatch per call
   (:func:`roll_slew_time`, :func:`roll_need`, :func:`roll_min_gap`), equal to the
   kernels bit for bit (tests);
-* :class:`RollOnly`, the :class:`~jaxspline.screen.models.base.ManeuverModel` members
-  for a planner satellite (rad). It is not registered for scenario files: the planner's
-  observations still point with pitch, which a roll-only satellite cannot.
+* :class:`RollOnly`, the :class:`~jaxspline.screen.models.base.ManeuverModel` of a
+  planner satellite (``model = "roll_only"``, rad): it images area strips only (a roll
+  held fixed, :func:`jaxspline.geometry.pointing.roll_params`; point and strip targets
+  need pitch), compares its lines of sight in the Earth-fixed frame (the benchmark's
+  slew angle) and has no requirement before its first observation.
 """
 
 from __future__ import annotations
@@ -255,15 +257,25 @@ class RollOnly(RestToRest):
     """Roll-only slews as a :class:`~jaxspline.screen.models.base.ManeuverModel`.
 
     The profile time is :func:`roll_slew_time` of the satellite's scalar limits [rad].
-    Through the protocol (slew tables of angles between lines of sight) the answers are
-    conservative: for roll-only looks ``cos r1 nadir1 + sin r1 across`` and the same at r2
-    (across fixed, as on a circular orbit), ``cos(theta) = cos r1 cos r2 (nadir1 .
-    nadir2) + sin r1 sin r2 <= cos(r2 - r1)`` for ``|r| < 90 deg``, so the line-of-sight
-    angle is at least the roll change. See the module docstring for why it is not
-    registered.
+    Through the protocol (slew tables of angles between Earth-fixed lines of sight) the
+    answers are conservative: for roll-only looks ``cos r1 nadir1 + sin r1 across`` and
+    the same at r2 (across fixed, as on a circular orbit), ``cos(theta) = cos r1 cos r2
+    (nadir1 . nadir2) + sin r1 sin r2 <= cos(r2 - r1)`` for ``|r| < 90 deg``, so the
+    line-of-sight angle is at least the roll change.
     """
 
     name = "roll_only"
+    los_frame = "earth_fixed"
+    tracks_points = False
+    first_from_nadir = False
+
+    def first_requirements(self, sat, options, idx, screen_model):
+        """No requirement before a first observation (the roll is free at the start).
+
+        Returns:
+          numpy float [K], zeros.
+        """
+        return np.zeros(np.shape(idx)[0])
 
     def profile_time(self, sat, theta) -> np.ndarray:
         """Bang-coast-bang time [s] through angles theta [rad] (numpy)."""
