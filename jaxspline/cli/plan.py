@@ -441,8 +441,6 @@ def _print_summary(r, out: Path, names, page=None) -> None:
     if page:
         lines.append(f"page          {HTML_FILE}: {page[0] / 1e6:.2f} MB in {page[1]:.2f} s")
     if r.report.get("areas"):
-        from jaxspline.readers.areas import coverage_line
-
         lines.insert(5, f"areas         {coverage_line(r.report['areas'])}")
     j = r.report.get("joins")  # only when the flown joins were checked (--aem)
     if j:
@@ -453,3 +451,20 @@ def _print_summary(r, out: Path, names, page=None) -> None:
             f"accel {j['max_accel_ratio']:.3f}, jerk {j['max_jerk_ratio']:.3f}",
         )
     print("\n".join(lines), file=sys.stdout)
+
+
+def coverage_line(areas: list[dict], limit: int = 6) -> str:
+    """One line on the areas of a plan: each area's covered share and strips.
+
+    Args:
+      areas: ``report["areas"]`` of a plan (:func:`jaxspline.planner.area_report.area_report`).
+      limit: most areas named (the rest are counted).
+    Returns:
+      str, e.g. ``2 areas covered: karst 87.5 % (6 strips), ...``.
+    """
+    parts = [
+        f"{a['area']} {100 * a['covered_share']:.1f} % ({a['strips']} strips)"
+        for a in areas[:limit]
+    ]
+    more = f", {len(areas) - limit} more" if len(areas) > limit else ""
+    return f"{len(areas)} areas covered: " + ", ".join(parts) + more

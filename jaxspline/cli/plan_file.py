@@ -149,6 +149,8 @@ def _area(c, where, x):
 
 
 def _geometry(c, where, x):
+    if x is None:  # an area given by its samples alone
+        return
     c.table(where, x, {"type": STR, "coordinates": lambda c, w, v: c.items(w, v, _anything)})
 
 
@@ -190,7 +192,7 @@ def _report(c, where, x):
             "checked": OPT,
             "dropped": lambda c, w, v: c.table(w, v, dict.fromkeys(v, OPT)),
             "joins": lambda c, w, v: c.table(w, v, dict.fromkeys(v, OPT)),
-            "areas": [lambda c, w, v: c.table(w, v, {"name": STR, "covered_fraction": OPT})],
+            "areas": [lambda c, w, v: c.table(w, v, {"area": STR, "covered_share": OPT})],
             "min_battery_wh": lambda c, w, v: (
                 c.table(w, v, dict.fromkeys(v, OPT)) if isinstance(v, dict) else c.value(w, v, OPT)
             ),

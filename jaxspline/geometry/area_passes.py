@@ -1,27 +1,30 @@
 """Where area strips can be: the passes of each satellite over each area, and their roll groups.
 
-An area strip is a push-broom look at a roll held fixed in the track frame
-(:func:`jaxspline.geometry.pointing.roll_frame`, :func:`jaxspline.geometry.pointing.roll_params`)
-over a whole number of action-grid slots. This module finds, on the satellites'
-Earth-fixed tracks (the planner's orbit table rotated to the Earth-fixed frame), which
-(satellite, roll, slots) can cover any sample of an area:
+An area strip is a push-broom look at a pointing offset (roll, pitch) held fixed in the
+track frame (:func:`jaxspline.geometry.pointing.roll_look_direction`,
+:func:`jaxspline.geometry.pointing.roll_params`) over a whole number of action-grid slots:
+at each instant its rays sweep the plane through ``down = cos(p) nadir + sin(p) along``
+and ``across``, whose normal is ``n = cos(p) along - sin(p) nadir``. A roll-only satellite
+has the pitch 0 alone; an agile one a grid of pitches, so that it can image several rows
+of an area in one pass, looking ahead, then down, then back. This module finds, on the
+satellites' Earth-fixed tracks (the planner's orbit table rotated to the Earth-fixed
+frame), which (satellite, pitch, roll, slots) can cover any sample of an area:
 
-1. **Passes.** The instants when the area's centre crosses the satellite's cross-track
-   plane (``(X - p) . along`` changes sign from + to -, the point in front of the
+1. **Passes.** Per pitch, the instants when the area's centre crosses the satellite's
+   imaging plane (``(X - p) . n`` changes sign from + to -, the point in front of the
    Earth's horizon) with some sample inside the roll band (+- :data:`PASS_SLACK_DEG`)
    at that instant, and the Earth's central angle to the centre within reach.
 2. **Sample crossings.** Per pass, every sample's own crossing instant ``t_j`` (linear
-   interpolation of ``(X_j - p) . along`` on the mesh) and its look angle ``a_j =
-   atan2((X_j - p) . across, (X_j - p) . nadir)`` there: a strip of roll ``r`` and field
+   interpolation of ``(X_j - p) . n`` on the mesh) and its look angle ``a_j =
+   atan2((X_j - p) . across, (X_j - p) . down)`` there: a strip of roll ``r`` and field
    of view ``f`` covers sample ``j`` about when ``|a_j - r| <= f / 2`` and the strip
-   spans ``t_j`` (the imaged ground line at an instant lies in the plane through the
-   satellite normal to ``along``).
+   spans ``t_j``.
 3. **Groups.** Rolls on a grid of the satellite's step inside each side of its roll band
-   (:func:`roll_grid`: values on a :data:`ROLL_DECIMALS` grid, strictly inside the band);
-   per (pass, roll) with any sample near it, the slots spanning those samples'
-   crossings with one slot of slack on each side, at least the minimum strip length,
-   clipped to the area's slots. Groups of one (satellite, roll) whose slots meet are
-   merged (:func:`merge_groups`).
+   (:func:`roll_grid`: values on a :data:`ROLL_DECIMALS` grid, strictly inside the band,
+   the boresight within the off-nadir limit at that pitch); per (pass, roll) with any
+   sample near it, the slots spanning those samples' crossings with one slot of slack
+   on each side, at least the minimum strip length, clipped to the area's slots. Groups
+   of one (satellite, pitch, roll) whose slots meet are merged (:func:`merge_groups`).
 
 Which samples each slot of each group covers is the coverage engine's work
 (:func:`jaxspline.screen.coverage.coverage_slices`, exact quadrilateral geometry).
@@ -73,6 +76,9 @@ class StripSensor(NamedTuple):
         of nadir (``0 <= lo <= hi``; the grid keeps 1e-4 deg inside it).
       roll_step_deg: roll grid step [deg].
       min_slots: fewest action-grid slots of a strip.
+      pitches_deg: the pitches of its strips [deg] ((0,): roll only).
+      off_nadir_deg: the boresight's off-nadir limit [deg]: at pitch p the roll keeps
+        ``cos(r) cos(p) >= cos(limit)``.
     """
 
     fov_deg: float
@@ -80,6 +86,8 @@ class StripSensor(NamedTuple):
     roll_hi_deg: float
     roll_step_deg: float
     min_slots: int
+    pitches_deg: tuple = (0.0,)
+    off_nadir_deg: float = 90.0
 
 
 class AreaSamples(NamedTuple):
@@ -98,17 +106,18 @@ class AreaSamples(NamedTuple):
 
 
 class Groups(NamedTuple):
-    """Roll groups: one satellite at one roll over a contiguous range of slots.
+    """Roll groups: one satellite at one pointing offset over a contiguous range of slots.
 
     Attributes:
       sat: int64 [G]; roll_deg: float64 [G] [deg]; slot_lo, slot_hi: int64 [G], the
-      group's slots ``[lo, hi)``; n_passes: passes found.
+      group's slots ``[lo, hi)``; pitch_deg: float64 [G] [deg]; n_passes: passes found.
     """
 
     sat: np.ndarray
     roll_deg: np.ndarray
     slot_lo: np.ndarray
     slot_hi: np.ndarray
+    pitch_deg: np.ndarray
     n_passes: int
 
     def __len__(self) -> int:
@@ -218,20 +227,31 @@ def _pass_groups(sensor: StripSensor, grid, t, a, slot_s, slots):
 
 
 def merge_groups(groups) -> list:
-    """Merge (sat, roll, lo, hi) entries of one (sat, roll) whose slot ranges meet.
+    """Merge (sat, pitch, roll, lo, hi) entries of one (sat, pitch, roll) whose slot
+    ranges meet.
 
     Args:
-      groups: iterable of (sat, roll, lo, hi).
+      groups: iterable of (sat, pitch, roll, lo, hi).
     Returns:
-      list of [sat, roll, lo, hi], sorted.
+      list of [sat, pitch, roll, lo, hi], sorted.
     """
     out = []
-    for s, r, lo, hi in sorted(groups):
-        if out and out[-1][0] == s and out[-1][1] == r and lo <= out[-1][3]:
-            out[-1][3] = max(out[-1][3], hi)
+    for s, p, r, lo, hi in sorted(groups):
+        if out and out[-1][:3] == [s, p, r] and lo <= out[-1][4]:
+            out[-1][4] = max(out[-1][4], hi)
         else:
-            out.append([s, r, lo, hi])
+            out.append([s, p, r, lo, hi])
     return out
+
+
+def tilted_frames(frames, pitch_deg: float):
+    """The imaging plane's frame at a pitch: ``(down, n, across)`` [K, 3] (module docstring),
+    from the track frames ``(nadir, along, across)``; pitch 0 gives them back."""
+    nadir, along, across = frames
+    if pitch_deg == 0.0:
+        return frames
+    p = np.radians(pitch_deg)
+    return np.cos(p) * nadir + np.sin(p) * along, np.cos(p) * along - np.sin(p) * nadir, across
 
 
 def find_groups(pos, vel, step_s: float, sensors, areas, slot_s: float) -> Groups:
@@ -251,33 +271,47 @@ def find_groups(pos, vel, step_s: float, sensors, areas, slot_s: float) -> Group
     for s, sensor in enumerate(sensors):
         if sensor is None:
             continue
-        grid = roll_grid(sensor.roll_lo_deg, sensor.roll_hi_deg, sensor.roll_step_deg)
-        if grid.size == 0:
-            continue
-        frames = roll_frame(pos[s], vel[s])
-        for area in areas:
-            if not area.sats[s] or area.xyz.shape[0] == 0:
+        track = roll_frame(pos[s], vel[s])
+        for pitch in sensor.pitches_deg:
+            grid = roll_grid(*_roll_band(sensor, pitch), sensor.roll_step_deg)
+            if grid.size == 0:
                 continue
-            found, n = _area_passes(pos[s], frames, step_s, sensor, grid, area, slot_s)
-            out += [(s, *g) for g in found]
-            n_passes += n
-    merged = np.array(merge_groups(out), np.float64).reshape(-1, 4)
+            frames = tilted_frames(track, pitch)
+            for area in areas:
+                if not area.sats[s] or area.xyz.shape[0] == 0:
+                    continue
+                found, n = _area_passes(pos[s], frames, step_s, sensor, grid, area, slot_s, pitch)
+                out += [(s, float(pitch), *g) for g in found]
+                n_passes += n
+    merged = np.array(merge_groups(out), np.float64).reshape(-1, 5)
     return Groups(
         merged[:, 0].astype(np.int64),
-        merged[:, 1],
-        merged[:, 2].astype(np.int64),
+        merged[:, 2],
         merged[:, 3].astype(np.int64),
+        merged[:, 4].astype(np.int64),
+        merged[:, 1],
         n_passes,
     )
 
 
-def _area_passes(pos, frames, step_s, sensor: StripSensor, grid, area: AreaSamples, slot_s):
-    """The groups ``(roll, lo, hi)`` of one satellite over one area, and its passes."""
+def _roll_band(sensor: StripSensor, pitch: float) -> tuple[float, float]:
+    """The roll band at a pitch: the sensor's, its top lowered so the boresight keeps
+    ``cos(r) cos(p) >= cos(off-nadir limit)``."""
+    c = np.cos(np.radians(sensor.off_nadir_deg)) / np.cos(np.radians(pitch))
+    top = float(np.degrees(np.arccos(min(c, 1.0))))
+    return sensor.roll_lo_deg, min(sensor.roll_hi_deg, top)
+
+
+def _area_passes(pos, frames, step_s, sensor: StripSensor, grid, area: AreaSamples, slot_s,
+                 pitch: float):  # fmt: skip
+    """The groups ``(roll, lo, hi)`` of one satellite at one pitch over one area (``frames``
+    the imaging plane's, :func:`tilted_frames`), and its passes."""
     xyz = area.xyz
     centre = xyz.mean(axis=0)
     reach = float(np.max(np.linalg.norm(xyz - centre, axis=1)))
     w = int(np.ceil(reach / MIN_GROUND_SPEED / step_s)) + WINDOW_PAD
-    far = _ground_reach(pos, sensor.roll_hi_deg + sensor.fov_deg / 2 + PASS_SLACK_DEG) + reach
+    look = sensor.roll_hi_deg + sensor.fov_deg / 2 + abs(pitch) + PASS_SLACK_DEG
+    far = _ground_reach(pos, look) + reach
     lo_b = max(sensor.roll_lo_deg - sensor.fov_deg / 2 - PASS_SLACK_DEG, 0.0)
     hi_b = sensor.roll_hi_deg + sensor.fov_deg / 2 + PASS_SLACK_DEG
     slots = (area.slot_lo, area.slot_hi)

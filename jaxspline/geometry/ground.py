@@ -37,12 +37,15 @@ __all__ = [
     "local_axes",
     "strip_between",
     "strip_centerline",
+    "FOOTPRINT_STEP_M",
+    "footprint_lonlat",
     "strip_footprint",
     "surface_point",
     "unit_vectors",
 ]
 
 _B2 = R_EARTH**2 * (1.0 - WGS84_E2)  # squared polar radius [m^2]
+FOOTPRINT_STEP_M = 2000.0  # footprint rings get a point on each side every this [m]
 
 
 def unit_vectors(x):
@@ -235,6 +238,27 @@ def strip_footprint(lat, lon, azimuth, length, swath, samples: int, alt=0.0):
     left = np.cos(b) * u + np.sin(b) * side
     right = np.cos(b) * u - np.sin(b) * side
     return np.concatenate([left, right[..., ::-1, :]], axis=-2)
+
+
+def footprint_lonlat(lat, lon, azimuth, length, swath, alt=0.0, upto: float = 1.0):
+    """Ground footprint of one strip imaged ``swath`` metres wide, as a closed lon/lat ring.
+
+    :func:`strip_footprint` of the first ``upto`` of the strip, a point on each side
+    every :data:`FOOTPRINT_STEP_M`, put on the ellipsoid.
+
+    Args:
+      lat, lon: geodetic start point [rad]; azimuth: direction at the start [rad];
+      length: strip length [m]; swath: imaged width [m]; alt: start height [m];
+      upto: fraction of the strip from its start (0 < upto <= 1).
+    Returns:
+      (lon [deg], lat [deg]), float [n] each, the ring closed (first point repeated).
+    """
+    part = float(length) * upto
+    samples = max(2, int(np.ceil(part / FOOTPRINT_STEP_M)) + 1)
+    u = strip_footprint(lat, lon, azimuth, part, swath, samples, alt=alt)
+    la, lo, _ = ecef_to_geodetic(surface_point(u))
+    lo, la = np.degrees(lo), np.degrees(la)
+    return np.append(lo, lo[0]), np.append(la, la[0])
 
 
 def ground_track(r_ecef, v_ecef):

@@ -109,27 +109,30 @@ def aim_params(target_ecef, direction_ecef=None, speed=0.0):
     return jnp.concatenate([g0, d, speed[..., None], strip[..., None]], -1)
 
 
-def roll_params(roll):
-    """Pack a roll law: the boresight held at ``roll`` in the track frame (one candidate
-    or broadcasting).
+def roll_params(roll, pitch=0.0):
+    """Pack a roll law: the boresight held at (``roll``, ``pitch``) in the track frame (one
+    candidate or broadcasting).
 
-    The law of an area strip (and of every observation of a roll-only satellite): at
-    each instant the look direction is ``nadir + tan(roll) across`` in the local frame
-    of the Earth-fixed track (:func:`roll_frame`), the push-broom detector across the
-    track, so the ground under the strip slides along the track. The packed vector is
-    ``[roll, 0, 0, 0, 0, 0, 0, ROLL_LAW]``; every aim-law kernel (:func:`aim_angles`,
-    :func:`aim_state`, :func:`aim_geometry`) evaluates it, whatever the start ``t0``.
+    The law of an area strip (and of every observation of a roll-only satellite, whose
+    pitch is 0): at each instant the look direction is :func:`roll_look_direction` in the
+    local frame of the Earth-fixed track (:func:`roll_frame`), the push-broom detector
+    across the track, so the ground under the strip slides along the track. The packed
+    vector is ``[roll, pitch, 0, 0, 0, 0, 0, ROLL_LAW]``; every aim-law kernel
+    (:func:`aim_angles`, :func:`aim_state`, :func:`aim_geometry`) evaluates it, whatever
+    the start ``t0``.
 
     Args:
       roll: float [...], roll [rad], positive towards ``across`` (|roll| < 90 deg).
+      pitch: float [...], pitch [rad], positive forward (|pitch| < 90 deg).
     Returns:
       float [..., 8], the aim law p.
     """
-    r = jnp.asarray(roll)
-    r = r.astype(jnp.result_type(r, float))
-    z = jnp.zeros(r.shape + (6,), r.dtype)
-    kind = jnp.full(r.shape + (1,), ROLL_LAW, r.dtype)
-    return jnp.concatenate([r[..., None], z, kind], -1)
+    r, q = jnp.broadcast_arrays(jnp.asarray(roll), jnp.asarray(pitch))
+    dt = jnp.result_type(r, q, float)
+    r, q = r.astype(dt), q.astype(dt)
+    z = jnp.zeros(r.shape + (5,), dt)
+    kind = jnp.full(r.shape + (1,), ROLL_LAW, dt)
+    return jnp.concatenate([r[..., None], q[..., None], z, kind], -1)
 
 
 def _roll_los(scene: Scene, p, t, sat=None):
@@ -145,7 +148,7 @@ def _roll_los(scene: Scene, p, t, sat=None):
     pos = rot_z(theta, r)
     vel = rot_z(theta, v) - OMEGA_EARTH * jnp.stack([-pos[1], pos[0], jnp.zeros_like(pos[0])])
     nadir, along, across = roll_frame(pos, vel)
-    d = nadir + jnp.tan(p[0]) * across
+    d = jnp.cos(p[1]) * nadir + jnp.sin(p[1]) * along + jnp.tan(p[0]) * across
     d = rot_z(-theta, d / jnp.sqrt(jnp.sum(d * d)))
     rd = jnp.dot(r, d)
     disc = rd * rd - (jnp.dot(r, r) - R_EARTH * R_EARTH)
@@ -478,24 +481,29 @@ def roll_frame(pos, vel):
     return nadir, along, xp.cross(along, nadir)
 
 
-def roll_look_direction(pos, vel, look_deg):
-    """Look direction ``nadir + tan(a) across`` of a roll-only satellite (one candidate).
+def roll_look_direction(pos, vel, look_deg, pitch_deg=0.0):
+    """Look direction ``down + tan(a) across`` of a held pointing offset (one candidate).
 
-    The pointing law of a roll-only satellite: its body stays in the local frame of
-    :func:`roll_frame` (pitch = yaw = 0) and only the roll a turns the boresight about
-    ``along``; during a strip the roll is held fixed, so the look direction at each
-    sample is this vector at that sample's state. Not normalized: its length is
-    ``sec a`` (the ray ``p + t d`` meets the ground where the caller solves for t).
+    ``down = cos(p) nadir + sin(p) along`` is nadir pitched by ``p`` towards the track;
+    with ``p = 0`` it is nadir and the law is a roll-only satellite's (``nadir + tan(a)
+    across``, the regional_coverage benchmark's). The body stays in the local frame of
+    :func:`roll_frame`; during a strip the offset (a, p) is held fixed, so the look
+    direction at each sample is this vector at that sample's state: the rays of one
+    instant sweep the plane through ``down`` and ``across``. Not normalized: its length
+    is ``sec a`` (the ray ``p + t d`` meets the ground where the caller solves for t).
 
     Args:
       pos: float [3], Earth-fixed position [m].
       vel: float [3], Earth-fixed velocity relative to the rotating Earth [m/s].
       look_deg: float [], look (roll) angle a [deg], positive towards ``across``.
+      pitch_deg: float [], pitch p [deg], positive towards ``along`` (forward).
     Returns:
       float [3], the direction (length ``sec a``).
     """
-    nadir, _, across = roll_frame(pos, vel)
-    return nadir + jnp.tan(jnp.radians(look_deg)) * across
+    nadir, along, across = roll_frame(pos, vel)
+    p = jnp.radians(pitch_deg)
+    down = jnp.cos(p) * nadir + jnp.sin(p) * along
+    return down + jnp.tan(jnp.radians(look_deg)) * across
 
 
 def _roll_unit_kernel(pos, vel, roll_deg):

@@ -74,6 +74,7 @@ class AreaOptions(NamedTuple):
       indptr, indices: CSR of the groups' slot rows (samples numbered area by area).
       opp: :class:`Opportunities` of the area options (unsorted).
       window: int64 [K, 3], per option its (group, first slot, end slot).
+      fov_deg: float [S], each satellite's field of view of area strips [deg] (0: none).
     """
 
     grids: list
@@ -83,6 +84,7 @@ class AreaOptions(NamedTuple):
     indices: np.ndarray
     opp: Opportunities
     window: np.ndarray
+    fov_deg: np.ndarray
 
     def __len__(self) -> int:
         return int(self.window.shape[0])
@@ -108,11 +110,12 @@ def earth_fixed_tracks(sc: Scenario, table, scene):
     return pos, vel, t[sl]
 
 
-def strip_sensor(sat, sc: Scenario, altitude: float) -> StripSensor | None:
+def strip_sensor(sat, sc: Scenario, altitude: float, speed: float) -> StripSensor | None:
     """What a satellite's area strips may be (module docstring), None when none fits.
 
     Args:
-      sat: Satellite; sc: Scenario (the planner's settings); altitude: mean altitude [m].
+      sat: Satellite; sc: Scenario (the planner's settings); altitude: mean altitude [m];
+      speed: mean speed of its ground track [m/s] (the automatic pitch step).
     Returns:
       :class:`StripSensor` or None (no roll in the band, or no strip fits the slots).
     """
@@ -127,7 +130,15 @@ def strip_sensor(sat, sc: Scenario, altitude: float) -> StripSensor | None:
     if hi < lo or int(math.floor(longest / pc.time_step + 1e-9)) < need:
         return None
     deg = math.degrees
-    return StripSensor(deg(fov), deg(lo), deg(hi), deg(pc.area_roll_step), need)
+    off = float(sat.off_nadir_max) - pc.margins.off_nadir
+    pitches = (0.0,)
+    if sat.maneuver.tracks_points:  # an agile satellite may also look ahead or back
+        step = pc.area_pitch_step
+        if step is None:  # the pitch that moves the imaged ground by one time step
+            step = math.atan(speed * pc.time_step / altitude)
+        n = int(math.floor(off / step + 1e-9))
+        pitches = tuple(round(deg(k * step), 6) for k in range(-n, n + 1))
+    return StripSensor(deg(fov), deg(lo), deg(hi), deg(pc.area_roll_step), need, pitches, deg(off))
 
 
 def _grids(sc: Scenario) -> list:
@@ -168,6 +179,7 @@ def _rows(pos, vel, sensors, groups: Groups, per: int, lon, lat, region):
         k0=(slot * per).astype(np.int32),
         n=np.full(slot.size, per + 1, np.int32),
         roll_deg=groups.roll_deg[gi],
+        pitch_deg=groups.pitch_deg[gi],
     )
     res = coverage_slices(pos, vel, fov, cands, lon, lat, region)
     table = res.csr()
@@ -188,7 +200,7 @@ def _keep_groups(groups: Groups, group_area, indptr, indices, keep):
     starts = np.repeat(indptr[rows] - np.concatenate([[0], np.cumsum(counts)[:-1]]), counts)
     indices = indices[starts + np.arange(int(counts.sum()))]
     indptr = np.concatenate([[0], np.cumsum(counts)]).astype(np.int64)
-    kept = Groups(*(x[keep] for x in groups[:4]), groups.n_passes)
+    kept = Groups(*(x[keep] for x in groups[:5]), groups.n_passes)
     return kept, group_area[keep], indptr, indices
 
 
@@ -229,7 +241,9 @@ def _option_table(sc: Scenario, scene, groups: Groups, group_area, win) -> Oppor
     tgt = np.array([sc.areas[int(a)].target for a in group_area], np.int64)[g]
     t0 = win[:, 1] * pc.time_step
     t1 = win[:, 2] * pc.time_step
-    params = np.asarray(roll_params(np.radians(groups.roll_deg[g])))
+    params = np.asarray(
+        roll_params(np.radians(groups.roll_deg[g]), np.radians(groups.pitch_deg[g]))
+    )
     per_ch = np.array([not s.maneuver.rest_to_rest for s in sats])
     o = option_states(sc, scene, sat, tgt, t0, t1, params, per_ch)
     earth = np.array([s.maneuver.los_frame == "earth_fixed" for s in sats])[sat]
@@ -257,8 +271,13 @@ def area_options(sc: Scenario, table, scene) -> AreaOptions | None:
     pc = sc.planner
     grids = _grids(sc)
     pos, vel, _ = earth_fixed_tracks(sc, table, scene)
-    alt = np.linalg.norm(pos, axis=-1).mean(axis=1) - R_EARTH
-    sensors = [strip_sensor(s, sc, float(h)) for s, h in zip(sc.satellites, alt, strict=True)]
+    rad = np.linalg.norm(pos, axis=-1)
+    alt = rad.mean(axis=1) - R_EARTH
+    ground = (np.linalg.norm(vel, axis=-1) * R_EARTH / rad).mean(axis=1)
+    sensors = [
+        strip_sensor(s, sc, float(h), float(v))
+        for s, h, v in zip(sc.satellites, alt, ground, strict=True)
+    ]
     tg = sc.targets
     areas = []
     for a, grid in zip(sc.areas, grids, strict=True):
@@ -278,7 +297,8 @@ def area_options(sc: Scenario, table, scene) -> AreaOptions | None:
     groups, group_area, indptr, indices = _keep_groups(groups, group_area, indptr, indices, ~bad)
     win = _windows(sc, groups, indptr, table)
     opp = _option_table(sc, scene, groups, group_area, win)
-    return AreaOptions(grids, groups, group_area, indptr, indices, opp, win)
+    fov = np.array([0.0 if x is None else x.fov_deg for x in sensors])
+    return AreaOptions(grids, groups, group_area, indptr, indices, opp, win, fov)
 
 
 def _find(pos, vel, pc, sensors, areas):
@@ -289,9 +309,14 @@ def _find(pos, vel, pc, sensors, areas):
         parts.append(g)
         owner.append(np.full(len(g), i, np.int64))
         n_passes += g.n_passes
-    cat = [np.concatenate([getattr(p, f) for p in parts]) for f in Groups._fields[:4]]
+    cat = [np.concatenate([getattr(p, f) for p in parts]) for f in Groups._fields[:5]]
     groups = Groups(
-        cat[0].astype(np.int64), cat[1], cat[2].astype(np.int64), cat[3].astype(np.int64), n_passes
+        cat[0].astype(np.int64),
+        cat[1],
+        cat[2].astype(np.int64),
+        cat[3].astype(np.int64),
+        cat[4],
+        n_passes,
     )
     return groups, np.concatenate(owner)
 
@@ -301,7 +326,7 @@ def _daylight(sc, scene, grids, groups: Groups, group_area):
     keep = _sun_ok(sc, scene, grids, groups, group_area)
     if keep.all():
         return groups, group_area
-    return Groups(*(x[keep] for x in groups[:4]), groups.n_passes), group_area[keep]
+    return Groups(*(x[keep] for x in groups[:5]), groups.n_passes), group_area[keep]
 
 
 def merge_options(opp: Opportunities, area: AreaOptions):
@@ -352,6 +377,7 @@ def cover_table(sc: Scenario, area: AreaOptions, window: np.ndarray) -> CoverTab
         indices=np.asarray(area.indices, np.int32),
         group_sat=g.sat,
         group_roll=g.roll_deg,
+        group_pitch=g.pitch_deg,
         group_slot0=g.slot_lo,
         group_nslots=g.slot_hi - g.slot_lo,
         group_area=area.group_area,

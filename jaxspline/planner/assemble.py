@@ -4,9 +4,9 @@
 optional HiGHS certificate); :func:`assemble_result` only reads their outputs: the
 observations in the re-check's order with their maneuver times and slacks, the value
 (an area counted by the share of its samples the plan's strips cover,
-:func:`area_report`) and the bound (the search's, capped by the value within reach of
-the options, lowered by the HiGHS bound when that is smaller), the battery profiles,
-the check report and the statistics.
+:mod:`jaxspline.planner.area_report`) and the bound (the search's, capped by the value
+within reach of the options, lowered by the HiGHS bound when that is smaller), the
+battery profiles, the check report and the statistics.
 """
 
 from __future__ import annotations
@@ -15,11 +15,12 @@ import math
 
 import numpy as np
 
+from jaxspline.planner.area_report import area_report, area_samples, strip_footprints
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.result import Observations, PlanResult
 from jaxspline.search import BoundStatus
 
-__all__ = ["area_report", "assemble_result"]
+__all__ = ["assemble_result"]
 
 
 def assemble_result(
@@ -50,8 +51,11 @@ def assemble_result(
     if mip is not None:
         mip_stats, bound, converged = _with_certificate(mip, bound, converged)
     report = _report(rep, obs, flown_joins, interrupted)
+    areas, footprints = [], []
     if ctx.problem.cover is not None:
         report["areas"] = area_report(sc, ctx.problem.cover, det["order"])
+        areas = area_samples(ctx.areas, ctx.problem.cover, det["order"])
+        footprints = strip_footprints(ctx, obs)
     return PlanResult(
         scenario=sc,
         observations=obs,
@@ -63,6 +67,8 @@ def assemble_result(
         stats=_stats(ctx, rep, res, mip_stats, peak_rss_mb),
         timings=timings,
         battery=_battery_profiles(sc.satellites, ctx.battery, det),
+        areas=areas,
+        footprints=footprints,
     )
 
 
@@ -73,11 +79,12 @@ def _observations(tg, opp, det, cover) -> Observations:
     o = opp.options
     idx = np.asarray(det["order"], np.int64)
     value = np.asarray(tg.value, np.float64)[np.asarray(o.route)[idx]]
-    roll = np.full(idx.size, np.nan)
+    roll, pitch = np.full(idx.size, np.nan), np.full(idx.size, np.nan)
     if cover is not None:
         area = cover.option_group[idx] >= 0
         value[area] = _strip_values(cover, idx[area], np.asarray(o.t_start)[idx[area]])
         roll[area] = opp.params[idx[area], 0]
+        pitch[area] = opp.params[idx[area], 1]
     return Observations(
         sat=np.asarray(o.sat)[idx],
         target=np.asarray(o.route)[idx],
@@ -88,6 +95,7 @@ def _observations(tg, opp, det, cover) -> Observations:
         value=value,
         speed=opp.speed[idx],
         roll=roll,
+        pitch=pitch,
     )
 
 
@@ -103,50 +111,6 @@ def _strip_values(cover, ids, starts) -> np.ndarray:
         new = s[~hit[s]]
         out[j] = float(cover.weight[new].sum())
         hit[new] = True
-    return out
-
-
-def area_report(sc, cover, chosen) -> list:
-    """Per area what the plan covers of it.
-
-    Args:
-      sc: Scenario; cover: the problem's :class:`jaxspline.search.cover.CoverTable`;
-      chosen: option ids of the plan.
-    Returns:
-      list of dict per area: ``area`` (name), ``priority``, ``samples``,
-      ``samples_covered``, ``covered_share`` (summed weight of its covered samples),
-      ``value`` (priority times the share), ``strips`` (area strips planned that cover
-      it), ``reachable_share`` (the share all its candidate strips cover together: no
-      plan covers more) and ``min_share`` (None: no minimum).
-    """
-    ids = np.asarray([c for c in chosen if cover.option_group[c] >= 0], np.int64)
-    hit = np.zeros(cover.n_samples, bool)
-    strips = np.zeros(cover.n_areas, np.int64)
-    for c in ids.tolist():
-        s = cover.samples(
-            int(cover.option_group[c]), int(cover.option_a[c]), int(cover.option_b[c])
-        )
-        hit[s] = True
-        strips[np.unique(cover.area[s])] += 1
-    reach = np.zeros(cover.n_samples, bool)
-    reach[cover.indices] = True
-    out = []
-    for a, area in enumerate(sc.areas):
-        m = cover.area == a
-        share = float(cover.share[m & hit].sum())
-        out.append(
-            {
-                "area": area.name,
-                "priority": float(sc.targets.value[area.target]),
-                "samples": int(m.sum()),
-                "samples_covered": int((m & hit).sum()),
-                "covered_share": share,
-                "value": float(sc.targets.value[area.target]) * share,
-                "strips": int(strips[a]),
-                "reachable_share": float(cover.share[m & reach].sum()),
-                "min_share": None if np.isnan(area.min_share) else float(area.min_share),
-            }
-        )
     return out
 
 

@@ -279,7 +279,7 @@ def _per_channel_maneuvers(sc, o, pl: _PlanRows, s, m):
 
 def _from_rest(sc, o, ids) -> RouteOptions:
     """The steps of the options ``ids`` (one satellite's, in order) after a rest step:
-    zero angles and rates at t = 0 on a route of its own, every scan flyable."""
+    zero angles and rates at t = 0, each step on a route of its own, every scan flyable."""
     steps = take_options(o, ids)
     rest = RouteOptions(
         *(
@@ -287,10 +287,8 @@ def _from_rest(sc, o, ids) -> RouteOptions:
             for x in steps
         )
     )
-    return rest._replace(
-        route=np.concatenate([[int(sc.targets.kind.size)], steps.route]),
-        scan_ok=np.ones(ids.size + 1, bool),
-    )
+    # one route a step: repeats are the repeat rule's business (an area takes many)
+    return rest._replace(route=np.arange(ids.size + 1), scan_ok=np.ones(ids.size + 1, bool))
 
 
 def _band_findings(sc, opp, pl: _PlanRows) -> _Findings:

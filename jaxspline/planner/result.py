@@ -37,6 +37,7 @@ class Observations(NamedTuple):
         strips before it (in time order), so the values sum to the plan's.
       speed: ground scan speed of a strip [m/s] (0 for points).
       roll: the roll an area strip holds [rad] (NaN for point and strip targets).
+      pitch: the pitch an area strip holds [rad] (NaN for point and strip targets).
     """
 
     sat: np.ndarray
@@ -48,6 +49,7 @@ class Observations(NamedTuple):
     value: np.ndarray
     speed: np.ndarray
     roll: np.ndarray
+    pitch: np.ndarray
 
     def __len__(self) -> int:
         return int(self.sat.shape[0])
@@ -76,6 +78,11 @@ class PlanResult:
       timings: wall time per stage [s].
       battery: per satellite name, ``(t [s], level [Wh])`` of the planned battery
         profile (satellites without power model are absent).
+      areas: per area of the scenario its samples and which the plan covers
+        (:func:`jaxspline.planner.area_report.area_samples`; empty without areas).
+      footprints: per observation the ground ring an area strip sweeps, ``(lon, lat)``
+        [deg], None for other targets (:func:`jaxspline.planner.area_report.strip_footprints`;
+        empty without areas).
     """
 
     scenario: Scenario
@@ -88,6 +95,8 @@ class PlanResult:
     stats: dict
     timings: dict
     battery: dict = dataclasses.field(default_factory=dict)
+    areas: list = dataclasses.field(default_factory=list)
+    footprints: list = dataclasses.field(default_factory=list)
 
     @property
     def total_value(self) -> float:
@@ -145,13 +154,15 @@ class PlanResult:
         return out
 
     def _area_columns(self, rows: list[dict]) -> None:
-        """Add ``roll_deg`` (the roll an area strip holds, "" for other targets) and
-        ``area_covered_share`` (the strip's area's covered share, ``report["areas"]``)
-        to each row of :meth:`rows`."""
+        """Add ``roll_deg`` and ``pitch_deg`` (the pointing offset an area strip holds, ""
+        for other targets) and ``area_covered_share`` (the strip's area's covered share,
+        ``report["areas"]``) to each row of :meth:`rows`."""
         share = {a["area"]: a["covered_share"] for a in self.report.get("areas", [])}
-        for row, roll in zip(rows, self.observations.roll, strict=True):
+        o = self.observations
+        for row, roll, pitch in zip(rows, o.roll, o.pitch, strict=True):
             area = row["kind"] == "area"
             row["roll_deg"] = round(math.degrees(float(roll)), 6) if area else ""
+            row["pitch_deg"] = round(math.degrees(float(pitch)), 6) if area else ""
             row["area_covered_share"] = round(share[row["target"]], 6) if area else ""
 
     def summary(self) -> dict:

@@ -22,7 +22,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
-from jaxspline.geometry.pointing import Scene
+from jaxspline.geometry.pointing import Scene, roll_params
 from jaxspline.kernels.joins import Maneuver, maneuver_eval
 from jaxspline.planner.attitude_laws import NADIR_LAW, law_modes, law_states
 from jaxspline.planner.flown_joins import NADIR, Joins, join_summary, plan_joins
@@ -87,8 +87,9 @@ def plan_scene(sc) -> Scene:
     return orbit_scene(sc)[1]
 
 
-def observation_laws(sc, target, speed) -> np.ndarray:
-    """Aim laws [K, 8] of observations (targets [K], scan speeds [K] [m/s], 0 for points)."""
+def observation_laws(sc, target, speed, roll=None, pitch=None) -> np.ndarray:
+    """Aim laws [K, 8] of observations (targets [K], scan speeds [K] [m/s], 0 for points;
+    ``roll``, ``pitch`` [K] [rad], the held offset of area strips, NaN for the others)."""
     laws = aim_laws(sc)
     speeds = np.array([lw[0] for lw in laws])
     target, speed = np.asarray(target, np.int64), np.asarray(speed, np.float64)
@@ -96,7 +97,13 @@ def observation_laws(sc, target, speed) -> np.ndarray:
     li = np.argmin(np.abs(speed[:, None] - speeds[None, :]), -1)
     if np.any(strip & ~np.isclose(speed, speeds[li], rtol=1e-12, atol=0.0)):
         raise ValueError(f"speed: a strip's scan speed is not a planner speed {speeds.tolist()}")
-    return np.stack([lw[1] for lw in laws])[np.where(strip, li, 0), target]
+    out = np.stack([lw[1] for lw in laws])[np.where(strip, li, 0), target]
+    if roll is not None:
+        area = np.isfinite(np.asarray(roll, np.float64))
+        if area.any():
+            r, p = (np.asarray(x, np.float64)[area] for x in (roll, pitch))
+            out[area] = np.asarray(roll_params(r, p))
+    return out
 
 
 def attitude_history(result, step: float = 1.0) -> PlanAttitude:
@@ -118,7 +125,7 @@ def _history(result, step: float) -> PlanAttitude:
     sc = result.scenario
     obs = result.observations
     scene = plan_scene(sc)
-    params = observation_laws(sc, obs.target, obs.speed)
+    params = observation_laws(sc, obs.target, obs.speed, obs.roll, obs.pitch)
     joins = plan_joins(scene, sc.satellites, obs.sat, obs.start, obs.end, params)
     mode = law_modes(sc.satellites)
     grid = np.arange(0.0, sc.duration + _TIME_TOL, float(step))

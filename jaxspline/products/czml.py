@@ -15,10 +15,11 @@ on https://sandcastle.cesium.com):
   the target, available only during the imaging interval ``[start, end]``;
 * one sensor footprint per observation (id ``footprint-<i>``), during ``[start, end]``:
   for a strip the imaged ground so far, the footprint swept by the satellite's swath
-  from the strip's start (:func:`jaxspline.readers.areas.footprint_lonlat`), growing in
-  :data:`FOOTPRINT_FRAMES` steps; for a point a disc as wide as the swath;
+  from the strip's start (:func:`jaxspline.geometry.ground.footprint_lonlat`), growing in
+  :data:`FOOTPRINT_FRAMES` steps; for a point a disc as wide as the swath; for an area
+  strip the ground it sweeps (``PlanResult.footprints``);
 * one packet per part of every area target (id ``area-<a>-<p>``): the polygon with its
-  holes, translucent, its covered fraction in the description; and per planned strip of
+  holes, translucent, its covered share in the description; and per planned strip of
   an area (id ``taken-<i>``) its footprint in the satellite's colour from the start of
   its imaging to the end of the horizon (the strips taken).
 
@@ -38,7 +39,9 @@ import jax
 import numpy as np
 
 from jaxspline.geometry.frames import earth_rotation_angle, gmst, teme_to_ecef
+from jaxspline.geometry.ground import footprint_lonlat
 from jaxspline.geometry.orbit import MU_EARTH, orbit_position, tabulate_orbits
+from jaxspline.geometry.routes import AREA, STRIP
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 
 __all__ = ["SATELLITE_COLORS", "satellite_tracks", "write_czml"]
@@ -250,7 +253,7 @@ def _target_packets(result) -> list:
     }
     out = []
     for i in range(len(tg)):
-        kind = "strip" if int(tg.kind[i]) == 1 else "point"
+        kind = ("point", "strip", "area")[int(tg.kind[i])]
         out.append(
             Packet(
                 id=f"target-{i}",
@@ -316,18 +319,39 @@ def _footprint_packets(result, horizon) -> list:
     sc = result.scenario
     obs = result.observations
     tg = sc.targets
-    in_area = {int(r) for a in sc.areas for r in np.asarray(a.targets)}
     out = []
     for i in range(len(obs)):
         k, j = int(obs.sat[i]), int(obs.target[i])
         color = SATELLITE_COLORS[k % len(SATELLITE_COLORS)]
-        if int(tg.kind[j]) != 1:
+        if int(tg.kind[j]) == AREA:
+            ring = result.footprints[i] if result.footprints else None
+            if ring is not None:
+                out.append(_ring_packet(sc, obs, i, color, ring))
+                out.append(_taken_strip(sc, obs, i, color, horizon, ring))
+        elif int(tg.kind[j]) == STRIP:
+            out.append(_strip_footprint(sc, obs, i, color))
+        else:
             out.append(_disc_footprint(sc, obs, i, color))
-            continue
-        out.append(_strip_footprint(sc, obs, i, color))
-        if j in in_area:
-            out.append(_taken_strip(sc, obs, i, color, horizon))
     return out
+
+
+def _ring_packet(sc, obs, i: int, color: str, ring):
+    """Observation i of an area: the ground ``ring`` it sweeps, during imaging."""
+    from czml3 import Packet
+    from czml3.properties import Polygon, PositionList
+    from czml3.types import TimeInterval
+
+    k, j = int(obs.sat[i]), int(obs.target[i])
+    t0, t1 = float(obs.start[i]), float(obs.end[i])
+    return Packet(
+        id=f"footprint-{i}",
+        name=f"footprint {sc.satellites[k].name} -> {sc.targets.name[j]}",
+        availability=TimeInterval(start=sc.at(t0), end=sc.at(t1)),
+        polygon=Polygon(
+            positions=PositionList(cartographicDegrees=_degrees_list(*ring)),
+            material=_footprint_fill(color),
+        ),
+    )
 
 
 @functools.cache
@@ -374,8 +398,6 @@ def _strip_footprint(sc, obs, i: int, color: str):
     from czml3.properties import Polygon, PositionList
     from czml3.types import IntervalValue, TimeInterval, TimeIntervalCollection
 
-    from jaxspline.readers.areas import footprint_lonlat
-
     k, j = int(obs.sat[i]), int(obs.target[i])
     sat, tg = sc.satellites[k], sc.targets
     t0, t1 = float(obs.start[i]), float(obs.end[i])
@@ -385,7 +407,8 @@ def _strip_footprint(sc, obs, i: int, color: str):
             t0 + (t1 - t0) * f / FOOTPRINT_FRAMES,
             t0 + (t1 - t0) * (f + 1) / FOOTPRINT_FRAMES,
         )
-        lon, lat = footprint_lonlat(tg, j, sat.swath, (f + 1) / FOOTPRINT_FRAMES)
+        lon, lat = footprint_lonlat(tg.lat[j], tg.lon[j], tg.azimuth[j], tg.length[j], sat.swath,
+                                    tg.alt[j], (f + 1) / FOOTPRINT_FRAMES)  # fmt: skip
         frames.append(
             IntervalValue(
                 start=sc.at(a),
@@ -403,18 +426,16 @@ def _strip_footprint(sc, obs, i: int, color: str):
     )
 
 
-def _taken_strip(sc, obs, i: int, color: str, horizon):
-    """Observation i of an area's strip: its footprint from the start of imaging to the
-    end of the horizon, in the satellite's colour."""
+def _taken_strip(sc, obs, i: int, color: str, horizon, ring):
+    """Observation i of an area's strip: the ground ``ring`` it swept from the start of
+    imaging to the end of the horizon, in the satellite's colour."""
     from czml3 import Packet
     from czml3.properties import Color, Material, Polygon, PositionList, SolidColorMaterial
     from czml3.types import TimeInterval
 
-    from jaxspline.readers.areas import footprint_lonlat
-
     k, j = int(obs.sat[i]), int(obs.target[i])
     sat, tg = sc.satellites[k], sc.targets
-    lon, lat = footprint_lonlat(tg, j, sat.swath)
+    lon, lat = ring
     taken = _rgba(color, TAKEN_ALPHA)
     return Packet(
         id=f"taken-{i}",
@@ -452,18 +473,17 @@ def _area_packets(result) -> list:
     sc = result.scenario
     if not sc.areas:
         return []
-    cover = result.report.get("areas")
-    if cover is None:
-        from jaxspline.readers.areas import area_coverage
-
-        cover = area_coverage(result)
+    cover = result.report.get("areas") or [None] * len(sc.areas)
     out = []
     for a_i, (area, cov) in enumerate(zip(sc.areas, cover, strict=True)):
-        desc = (
-            f"area {area.name}: priority {area.value:g}, swath {area.swath / 1e3:g} km, "
-            f"{cov['strips_planned']}/{cov['strips']} strips planned, "
-            f"{100 * cov['covered_fraction']:.1f} % of {cov['area_km2']:.1f} km2 covered"
-        )
+        desc = f"area {area.name}: priority {float(sc.targets.value[area.target]):g}"
+        if cov is not None:
+            desc += (
+                f", {cov['strips']} strips planned, {100 * cov['covered_share']:.1f} % of "
+                f"{cov['samples']} samples' weight covered"
+            )
+        if area.geometry is None:
+            continue
         for p_i, (ext, holes) in enumerate(_polygon_parts(area.geometry)):
             ring = np.asarray(ext, np.float64)
             hole_lists = [_degrees_list(*np.asarray(h, np.float64).T) for h in holes]

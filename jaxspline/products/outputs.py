@@ -349,8 +349,7 @@ def write_plan_outputs(
 ):
     """Write the files of a plan into ``folder`` (the staging directory of an :class:`OutputSet`).
 
-    Adds the covered fraction of every area to ``result.report["areas"]`` and the
-    times of the attitude history and coverage to ``result.timings``. Given a
+    Adds the time of the attitude history to ``result.timings``. Given a
     ``deadline``, the optional products (:data:`jaxspline.products.output_budget.PRODUCTS`)
     are written only while their estimate fits before its limit; each one left out
     is recorded (``result.report["time_limit"]["skipped"]``). ``plan.json`` and
@@ -380,12 +379,6 @@ def write_plan_outputs(
 def _write_all(result, out: Path, plots, aem, aem_step, html, deadline, doing: list):
     from jaxspline.products.plan_view import view_data
 
-    if result.scenario.areas:  # covered fraction per area, into plan.json's report
-        from jaxspline.readers.areas import area_coverage
-
-        t0 = time.monotonic()
-        result.report["areas"] = area_coverage(result)
-        result.timings["coverage"] = round(time.monotonic() - t0, 3)
     fits = _fits(result, deadline, plots=plots, html=html, aem=aem, aem_step=aem_step)
     view = {"view": view_data(result)}  # what plan.html draws: `jaxspline view` rebuilds it
     doing.append("plan.csv")

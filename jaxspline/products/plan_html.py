@@ -11,8 +11,8 @@ scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
   ``data-key`` attribute);
 * ``map`` (equirectangular, pan / zoom): land and coastlines from the package's
   offline land data (:func:`jaxspline.readers.land.land_fraction`, contoured at land
-  fraction 0.5), area polygons (``areas``), the coverage grid of ``objective =
-  "coverage"`` areas (``area_samples_covered`` green, ``area_samples_uncovered`` red),
+  fraction 0.5), area polygons (``areas``), the samples of the areas
+  (``area_samples_covered`` green, ``area_samples_uncovered`` red),
   strip centrelines (``strips``), ground
   tracks (``tracks``), sensor footprints of the observations (``footprints``), targets
   not imaged (``targets_not_imaged``, grey) and one glyph per observation at its
@@ -214,7 +214,7 @@ def _add_areas(fig, doc) -> None:
 
 
 def _add_area_samples(fig, areas) -> None:
-    """The coverage grid of ``objective = "coverage"`` areas: covered samples in
+    """The samples of the areas: covered samples in
     :data:`COVERED_COLOR`, uncovered ones in :data:`UNCOVERED_COLOR` (hover: the area)."""
     from bokeh.models import ColumnDataSource, HoverTool
 

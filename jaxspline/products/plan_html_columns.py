@@ -217,9 +217,11 @@ def area_columns(doc) -> dict:
     cols = {"xs": [], "ys": [], "name": [], "priority": [], "covered": []}
     for a, area in enumerate(view.get("areas") or []):
         geom = area["geometry"]
+        if geom is None:  # an area given by its samples alone
+            continue
         polys = [geom["coordinates"]] if geom["type"] == "Polygon" else geom["coordinates"]
         cov = cover[a] if a < len(cover) else {}
-        frac = cov.get("covered_fraction")
+        frac = cov.get("covered_share")
         for rings in polys:
             cols["xs"].append([[np.asarray([p[0] for p in ring], np.float64) for ring in rings]])
             cols["ys"].append([[np.asarray([p[1] for p in ring], np.float64) for ring in rings]])

@@ -102,8 +102,9 @@ def _joins_line(rep) -> str:
 def _area_lines(rep) -> list[str]:
     return [
         f"<b>area</b> {html.escape(str(a.get('area')))}: "
-        f"{a.get('strips_planned')}/{a.get('strips')} strips planned, "
-        f"{columns.fmt(100.0 * (a.get('covered_fraction') or 0.0), '.1f')} % covered"
+        f"{a.get('strips')} strips planned, "
+        f"{columns.fmt(100.0 * (a.get('covered_share') or 0.0), '.1f')} % covered"
+        f" (within reach {columns.fmt(100.0 * (a.get('reachable_share') or 0.0), '.1f')} %)"
         for a in rep.get("areas") or []
     ]
 

@@ -13,10 +13,12 @@ is rebuilt from ``plan.json`` alone, without the scenario or a re-plan
 * ``strips``: the centreline of every strip target;
 * ``observations``: per planned observation (the order of ``plan.json``'s
   ``observations``) the off-nadir angle of the line of sight at mid-imaging and the
-  sensor footprint of a strip, its swept ground (:func:`jaxspline.readers.areas.footprint_lonlat`;
-  ``null`` for a point, whose footprint is a disc as wide as the swath, :func:`disc`,
-  as in the CZML export);
-* ``areas``: the GeoJSON geometry and priority of every area target;
+  sensor footprint of a strip, its swept ground (:func:`jaxspline.geometry.ground.footprint_lonlat`,
+  an area strip's the ring of its edge points, ``PlanResult.footprints``; ``null`` for a
+  point, whose footprint is a disc as wide as the swath, :func:`disc`, as in the CZML
+  export);
+* ``areas``: the GeoJSON geometry, the priority and the samples (covered or not) of
+  every area target;
 * ``battery``: the planned battery level of every powered satellite.
 
 The off-nadir angle is ``atan2(|d x n|, d . n)`` between the line of sight
@@ -41,15 +43,15 @@ from jaxspline.geometry.frames import (
     gmst,
     teme_to_ecef,
 )
-from jaxspline.geometry.ground import strip_centerline
+from jaxspline.geometry.ground import FOOTPRINT_STEP_M, footprint_lonlat, strip_centerline
 from jaxspline.geometry.orbit import orbit_position, tabulate_orbits
+from jaxspline.geometry.routes import STRIP
 from jaxspline.products.czml import SATELLITE_COLORS, satellite_tracks
-from jaxspline.readers.areas import FOOTPRINT_STEP_M, footprint_lonlat, sample_cover
-from jaxspline.readers.mission import STRIP
 
 __all__ = ["disc", "view_data"]
 
-_VIEW_VERSION = 1  # bumped when the layout of the "view" section changes
+_VIEW_VERSION = 2  # bumped when the layout of the "view" section changes
+_KINDS = ("point", "strip", "area")  # by target kind
 _TRACK_STEP_S = 30.0  # ground-track sample step [s]
 DISC_SIDES = 24  # polygon sides of a point target's footprint disc
 DEG_DECIMALS = 4  # longitudes / latitudes rounded to ~10 m
@@ -127,7 +129,10 @@ def _off_nadir_deg(sc, obs) -> np.ndarray:
         r_teme = np.asarray(_orbit_position(table.orbit, mid, sat=sat), np.float64)
     r = teme_to_ecef(r_teme, earth_rotation_angle(float(gmst(sc.epoch_jd)), mid))
     g = _aim_points(sc.targets, np.asarray(obs.target, np.int64))
-    return np.degrees(angle_between(g - r, -r))
+    off = np.degrees(angle_between(g - r, -r))
+    area = np.isfinite(obs.roll)  # an area strip: the angle of its held offset
+    r, p = (np.where(area, x, 0.0) for x in (obs.roll, obs.pitch))
+    return np.where(area, np.degrees(np.arccos(np.cos(r) * np.cos(p))), off)
 
 
 def _tracks(sc) -> dict:
@@ -159,16 +164,21 @@ def _strips(tg) -> list[dict]:
     return out
 
 
-def _footprints(sc, obs) -> list[dict | None]:
+def _footprints(result) -> list[dict | None]:
+    sc, obs = result.scenario, result.observations
     tg = sc.targets
     out = []
     for i in range(len(obs)):
         k, j = int(obs.sat[i]), int(obs.target[i])
         swath = float(sc.satellites[k].swath)
-        if int(tg.kind[j]) != STRIP:
+        if result.footprints and result.footprints[i] is not None:  # an area strip
+            lon, lat = result.footprints[i]
+        elif int(tg.kind[j]) == STRIP:
+            lon, lat = footprint_lonlat(tg.lat[j], tg.lon[j], tg.azimuth[j], tg.length[j],
+                                        swath, tg.alt[j])  # fmt: skip
+        else:
             out.append(None)
             continue
-        lon, lat = footprint_lonlat(tg, j, swath)
         lon = _wrap_deg(lon)
         out.append({"lon_deg": _round(lon, DEG_DECIMALS), "lat_deg": _round(lat, DEG_DECIMALS)})
     return out
@@ -202,7 +212,7 @@ def view_data(result) -> dict:
         "tracks": _tracks(sc),
         "targets": {
             "name": [str(n) for n in tg.name],
-            "kind": ["strip" if int(k) == STRIP else "point" for k in tg.kind],
+            "kind": [_KINDS[int(k)] for k in tg.kind],
             "lon_deg": _round(lon, DEG_DECIMALS),
             "lat_deg": _round(np.degrees(tg.lat), DEG_DECIMALS),
             "value": [float(v) for v in tg.value],
@@ -210,9 +220,9 @@ def view_data(result) -> dict:
         "strips": _strips(tg),
         "observations": {
             "off_nadir_deg": _round(_off_nadir_deg(sc, obs), VALUE_DECIMALS),
-            "footprint": _footprints(sc, obs),
+            "footprint": _footprints(result),
         },
-        "areas": [_area_view(result, a) for a in sc.areas],
+        "areas": [_area_view(result, i, a) for i, a in enumerate(sc.areas)],
         "battery": {
             name: {"t_s": _round(t, TIME_DECIMALS), "level_wh": _round(level, VALUE_DECIMALS)}
             for name, (t, level) in (result.battery or {}).items()
@@ -220,15 +230,16 @@ def view_data(result) -> dict:
     }
 
 
-def _area_view(result, a) -> dict:
-    """An area of the view: name, priority, polygon and, for ``objective = "coverage"``,
-    its grid samples (``lon_deg``, ``lat_deg``, ``covered`` 0/1 by the plan)."""
-    out = {"name": a.name, "value": float(a.value), "geometry": a.geometry}
-    if a.objective == "coverage":
-        lonlat = np.asarray(a.sample_lonlat, np.float64)
+def _area_view(result, i: int, a) -> dict:
+    """An area of the view: name, priority, polygon (None when the scenario gave only
+    samples) and its samples (``lon_deg``, ``lat_deg``, ``covered`` 0/1 by the plan)."""
+    value = float(result.scenario.targets.value[a.target])
+    out = {"name": a.name, "value": value, "geometry": a.geometry}
+    if result.areas:
+        smp = result.areas[i]
         out["samples"] = {
-            "lon_deg": _round(lonlat[:, 0], DEG_DECIMALS),
-            "lat_deg": _round(lonlat[:, 1], DEG_DECIMALS),
-            "covered": [int(c) for c in sample_cover(result, a)],
+            "lon_deg": _round(smp["lon_deg"], DEG_DECIMALS),
+            "lat_deg": _round(smp["lat_deg"], DEG_DECIMALS),
+            "covered": [int(c) for c in smp["covered"]],
         }
     return out

@@ -5,43 +5,20 @@
 ``fields`` the checked TOML/CSV field readers; ``ranges`` the physical range of every
 number of a scenario file; ``land`` the land mask; ``satellites`` the satellite tables
 (TLE checks); ``targets`` the target tables (CSV and TOML); ``area_files`` the
-GeoJSON/TOML areas; ``areas`` cuts areas into strip targets along the ground tracks and
-reports their coverage; ``coverage_strips`` the sample grid, free candidate strips and
-lazy greedy of ``objective = "coverage"`` areas; ``scenario`` the TOML scenario reader
-(the full schema is its docstring).
+GeoJSON/TOML areas and their sample files; ``scenario`` the TOML scenario reader (the
+full schema is its docstring). Readers read: the planner lays areas out and plans them
+(:mod:`jaxspline.planner.area_options`).
 """
 
 from jaxspline.readers.area_files import AREA_KEYS as AREA_KEYS
-from jaxspline.readers.area_files import AREA_OBJECTIVES as AREA_OBJECTIVES
-from jaxspline.readers.area_files import DEFAULT_OBJECTIVE as DEFAULT_OBJECTIVE
-from jaxspline.readers.area_files import DENSIFY_DEG as DENSIFY_DEG
 from jaxspline.readers.area_files import GRID_PER_SWATH as GRID_PER_SWATH
 from jaxspline.readers.area_files import MAX_AREA_SAMPLES as MAX_AREA_SAMPLES
-from jaxspline.readers.area_files import MAX_AREA_STRIPS as MAX_AREA_STRIPS
 from jaxspline.readers.area_files import MAX_RADIUS_DEG as MAX_RADIUS_DEG
-from jaxspline.readers.area_files import MAX_SWATH_KM as MAX_SWATH_KM
-from jaxspline.readers.area_files import MIN_STRIP_M as MIN_STRIP_M
 from jaxspline.readers.area_files import AreaSpec as AreaSpec
 from jaxspline.readers.area_files import parse_areas as parse_areas
 from jaxspline.readers.area_files import polygon_center as polygon_center
 from jaxspline.readers.area_files import read_geojson as read_geojson
-from jaxspline.readers.areas import FOOTPRINT_STEP_M as FOOTPRINT_STEP_M
-from jaxspline.readers.areas import MERGE_DEG as MERGE_DEG
-from jaxspline.readers.areas import area_coverage as area_coverage
-from jaxspline.readers.areas import coverage_line as coverage_line
-from jaxspline.readers.areas import cut_areas as cut_areas
-from jaxspline.readers.areas import footprint_lonlat as footprint_lonlat
-from jaxspline.readers.areas import sample_cover as sample_cover
-from jaxspline.readers.coverage_strips import MIN_GAIN as MIN_GAIN
-from jaxspline.readers.coverage_strips import OFFSET_PER_SWATH as OFFSET_PER_SWATH
-from jaxspline.readers.coverage_strips import RUN_GAP_CELLS as RUN_GAP_CELLS
-from jaxspline.readers.coverage_strips import AreaGrid as AreaGrid
-from jaxspline.readers.coverage_strips import CoverageStrips as CoverageStrips
-from jaxspline.readers.coverage_strips import area_grid as area_grid
-from jaxspline.readers.coverage_strips import candidate_strips as candidate_strips
-from jaxspline.readers.coverage_strips import covered_samples as covered_samples
-from jaxspline.readers.coverage_strips import lazy_greedy as lazy_greedy
-from jaxspline.readers.coverage_strips import select_strips as select_strips
+from jaxspline.readers.area_files import read_samples as read_samples
 from jaxspline.readers.mission import DEFAULT_SWATH as DEFAULT_SWATH
 from jaxspline.readers.mission import MAX_EXACT_OPTIONS as MAX_EXACT_OPTIONS
 from jaxspline.readers.mission import MODELS as MODELS

@@ -1,25 +1,29 @@
-"""Area target tables of scenario files: ``[[areas]]``, GeoJSON polygons, named errors.
+"""Area tables of scenario files: ``[[areas]]``, GeoJSON polygons or sample files, named errors.
 
 The schema is documented with the rest of the scenario file in
-:mod:`jaxspline.readers.scenario`; :mod:`jaxspline.readers.areas` cuts the areas read here
-into strip targets. Every error is a ``ValueError`` naming the field (``areas[1].swath_km``), its
-TOML line and the value; GeoJSON content errors name ``areas[i].geojson`` and what is
-wrong with the file. Polygons: GeoJSON Polygon / MultiPolygon, a Feature of one, or a
-FeatureCollection of them (united), or one inline ring ``lonlat_deg`` of ``[lon, lat]``
-pairs [deg]; finite, valid (no self-intersection), with area, within [-180, 180] x
-[-90, 90] deg, less than 180 deg wide in longitude and no vertex farther than
-:data:`MAX_RADIUS_DEG` from the centre.
+:mod:`jaxspline.readers.scenario`. An area is read, never cut: each becomes a target of
+kind ``AREA`` (its priority, imaging window and sensor) and an
+:class:`jaxspline.readers.mission.Area` (its polygon and grid spacing, or its own samples),
+which the planner lays out and plans (:mod:`jaxspline.planner.area_options`). Every error
+is a ``ValueError`` naming the field (``areas[1].grid_km``), its TOML line and the value;
+GeoJSON content errors name ``areas[i].geojson`` and what is wrong with the file.
+Polygons: GeoJSON Polygon / MultiPolygon, a Feature of one, or a FeatureCollection of
+them (united), or one inline ring ``lonlat_deg`` of ``[lon, lat]`` pairs [deg]; finite,
+valid (no self-intersection), with area, within [-180, 180] x [-90, 90] deg, less than
+180 deg wide in longitude and no vertex farther than :data:`MAX_RADIUS_DEG` from the
+centre. Samples (``samples_csv``): a CSV file with columns ``lon_deg``, ``lat_deg`` and
+``weight`` (each sample's share of the area, summing to at most 1).
 
 Areas crossing the antimeridian (the 180 deg meridian) are refused, whether written
 with a jump from +180 to -180, with longitudes beyond 180, or split in two at the
 meridian as RFC 7946 section 3.1.9 asks: the centre of an area is the centroid of its
 longitudes and latitudes (:func:`polygon_center`), which for such an area lies on the
 far side of the Earth, and the output files draw areas in [-180, 180]. Give such an
-area as two ``[[areas]]``, one on each side of the meridian; each is cut on its own.
+area as two ``[[areas]]``, one on each side of the meridian.
 
-The strip width ``swath_km`` (at most :data:`MAX_SWATH_KM`) and ``max_length_km`` (at
-least :data:`MIN_STRIP_M`) must not cut an area into more than
-:data:`MAX_AREA_STRIPS` strips per direction (estimated from the area's size).
+The sample spacing ``grid_km`` (default a third of the narrowest swath of the satellites
+whose sensor the area accepts) must not give an area more than
+:data:`MAX_AREA_SAMPLES` samples (estimated from the area's size).
 """
 
 from __future__ import annotations
@@ -46,80 +50,71 @@ from jaxspline.readers.fields import (
     read_text,
     read_tick,
 )
-from jaxspline.readers.ranges import MAX_NAME_CHARS, RANGES, bounds
+from jaxspline.readers.ranges import MAX_NAME_CHARS, bounds
 
 __all__ = [
     "AREA_KEYS",
-    "AREA_OBJECTIVES",
-    "DEFAULT_OBJECTIVE",
     "GRID_PER_SWATH",
     "MAX_AREA_SAMPLES",
-    "DENSIFY_DEG",
-    "MAX_AREA_STRIPS",
     "MAX_RADIUS_DEG",
-    "MAX_SWATH_KM",
-    "MIN_STRIP_M",
     "AreaSpec",
     "parse_areas",
     "polygon_center",
     "read_geojson",
+    "read_samples",
 ]
 
 #: Keys of an ``[[areas]]`` table.
 AREA_KEYS = frozenset(
-    "name geojson lonlat_deg priority swath_km max_length_km sensor window_s objective "
-    "grid_km".split()
+    "name geojson lonlat_deg samples_csv priority sensor window_s grid_km min_coverage".split()
 )
-#: Values of ``areas[].objective``: ``coverage`` (strips chosen by unique coverage of a
-#: sample grid, :mod:`jaxspline.readers.coverage_strips`) or ``strips`` (fixed cut strips).
-AREA_OBJECTIVES = ("coverage", "strips")
-#: The objective of an area that names none (docs/areas.md says why).
-DEFAULT_OBJECTIVE = "coverage"
-#: Most grid samples one area may have (a finer ``grid_km`` is refused).
+#: Keys of earlier versions, refused with what replaced them.
+RETIRED_KEYS = {
+    "swath_km": "the strips are as wide as the imaging satellite's field of view (fov_deg, "
+    "or its swath_km)",
+    "max_length_km": "a strip lasts the satellite's strip_duration_s",
+    "objective": "every area is planned by the unique coverage of its samples",
+}
+#: Most samples one area may have (a finer ``grid_km`` is refused).
 MAX_AREA_SAMPLES = 200_000
-#: Default sample spacing as a share of the area's swath (3 samples across a strip).
+#: Default sample spacing as a share of the narrowest swath (3 samples across a strip).
 GRID_PER_SWATH = 1.0 / 3.0
 MAX_RADIUS_DEG = 10.0  # largest central angle from an area's centre to a vertex [deg]
-DENSIFY_DEG = 0.05  # polygon edges are split into pieces at most this long [deg]
-MIN_STRIP_M = 1000.0  # shorter strips are lengthened about their middle to this [m]
-MAX_SWATH_KM = RANGES["areas[].swath_km"][1]  # a wider strip is a unit mistake [km]
-MAX_AREA_STRIPS = 20_000  # most strips one cutting of an area may have (size / swath ...)
 _KM_PER_DEG = 111.195  # great-circle km per degree (mean Earth radius)
 _MERIDIAN = (
     "; an area across the antimeridian (180 deg) is not supported: give it as two areas, "
     "one on each side"
 )
+_SAMPLE_COLUMNS = ("lon_deg", "lat_deg", "weight")
 
 
 @dataclasses.dataclass(frozen=True)
 class AreaSpec:
-    """An ``[[areas]]`` table, read and checked (:func:`parse_areas`), not yet cut.
+    """An ``[[areas]]`` table, read and checked (:func:`parse_areas`).
 
     Attributes:
       name: label (unique among the areas).
-      polygon: shapely Polygon or MultiPolygon, coordinates (lon, lat) [deg].
+      polygon: shapely Polygon or MultiPolygon, coordinates (lon, lat) [deg], or None
+        (samples given without a polygon).
       value: priority of the whole area (> 0).
-      swath: strip width [m] (> 0).
-      max_length: longest strip [m] (inf: no limit).
       sensor: required sensor type ("" = any).
-      t_lo, t_hi: imaging window of every strip [s from the epoch] (-inf/+inf: free).
+      t_lo, t_hi: imaging window of its strips [s from the epoch] (-inf/+inf: free).
+      grid: sample spacing [m] (0 with samples given).
+      samples: float [N, 3] ``(lon [deg], lat [deg], weight)`` given, or [0, 3].
+      min_share: least covered share (NaN: none).
       field: label of the table in error messages (``areas[0]``).
-      objective: ``"coverage"`` (strips chosen by unique coverage of a sample grid) or
-        ``"strips"`` (fixed cut strips, each worth its share of the area).
-      grid: sample spacing of the coverage grid [m] (> 0; used by ``coverage``).
     """
 
     name: str
     polygon: object
     value: float
-    swath: float
-    max_length: float = math.inf
     sensor: str = ""
     t_lo: float = -math.inf
     t_hi: float = math.inf
+    grid: float = 0.0
+    samples: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros((0, 3)))
+    min_share: float = math.nan
     field: str = "areas[0]"
-    objective: str = DEFAULT_OBJECTIVE
-    grid: float = 1000.0
 
 
 def _polygonal(geom, where: str):
@@ -308,98 +303,145 @@ def _ring(ctx, field, value):
         raise ctx.error(field, f"not a polygon: {exc}") from None
 
 
-def _check_strip_count(ctx, f, swath_from: str, radius: float, swath: float, max_len: float):
-    """Refuse a swath / max_length that would cut the area into too many strips."""
-    across = 2.0 * radius * _KM_PER_DEG * 1e3  # the area's size bound [m]
-    bands = max(1.0, across / swath)  # floats: a tiny swath gives inf, not an overflow
-    pieces = max(1.0, across / max_len)
-    if bands * pieces <= MAX_AREA_STRIPS:
-        return
-    size = f"the area, up to {across / 1e3:.4g} km across, would be cut into ~"
-    if bands > MAX_AREA_STRIPS:
-        given = f" (not given: {swath_from}, the narrowest)" if swath_from else ""
-        raise ctx.error(
-            f"{f}.swath_km",
-            f"{swath / 1e3:g} km{given} is too narrow: {size}{bands:.3g} strips "
-            f"(at most {MAX_AREA_STRIPS})",
-        )
-    raise ctx.error(
-        f"{f}.max_length_km",
-        f"{max_len / 1e3:g} km is too short: {size}{bands * pieces:.3g} strips "
-        f"(at most {MAX_AREA_STRIPS})",
-    )
-
-
 def parse_areas(ctx, data: dict, base_dir, satellites, horizon=None) -> list[AreaSpec]:
     """The ``[[areas]]`` (alias ``[area]``) tables of a parsed scenario file, checked.
 
     Args:
       ctx: :class:`jaxspline.readers.fields.FieldContext` of the file.
       data: dict, the parsed scenario TOML.
-      base_dir: folder that relative GeoJSON paths start from (None: the working directory).
+      base_dir: folder that relative paths start from (None: the working directory).
       satellites: the scenario's :class:`jaxspline.readers.mission.Satellite` tuple (the
-        default swath is the narrowest of those whose sensor the area accepts).
+        default grid spacing comes from the narrowest swath of those whose sensor the
+        area accepts).
       horizon: the scenario's duration [s]: ``window_s`` lies in ``[0, horizon]`` (None:
         the longest horizon).
     Returns:
       list of :class:`AreaSpec`, in file order.
     Raises:
-      ValueError: naming the field (``areas[1].swath_km``), its TOML line and the value.
+      ValueError: naming the field (``areas[1].grid_km``), its TOML line and the value.
     """
     out, names = [], {}
     for i, (f, a) in enumerate(field_tables(ctx, data, "areas", "area")):
+        for key, why in RETIRED_KEYS.items():
+            if key in a:
+                raise ctx.error(f"{f}.{key}", f"is no longer read: {why}")
         a = field_table(ctx, f, a, AREA_KEYS)
         name = a.get("name", f"area_{i + 1}")
         name = field_str(ctx, f"{f}.name", name, allow_empty=False, max_chars=MAX_NAME_CHARS)
         if name in names:
             raise ctx.error(f"{f}.name", f"duplicate area name {name!r} (also {names[name]})")
         names[name] = f
-        geom, radius = _area_polygon(ctx, f, a, base_dir)
 
         def num(key, default=None, f=f, a=a):
             return field_number(ctx, f"{f}.{key}", a.get(key, default), **bounds(f"areas[].{key}"))
 
         value = num("priority", 1.0)
         sensor = field_str(ctx, f"{f}.sensor", a.get("sensor", ""), max_chars=MAX_NAME_CHARS)
-        swath, swath_from = _area_swath(ctx, f, a, sensor, satellites)
-        max_len = 1e3 * num("max_length_km") if "max_length_km" in a else math.inf
-        _check_strip_count(ctx, f, swath_from, radius, swath, max_len)
         t_lo, t_hi = -math.inf, math.inf
         if "window_s" in a:
             t_lo, t_hi = field_pair(ctx, f"{f}.window_s", a["window_s"],
                                     **bounds("areas[].window_s", horizon))  # fmt: skip
-        objective, grid = _area_objective(ctx, f, a, radius, swath)
-        out.append(
-            AreaSpec(name, geom, value, swath, max_len, sensor, t_lo, t_hi, f, objective, grid)
-        )
+        min_share = num("min_coverage") if "min_coverage" in a else math.nan
+        if "samples_csv" in a:
+            samples = _area_samples(ctx, f, a, base_dir)
+            geom = _area_polygon(ctx, f, a, base_dir)[0] if _has_polygon(a) else None
+            grid = 0.0
+        else:
+            geom, radius = _area_polygon(ctx, f, a, base_dir)
+            samples, grid = np.zeros((0, 3)), _area_grid(ctx, f, a, radius, sensor, satellites)
+        out.append(AreaSpec(name, geom, value, sensor, t_lo, t_hi, grid, samples, min_share, f))
     return out
 
 
-def _area_objective(ctx, f, a, radius: float, swath: float) -> tuple[str, float]:
-    """``(objective, grid spacing [m])`` of an area table: ``objective`` one of
-    :data:`AREA_OBJECTIVES`, ``grid_km`` in its range (default :data:`GRID_PER_SWATH` of
-    the swath) and not so fine that the area gets over :data:`MAX_AREA_SAMPLES` samples."""
-    objective = field_str(ctx, f"{f}.objective", a.get("objective", DEFAULT_OBJECTIVE))
-    if objective not in AREA_OBJECTIVES:
-        raise ctx.error(
-            f"{f}.objective", f"must be one of {', '.join(AREA_OBJECTIVES)}, got {objective!r}"
+def _has_polygon(a) -> bool:
+    return "geojson" in a or "lonlat_deg" in a
+
+
+def _area_samples(ctx, f, a, base_dir) -> np.ndarray:
+    """The samples of ``samples_csv`` (:func:`read_samples`), errors naming the field."""
+    key = f"{f}.samples_csv"
+    path = Path(field_str(ctx, key, a["samples_csv"], allow_empty=False))
+    if not path.is_absolute() and base_dir is not None:
+        path = Path(base_dir) / path
+    try:
+        return read_samples(path)
+    except (OSError, ValueError) as exc:
+        raise ctx.error(key, str(exc)) from None
+
+
+def read_samples(path) -> np.ndarray:
+    """An area's samples from a CSV file with columns ``lon_deg``, ``lat_deg``, ``weight``.
+
+    Args:
+      path: str or Path of the file.
+    Returns:
+      float [N, 3] ``(lon [deg], lat [deg], weight)``.
+    Raises:
+      ValueError: a missing column, a row that is not three finite numbers, a longitude
+        or latitude out of range, a negative weight, weights summing to more than 1, or
+        no rows (the message names the file, the row and the value).
+      OSError: the file cannot be read.
+    """
+    import csv
+
+    path = Path(path)
+    text = read_text(path)
+    rows = list(csv.DictReader(text.splitlines()))
+    head = rows[0].keys() if rows else next(csv.reader(text.splitlines()), [])
+    missing = [c for c in _SAMPLE_COLUMNS if c not in head]
+    if missing:
+        raise ValueError(
+            f"{path.name}: missing column {missing[0]!r} (columns: lon_deg, lat_deg, weight)"
         )
+    out = np.empty((len(rows), 3))
+    for i, row in enumerate(rows):
+        for j, c in enumerate(_SAMPLE_COLUMNS):
+            out[i, j] = check_float(
+                row[c],
+                lambda m, i=i, c=c: ValueError(f"{path.name} row {i + 2}: {c} {m}"),
+                text=True,
+            )
+    if out.shape[0] == 0:
+        raise ValueError(f"{path.name}: no samples")
+    for j, (c, lo, hi) in enumerate(
+        (("lon_deg", -180, 180), ("lat_deg", -90, 90), ("weight", 0, 1))
+    ):
+        bad = np.flatnonzero((out[:, j] < lo) | (out[:, j] > hi))
+        if bad.size:
+            i = int(bad[0])
+            raise ValueError(
+                f"{path.name} row {i + 2}: {c} must be within [{lo}, {hi}], got {out[i, j]!r}"
+            )
+    if out[:, 2].sum() > 1.0 + 1e-9:
+        raise ValueError(f"{path.name}: the weights sum to {out[:, 2].sum():.6g}, more than 1")
+    return out
+
+
+def _area_grid(ctx, f, a, radius: float, sensor: str, satellites) -> float:
+    """The grid spacing [m] of an area: ``grid_km`` in its range, or :data:`GRID_PER_SWATH`
+    of the narrowest swath of the satellites whose sensor the area accepts; refused when
+    the area would get over :data:`MAX_AREA_SAMPLES` samples."""
     if "grid_km" in a:
         grid = 1e3 * field_number(ctx, f"{f}.grid_km", a["grid_km"], **bounds("areas[].grid_km"))
+        given = ""
     else:
-        grid = swath * GRID_PER_SWATH
-    if objective == "coverage":
-        across = 2.0 * radius * _KM_PER_DEG * 1e3  # the area's size bound [m]
-        if (across / grid) ** 2 > MAX_AREA_SAMPLES:
-            given = f" ({GRID_PER_SWATH:.3g} x the {swath / 1e3:g} km swath: grid_km not given)"
-            given = "" if "grid_km" in a else given
+        swaths = [(s.swath, k) for k, s in enumerate(satellites) if sensor in ("", s.sensor)]
+        if not swaths:
             raise ctx.error(
-                f"{f}.grid_km",
-                f"{grid / 1e3:g} km{given} is too fine: the area, up to {across / 1e3:.4g} km "
-                f"across, would get ~{(across / grid) ** 2:.3g} samples (at most "
-                f"{MAX_AREA_SAMPLES}); give a coarser grid_km",
+                f"{f}.sensor", f"no satellite has sensor {sensor!r}: none can image the area"
             )
-    return objective, grid
+        swath, k = min(swaths)
+        grid = swath * GRID_PER_SWATH
+        given = f" ({GRID_PER_SWATH:.3g} x satellites[{k}].swath_km: grid_km not given)"
+    across = 2.0 * radius * _KM_PER_DEG * 1e3  # the area's size bound [m]
+    if (across / grid) ** 2 > MAX_AREA_SAMPLES:
+        raise ctx.error(
+            f"{f}.grid_km",
+            f"{grid / 1e3:g} km{given} is too fine: the area, up to {across / 1e3:.4g} km "
+            f"across, would get ~{(across / grid) ** 2:.3g} samples (at most "
+            f"{MAX_AREA_SAMPLES}); give a coarser grid_km",
+        )
+    return grid
 
 
 def _area_polygon(ctx, f, a, base_dir):
@@ -427,18 +469,3 @@ def _area_polygon(ctx, f, a, base_dir):
         return geom, _check_polygon(geom, lambda m: ctx.error(key, where + m))
     except shapely.errors.ShapelyError as exc:  # GEOS on a degenerate polygon
         raise ctx.error(key, f"{where}not a usable polygon: {exc}") from None
-
-
-def _area_swath(ctx, f, a, sensor, satellites) -> tuple[float, str]:
-    """``(swath [m], field it came from)``: the area's ``swath_km``, or the narrowest swath
-    of the satellites whose sensor the area accepts (the field names that satellite)."""
-    if "swath_km" in a:
-        swath = field_number(ctx, f"{f}.swath_km", a["swath_km"], **bounds("areas[].swath_km"))
-        return 1e3 * swath, ""
-    swaths = [(s.swath, k) for k, s in enumerate(satellites) if sensor in ("", s.sensor)]
-    if not swaths:
-        raise ctx.error(
-            f"{f}.swath_km", f"missing, and no satellite has sensor {sensor!r} to take it from"
-        )
-    swath, k = min(swaths)
-    return swath, f"satellites[{k}].swath_km"

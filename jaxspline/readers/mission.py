@@ -511,6 +511,11 @@ class PlannerConfig:
       default_time_limit: search budget [s] when :func:`plan` gets no time limit.
       max_actions: most observations of a plan, all satellites together (None: no cap).
       area_roll_step: roll grid step of area strips [rad].
+      area_pitch_step: pitch grid step of an agile satellite's area strips [rad] (their
+        pitches are its multiples within the off-nadir limit); None: per satellite, the
+        pitch that moves the imaged ground by one action-grid step of its ground track
+        (``atan(ground speed * time_step / altitude)``), so that a strip of any row can
+        start at any step of the pass.
     """
 
     time_step: float = 5.0
@@ -525,6 +530,7 @@ class PlannerConfig:
     default_time_limit: float = 30.0
     max_actions: int | None = None
     area_roll_step: float = math.radians(DEFAULT_ROLL_STEP_DEG)
+    area_pitch_step: float | None = None
 
     def __post_init__(self):
         for f in ("time_step", "geometry_step", "default_time_limit"):
@@ -551,6 +557,8 @@ class PlannerConfig:
         if self.max_actions is not None and int(self.max_actions) < 1:
             raise ValueError(f"planner.max_actions must be >= 1, got {self.max_actions!r}")
         _positive("planner.area_roll_step", self.area_roll_step)
+        if self.area_pitch_step is not None:
+            _positive("planner.area_pitch_step", self.area_pitch_step)
 
 
 @dataclasses.dataclass(frozen=True)

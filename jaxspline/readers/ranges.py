@@ -64,6 +64,10 @@ RANGES: dict[str, tuple] = {
     "satellites[].off_nadir_max_deg": (0.01, 80.0),
     "satellites[].settle_s": (0.0, 600.0),
     "satellites[].swath_km": (0.01, 5000.0),
+    "satellites[].fov_deg": (0.001, 80.0),
+    "satellites[].edge_off_nadir_deg": (0.0, 80.0),
+    "satellites[].strip_duration_s": (0.0, 3600.0),
+    "satellites[].duty_s_per_orbit": (0.01, 86400.0),
     "satellites[].flex.freq_hz": (0.001, 100.0),
     "satellites[].flex.damping": (0.0, 1.0),
     "satellites[].flex.tolerance_deg": (1e-9, 10.0),
@@ -85,8 +89,7 @@ RANGES: dict[str, tuple] = {
     "targets[].tolerance_s": (0.0, HORIZON),
     "targets[].min_duration_s": (0.0, 3600.0),
     "areas[].priority": (1e-6, 1e6),
-    "areas[].swath_km": (0.01, 5000.0),
-    "areas[].max_length_km": (1.0, 10000.0),
+    "areas[].min_coverage": (0.0, 1.0),
     "areas[].window_s": (0.0, HORIZON),
     "areas[].grid_km": (0.01, 1000.0),
     "random_targets.seed": (0, 2**63 - 1),
@@ -111,6 +114,10 @@ RANGES: dict[str, tuple] = {
     "planner.lagrangian_share": (0.0, 0.99),
     "planner.refine_steps": (0, 100_000),
     "planner.time_limit_s": (0.01, 7 * _DAY_S),
+    "planner.max_actions": (1, 1_000_000),
+    "planner.area_roll_step_deg": (0.001, 10.0),
+    "planner.area_pitch_step_deg": (0.1, 80.0),
+    "planner.duty_margin_s": (0.0, 600.0),
 }
 
 

@@ -26,6 +26,7 @@ from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.fields import (
     field_bool,
     field_number,
+    field_pair,
     field_str,
     field_table,
     field_tables,
@@ -58,7 +59,8 @@ SATELLITE_KEYS = {
     name: frozenset(keys.split())
     for name, keys in {
         "satellite": " ".join(_ORBIT_KEYS) + " name tle model rate_deg_s accel_deg_s2 "
-        "off_nadir_max_deg sensor settle_s flex power swath_km",
+        "off_nadir_max_deg sensor settle_s flex power swath_km fov_deg edge_off_nadir_deg "
+        "strip_duration_s duty_s_per_orbit",
         "over": "lat_deg lon_deg t_s descending",
         "flex": "freq_hz damping tolerance_deg",
         "power": "capacity_wh initial_wh idle_w imaging_w slew_w charge_w",
@@ -320,12 +322,39 @@ def _satellite(ctx, f, sat, default_name, epoch, duration) -> Satellite:
             f"rate_deg_s = {math.degrees(rate):g}, accel_deg_s2 = {math.degrees(accel):g}: "
             "give a larger tolerance_deg or freq_hz, or a smaller accel_deg_s2",
         )
+    area = _area_fields(ctx, f, sat, off)
     try:
         return Satellite(
-            name, orbit, model, limits, math.radians(off), sensor, settle, flex, power, 1e3 * swath
-        )
+            name, orbit, model, limits, math.radians(off), sensor, settle, flex, power,
+            1e3 * swath, **area,
+        )  # fmt: skip
     except ValueError as exc:
         raise ctx.error(f, str(exc)) from None
+
+
+def _area_fields(ctx, f, sat, off_deg: float) -> dict:
+    """The fields of a satellite's area strips: ``fov_deg``, ``edge_off_nadir_deg`` (its
+    edges' band, within the off-nadir limit), ``strip_duration_s`` and
+    ``duty_s_per_orbit`` (each only where given)."""
+    out = {}
+    if "fov_deg" in sat:
+        out["fov"] = math.radians(_num(ctx, f"{f}.fov_deg", sat["fov_deg"], "fov_deg"))
+    if "edge_off_nadir_deg" in sat:
+        lo, hi = field_pair(ctx, f"{f}.edge_off_nadir_deg", sat["edge_off_nadir_deg"],
+                            **bounds("satellites[].edge_off_nadir_deg"))  # fmt: skip
+        if hi > off_deg:
+            raise ctx.error(
+                f"{f}.edge_off_nadir_deg",
+                f"the band's outer edge {hi:g} deg must be <= off_nadir_max_deg = {off_deg:g}",
+            )
+        out["edge_band"] = (math.radians(lo), math.radians(hi))
+    if "strip_duration_s" in sat:
+        out["strip_duration"] = field_pair(ctx, f"{f}.strip_duration_s", sat["strip_duration_s"],
+                                           **bounds("satellites[].strip_duration_s"))  # fmt: skip
+    if "duty_s_per_orbit" in sat:
+        out["duty"] = _num(ctx, f"{f}.duty_s_per_orbit", sat["duty_s_per_orbit"],
+                           "duty_s_per_orbit")  # fmt: skip
+    return out
 
 
 def parse_satellites(ctx, data: dict, epoch: _dt.datetime, duration: float) -> tuple:

@@ -144,13 +144,16 @@ six hours with about 1500 city targets (``data/cities.csv``, made by
 
 from __future__ import annotations
 
+import dataclasses
 import datetime as _dt
 import importlib.resources
+import json
 import math
 import tomllib
 from pathlib import Path
 
 import numpy as np
+import shapely.geometry
 
 from jaxspline.readers.fields import (
     FieldContext,
@@ -161,7 +164,14 @@ from jaxspline.readers.fields import (
     field_table,
     read_text,
 )
-from jaxspline.readers.mission import Margins, PlannerConfig, Scenario, make_targets
+from jaxspline.readers.mission import (
+    AREA,
+    Area,
+    Margins,
+    PlannerConfig,
+    Scenario,
+    make_targets,
+)
 from jaxspline.readers.ranges import EPOCH_RANGE, MAX_SCAN_SPEEDS, RANGES, bounds
 from jaxspline.readers.satellites import parse_satellites
 from jaxspline.readers.targets import TARGET_SECTIONS, scenario_targets
@@ -188,7 +198,8 @@ _KEYS = {
         "scenario": "name epoch duration_s duration_h",
         "planner": "time_step_s geometry_step_s scan_speeds_km_s sun_elevation_min_deg "
         "off_nadir_margin_deg horizon_margin gap_margin_s battery_margin_wh shadow_guard_steps "
-        "exact_max_options lagrangian_share bound_worker refine_steps time_limit_s",
+        "exact_max_options lagrangian_share bound_worker refine_steps time_limit_s "
+        "max_actions area_roll_step_deg area_pitch_step_deg duty_margin_s",
     }.items()
 }
 _TOP = frozenset("scenario satellites satellite planner areas area".split()) | TARGET_SECTIONS
@@ -260,6 +271,7 @@ def _margins(ctx, pl, sats) -> Margins:
         gap=num("gap_margin_s", dm.gap),
         battery_wh=num("battery_margin_wh", dm.battery_wh),
         shadow_guard=_int(ctx, pl, "shadow_guard_steps", dm.shadow_guard),
+        duty=num("duty_margin_s", dm.duty),
     )
 
 
@@ -287,6 +299,11 @@ def _planner(ctx, pl, duration: float, sats) -> PlannerConfig:
         ),
         "refine_steps": _int(ctx, pl, "refine_steps", d.refine_steps),
         "default_time_limit": num("time_limit_s", d.default_time_limit),
+        "max_actions": _int(ctx, pl, "max_actions", None) if "max_actions" in pl else None,
+        "area_roll_step": math.radians(num("area_roll_step_deg", math.degrees(d.area_roll_step))),
+        "area_pitch_step": (
+            math.radians(num("area_pitch_step_deg", None)) if "area_pitch_step_deg" in pl else None
+        ),
     }
     try:
         return PlannerConfig(**kw)
@@ -366,22 +383,42 @@ def parse_scenario(
 
 
 def _with_areas(ctx, data, base_dir, sc: Scenario) -> Scenario:
-    """``sc`` with the ``[[areas]]`` of ``data`` cut into strip targets after its targets."""
-    import shapely
-
-    from jaxspline.readers.area_files import parse_areas
-    from jaxspline.readers.areas import cut_areas
+    """``sc`` with the ``[[areas]]`` of ``data``: each a target of kind AREA after its
+    targets (priority, window, sensor, its centre) and an :class:`Area`."""
+    from jaxspline.readers.area_files import parse_areas, polygon_center
 
     specs = parse_areas(ctx, data, base_dir, sc.satellites, horizon=sc.duration)
-    try:
-        sc = cut_areas(sc, specs)
-    except (ValueError, shapely.errors.ShapelyError) as exc:  # a polygon GEOS cannot cut
-        raise ctx.error("areas", f"cannot cut the areas into strips: {exc}") from None
-    if len(sc.targets) == 0:
-        raise ctx.error(
-            "areas", "no targets: no satellite passes over any area and no other targets are given"
-        )
-    return sc
+    lat, lon, areas = [], [], []
+    first = len(sc.targets)
+    for i, a in enumerate(specs):
+        if a.samples.shape[0]:
+            w = a.samples[:, 2] if a.samples[:, 2].sum() > 0 else None
+            lon.append(math.radians(float(np.average(a.samples[:, 0], weights=w))))
+            lat.append(math.radians(float(np.average(a.samples[:, 1], weights=w))))
+        else:
+            c = polygon_center(a.polygon)
+            lat.append(math.asin(float(c[2])))
+            lon.append(math.atan2(float(c[1]), float(c[0])))
+        geometry = None if a.polygon is None else shapely.geometry.mapping(a.polygon)
+        areas.append(Area(a.name, first + i, _plain(geometry), a.grid, a.samples, a.min_share))
+    rows = make_targets(
+        np.full(len(specs), AREA),
+        lat,
+        lon,
+        value=[a.value for a in specs],
+        t_lo=[a.t_lo for a in specs],
+        t_hi=[a.t_hi for a in specs],
+        sensor=[a.sensor for a in specs],
+        name=[a.name for a in specs],
+    )
+    return dataclasses.replace(sc, targets=sc.targets.concat(rows), areas=tuple(areas))
+
+
+def _plain(geometry):
+    """A GeoJSON geometry mapping as plain nested lists (shapely gives tuples)."""
+    if geometry is None:
+        return None
+    return json.loads(json.dumps(geometry))
 
 
 def load_scenario(path) -> Scenario:

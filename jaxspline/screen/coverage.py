@@ -95,12 +95,14 @@ class Candidates(NamedTuple):
       k0: int32 [C], first mesh sample (start time / mesh step).
       n: int32 [C], number of mesh samples (duration / step + 1, >= 2).
       roll_deg: float64 [C], roll [deg].
+      pitch_deg: float64 [C], pitch [deg] (None: 0, the roll-only law).
     """
 
     sat: np.ndarray
     k0: np.ndarray
     n: np.ndarray
     roll_deg: np.ndarray
+    pitch_deg: np.ndarray | None = None
 
 
 class CoverageTable(NamedTuple):
@@ -182,7 +184,7 @@ _edges_batch = jax.jit(jax.vmap(edge_points))
 _ranges_batch = jax.jit(jax.vmap(quad_range, in_axes=(None, None, None, None, 0)))
 
 
-def strip_quads(pos, vel, roll_deg: float, fov_deg: float):
+def strip_quads(pos, vel, roll_deg: float, fov_deg: float, pitch_deg: float = 0.0):
     """Edge points of one strip (every sample of it).
 
     Args:
@@ -190,6 +192,7 @@ def strip_quads(pos, vel, roll_deg: float, fov_deg: float):
       vel: float [n, 3], Earth-fixed velocities [m/s].
       roll_deg: roll [deg].
       fov_deg: cross-track field of view [deg].
+      pitch_deg: pitch [deg] (0: the roll-only law).
     Returns:
       (inner [n, 2], outer [n, 2], hit [n]) numpy: (lon, lat) [deg] of the edge ground
       points, and whether both rays meet the Earth.
@@ -199,7 +202,8 @@ def strip_quads(pos, vel, roll_deg: float, fov_deg: float):
         n = pos.shape[0]
         r = jnp.full((n,), roll_deg, jnp.float64)
         f = jnp.full((n,), fov_deg, jnp.float64)
-        inner, outer, hit = _edges_batch(pos, jnp.asarray(vel, jnp.float64), r, f)
+        q = jnp.full((n,), pitch_deg, jnp.float64)
+        inner, outer, hit = _edges_batch(pos, jnp.asarray(vel, jnp.float64), r, f, q)
     return np.asarray(inner), np.asarray(outer), np.asarray(hit)
 
 
@@ -259,21 +263,27 @@ def _check_inputs(pos, vel, fov_deg, cands: Candidates, lon, lat, region):
 
 
 def _as_candidates(c: Candidates) -> Candidates:
+    roll = np.asarray(c.roll_deg, np.float64).ravel()
+    pitch = np.zeros_like(roll) if c.pitch_deg is None else c.pitch_deg
     return Candidates(
         np.asarray(c.sat, np.int32).ravel(),
         np.asarray(c.k0, np.int32).ravel(),
         np.asarray(c.n, np.int32).ravel(),
-        np.asarray(c.roll_deg, np.float64).ravel(),
+        roll,
+        np.broadcast_to(np.asarray(pitch, np.float64).ravel(), roll.shape),
     )
 
 
 def _groups(cands: Candidates):
-    """Group id per candidate (by satellite and exact roll) and each group's (sat, roll)."""
+    """Group id per candidate (by satellite, exact roll and pitch) and each group's
+    (sat, roll, pitch)."""
     rolls, r_inv = np.unique(cands.roll_deg, return_inverse=True)
-    keys, gid = np.unique(
-        cands.sat.astype(np.int64) * rolls.size + r_inv.ravel(), return_inverse=True
-    )
-    return gid.ravel().astype(np.int64), keys // rolls.size, rolls[keys % rolls.size]
+    pitches, p_inv = np.unique(cands.pitch_deg, return_inverse=True)
+    key = (cands.sat.astype(np.int64) * pitches.size + p_inv.ravel()) * rolls.size + r_inv.ravel()
+    keys, gid = np.unique(key, return_inverse=True)
+    g_sat = keys // (rolls.size * pitches.size)
+    g_pitch = pitches[(keys // rolls.size) % pitches.size]
+    return gid.ravel().astype(np.int64), g_sat, rolls[keys % rolls.size], g_pitch
 
 
 def _union_samples(gid, k0, n, n_samples):
@@ -293,7 +303,7 @@ def _union_samples(gid, k0, n, n_samples):
     return u_key
 
 
-def _edges(pos, vel, fov, g_sat, g_roll, u_key, n_samples):
+def _edges(pos, vel, fov, g_sat, g_roll, g_pitch, u_key, n_samples):
     """Edge points (inner, outer [U, 2], hit [U]) of every union sample, in fixed chunks."""
     u_gid, u_k = u_key // n_samples, u_key % n_samples
     sat = g_sat[u_gid]
@@ -308,7 +318,8 @@ def _edges(pos, vel, fov, g_sat, g_roll, u_key, n_samples):
         v = jnp.asarray(vel[sat[idx], u_k[idx]])
         r = jnp.asarray(g_roll[u_gid[idx]])
         f = jnp.asarray(fov[sat[idx]])
-        i_, o_, h_ = _edges_batch(p, v, r, f)
+        q = jnp.asarray(g_pitch[u_gid[idx]])
+        i_, o_, h_ = _edges_batch(p, v, r, f, q)
         inner[sl], outer[sl], hit[sl] = np.asarray(i_)[:m], np.asarray(o_)[:m], np.asarray(h_)[:m]
     return inner, outer, hit
 
@@ -349,10 +360,10 @@ def coverage_slices(pos, vel, fov_deg, candidates: Candidates, lon_deg, lat_deg,
     region = np.asarray(region).ravel()
     _check_inputs(pos, vel, fov, cands, lon, lat, region)
     k_all = pos.shape[1]
-    gid, g_sat, g_roll = _groups(cands)
+    gid, g_sat, g_roll, g_pitch = _groups(cands)
     u_key = _union_samples(gid, cands.k0, cands.n, k_all)
     with jax.enable_x64(True):
-        inner, outer, hit = _edges(pos, vel, fov, g_sat, g_roll, u_key, k_all)
+        inner, outer, hit = _edges(pos, vel, fov, g_sat, g_roll, g_pitch, u_key, k_all)
         valid = _validity(hit, u_key, gid, cands.k0, cands.n, k_all)
         g_maxq = np.zeros(g_sat.size, np.int64)
         np.maximum.at(g_maxq, gid, cands.n.astype(np.int64) - 1)

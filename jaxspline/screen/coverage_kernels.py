@@ -47,11 +47,12 @@ WGS84_B = R_EARTH * (1.0 - WGS84_F)  # m, polar semi-axis
 FULL_TURN_DEG = 360.0
 
 
-def look_point(pos, vel, look_deg):
+def look_point(pos, vel, look_deg, pitch_deg=0.0):
     """Ground point of the look angle ``look_deg`` at one sample (one ray).
 
-    ``d = nadir + tan(a) across`` (the roll-only pointing law,
-    :func:`jaxspline.geometry.pointing.roll_look_direction`); scaled by the semi-axes
+    ``d = down + tan(a) across`` (the held pointing offset, ``down`` nadir pitched by
+    ``pitch_deg`` forward: :func:`jaxspline.geometry.pointing.roll_look_direction`; with
+    pitch 0 the roll-only law ``nadir + tan(a) across``); scaled by the semi-axes
     (``P = p / (a, a, b)``, ``D = d / (a, a, b)``) the ray meets the unit sphere where
     ``|P + t D|^2 = 1``; the first root is ``t = C / (-B + sqrt(B^2 - A C))`` with
     ``A = D.D``, ``B = P.D``, ``C = P.P - 1`` (the cancellation-free form). Geodetic
@@ -62,11 +63,12 @@ def look_point(pos, vel, look_deg):
       vel: float [3], Earth-fixed velocity relative to the rotating Earth [m/s].
       look_deg: float [], look angle across track [deg] (positive towards
         ``along x nadir``).
+      pitch_deg: float [], pitch [deg] (positive forward).
     Returns:
       (lon_deg [], lat_deg [], hit bool []): geodetic longitude/latitude [deg] of the hit;
       where ``hit`` is False (the ray misses the ellipsoid) lon/lat are finite junk.
     """
-    d = roll_look_direction(pos, vel, look_deg)
+    d = roll_look_direction(pos, vel, look_deg, pitch_deg)
     scale = jnp.stack([1.0 / R_EARTH, 1.0 / R_EARTH, 1.0 / WGS84_B]).astype(pos.dtype)
     p_s, d_s = pos * scale, d * scale
     a = jnp.sum(d_s * d_s)
@@ -82,25 +84,26 @@ def look_point(pos, vel, look_deg):
     return lon, lat, hit
 
 
-def edge_points(pos, vel, roll_deg, fov_deg):
+def edge_points(pos, vel, roll_deg, fov_deg, pitch_deg=0.0):
     """Inner and outer strip-edge ground points at one sample.
 
     Inner edge angle ``sign(r) (|r| - f/2)``, outer ``sign(r) (|r| + f/2)``
-    (``sign(0) = +1``).
+    (``sign(0) = +1``), both at the strip's pitch.
 
     Args:
       pos: float [3], Earth-fixed position [m].
       vel: float [3], Earth-fixed velocity relative to the rotating Earth [m/s].
       roll_deg: float [], roll r [deg].
       fov_deg: float [], cross-track field of view f [deg].
+      pitch_deg: float [], pitch [deg] (0: the roll-only law).
     Returns:
       (inner [2], outer [2], hit bool []): (lon, lat) [deg] of the two edge ground
       points; ``hit`` is True iff both rays meet the ellipsoid.
     """
     sign = jnp.where(roll_deg < 0.0, -1.0, 1.0)
     half = 0.5 * fov_deg
-    lon_i, lat_i, hit_i = look_point(pos, vel, sign * (jnp.abs(roll_deg) - half))
-    lon_o, lat_o, hit_o = look_point(pos, vel, sign * (jnp.abs(roll_deg) + half))
+    lon_i, lat_i, hit_i = look_point(pos, vel, sign * (jnp.abs(roll_deg) - half), pitch_deg)
+    lon_o, lat_o, hit_o = look_point(pos, vel, sign * (jnp.abs(roll_deg) + half), pitch_deg)
     return jnp.stack([lon_i, lat_i]), jnp.stack([lon_o, lat_o]), hit_i & hit_o
 
 

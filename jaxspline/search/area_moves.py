@@ -99,8 +99,8 @@ class AreaIndex:
     Attributes:
       pb: the Problem; cv: its CoverTable.
       windows: :class:`Windows`.
-      passes: per pass its groups sorted by roll; span: int64 [P, 2] its slots.
-      roll_order: groups sorted by (pass, roll); roll_pos: each group's place there.
+      passes: per pass its groups sorted by (pitch, roll); span: int64 [P, 2] its slots.
+      roll_order: groups sorted by (pass, pitch, roll); roll_pos: each group's place there.
       los: per group the unit lines of sight at its slot boundaries ([n + 1, 3]), from its
         options (None where the satellite's model needs no lines of sight).
     """
@@ -110,7 +110,7 @@ class AreaIndex:
         cv = self.cv = pb.cover
         self.windows = _windows(cv)
         n = int(cv.group_pass.max()) + 1 if cv.n_groups else 0
-        order = np.lexsort((cv.group_roll, cv.group_pass))
+        order = np.lexsort((cv.group_roll, cv.group_pitch, cv.group_pass))
         cuts = np.searchsorted(cv.group_pass[order], np.arange(n + 1))
         self.passes = [order[cuts[i] : cuts[i + 1]] for i in range(n)]
         end = cv.group_slot0 + cv.group_nslots
@@ -220,20 +220,52 @@ def need_bound(ix: AreaIndex, c: int, g: int, before: bool) -> float:
 
 
 def pass_gaps(ix: AreaIndex, groups) -> np.ndarray:
-    """Slots needed between a strip of ``groups[i]`` and a later one of ``groups[j]``."""
+    """Slots needed between a strip of ``groups[i]`` and a later one of ``groups[j]``: the
+    slew table at the largest angle between their boundary lines of sight (>= 1); for a
+    model that needs no lines of sight, the fewest slots after which the problem's own
+    transition (:meth:`Problem.need`) from an option of ``groups[i]`` ending mid-pass to
+    one of ``groups[j]`` fits (:func:`_exact_gaps`)."""
     pb = ix.pb
     cv = ix.cv
     k = int(cv.group_sat[groups[0]])
     table = pb.tables[k]
     n = len(groups)
     if table is None or any(ix.los[g] is None for g in groups):
-        return np.ones((n, n), np.int64)
-    ang = np.zeros((n, n))
+        return _exact_gaps(ix, groups)
+    b = max(ix.los[g].shape[0] for g in groups)
+    los = np.stack([np.pad(ix.los[g], ((0, b - ix.los[g].shape[0]), (0, 0)), mode="edge")
+                    for g in groups])  # fmt: skip
+    dots = np.einsum("ibc,jdc->ijbd", los, los).reshape(n, n, -1).min(axis=-1)
+    need = table(np.arccos(np.clip(dots, -1.0, 1.0)))
+    return np.maximum(np.ceil(np.asarray(need) / cv.slot_s - 1e-9).astype(np.int64), 1)
+
+
+def _exact_gaps(ix: AreaIndex, groups, most: int = 8) -> np.ndarray:
+    """The gap matrix of :func:`pass_gaps` from exact transitions: per pair of groups, an
+    option of the first ending at a boundary shared by both and options of the second
+    starting 1, 2, ... slots later (at most ``most``; never feasible: ``most``)."""
+    pb, cv = ix.pb, ix.cv
+    n = len(groups)
+    ends, starts = {}, {}
+    for c in np.flatnonzero(np.isin(cv.option_group, groups)).tolist():
+        g = int(cv.option_group[c])
+        ends.setdefault((g, int(cv.option_b[c])), c)
+        starts.setdefault((g, int(cv.option_a[c])), c)
+    out = np.full((n, n), most, np.int64)
     for i, gi in enumerate(groups):
+        lo_i, hi_i = int(cv.group_slot0[gi]), int(cv.group_slot0[gi] + cv.group_nslots[gi])
         for j, gj in enumerate(groups):
-            ang[i, j] = _angles(ix.los[gi][:, None, :], ix.los[gj][None, :, :]).max()
-    need = np.vectorize(table.scalar)(ang)
-    return np.maximum(np.ceil(need / cv.slot_s - 1e-9).astype(np.int64), 1)
+            lo_j = int(cv.group_slot0[gj])
+            t = max(lo_i + 1, min(hi_i, lo_j + 1))  # the end slot the test is made at
+            c = ends.get((int(gi), t))
+            if c is None:
+                continue
+            for k in range(1, most):
+                d = starts.get((int(gj), t + k))
+                if d is not None and k * cv.slot_s >= pb.need(c, d):
+                    out[i, j] = k
+                    break
+    return out
 
 
 # ---------------------------------------------------------------- fitting one strip
@@ -622,8 +654,9 @@ def local_moves(tl: Timeline, ix: AreaIndex) -> int:
     """One round of first-improvement local moves over all area strips.
 
     For each strip: its group replaced by one of the :data:`ROLL_NEIGHBOURS` nearest-roll
-    groups on each side in the same pass (same slots, then fitted), or one end moved by
-    one slot; a move is kept when its exact gain exceeds the strip's loss.
+    groups on each side in the same pass and at the same pitch (same slots, then
+    fitted), or one end moved by one slot; a move is kept when its exact gain exceeds
+    the strip's loss.
 
     Returns:
       number of moves kept.
@@ -642,12 +675,10 @@ def local_moves(tl: Timeline, ix: AreaIndex) -> int:
         p0 = ix.roll_pos[g]
         for d in range(-ROLL_NEIGHBOURS, ROLL_NEIGHBOURS + 1):
             j = p0 + d
-            if (
-                d
-                and 0 <= j < ix.roll_order.size
-                and cv.group_pass[ix.roll_order[j]] == (cv.group_pass[g])
-            ):
-                tries.append((int(ix.roll_order[j]), a, b))
+            if d and 0 <= j < ix.roll_order.size:
+                h = int(ix.roll_order[j])
+                if cv.group_pass[h] == cv.group_pass[g] and cv.group_pitch[h] == cv.group_pitch[g]:
+                    tries.append((h, a, b))
         best, best_gain = c, base + 1e-12
         for og, oa, ob in tries:
             got = fit(tl, ix, og, oa, ob)

@@ -79,6 +79,7 @@ class CoverTable:
       indices: int32 [nnz], the samples of each row (unique within a row).
       group_sat: int64 [G], satellite of each group.
       group_roll: float64 [G], roll of each group [deg].
+      group_pitch: float64 [G], pitch of each group [deg] (0: the roll-only law).
       group_slot0: int64 [G], first slot of each group.
       group_nslots: int64 [G], slots (rows) of each group.
       group_area: int64 [G], the area (index into ``area_target``) a group was found for.
@@ -100,6 +101,7 @@ class CoverTable:
     indices: np.ndarray
     group_sat: np.ndarray
     group_roll: np.ndarray
+    group_pitch: np.ndarray
     group_slot0: np.ndarray
     group_nslots: np.ndarray
     group_area: np.ndarray

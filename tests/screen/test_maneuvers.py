@@ -49,7 +49,7 @@ def _sat(model):
 
 
 def test_builtin_models_follow_the_protocol():
-    assert MODELS == ("per_channel", "eigen_axis", "flexible")
+    assert MODELS == ("per_channel", "eigen_axis", "flexible", "roll_only")
     for name in MODELS:
         m = maneuver_model(name)
         assert isinstance(m, ManeuverModel) and m.name == name

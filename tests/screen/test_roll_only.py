@@ -218,7 +218,9 @@ def test_roll_only_model_protocol():
         settle = 1.5
 
     m = RollOnly()
-    assert isinstance(m, ManeuverModel) and m.name not in model_names()
+    assert isinstance(m, ManeuverModel) and m.name in model_names()
+    assert m.los_frame == "earth_fixed" and not m.tracks_points and not m.first_from_nadir
+    np.testing.assert_array_equal(m.first_requirements(Sat, None, np.arange(3), None), 0.0)
     theta = np.radians([0.0, 1.0, 30.0])
     np.testing.assert_array_equal(m.slew_time(Sat, theta), roll_need(theta, m.limits(Sat)) + 0.0)
 
