@@ -50,10 +50,10 @@ from jaxspline.kernels.channel_join import DEFAULT_JOIN_SAMPLES, channel_join_pe
 from jaxspline.planner.attitude_laws import JERK_STEP_S, LAW_POINTING, law_modes
 from jaxspline.planner.flown_joins import DIRECT_MAX_S, RETURN_S, SAMPLING_MARGIN, join_limits
 from jaxspline.planner.opportunities import evaluate, state_batched
+from jaxspline.search.problem import septic_time
 
 __all__ = [
     "JOIN_FAR_SAFETY",
-    "SEPTIC_PEAKS",
     "ChannelStates",
     "channel_states",
     "join_far_gap",
@@ -62,7 +62,6 @@ __all__ = [
 ]
 
 # max over [0, 1] of |p'|, |p''|, |p'''| of the septic 35τ⁴ - 84τ⁵ + 70τ⁶ - 20τ⁷ (0 -> 1)
-SEPTIC_PEAKS = (35.0 / 16.0, 7.513188403792299, 52.5)
 JOIN_FAR_SAFETY = 1.5  # screened range: this times the septic time of the largest turn
 _TURN_ITERS = 50  # fixed-point iterations of the rest-to-rest turn bound
 
@@ -115,13 +114,6 @@ def channel_states(scene, sats, opp) -> ChannelStates:
     return ChannelStates(full(t0), full(np.asarray(o.t_end, np.float64)))
 
 
-def _septic_time(theta: float, rate: float, accel: float, jerk: float) -> float:
-    """Shortest T of the rest-to-rest septic join over ``theta`` within the three bounds."""
-    k1, k2, k3 = SEPTIC_PEAKS
-    t_jerk = (k3 * theta / jerk) ** (1.0 / 3.0) if math.isfinite(jerk) else 0.0
-    return max(k1 * theta / rate, math.sqrt(k2 * theta / accel), t_jerk)
-
-
 def join_far_gap(sat, far: float, nadir_rate: float) -> float:
     """The gap up to which the join screen runs for satellite ``sat`` (module docstring).
 
@@ -146,7 +138,7 @@ def join_far_gap(sat, far: float, nadir_rate: float) -> float:
     septic = 0.0
     for _ in range(_TURN_ITERS):
         theta = min(math.pi, 2.0 * float(sat.off_nadir_max) + nadir_rate * septic)
-        septic = _septic_time(theta, norm.rate, norm.accel, norm.jerk)
+        septic = septic_time(theta, norm.rate, norm.accel, norm.jerk)
     return max(float(far), JOIN_FAR_SAFETY * septic)
 
 

@@ -50,6 +50,7 @@ from jaxspline.planner.assemble import assemble_result
 from jaxspline.planner.budget import Budget, deadline_budget, default_budget, refine_steps
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.deadline import StageDeadline
+from jaxspline.planner.flown_joins import join_limits
 from jaxspline.planner.join_screen import (
     channel_states,
     join_far_gap,
@@ -227,7 +228,7 @@ def _orbits(sc: Scenario):
     return table, scene, sunlit
 
 
-def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None):
+def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None, skip=None):
     """Feasible pairs i -> j (same satellite) with 0 < gap < far + slack, with their need.
 
     The slack (the shortest observation) lets the DP process a block of starts that
@@ -242,7 +243,9 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None):
     result does not depend on how either side rounds. ``join_filter(src, dst) -> bool``
     (the flown-join screen) runs on batches of ``_JOIN_BATCH`` pairs. Chunks go into a
     :class:`jaxspline.search.store.PairsBuilder` (one satellite sorted in a thread).
-    ``tick(share done)`` (a StageDeadline's clock) is called after every chunk.
+    ``tick(share done)`` (a StageDeadline's clock) is called after every chunk. Options
+    where ``skip`` holds (the area options: their transitions have a closed form,
+    :mod:`jaxspline.search.problem`) are left out.
 
     Returns:
       (NearPairs, pairs removed by ``join_filter``).
@@ -251,7 +254,7 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None):
     builder = PairsBuilder(len(opp), start_order(o.t_start, o.sat), background=True)
     removed = 0
     for k, sat in enumerate(sc.satellites):
-        ids = np.flatnonzero(o.sat == k)
+        ids = np.flatnonzero((o.sat == k) if skip is None else (o.sat == k) & ~skip)
         if ids.size < 2:
             continue
         n = ids.size
@@ -367,8 +370,9 @@ def build_problem(
         reach = np.asarray(far) + slack + _NEAR_SLACK + _WINDOW_GUARD
         fits("screening", lambda: pair_bytes(sc, opp.options, reach))
         tick = check("screening", 0, since=time.monotonic(), work=lambda: (len(opp), "options"))
+        skip = None if window is None else window[:, 0] >= 0
         near, removed = _near_pairs(
-            sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick
+            sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick, skip=skip
         )
         release_programs(len(opp))  # the screen's compiled chunk programs are done with
         clock.lap("screening", _screening_line(near, removed, far, lookup is not None))
@@ -376,7 +380,9 @@ def build_problem(
         battery = _battery(sc, sunlit)
         cover = None if area is None else cover_table(sc, area, window)
         values = np.where(sc.targets.kind == AREA, 0.0, sc.targets.value)  # areas: in samples
-        rules = {"cover": cover, "max_actions": sc.planner.max_actions, "duty": _duty(sc)}
+        rules = {"cover": cover, "max_actions": sc.planner.max_actions, "duty": _duty(sc),
+                 "gap_margin": sc.planner.margins.gap,
+                 "joins": _join_rules(sats) if joins and cover is not None else None}  # fmt: skip
         pb = Problem.build(opp, sats, first, near, far, tables, battery, values, lookup, **rules)
         pb.near_slack = slack
     return PlanContext(sc, pb, opp, windows, scene, table, battery, far, areas=area)
@@ -447,6 +453,18 @@ def _duty(sc: Scenario):
         None if s.duty is None else (orbit_period(s.orbit), float(s.duty) - m)
         for s in sc.satellites
     ]
+
+
+def _join_rules(sats) -> list:
+    """Per satellite the limits its flown joins keep (:attr:`Problem.joins`)."""
+    out = []
+    for s in sats:
+        norm, per = join_limits(s)
+        if per is None:
+            out.append((float(norm.rate), float(norm.accel), float(norm.jerk)))
+        else:
+            out.append((np.asarray(per.rate), np.asarray(per.accel), math.inf))
+    return out
 
 
 def _no_tick(share: float) -> None:

@@ -9,6 +9,11 @@ near pairs (:class:`jaxspline.search.store.NearPairs`, 8 bytes a pair); pairs
 at least ``far[sat]`` apart are always feasible. When the engine
 also screened the flown joins (:mod:`jaxspline.planner.join_screen`), every satellite
 looks its near pairs up (``lookup``): a pair the join screen removed is infeasible.
+
+Area options (``cover``) are never screened pair by pair: a transition into or out of
+one takes the model's closed form, the slew table of rest-to-rest satellites, and for
+per-channel satellites a time that surely suffices (:func:`rest_need`: each channel
+brakes to rest, slews, waits and speeds up to the next state).
 """
 
 from __future__ import annotations
@@ -22,7 +27,64 @@ from jaxspline.search.battery import BatteryModel
 from jaxspline.search.cover import CoverTable
 from jaxspline.search.store import NearPairs, start_order
 
-__all__ = ["Problem"]
+__all__ = ["JOIN_SAFETY", "SEPTIC_PEAKS", "Problem", "rest_need", "septic_time"]
+
+#: Peak rate, acceleration and jerk of the rest-to-rest septic (degree-7) join over a
+#: unit turn in unit time (SPEC section 3): its time over ``theta`` within bounds is
+#: :func:`septic_time`.
+SEPTIC_PEAKS = (35.0 / 16.0, 7.513188403792299, 52.5)
+#: A closed-form transition flown as a degree-7 join from or to a point or strip target
+#: gets this times the septic time of its turn (the motion of the target's law at that
+#: end; between two area strips, held in the track frame, the septic time itself).
+JOIN_SAFETY = 1.5
+
+
+def septic_time(theta: float, rate: float, accel: float, jerk: float) -> float:
+    """Shortest time [s] of the rest-to-rest septic join over ``theta`` [rad] within the
+    rate, acceleration and jerk bounds (jerk inf: none)."""
+    k1, k2, k3 = SEPTIC_PEAKS
+    t_jerk = (k3 * theta / jerk) ** (1.0 / 3.0) if math.isfinite(jerk) else 0.0
+    return max(k1 * theta / rate, math.sqrt(k2 * theta / accel), t_jerk)
+
+
+def rest_need(angle_a, rate_a, angle_b, rate_b, rate, accel) -> float:
+    """A transition time that surely suffices for per-channel states [s] (host numpy).
+
+    Each channel brakes from ``(angle_a, rate_a)`` to rest (``|w_a| / a``, ending
+    ``w_a |w_a| / (2 a)`` further on), slews at rest to rest by bang-coast-bang to where
+    speeding up reaches ``(angle_b, rate_b)`` (``2 sqrt(d / a)`` when ``d <= W^2 / a``,
+    else ``d / W + W / a``), waits, and speeds up (``|w_b| / a``). Every phase keeps the
+    channel's rate ``W`` and acceleration ``a`` limits, and waiting at rest makes every
+    longer gap feasible too: the exact-T reachable set (SPEC section 1) holds every
+    gap at least this long. The largest channel's time.
+
+    Args:
+      angle_a, rate_a: float [3], the first observation's end state [rad, rad/s].
+      angle_b, rate_b: float [3], the next one's start state [rad, rad/s].
+      rate, accel: float [3], the channels' limits [rad/s, rad/s^2].
+    Returns:
+      float [s].
+    """
+    stop_a = angle_a + rate_a * np.abs(rate_a) / (2.0 * accel)
+    go_b = angle_b - rate_b * np.abs(rate_b) / (2.0 * accel)
+    d = np.abs(go_b - stop_a)
+    slew = np.where(d <= rate * rate / accel, 2.0 * np.sqrt(d / accel), d / rate + rate / accel)
+    return float(np.max(np.abs(rate_a) / accel + slew + np.abs(rate_b) / accel))
+
+
+def _channel_septic(st, i: int, j: int, rate, accel, jerk) -> float:
+    """Per-channel septic time of the turn from option i's end to option j's start (each
+    channel's stop and start points as in :func:`rest_need`, plus its braking and speeding
+    up), the largest channel's [s]."""
+    ra, rb = st[3][i], st[1][j]
+    d = np.abs(
+        (st[0][j] - rb * np.abs(rb) / (2 * accel)) - (st[2][i] + ra * np.abs(ra) / (2 * accel))
+    )
+    t = [
+        septic_time(float(x), float(w), float(a), math.inf)
+        for x, w, a in zip(d, rate, accel, strict=True)
+    ]
+    return float(np.max(np.asarray(t) + (np.abs(ra) + np.abs(rb)) / accel))
 
 
 @dataclass
@@ -59,6 +121,15 @@ class Problem:
         None entry: no duty rule).
       area_index: what the area moves precompute, built once on first use
         (:func:`jaxspline.search.area_moves.area_index`).
+      channels: with areas, per option its boundary states ``(start angle, start rate,
+        end angle, end rate)`` [N, 3] each (per-channel satellites' transitions into and
+        out of area options, :func:`rest_need`); None without areas.
+      limits: with areas, per satellite its per-channel ``(rate [3], accel [3])`` or None.
+      gap_margin: added to every closed-form transition time [s].
+      joins: per satellite the limits ``(rate, accel, jerk)`` its flown degree-7 joins
+        keep (scalars about the eigen-axis, or per channel [3]; with the join screen);
+        None: no joins are flown. A closed-form transition then also takes
+        :data:`JOIN_SAFETY` times the septic time of its turn.
     """
 
     n_sats: int
@@ -84,12 +155,17 @@ class Problem:
     max_actions: int | None = None
     duty: list | None = None
     area_index: object = None
+    channels: tuple | None = None
+    limits: list | None = None
+    gap_margin: float = 0.0
+    joins: list | None = None
 
     def __post_init__(self):
         if self.lookup is None:  # the model alone decides: tables where there are tables
             self.lookup = [t is None for t in self.tables]
         # the hot path of need(): tables of satellites whose near pairs are not looked up
         self._free = [None if look else t for t, look in zip(self.tables, self.lookup, strict=True)]
+        self._area = None if self.cover is None else (self.cover.option_group >= 0).tolist()
         rows = start_order(self.option_start, self.option_sat)
         if not np.array_equal(self.pairs.rows, rows):  # the DP walks rows in start order
             p = self.pairs
@@ -125,6 +201,8 @@ class Problem:
           float [s]; inf when (i, j) is not a feasible near pair of a per-channel satellite.
         """
         k = self.option_sat[j]
+        if self._area is not None and (self._area[i] or self._area[j]):
+            return self._closed_need(i, j, k)
         table = self._free[k]
         if table is None:
             gap = self.option_start[j] - self.option_end[i]
@@ -153,6 +231,30 @@ class Problem:
         areas = set(self.cover.area_target.tolist())
         return [t for t in range(self.n_targets) if t not in areas]
 
+    def _closed_need(self, i: int, j: int, k: int) -> float:
+        """The closed-form transition time i -> j of satellite k (module docstring)."""
+        table = self.tables[k]
+        joins = None if self.joins is None else self.joins[k]
+        safety = 1.0 if self._area[i] and self._area[j] else JOIN_SAFETY
+        if table is None:
+            st = self.channels
+            rate, accel = self.limits[k]
+            t = rest_need(st[2][i], st[3][i], st[0][j], st[1][j], rate, accel)
+            if joins is not None:
+                t = max(t, safety * _channel_septic(st, i, j, *joins))
+            return t + self.gap_margin
+        a, b = self.option_end_los[i], self.option_start_los[j]
+        cx = a[1] * b[2] - a[2] * b[1]
+        cy = a[2] * b[0] - a[0] * b[2]
+        cz = a[0] * b[1] - a[1] * b[0]
+        th = math.atan2(
+            math.sqrt(cx * cx + cy * cy + cz * cz), a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+        )
+        t = table.scalar(th)
+        if joins is not None:
+            t = max(t, safety * septic_time(th, *joins) + self.gap_margin)
+        return t
+
     @classmethod
     def build(
         cls,
@@ -168,6 +270,8 @@ class Problem:
         cover=None,
         max_actions=None,
         duty=None,
+        gap_margin=0.0,
+        joins=None,
     ):
         """Assemble from numpy data.
 
@@ -187,6 +291,8 @@ class Problem:
           cover: CoverTable of the areas, or None.
           max_actions: most observations of a plan, or None.
           duty: per satellite ``(period, limit)`` [s] or None, or None.
+          gap_margin: added to closed-form transition times [s] (the planner's gap margin).
+          joins: per satellite its join limits (see the class docstring), or None.
         """
         o = opp.options
         sat = np.asarray(o.sat, np.int64)
@@ -203,6 +309,16 @@ class Problem:
             near_pairs = NearPairs.from_arrays(n, *near_pairs, rows=start_order(o.t_start, sat))
         pc = np.array([not s.maneuver.rest_to_rest for s in sats], bool)
         look = pc if lookup is None else np.asarray(lookup, bool) | pc
+        channels = limits = None
+        if cover is not None:
+            channels = tuple(np.asarray(x, np.float64) for x in
+                             (o.start_angle, o.start_rate, o.end_angle, o.end_rate))  # fmt: skip
+            limits = [
+                (np.broadcast_to(s.limits.rate, 3), np.broadcast_to(s.limits.accel, 3))
+                if p
+                else None
+                for s, p in zip(sats, pc, strict=True)
+            ]
         return cls(
             n_sats=n_s,
             target_value=[float(v) for v in target_values],
@@ -227,4 +343,8 @@ class Problem:
             cover=cover,
             max_actions=max_actions,
             duty=duty,
+            channels=channels,
+            limits=limits,
+            gap_margin=gap_margin,
+            joins=joins,
         )
