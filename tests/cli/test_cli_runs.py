@@ -3,12 +3,15 @@
 * SIGINT / SIGTERM during the search: exit 130, the best plan so far checked and
   written whole (valid JSON, CSV rows = observations, ``report.interrupted`` named,
   no temporary file left), a line on stderr says so.
+* SIGKILL during the search: no child process (the bound worker) outlives the command,
+  and a rerun on the same output directory starts at once.
 
 The processes share the run's compile cache (tests/conftest.py), so only the first one compiles.
 """
 
 from __future__ import annotations
 
+import contextlib
 import csv
 import json
 import os
@@ -16,6 +19,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 from test_cli_plan import SMALL, plan_json
@@ -93,6 +97,57 @@ def test_signal_during_search_writes_the_best_plan_and_exits_130(env, sig):
     assert len(_rows(out)) == data["summary"]["observations"] > 0
     assert not [f.name for f in out.iterdir() if f.name.startswith(".")]  # no temp files
     assert time.monotonic() - t0 < 120  # well before the 240 s budget
+
+
+def _stat(pid) -> list[str]:
+    """Fields of ``/proc/PID/stat`` after the command name ([state, parent, ...]); [] when
+    there is no such process."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()
+    except (OSError, IndexError):
+        return []
+
+
+def _running(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie, ended and not reaped, does not)."""
+    return _stat(pid)[:1] not in ([], ["Z"], ["X"])
+
+
+def _children(pid: int) -> list[int]:
+    """The running processes whose parent is ``pid``."""
+    ids = [int(d.name) for d in Path("/proc").iterdir() if d.name.isdigit()]
+    return [k for k in ids if _stat(k)[1:2] == [str(pid)] and _running(k)]
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
+@pytest.mark.skipif(len(os.sched_getaffinity(0)) < 2, reason="no bound worker on one core")
+def test_kill_9_during_the_search_leaves_no_process_and_the_directory_free(env):
+    out = env["dir"] / "killed"
+    p, seen = _start_until(env, out, b"lns", "--time-limit", "60")  # the search runs
+    kids = _children(p.pid)
+    try:
+        assert kids, "no bound worker: nothing to check"
+        p.kill()
+        p.wait()
+        t_end = time.monotonic() + 5.0
+        while time.monotonic() < t_end and any(map(_running, kids)):
+            time.sleep(0.05)
+        left = [k for k in kids if _running(k)]
+        assert not left, f"children of the killed run still run: {left}"
+    finally:
+        p.kill()
+        p.wait()
+        for k in kids:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(k, signal.SIGKILL)
+    again = subprocess.run(
+        _cmd(env["scen"], out, "--force", "--time-limit", "10", "--max-iters", "30", "--quiet"),
+        env=env["env"],
+        capture_output=True,
+        timeout=_TIMEOUT_S,
+    )
+    assert again.returncode == 0, again.stderr.decode(errors="replace")
+    assert plan_json(out)["report"]["valid"]
 
 
 def test_signal_before_any_plan_leaves_nothing(env):
