@@ -342,17 +342,24 @@ def _deadline(sc, limit, t_start, **asked):
     """The run's :class:`jaxspline.planner.deadline.StageDeadline` from ``t_start`` on,
     with the estimated time of the asked outputs (``asked``: plots, html, aem, aem_step)
     kept out of the search."""
-    from jaxspline.planner.deadline import StageDeadline
+    from jaxspline.planner.deadline import RunSize, StageDeadline
     from jaxspline.products.output_budget import RESERVE_FACTOR, output_seconds
 
-    size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
+    scale = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
     cost = output_seconds(sc, **asked)
     return StageDeadline(
         t_start,
         limit,
-        size,
+        scale,
         after_s=RESERVE_FACTOR * sum(cost.values()),
         must_s=cost["plan files"],
+        size=RunSize(
+            len(sc.targets),
+            len(sc.satellites),
+            sc.duration,
+            sc.planner.time_step,
+            joins=asked["aem"],
+        ),
     )
 
 
