@@ -254,13 +254,24 @@ def _report(exc: Exception, debug: bool) -> int:
     code, label = _classify(exc, TimeLimitError, MemoryLimitError, OutputBusyError, OutputError)
     if debug:
         traceback.print_exception(exc, file=sys.stderr)
-    text = str(exc).replace("\r", " ").replace("\n", " ").strip() or type(exc).__name__
+    text = _text(exc).replace("\r", " ").replace("\n", " ").strip() or type(exc).__name__
     if code == EXIT_INTERNAL:
         text = f"{type(exc).__name__}: {text}"
         if not debug:
             text += " (a bug: run again with --debug for the traceback, and report it)"
     print(f"jaxspline: {label}: {text}", file=sys.stderr)
     return code
+
+
+def _text(exc: Exception) -> str:
+    """The message of ``exc``; an ``OSError`` of the system as ``FILE: reason`` (Python
+    writes ``[Errno 28] No space left on device: 'FILE'``)."""
+    if isinstance(exc, OSError) and exc.strerror and len(exc.args) >= 2:
+        names = [
+            repr(n) if n == "" else str(n) for n in (exc.filename, exc.filename2) if n is not None
+        ]
+        return f"{' -> '.join(names)}: {exc.strerror}" if names else exc.strerror
+    return str(exc)
 
 
 def _classify(exc, time_limit, memory_limit, busy, output) -> tuple[int, str]:

@@ -324,6 +324,13 @@ BAD = [
         5,
         "a number",
     ),
+    (  # the value as written, in km, and the way out
+        HEAD + "[[satellites]]\naltitude_km = 30000\n" + POINT_TARGET,
+        "satellites[0].altitude_km",
+        5,
+        "30000 km admits no Sun-synchronous orbit (the orbit of a satellite without "
+        "inclination_deg): give inclination_deg",
+    ),
     (HEAD + SAT + "model = 'flexible'\n" + POINT_TARGET, "satellites[0].model", 6, "flex ="),
     (
         HEAD + SAT + "model = 'eigen_axis'\nrate_deg_s = [1, 1, 1]\n" + POINT_TARGET,
