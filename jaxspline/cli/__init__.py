@@ -32,6 +32,7 @@ from __future__ import annotations
 import argparse
 import functools
 import os
+import re
 import signal
 import sys
 import threading
@@ -52,10 +53,12 @@ __all__ = [
     "EXIT_TIME_LIMIT",
     "EXIT_WRITE",
     "build_parser",
+    "OneLineParser",
     "cache_dir",
     "command_of",
     "end_process",
     "main",
+    "one_line",
 ]
 
 CACHE_ENV = "JAXSPLINE_CACHE_DIR"
@@ -143,7 +146,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """
     import importlib
 
-    parser = argparse.ArgumentParser(prog="jaxspline", description=_DESCRIPTION)
+    parser = OneLineParser(prog="jaxspline", description=_DESCRIPTION)
     parser.add_argument("--debug", action="store_true", help=_DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", required=True)
     names = _SUBCOMMAND_MODULES if command is None else (command,)
@@ -154,6 +157,47 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 _DEBUG_HELP = "on an error, also print the Python traceback"
+_ARGUMENT = re.compile(r"argument (\S+): (.*)", re.DOTALL)
+_NOT_A = re.compile(r"invalid (float|int) value: (.*)", re.DOTALL)
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An ``ArgumentParser`` whose errors are one line naming the flag and the value.
+
+    ``jaxspline plan --time-limit abc`` ends with ``jaxspline plan: error: --time-limit:
+    'abc' is not a number`` and exit 2, not argparse's usage block (``-h`` shows it).
+    Its sub-parsers are of this class too (argparse makes them of their parent's class).
+    """
+
+    def error(self, message: str):
+        """Print ``message`` in one line, as ``PROG: error: FLAG: WHAT``, and exit with 2.
+
+        Args:
+          message: argparse's message (``argument --seed: invalid int value: '1.5'``).
+        Raises:
+          SystemExit: always, code 2.
+        """
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {one_line(message)}\n")
+
+
+def one_line(message: str) -> str:
+    """An argparse error message as one line naming the flag (:class:`OneLineParser`).
+
+    Args:
+      message: argparse's message.
+    Returns:
+      str: ``--time-limit: 'abc' is not a number``, ``--seed: '1.5' is not an integer``,
+      ``--json: expected one argument``; other messages as they are, on one line.
+    """
+    found = _ARGUMENT.fullmatch(message)
+    if found is not None:
+        flag, what = found.groups()
+        bad = _NOT_A.fullmatch(what)
+        if bad is not None:
+            kind = "a number" if bad.group(1) == "float" else "an integer"
+            what = f"{bad.group(2)} is not {kind}"
+        message = f"{flag}: {what}"
+    return " ".join(message.split())
 
 
 def _add_debug(subparsers) -> None:

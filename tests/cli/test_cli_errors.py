@@ -166,6 +166,37 @@ def test_every_subcommand_takes_debug():
     assert parser.parse_args(["view", "p.json"]).debug is False
 
 
+UNPARSABLE = [  # (command line, the one line argparse's error becomes)
+    ("plan --time-limit abc", "jaxspline plan: error: --time-limit: 'abc' is not a number"),
+    ("plan --max-iters 1.5", "jaxspline plan: error: --max-iters: '1.5' is not an integer"),
+    ("plan --aem-step", "jaxspline plan: error: --aem-step: expected one argument"),
+    ("bound --search-iters 2e3", "jaxspline bound: error: --search-iters: '2e3' is not an integer"),
+    ("bound --target x", "jaxspline bound: error: --target: 'x' is not a number"),
+    ("view p.json -o", "jaxspline view: error: -o/--output: expected one argument"),
+    (
+        "aeossp solve c -o s.json --time-limit 1m",
+        "jaxspline aeossp solve: error: --time-limit: '1m' is not a number",
+    ),
+    (
+        "aeossp check",
+        "jaxspline aeossp check: error: the following arguments are required: case_dir, solution",
+    ),
+    (
+        "regional solve c -o s.json --seed -",
+        "jaxspline regional solve: error: --seed: '-' is not an integer",
+    ),
+    ("plan --bogus", "jaxspline: error: unrecognized arguments: --bogus"),
+]
+
+
+@pytest.mark.parametrize(("argv", "line"), UNPARSABLE, ids=[a for a, _ in UNPARSABLE])
+def test_a_flag_argparse_cannot_parse_is_one_line_with_exit_2(capsys, argv, line):
+    with pytest.raises(SystemExit) as exc:
+        main(argv.split())
+    assert exc.value.code == EXIT_BAD_INPUT
+    assert capsys.readouterr().err == line + "\n"
+
+
 def test_an_unexpected_error_is_one_line_and_debug_shows_the_traceback(monkeypatch, capsys):
     def boom(args):
         raise KeyError("surprise")
