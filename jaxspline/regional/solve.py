@@ -135,6 +135,7 @@ def start_bound(prob, target: float, seconds: float):
     import pickle
     import subprocess
     import tempfile
+    import warnings
 
     from jaxspline.search.orphans import die_with_parent
 
@@ -152,7 +153,11 @@ def start_bound(prob, target: float, seconds: float):
         env = dict(os.environ, JAX_PLATFORMS=os.environ.get("JAX_PLATFORMS", "cpu"))
         ends = functools.partial(die_with_parent, os.getpid(), watch=False)  # with us
         out, err = subprocess.PIPE, subprocess.DEVNULL
-        proc = subprocess.Popen(cmd, stdout=out, stderr=err, text=True, env=env, preexec_fn=ends)
+        with warnings.catch_warnings():  # JAX warns of any fork; the child execs at once
+            warnings.filterwarnings("ignore", message=r"os\.fork\(\) was called")
+            proc = subprocess.Popen(
+                cmd, stdout=out, stderr=err, text=True, env=env, preexec_fn=ends
+            )
         return proc, path
     except (OSError, ValueError):
         return None
