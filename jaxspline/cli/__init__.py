@@ -4,7 +4,9 @@ Compiled programs are kept between runs in a persistent XLA cache (a run of the
 default job compiles ~160 programs, 20-40 s on 2 cores, most of its first run):
 ``$JAXSPLINE_CACHE_DIR``, else ``$XDG_CACHE_HOME/jaxspline/xla`` (``~/.cache`` when
 unset). ``JAXSPLINE_CACHE_DIR=off`` (or empty) disables it; a cache directory set for
-JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left alone.
+JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left alone. A folder that cannot be
+written (read-only, a full disk) leaves the cache off for the run, said in one line
+(:mod:`jaxspline.cli.compile_cache`).
 
 Exit codes (every command): 0 done; 1 the plan or solution failed its check; 2 bad
 input (a scenario, case or plan file, a flag; nothing was planned or written); 3 the
@@ -88,21 +90,21 @@ def cache_dir() -> Path | None:
     return Path(base) / "jaxspline" / "xla"
 
 
-def _enable_compile_cache() -> None:
+def _enable_compile_cache():
+    """The command's cache (:func:`cache_dir`, :mod:`jaxspline.cli.compile_cache`) unless
+    JAX has one set; returns what restores the warnings hook afterwards."""
     import jax
 
-    if jax.config.jax_compilation_cache_dir:
-        return
+    from jaxspline.cli.compile_cache import enable_cache
+
     path = cache_dir()
-    if path is None:
-        return
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError:  # read-only home: run without the cache
-        return
-    jax.config.update("jax_compilation_cache_dir", str(path))
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    if jax.config.jax_compilation_cache_dir or path is None:
+        return _nothing
+    return enable_cache(path)
+
+
+def _nothing() -> None:
+    """Nothing to restore."""
 
 
 # Each module registers its own sub-command (by name, the key) with ``register(subparsers)``;
@@ -268,8 +270,9 @@ def _run(argv: list[str] | None) -> int:
         for s in old:  # SIGTERM like Ctrl-C (clean-up runs); both remembered if swallowed
             signal.signal(s, _terminate)
         sys.unraisablehook = functools.partial(_unraisable, old_hook)
+    restore = _nothing  # the cache's warnings hook, once it is set
     try:
-        _enable_compile_cache()
+        restore = _enable_compile_cache()
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
         print(
@@ -286,6 +289,7 @@ def _run(argv: list[str] | None) -> int:
             for s, h in old.items():
                 signal.signal(s, signal.SIG_IGN if argv is None else h)
             sys.unraisablehook = old_hook
+        restore()
 
 
 def _report(exc: Exception, debug: bool) -> int:
