@@ -216,6 +216,17 @@ def default_aem_step(sc) -> tuple[float, str]:
     )
 
 
+def _aem_step(sc, asked: float | None, aem: bool) -> float:
+    """The AEM step of the run: ``asked``, else :func:`default_aem_step` (its note said on
+    stderr when the AEM files are written)."""
+    if asked is not None:
+        return asked
+    step, note = default_aem_step(sc)
+    if note and aem:
+        print(note, file=sys.stderr)
+    return step
+
+
 def _check_aem(sc, aem_step: float) -> tuple[str, ...]:
     """The AEM file names of the satellites: distinct, a step within the horizon (two
     samples at least), and not too many states to write."""
@@ -309,10 +320,7 @@ def run_plan(
         sc = scenario_from(scenario)
     finally:
         READ_CLOCK.reset(token)
-    if aem_step is None:
-        aem_step, note = default_aem_step(sc)
-        if note and aem:
-            print(note, file=sys.stderr)
+    aem_step = _aem_step(sc, aem_step, aem)
     aems = _check_aem(sc, aem_step) if aem else ()
     limit = sc.planner.default_time_limit if time_limit is None else time_limit
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]

@@ -120,13 +120,11 @@ def run_bound(
 
     Args:
       scenario: scenario TOML path, a Scenario, or None (the default scenario).
-      time_limit: wall-clock budget [s] of the whole call from ``t_start``: loading, the
-        stages before the iterations (which stop with
-        :class:`jaxspline.planner.deadline.TimeLimitError` once it has passed, as
-        :func:`jaxspline.plan`'s do; with several processes they run whole, as no
-        process may stop while its peers wait for it) and the iterations, which stop at
-        its end (after one at least). With ``plan_path`` the search's ``search_time``
-        follows.
+      time_limit: wall-clock budget [s] of the whole call from ``t_start``: the stages
+        before the iterations stop with :class:`jaxspline.planner.deadline.TimeLimitError`
+        once it has passed, as :func:`jaxspline.plan`'s do (with several processes they
+        run whole: no process may stop while its peers wait), the iterations at its end
+        (after one at least); with ``plan_path`` the search's ``search_time`` follows.
       max_iters: cap on the iterations (None: the time limit alone).
       target: step-size target; None: the sum of each process's greedy plan values
         (the same in every process).
