@@ -55,7 +55,8 @@ def test_a_limit_too_short_for_the_preparation_stops_bound_with_exit_3(big):
 
 
 def test_the_iterations_end_at_the_limit_of_the_whole_command(big):
-    code, out, err, wall = _bound(big, "--time-limit", "15", "--target", "1e9")
+    # the preparation takes ~7 s on an idle machine: room for it on a loaded one
+    code, out, err, wall = _bound(big, "--time-limit", "30", "--target", "1e9")
     assert code == 0, err
     assert re.match(r"bound \S+ \(time, \d+ iterations", out), out  # stopped by the clock
-    assert wall <= 15.0 + _TOLERANCE_S, out
+    assert wall <= 30.0 + _TOLERANCE_S, out
