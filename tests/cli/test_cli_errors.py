@@ -370,16 +370,16 @@ def test_the_estimate_covers_every_stage_still_to_come(monkeypatch):
     clock["now"] = 106.0  # the windows started at 104 s, 25 % done
     with pytest.raises(dl.TimeLimitError) as exc:
         d.check("windows", 0.25, 104.0, "", lambda: (600_000, "target-satellite pairs"))
-    # windows: 6 s more (2 s for 25 %); options: 2 s + 600,000 pairs x 4,320 steps x 1e-3
-    # candidates x 2e-5 s = 53.84 s; screening of as many options: 2 s + 2,592,000 x 1e-4 s
-    # + 4 x 150 s x 2,592,000^2 / (12 x 43,200 s) pairs x 1.5e-7 s = 1,427.6 s; repair:
-    # 6 s + min(25,000, 2,592,000, 17,280) observations x 3e-3 s = 57.84 s; outputs 10 s
-    later = 53.84 + 1427.6 + 57.84 + 10.0
+    # windows: 6 s more (2 s for 25 %); options: 2 s + 600,000 pairs x 4,320 steps x 7e-4
+    # candidates x 2e-5 s = 38.288 s; screening of as many options: 2 s + 1,814,400 x 1e-4 s
+    # + 4 x 150 s x 1,814,400^2 / (12 x 43,200 s) pairs x 1.5e-7 s = 754.976 s; repair:
+    # 6 s + min(25,000, 1,814,400, 17,280) observations x 3e-3 s = 57.84 s; outputs 10 s
+    later = 38.288 + 754.976 + 57.84 + 10.0
     assert exc.value.estimate == pytest.approx(6.0 + 6.0 + later)
     msg = str(exc.value)
-    assert "the whole run needs ~1561 s or more (~12 s until the search, then ~1549 s" in msg, msg
-    assert "give a time limit of 3600 s or more" in msg, msg
-    # the options' own count, once known, replaces the prior (here 10x fewer candidates)
+    assert "the whole run needs ~873 s or more (~12 s until the search, then ~861 s" in msg, msg
+    assert "give a time limit of 1800 s or more" in msg, msg
+    # the options' own count, once known, replaces the prior (here 7x fewer candidates)
     clock["now"] = 120.0
     with pytest.raises(dl.TimeLimitError) as exc:
         d.check("options", 0.0, 110.0, "", lambda: (259_200, "candidate options"))
