@@ -4,7 +4,9 @@ Compiled programs are kept between runs in a persistent XLA cache (a run of the
 default job compiles ~160 programs, 20-40 s on 2 cores, most of its first run):
 ``$JAXSPLINE_CACHE_DIR``, else ``$XDG_CACHE_HOME/jaxspline/xla`` (``~/.cache`` when
 unset). ``JAXSPLINE_CACHE_DIR=off`` (or empty) disables it; a cache directory set for
-JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left alone.
+JAX itself (``JAX_COMPILATION_CACHE_DIR``) is left alone. A folder that cannot be
+written (read-only, a full disk) leaves the cache off for the run, said in one line
+(:mod:`jaxspline.cli.compile_cache`).
 
 Exit codes (every command): 0 done; 1 the plan or solution failed its check; 2 bad
 input (a scenario, case or plan file, a flag; nothing was planned or written); 3 the
@@ -32,6 +34,7 @@ from __future__ import annotations
 import argparse
 import functools
 import os
+import re
 import signal
 import sys
 import threading
@@ -52,10 +55,12 @@ __all__ = [
     "EXIT_TIME_LIMIT",
     "EXIT_WRITE",
     "build_parser",
+    "OneLineParser",
     "cache_dir",
     "command_of",
     "end_process",
     "main",
+    "one_line",
 ]
 
 CACHE_ENV = "JAXSPLINE_CACHE_DIR"
@@ -85,21 +90,21 @@ def cache_dir() -> Path | None:
     return Path(base) / "jaxspline" / "xla"
 
 
-def _enable_compile_cache() -> None:
+def _enable_compile_cache():
+    """The command's cache (:func:`cache_dir`, :mod:`jaxspline.cli.compile_cache`) unless
+    JAX has one set; returns what restores the warnings hook afterwards."""
     import jax
 
-    if jax.config.jax_compilation_cache_dir:
-        return
+    from jaxspline.cli.compile_cache import enable_cache
+
     path = cache_dir()
-    if path is None:
-        return
-    try:
-        path.mkdir(parents=True, exist_ok=True)
-    except OSError:  # read-only home: run without the cache
-        return
-    jax.config.update("jax_compilation_cache_dir", str(path))
-    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
-    jax.config.update("jax_persistent_cache_min_entry_size_bytes", 0)
+    if jax.config.jax_compilation_cache_dir or path is None:
+        return _nothing
+    return enable_cache(path)
+
+
+def _nothing() -> None:
+    """Nothing to restore."""
 
 
 # Each module registers its own sub-command (by name, the key) with ``register(subparsers)``;
@@ -143,7 +148,7 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     """
     import importlib
 
-    parser = argparse.ArgumentParser(prog="jaxspline", description=_DESCRIPTION)
+    parser = OneLineParser(prog="jaxspline", description=_DESCRIPTION)
     parser.add_argument("--debug", action="store_true", help=_DEBUG_HELP)
     sub = parser.add_subparsers(dest="command", required=True)
     names = _SUBCOMMAND_MODULES if command is None else (command,)
@@ -154,6 +159,47 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
 
 
 _DEBUG_HELP = "on an error, also print the Python traceback"
+_ARGUMENT = re.compile(r"argument (\S+): (.*)", re.DOTALL)
+_NOT_A = re.compile(r"invalid (float|int) value: (.*)", re.DOTALL)
+
+
+class OneLineParser(argparse.ArgumentParser):
+    """An ``ArgumentParser`` whose errors are one line naming the flag and the value.
+
+    ``jaxspline plan --time-limit abc`` ends with ``jaxspline plan: error: --time-limit:
+    'abc' is not a number`` and exit 2, not argparse's usage block (``-h`` shows it).
+    Its sub-parsers are of this class too (argparse makes them of their parent's class).
+    """
+
+    def error(self, message: str):
+        """Print ``message`` in one line, as ``PROG: error: FLAG: WHAT``, and exit with 2.
+
+        Args:
+          message: argparse's message (``argument --seed: invalid int value: '1.5'``).
+        Raises:
+          SystemExit: always, code 2.
+        """
+        self.exit(EXIT_BAD_INPUT, f"{self.prog}: error: {one_line(message)}\n")
+
+
+def one_line(message: str) -> str:
+    """An argparse error message as one line naming the flag (:class:`OneLineParser`).
+
+    Args:
+      message: argparse's message.
+    Returns:
+      str: ``--time-limit: 'abc' is not a number``, ``--seed: '1.5' is not an integer``,
+      ``--json: expected one argument``; other messages as they are, on one line.
+    """
+    found = _ARGUMENT.fullmatch(message)
+    if found is not None:
+        flag, what = found.groups()
+        bad = _NOT_A.fullmatch(what)
+        if bad is not None:
+            kind = "a number" if bad.group(1) == "float" else "an integer"
+            what = f"{bad.group(2)} is not {kind}"
+        message = f"{flag}: {what}"
+    return " ".join(message.split())
 
 
 def _add_debug(subparsers) -> None:
@@ -224,8 +270,9 @@ def _run(argv: list[str] | None) -> int:
         for s in old:  # SIGTERM like Ctrl-C (clean-up runs); both remembered if swallowed
             signal.signal(s, _terminate)
         sys.unraisablehook = functools.partial(_unraisable, old_hook)
+    restore = _nothing  # the cache's warnings hook, once it is set
     try:
-        _enable_compile_cache()
+        restore = _enable_compile_cache()
         return int(args.func(args) or 0)
     except KeyboardInterrupt:
         print(
@@ -242,6 +289,7 @@ def _run(argv: list[str] | None) -> int:
             for s, h in old.items():
                 signal.signal(s, signal.SIG_IGN if argv is None else h)
             sys.unraisablehook = old_hook
+        restore()
 
 
 def _report(exc: Exception, debug: bool) -> int:
@@ -254,13 +302,24 @@ def _report(exc: Exception, debug: bool) -> int:
     code, label = _classify(exc, TimeLimitError, MemoryLimitError, OutputBusyError, OutputError)
     if debug:
         traceback.print_exception(exc, file=sys.stderr)
-    text = str(exc).replace("\r", " ").replace("\n", " ").strip() or type(exc).__name__
+    text = _text(exc).replace("\r", " ").replace("\n", " ").strip() or type(exc).__name__
     if code == EXIT_INTERNAL:
         text = f"{type(exc).__name__}: {text}"
         if not debug:
             text += " (a bug: run again with --debug for the traceback, and report it)"
     print(f"jaxspline: {label}: {text}", file=sys.stderr)
     return code
+
+
+def _text(exc: Exception) -> str:
+    """The message of ``exc``; an ``OSError`` of the system as ``FILE: reason`` (Python
+    writes ``[Errno 28] No space left on device: 'FILE'``)."""
+    if isinstance(exc, OSError) and exc.strerror and len(exc.args) >= 2:
+        names = [
+            repr(n) if n == "" else str(n) for n in (exc.filename, exc.filename2) if n is not None
+        ]
+        return f"{' -> '.join(names)}: {exc.strerror}" if names else exc.strerror
+    return str(exc)
 
 
 def _classify(exc, time_limit, memory_limit, busy, output) -> tuple[int, str]:

@@ -2,7 +2,11 @@
 
 Screens the scenario like ``jaxspline plan`` and iterates the Lagrangian bound of the
 option model (per-satellite longest paths under target prices, battery relaxed),
-without searching for a plan. With ``--coordinator HOST:PORT --num-processes N
+without searching for a plan. ``--time-limit`` bounds the whole command, from the start
+of its process, as ``jaxspline plan``'s does: the stages before the iterations stop with
+exit 3, an estimate and the remedy when it runs out there (up to 20 s of compiling are
+not counted: :mod:`jaxspline.planner.deadline`); the iterations stop at its end. With
+``--coordinator HOST:PORT --num-processes N
 --process-id I`` (one command per process, on one or several hosts, the same scenario
 file everywhere) the satellites are sharded over the processes through
 ``jax.distributed`` (:mod:`jaxspline.planner.sharded`): each process screens,
@@ -54,7 +58,14 @@ def register(sub) -> None:
         description=__doc__,
     )
     p.add_argument("scenario", nargs="?", help="scenario TOML (default: built-in scenario)")
-    p.add_argument("--time-limit", type=float, default=60.0, help="iteration budget [s]")
+    p.add_argument(
+        "--time-limit",
+        type=float,
+        default=60.0,
+        help="wall-clock budget [s] of the whole command, from its start (default 60): the "
+        "stages before the iterations stop with exit 3 when it runs out there, the "
+        "iterations at its end; with --plan, --search-time follows",
+    )
     p.add_argument("--max-iters", type=int, default=None, help="cap on the iterations")
     p.add_argument(
         "--target",
@@ -142,6 +153,7 @@ def _main(args) -> int:
         num_processes=args.num_processes,
         process_id=args.process_id,
         memory=MemoryGuard(),
+        t_start=getattr(args, "started", None),
         **more,
     )
     if res.process == 0:

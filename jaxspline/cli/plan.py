@@ -74,6 +74,7 @@ __all__ = [
     "EXIT_INTERRUPTED",
     "MAX_AEM_STATES",
     "OUTPUT_FILES",
+    "default_aem_step",
     "register",
     "run_plan",
 ]
@@ -81,6 +82,8 @@ __all__ = [
 # AEM sample step of the plan command [s]: ccsds-ndm serializes ~2,000 states/s, so
 # 1 s over the default 6 h x 6 satellites would take a minute (junctions are exact anyway)
 AEM_STEP_S = 10.0
+# steps [s] the default is raised to when it would exceed MAX_AEM_STATES (the first that fits)
+_AEM_STEPS_S = (15.0, 20.0, 30.0, 45.0, 60.0, 90.0, 120.0, 180.0, 300.0, 600.0, 900.0, 1800.0)
 MAX_MEMORY_RANGE_GB = (0.25, 65536.0)  # --max-memory [GB]: a quarter GB runs nothing
 AEM_STEP_RANGE_S = (1e-3, 86400.0)
 MAX_AEM_STATES = 50_000  # attitude states over all AEM files (~30-60 s to compute and write)
@@ -137,8 +140,9 @@ def register(sub) -> None:
     p.add_argument(
         "--aem-step",
         type=float,
-        default=AEM_STEP_S,
-        help=f"attitude sample step of the AEM files [s] (default {AEM_STEP_S:g})",
+        default=None,
+        help=f"attitude sample step of the AEM files [s] (default {AEM_STEP_S:g}, coarser "
+        f"when that would be more than {MAX_AEM_STATES:,} attitude states, said on stderr)",
     )
     p.add_argument(
         "--max-memory",
@@ -186,8 +190,41 @@ def _check_flags(scenario, time_limit, seed, max_iters, certify, aem_step, max_m
     check_int("--max-iters", max_iters, 1, MAX_ITERS)
     check_seconds("--certify", certify, zero=True, hi=MAX_SECONDS)
     check_seconds("--aem-step", aem_step, hi=AEM_STEP_RANGE_S[1])
-    if aem_step < AEM_STEP_RANGE_S[0]:
+    if aem_step is not None and aem_step < AEM_STEP_RANGE_S[0]:
         raise ValueError(f"--aem-step: must be >= {AEM_STEP_RANGE_S[0]:g} s, got {aem_step:g}")
+
+
+def default_aem_step(sc) -> tuple[float, str]:
+    """The AEM sample step of a run without ``--aem-step``: :data:`AEM_STEP_S`, or the first
+    coarser step that keeps the states within :data:`MAX_AEM_STATES` (at most the horizon).
+
+    Args:
+      sc: the scenario.
+    Returns:
+      (step [s], a note for stderr: empty when the step is the default).
+    """
+    n = max(len(sc.satellites), 1)
+    if sc.duration / AEM_STEP_S * n <= MAX_AEM_STATES:
+        return min(AEM_STEP_S, sc.duration), ""
+    least = sc.duration * n / MAX_AEM_STATES
+    step = min(next((x for x in _AEM_STEPS_S if x >= least), least), sc.duration)
+    return step, (
+        f"jaxspline: note: AEM files sampled every {step:g} s: the default {AEM_STEP_S:g} s "
+        f"over the {sc.duration:g} s horizon and {n} satellites would be "
+        f"{sc.duration / AEM_STEP_S * n:,.0f} attitude states (at most {MAX_AEM_STATES:,}); "
+        "--aem-step sets the step"
+    )
+
+
+def _aem_step(sc, asked: float | None, aem: bool) -> float:
+    """The AEM step of the run: ``asked``, else :func:`default_aem_step` (its note said on
+    stderr when the AEM files are written)."""
+    if asked is not None:
+        return asked
+    step, note = default_aem_step(sc)
+    if note and aem:
+        print(note, file=sys.stderr)
+    return step
 
 
 def _check_aem(sc, aem_step: float) -> tuple[str, ...]:
@@ -232,7 +269,7 @@ def run_plan(
     html: bool = True,
     progress: bool = True,
     aem: bool = True,
-    aem_step: float = AEM_STEP_S,
+    aem_step: float | None = None,
     t_start: float | None = None,
     max_memory: float | None = None,
 ):
@@ -253,7 +290,7 @@ def run_plan(
       html: write the web page ``plan.html``.
       progress: show progress bars.
       aem: write one CCSDS AEM per satellite (and check the flown joins).
-      aem_step: sampling step of the AEM files [s].
+      aem_step: sampling step of the AEM files [s]; None: :func:`default_aem_step`.
       t_start: when the time limit starts [s, ``time.monotonic``] (the command passes
         its process's start); None: now.
       max_memory: memory the run may hold [GiB] (None: :data:`MEMORY_SHARE` of the
@@ -283,6 +320,7 @@ def run_plan(
         sc = scenario_from(scenario)
     finally:
         READ_CLOCK.reset(token)
+    aem_step = _aem_step(sc, aem_step, aem)
     aems = _check_aem(sc, aem_step) if aem else ()
     limit = sc.planner.default_time_limit if time_limit is None else time_limit
     names = OUTPUT_FILES if plots else OUTPUT_FILES[:3]
@@ -342,17 +380,24 @@ def _deadline(sc, limit, t_start, **asked):
     """The run's :class:`jaxspline.planner.deadline.StageDeadline` from ``t_start`` on,
     with the estimated time of the asked outputs (``asked``: plots, html, aem, aem_step)
     kept out of the search."""
-    from jaxspline.planner.deadline import StageDeadline
+    from jaxspline.planner.deadline import RunSize, StageDeadline
     from jaxspline.products.output_budget import RESERVE_FACTOR, output_seconds
 
-    size = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
+    scale = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
     cost = output_seconds(sc, **asked)
     return StageDeadline(
         t_start,
         limit,
-        size,
+        scale,
         after_s=RESERVE_FACTOR * sum(cost.values()),
         must_s=cost["plan files"],
+        size=RunSize(
+            len(sc.targets),
+            len(sc.satellites),
+            sc.duration,
+            sc.planner.time_step,
+            joins=asked["aem"],
+        ),
     )
 
 

@@ -33,6 +33,7 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
+from jaxspline.planner.deadline import RunSize, StageDeadline
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 from jaxspline.planner.pipeline import build_problem
 from jaxspline.planner.repair import drop_failing
@@ -113,12 +114,17 @@ def run_bound(
     num_processes: int = 1,
     process_id: int = 0,
     memory=None,
+    t_start: float | None = None,
 ) -> BoundRun:
     """Screen ``scenario`` and iterate its Lagrangian bound (module docstring).
 
     Args:
       scenario: scenario TOML path, a Scenario, or None (the default scenario).
-      time_limit: iteration budget [s] after screening.
+      time_limit: wall-clock budget [s] of the whole call from ``t_start``: the stages
+        before the iterations stop with :class:`jaxspline.planner.deadline.TimeLimitError`
+        once it has passed, as :func:`jaxspline.plan`'s do (with several processes they
+        run whole: no process may stop while its peers wait), the iterations at its end
+        (after one at least); with ``plan_path`` the search's ``search_time`` follows.
       max_iters: cap on the iterations (None: the time limit alone).
       target: step-size target; None: the sum of each process's greedy plan values
         (the same in every process).
@@ -135,12 +141,16 @@ def run_bound(
       process_id: this run's index among the processes.
       memory: optional :class:`jaxspline.planner.memory_guard.MemoryGuard` for the
         screening of this process's satellites (``jaxspline bound`` passes one).
+      t_start: when ``time_limit`` starts [s, ``time.monotonic``] (the command passes
+        its process's start); None: now.
     Returns:
       :class:`BoundRun` of this process.
     Raises:
       ValueError: bad arguments (more processes than satellites, bad limits).
       jaxspline.planner.memory_guard.MemoryLimitError: the screening would not fit ``memory``.
+      jaxspline.planner.deadline.TimeLimitError: the limit ran out before the iterations.
     """
+    t_start = time.monotonic() if t_start is None else t_start
     _validate(time_limit, plan_path, search_time, search_iters, num_processes, coordinator)
     for path in (json_path, plan_path):
         if path is not None and process_id == 0:
@@ -155,7 +165,8 @@ def run_bound(
             )
         with jax.enable_x64(True):  # float64 through the collectives too
             search = None if plan_path is None else (search_time, search_iters, seed)
-            run, doc = _run(sc, procs, time_limit, max_iters, target, search, memory)
+            clock = _deadline(sc, time_limit, t_start, procs)
+            run, doc = _run(sc, procs, clock, max_iters, target, search, memory)
         if procs.index == 0:
             if doc is not None:
                 atomic_write_text(plan_path, json.dumps(doc, indent=1) + "\n", force=force)
@@ -189,21 +200,36 @@ def _start_processes(coordinator, num_processes: int, process_id: int) -> _Proce
     return _Processes(jax.process_index(), jax.process_count(), jax_allgather, True)
 
 
-def _run(sc, procs: _Processes, time_limit, max_iters, target, search, memory=None):
+def _deadline(sc, time_limit: float, t_start: float, procs: _Processes) -> StageDeadline:
+    """The clock of the call: the stages before the iterations check it (one process)."""
+    scale = f"{len(sc.targets)} targets, {len(sc.satellites)} satellites, {sc.duration / 3600:g} h"
+    size = RunSize(len(sc.targets), len(sc.satellites), sc.duration, sc.planner.time_step, False)
+    clock = StageDeadline(
+        t_start, time_limit, scale, size=size, goal="the bound's iterations", flags="--time-limit"
+    )
+    if not procs.distributed:
+        clock.check("loading", 1.0)
+    return clock
+
+
+def _run(sc, procs: _Processes, clock: StageDeadline, max_iters, target, search, memory=None):
     """The bound (and with ``search`` = (time, iterations, seed), the sharded plan)."""
     t0 = time.monotonic()
     owned = owned_satellites(len(sc.satellites), procs.index, procs.count)
     shard = dataclasses.replace(sc, satellites=tuple(sc.satellites[k] for k in owned))
     allgather = procs.allgather
     ctx = build_problem(
-        shard, reduce_slack=lambda s: float(allgather(np.array([s])).min()), memory=memory
+        shard,
+        reduce_slack=lambda s: float(allgather(np.array([s])).min()),
+        memory=memory,
+        deadline=None if procs.distributed else clock,
     )
     pb = ctx.problem
     if target is None:
         tl = Timeline(pb)
         greedy(tl, math.inf)
         target = float(allgather(np.array([tl.value])).sum())
-    deadline = time.monotonic() + time_limit
+    deadline = clock.end
     n_sats = len(sc.satellites)
     merged = doc = None
     if search is None:

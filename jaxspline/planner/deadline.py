@@ -5,7 +5,21 @@ own deadline; the stages before it (orbits, windows, options, screening) check a
 :class:`StageDeadline` between stages and, inside the options and screening stages,
 between blocks of work. When the limit has passed there, :meth:`StageDeadline.check`
 raises :class:`TimeLimitError` at once, with what was done, an estimate of the time the
-stages need (their elapsed time over the measured share of the stage) and the remedy.
+whole run needs and the remedy (:func:`suggested_limit`: twice the estimate, rounded up).
+
+The estimate (given the run's :class:`RunSize`) covers every stage still to come, not
+only the running one: the rest of the running stage (its elapsed time over the measured
+share of it, or its work model when no share is done yet), then each later stage from
+its work model (:func:`stage_seconds`), then what follows the search (the repair and
+the caller's outputs, :attr:`StageDeadline.after_s`); all of it at the run's pace. The
+work models count the units a stage works on, as well as they are known when the
+limit runs out: the target-satellite pairs (exact), the candidate options (once the
+windows are known; before, :data:`CANDIDATES_PER_STEP` per pair and time step of the
+horizon), the options (once built; before, the candidates) and the near pairs the
+screening evaluates, which grow as the square of the options' density in time
+(:data:`NEAR_REACH_S`, :data:`CLUSTERING`). Each unit costs the CPU time of
+:data:`WORK_SECONDS` and :data:`PAIR_SECONDS`, measured on 2-core runs with the
+programs compiled and rounded up about twice.
 
 Compiling XLA programs (tracing, lowering, compiling or loading them from the
 persistent cache: the events JAX reports through ``jax.monitoring``) is not counted
@@ -30,17 +44,29 @@ import os
 import threading
 import time
 from pathlib import Path
+from typing import NamedTuple
 
 __all__ = [
+    "CANDIDATES_PER_STEP",
+    "CLUSTERING",
     "COMPILE_ALLOWANCE_S",
     "EXEC_WAIT_FACTOR",
     "EXEC_WAIT_SLACK_S",
+    "JOINS_S_PER_OBS",
+    "NEAR_REACH_S",
+    "OBSERVATION_EVERY_S",
     "PACE_MAX",
+    "PAIR_SECONDS",
+    "REPAIR_S_PER_OBS",
+    "STAGES",
+    "STAGE_SECONDS",
+    "RunSize",
     "StageDeadline",
     "TimeLimitError",
     "WORK_SECONDS",
     "compile_seconds",
     "process_start",
+    "stage_seconds",
     "startup_seconds",
     "suggested_limit",
 ]
@@ -133,17 +159,94 @@ def startup_seconds(age_s: float, cpu_s: float) -> float:
     return age_s
 
 
-#: CPU seconds a unit of a stage's work takes, rounded up from the 12x12h preset (5,000
-#: targets, 12 satellites, 12 h; 2 cores, programs compiled: windows 2.9 s for 60,000
-#: target-satellite pairs, options 9.9 s for ~95,000 candidates, screening 15.9 s for
-#: 91,595 options): the estimate of a stage stopped before it finished a first share of
-#: its work. Windows: per target and satellite; options: per candidate option
-#: (:func:`jaxspline.planner.opportunities.option_counts`); screening: per option (the far
-#: gaps, first observations and near pairs together; denser options take longer each:
-#: ~0.4 ms with 50,000 targets, measured at 6 % of the stage).
-WORK_SECONDS = {"windows": 5e-5, "options": 1e-4, "screening": 3e-4}
+#: The stages before the search, in order.
+STAGES = ("loading", "orbits", "windows", "options", "screening")
+#: CPU seconds a unit of a stage's work takes (windows: per target and satellite;
+#: options: per candidate option, :func:`jaxspline.planner.opportunities.option_counts`;
+#: screening: per option, its far gaps and first observation, the near pairs aside:
+#: :data:`PAIR_SECONDS`). Fitted to 2-core runs of 5,000 to 100,000 targets with the
+#: programs compiled (5e-6, 8e-6 and 4.3e-5), rounded up.
+WORK_SECONDS = {"windows": 2e-5, "options": 2e-5, "screening": 1e-4}
+#: [s] of CPU every stage takes besides its units (loading its compiled programs).
+STAGE_SECONDS = 2.0
+#: CPU seconds of the screening per candidate near pair (fitted 7e-8, rounded up).
+PAIR_SECONDS = 1.5e-7
+#: Candidate options per target-satellite pair and time step of the horizon, before the
+#: windows are known (measured 3e-4 to 9e-4 on targets spread over the globe, 6.4e-4 on
+#: land strips; a scenario whose satellites are placed over its targets has more, and
+#: its estimate is made again from its candidates once the windows are known).
+CANDIDATES_PER_STEP = 7e-4
+#: [s] the gap a near pair spans at most, besides the options' own length (the far gaps
+#: of the packaged satellites: 41-188 s).
+NEAR_REACH_S = 150.0
+#: How much more near pairs a satellite's options have than if they were spread evenly
+#: over the horizon (targets cluster on land and under the ground tracks; measured 2-9).
+CLUSTERING = 4.0
+#: [s] of CPU the repair takes per observation of the plan (the independent checks and
+#: the start-time refinement of its rounds; :mod:`jaxspline.planner.budget` has the
+#: detailed model, measured 1.8e-3), plus :data:`STAGE_SECONDS` per step.
+REPAIR_S_PER_OBS = 3e-3
+#: [s] of CPU the flown-join checks add per observation (three rounds; measured 7.2e-3).
+JOINS_S_PER_OBS = 1e-2
+#: [s] a satellite takes at least per observation in the estimate of a plan's size.
+OBSERVATION_EVERY_S = 30.0
+_REPAIR_STEPS = 3  # the repair's steps that load programs (check, joins, refinement)
+
+
+class RunSize(NamedTuple):
+    """What the estimate of a run's time starts from (module docstring).
+
+    Attributes:
+      targets: number of targets.
+      satellites: number of satellites.
+      duration_s: the horizon [s].
+      time_step_s: the planner's time step [s] (candidate starts are this far apart).
+      repair: a plan is searched, repaired and written after the stages (``jaxspline
+        plan``); False: nothing of it follows (``jaxspline bound``).
+      joins: the repair checks the flown joins (``jaxspline plan --aem``).
+    """
+
+    targets: int
+    satellites: int
+    duration_s: float
+    time_step_s: float
+    repair: bool = True
+    joins: bool = False
+
+
+def stage_seconds(size: RunSize, known: dict | None = None) -> dict:
+    """CPU seconds of every stage of a run on an idle machine, from its work models.
+
+    Args:
+      size: the run's :class:`RunSize`.
+      known: the units a stage works on where they are known (``{"options": candidate
+        options, "screening": options}``); the others are estimated (module docstring).
+    Returns:
+      dict stage -> float [s]: ``"windows"``, ``"options"``, ``"screening"`` and, with
+      ``size.repair``, ``"repair"``.
+    """
+    known = known or {}
+    sats, horizon = max(size.satellites, 1), max(size.duration_s, 1.0)
+    pairs = size.targets * size.satellites
+    steps = horizon / max(size.time_step_s, 1e-3)
+    cands = known.get("options", pairs * steps * CANDIDATES_PER_STEP)
+    options = known.get("screening", cands)
+    near = CLUSTERING * NEAR_REACH_S * options * options / (sats * horizon)
+    out = {
+        "windows": STAGE_SECONDS + pairs * WORK_SECONDS["windows"],
+        "options": STAGE_SECONDS + cands * WORK_SECONDS["options"],
+        "screening": STAGE_SECONDS + options * WORK_SECONDS["screening"] + near * PAIR_SECONDS,
+    }
+    if size.repair:
+        plan = min(0.5 * size.targets, options, sats * horizon / OBSERVATION_EVERY_S)
+        each = REPAIR_S_PER_OBS + size.joins * JOINS_S_PER_OBS
+        out["repair"] = _REPAIR_STEPS * STAGE_SECONDS + plan * each
+    return out
+
+
 _STAT_STARTTIME = 19  # field 22 of /proc/PID/stat (starttime), counted after "(comm) "
-_NICE_LIMITS = (10, 20, 30, 60, 120, 300, 600, 1200, 1800, 3600, 7200, 14400, 28800, 86400)
+_NICE_LIMITS = (10, 20, 30, 60, 90, 120, 180, 300, 600, 900, 1200, 1800, 3600, 7200, 14400)
+_NICE_LIMITS += (28800, 86400)
 
 
 class TimeLimitError(Exception):
@@ -152,7 +255,8 @@ class TimeLimitError(Exception):
     Attributes:
       stage: the stage that was running (``"options"``, ``"screening"``, ...).
       elapsed: seconds since the call started.
-      estimate: estimated seconds the stages before the search need (None: unknown).
+      estimate: estimated seconds the run needs: the whole run given a :class:`RunSize`,
+        else the stages before the search (None: unknown).
     """
 
     def __init__(self, msg: str, stage: str, elapsed: float, estimate: float | None):
@@ -161,12 +265,13 @@ class TimeLimitError(Exception):
 
 
 def suggested_limit(estimate: float) -> int:
-    """A round time limit [s] leaving the search as much time as the stages before it.
+    """A round time limit [s] leaving the search as much time as the rest of the run.
 
     Args:
-      estimate: seconds the stages before the search need.
+      estimate: seconds the run needs besides the search.
     Returns:
-      int, the smallest of 10, 20, 30, 60, 120, ... s at least twice ``estimate``
+      int, the smallest of 10, 20, 30, 60, 90, 120, 180, 300, ... s at least twice
+      ``estimate``
       (or twice the estimate rounded up when it is longer than a day).
     """
     want = 2.0 * estimate
@@ -184,6 +289,10 @@ class StageDeadline:
       after_s: estimated seconds the caller needs after :func:`jaxspline.plan` returns
         (on an idle machine; the outputs of ``jaxspline plan``), kept out of the search.
       must_s: the part of ``after_s`` that is never left out (``plan.json``, ``plan.csv``).
+      size: the run's :class:`RunSize`: the estimate in the message is the whole run's
+        (module docstring); None: the stages up to the running one only.
+      goal: what the stages prepare, in the message (``"the search"``).
+      flags: where the limit is set, in the message's remedy.
 
     Attributes:
       t0: as given.
@@ -192,14 +301,32 @@ class StageDeadline:
       allowance: as given.
       after_s: as given.
       must_s: as given.
+      size: as given.
+      goal: as given.
+      flags: as given.
+      known: the units of work of the stages, as they became known (:meth:`check`).
       compiled0: :func:`compile_seconds` when the deadline was made.
       skipped: what was left out because of the limit (:meth:`skip`).
       split: how the limit was split (:meth:`record`; set by the planner).
     """
 
-    def __init__(self, t0, limit, scale="", allowance=COMPILE_ALLOWANCE_S, after_s=0.0, must_s=0.0):
+    def __init__(
+        self,
+        t0,
+        limit,
+        scale="",
+        allowance=COMPILE_ALLOWANCE_S,
+        after_s=0.0,
+        must_s=0.0,
+        *,
+        size: RunSize | None = None,
+        goal: str = "the search",
+        flags: str = "--time-limit or planner.time_limit_s",
+    ):
         self.t0, self.limit, self.scale, self.allowance = t0, limit, scale, allowance
         self.after_s, self.must_s = float(after_s), float(must_s)
+        self.size, self.goal, self.flags = size, goal, flags
+        self.known: dict = {}
         self.compiled0 = compile_seconds()
         self._wall0, self._cpu0 = time.monotonic(), time.process_time()
         self.skipped: list[dict] = []
@@ -273,8 +400,9 @@ class StageDeadline:
           what: what the stage works on (``"1.9 M options"``), for the message.
           work: optional callable returning ``(units, name)``, the stage's work
             (``(918734, "options")``; called only when the limit has passed): with
-            nothing done yet, the estimate is its units times the stage's
-            :data:`WORK_SECONDS` at the run's pace.
+            nothing done yet, the estimate of the stage is its work model
+            (:func:`stage_seconds`; without a :attr:`size`, its units times its
+            :data:`WORK_SECONDS`) at the run's pace.
         Raises:
           TimeLimitError: naming the stage, its progress, the estimate and the remedy.
         """
@@ -284,44 +412,76 @@ class StageDeadline:
             return
         elapsed = now - self.t0
         start = self.t0 if stage_t0 is None else stage_t0
-        estimate, basis = None, ""
         work = None if work is None else work()
-        if done > 0:
-            estimate = (start - self.t0) + (now - start) / min(done, 1.0) - compiling
-        elif work is not None and stage in WORK_SECONDS:  # nothing measured: the constant
-            units, name = work
-            each = WORK_SECONDS[stage]
-            estimate = (start - self.t0) - compiling + units * each * self.pace()
-            basis = (
-                f" (its work: {units:,} {name} at ~{1e3 * each:.2g} ms of CPU each, "
-                f"x {self.pace():.2g} for the machine's load)"
-            )
+        if work is not None:
+            self.known[stage] = work[0]
+        rest, basis = self._rest(stage, done, now - start, work)
+        spent = now - self.t0 - compiling
+        estimate = None if rest is None else spent + rest
+        later = self._later(stage)
         progress = f"{100 * done:.0f} % through it" if done < 1 else "at its end"
         if work is not None and done < 1:
             progress += f" of {work[0]:,} {work[1]}"
         raise TimeLimitError(
-            f"time limit of {self.limit:.4g} s reached before the search, in stage {stage!r} "
+            f"time limit of {self.limit:.4g} s reached before {self.goal}, in stage {stage!r} "
             f"after {elapsed:.1f} s ({compile_seconds() - self.compiled0:.1f} s of it compiling; "
             f"{progress}"
             f"{'; ' + what if what else ''}{'; ' + self.scale if self.scale else ''}): "
-            f"{_need(estimate, basis, now - self.t0 - compiling, now - start, stage)} "
-            "(--time-limit or planner.time_limit_s), or plan fewer targets or satellites, "
+            f"{self._need(estimate, later, basis, spent, now - start, stage)} "
+            f"({self.flags}), or plan fewer targets or satellites, "
             "a shorter horizon, or a coarser planner.time_step_s",
             stage,
             elapsed,
-            estimate,
+            None if estimate is None else estimate + (later or 0.0),
         )
 
-
-def _need(estimate, basis: str, spent: float, in_stage: float, stage: str) -> str:
-    """The message's estimate and suggested limit (a lower bound without an estimate)."""
-    if estimate is not None:
-        return (
-            f"at this pace the stages before the search alone need ~{estimate:.0f} s or "
-            f"more{basis}; give a time limit of {suggested_limit(estimate)} s or more"
+    def _rest(self, stage: str, done: float, in_stage: float, work):
+        """(seconds the running stage still needs at the run's pace or None, the basis
+        of the estimate for the message)."""
+        if done > 0:
+            return in_stage / min(done, 1.0) - in_stage, ""
+        pace = self.pace()
+        if self.size is not None and stage in WORK_SECONDS:
+            need = stage_seconds(self.size, self.known)[stage] * pace
+        elif work is not None and stage in WORK_SECONDS:
+            need = work[0] * WORK_SECONDS[stage] * pace
+        else:
+            return None, ""
+        if work is None:
+            return max(need - in_stage, 0.0), ""
+        each = WORK_SECONDS[stage]
+        return max(need - in_stage, 0.0), (
+            f" (its work: {work[0]:,} {work[1]} at ~{1e3 * each:.2g} ms of CPU each, "
+            f"x {pace:.2g} for the machine's load)"
         )
-    return (  # not even a first share of the stage done: what is known is a lower bound
-        f"the stages before the search need more than {spent:.0f} s at this pace "
-        f"({in_stage:.1f} s in {stage!r} did not finish a first share of it); give "
-        f"a time limit well above {suggested_limit(spent)} s"
-    )
+
+    def _later(self, stage: str) -> float | None:
+        """Seconds of what follows the running stage at the run's pace (the later stages,
+        the repair and the outputs), None without a :attr:`size`."""
+        if self.size is None:
+            return None
+        first = STAGES.index(stage) + 1 if stage in STAGES else len(STAGES)
+        cost = stage_seconds(self.size, self.known)
+        later = sum(cost[s] for s in STAGES[first:] if s in cost) + cost.get("repair", 0.0)
+        return (later + self.after_s) * self.pace()
+
+    def _need(self, estimate, later, basis: str, spent: float, in_stage: float, stage: str):
+        """The message's estimate and suggested limit (a lower bound without an estimate)."""
+        if estimate is not None and later is not None:
+            what = ", the repair and the outputs" if self.size.repair else ""
+            return (
+                f"at this pace the whole run needs ~{estimate + later:.0f} s or more "
+                f"(~{estimate:.0f} s until {self.goal}{basis}, then ~{later:.0f} s for the "
+                f"later stages{what}); give a time limit of "
+                f"{suggested_limit(estimate + later)} s or more"
+            )
+        if estimate is not None:
+            return (
+                f"at this pace the stages before {self.goal} alone need ~{estimate:.0f} s or "
+                f"more{basis}; give a time limit of {suggested_limit(estimate)} s or more"
+            )
+        return (  # not even a first share of the stage done: what is known is a lower bound
+            f"the stages before {self.goal} need more than {spent:.0f} s at this pace "
+            f"({in_stage:.1f} s in {stage!r} did not finish a first share of it); give "
+            f"a time limit well above {suggested_limit(spent)} s"
+        )

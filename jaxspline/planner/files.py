@@ -40,7 +40,8 @@ def atomic_path(path, suffix: str = ".tmp"):
     """Yield a temporary path next to ``path``; on success move it onto ``path`` atomically.
 
     On an exception the temporary file is removed and ``path`` is left untouched.
-    Missing parent directories are created.
+    Missing parent directories are created. An ``OSError`` that names no file (a full
+    disk: ``ENOSPC`` while writing or closing) is raised again naming ``path``.
 
     Args:
       path: str or Path, the destination.
@@ -58,6 +59,10 @@ def atomic_path(path, suffix: str = ".tmp"):
         yield tmp
         os.chmod(tmp, 0o666 & ~_umask())
         os.replace(tmp, path)
+    except OSError as exc:
+        if exc.filename is not None or exc.errno is None:
+            raise
+        raise type(exc)(exc.errno, exc.strerror, str(path)) from exc
     finally:
         if os.path.exists(tmp):
             os.remove(tmp)

@@ -8,11 +8,13 @@ are one set: a reader must never see files of two runs side by side, nor half a 
    :meth:`OutputSet.open`): the output directory is a usable path (not empty, not a
    file, not the working directory or one holding it, not holding files other than
    plan outputs, no earlier set unless ``force``); a lock is taken on it
-   (``.<name>.lock`` beside it, ``flock``): a second run on the same directory fails at
-   once with :class:`OutputBusyError`; a staging directory ``.<name>.<random>.partial``
-   is created beside it (missing parents are created, and removed again on failure)
-   and a probe of :data:`PROBE_BYTES` is written and synced there, so a read-only or
-   full disk fails before any work with :class:`OutputError`.
+   (``.<name>.lock`` beside it, ``flock``, holding the pid of its run): a second run on
+   the same directory fails at once with :class:`OutputBusyError`, unless the pid it
+   holds has ended (a child it left behind holds the lock): the lock is then taken over,
+   with a note on stderr naming the lock file and the pid; a staging directory
+   ``.<name>.<random>.partial`` is created beside it (missing parents are created, and
+   removed again on failure) and a probe of :data:`PROBE_BYTES` is written and synced
+   there, so a read-only or full disk fails before any work with :class:`OutputError`.
 2. **Writing**: every file goes into the staging directory
    (:func:`write_plan_outputs`); an ``OSError`` becomes :class:`OutputError` naming
    the file.
@@ -37,6 +39,7 @@ import fnmatch
 import os
 import shutil
 import stat
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -212,10 +215,15 @@ class OutputSet:
             try:
                 fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
             except BlockingIOError:
+                holder, ino = _lock_holder(fd), os.fstat(fd).st_ino
                 os.close(fd)
+                if holder is not None and not _alive(holder):  # held by an orphan of it
+                    _take_over(path, ino, holder)
+                    continue
                 raise OutputBusyError(
                     f"{self.flag}: {self.outdir} is in use by another jaxspline run (lock "
-                    f"{path}); wait for it to finish or choose another directory"
+                    f"{path}{f', process {holder}' if holder else ''}); wait for it to "
+                    "finish or choose another directory"
                 ) from None
             try:  # the file may have been removed by its last holder meanwhile
                 same = os.stat(path).st_ino == os.fstat(fd).st_ino
@@ -223,6 +231,7 @@ class OutputSet:
                 same = False
             if same:
                 self._lock_fd, self._lock_path = fd, path
+                _write_holder(fd)
                 return
             os.close(fd)
         raise OutputBusyError(f"{self.flag}: could not lock {path} (it keeps being replaced)")
@@ -283,6 +292,50 @@ class OutputSet:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+def _lock_holder(fd: int) -> int | None:
+    """The pid written in a lock file (:func:`_write_holder`), None when there is none."""
+    try:
+        text = os.pread(fd, 32, 0).decode("ascii", "replace").strip()
+    except OSError:
+        return None
+    return int(text) if text.isdigit() and int(text) > 0 else None
+
+
+def _write_holder(fd: int) -> None:
+    """Write this process's pid into the lock file it holds (best effort)."""
+    with contextlib.suppress(OSError):
+        os.ftruncate(fd, 0)
+        os.pwrite(fd, f"{os.getpid()}\n".encode("ascii"), 0)
+
+
+def _alive(pid: int) -> bool:
+    """Whether process ``pid`` runs (a zombie, ended and not yet reaped, does not)."""
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:  # another user's: it runs
+        return True
+    try:
+        state = Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0]
+    except (OSError, IndexError):
+        return True
+    return state not in ("Z", "X")
+
+
+def _take_over(path: Path, ino: int, pid: int) -> None:
+    """Remove the lock file (inode ``ino``) of process ``pid``, which ended: whatever still
+    holds it (a child it left behind) no longer guards a run. Says so on stderr."""
+    print(
+        f"jaxspline: note: taking over the lock {path} of process {pid}, which has ended",
+        file=sys.stderr,
+        flush=True,
+    )
+    with contextlib.suppress(FileNotFoundError):
+        if os.stat(path).st_ino == ino:  # not a lock another run has made since
+            os.unlink(path)
 
 
 def _umask() -> int:

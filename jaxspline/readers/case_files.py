@@ -42,7 +42,9 @@ class UniqueKeyLoader(_Loader):
 def parse_time(text: Any, *, where: str = "time", allow_datetime: bool = False) -> datetime:
     """Parse an ISO 8601 time (``2025-07-17T00:00:00Z``) to an aware UTC ``datetime``.
 
-    A string without an offset is taken as UTC; another offset is converted.
+    A string must name its time zone (``Z`` or an offset, which is converted); one
+    without is refused, as the zone it means is unknown. A ``datetime`` without one (a
+    YAML timestamp, whose rules make it UTC) is taken as UTC.
 
     Args:
       text: the time string (or, with ``allow_datetime``, a ``datetime``).
@@ -51,7 +53,7 @@ def parse_time(text: Any, *, where: str = "time", allow_datetime: bool = False) 
     Returns:
       datetime in UTC.
     Raises:
-      ValueError: not a string or not ISO 8601 (naming ``where``).
+      ValueError: not a string, not ISO 8601 or without a time zone (naming ``where``).
     """
     if allow_datetime and isinstance(text, datetime):
         value = text
@@ -63,6 +65,10 @@ def parse_time(text: Any, *, where: str = "time", allow_datetime: bool = False) 
             value = datetime.fromisoformat(s)
         except ValueError:
             raise ValueError(f"{where}: not an ISO 8601 time: {text!r}") from None
+        if value.tzinfo is None:
+            raise ValueError(
+                f"{where}: {text!r} has no time zone: add Z (UTC) or an offset such as +02:00"
+            )
     else:
         raise ValueError(f"{where}: expected an ISO 8601 time string, got {text!r}")
     if value.tzinfo is None:

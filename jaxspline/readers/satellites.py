@@ -20,7 +20,12 @@ import math
 import numpy as np
 
 from jaxspline.geometry.frames import gmst, jd_split, julian_date
-from jaxspline.geometry.orbit import circular_orbit, circular_orbit_over, propagate_tle
+from jaxspline.geometry.orbit import (
+    circular_orbit,
+    circular_orbit_over,
+    propagate_tle,
+    sso_inclination,
+)
 from jaxspline.kernels.flex import mode_suppressible
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.fields import (
@@ -195,10 +200,20 @@ def _tle(ctx, f, sat, epoch, duration) -> tuple[str, str]:
 
 def _circular(ctx, f, sat, epoch_jd, duration):
     """The circular orbit of a satellite given by altitude, inclination and node or ``over``."""
-    alt = _num(ctx, f"{f}.altitude_km", sat.get("altitude_km", DEFAULT_ALTITUDE_KM), "altitude_km")
+    raw = sat.get("altitude_km", DEFAULT_ALTITUDE_KM)
+    alt = _num(ctx, f"{f}.altitude_km", raw, "altitude_km")
     inc = sat.get("inclination_deg")
     if inc is not None:
         inc = math.radians(_num(ctx, f"{f}.inclination_deg", inc, "inclination_deg"))
+    else:
+        try:
+            inc = sso_inclination(1e3 * alt)
+        except ValueError:
+            raise ctx.error(
+                f"{f}.altitude_km",
+                f"{raw} km admits no Sun-synchronous orbit (the orbit of a satellite without "
+                "inclination_deg): give inclination_deg, or a lower altitude_km",
+            ) from None
     if "over" not in sat:
         raan = _num(ctx, f"{f}.raan_deg", sat.get("raan_deg", 0.0), "raan_deg")
         u0 = _num(ctx, f"{f}.arg_lat_deg", sat.get("arg_lat_deg", 0.0), "arg_lat_deg")

@@ -315,15 +315,25 @@ def _planner(ctx, pl, duration: float, sats) -> PlannerConfig:
 
 
 def _epoch(ctx, value) -> _dt.datetime:
+    """``scenario.epoch``: a date-time with its time zone (``Z`` or an offset), in UTC."""
+    written = value
     if isinstance(value, str):
         text = value.strip()
         try:
             value = _dt.datetime.fromisoformat(text[:-1] + "+00:00" if text[-1:] in "Zz" else text)
         except ValueError:
             pass
+    if isinstance(value, _dt.date) and (
+        not isinstance(value, _dt.datetime) or value.tzinfo is None
+    ):  # "2026-04-14", TOML's local date-times and dates: which zone is meant is unknown
+        shown = written if isinstance(written, str) else value.isoformat()
+        raise ctx.error(
+            "scenario.epoch",
+            f"{shown} has no time zone: add Z (UTC) or an offset, e.g. 2026-04-14T00:00:00Z",
+        )
     if not isinstance(value, _dt.datetime):
         raise ctx.error("scenario.epoch", f"must be an ISO-8601 UTC date-time, got {value!r}")
-    value = value.replace(tzinfo=_dt.UTC) if value.tzinfo is None else value.astimezone(_dt.UTC)
+    value = value.astimezone(_dt.UTC)
     lo, hi = EPOCH_RANGE
     if not lo <= value <= hi:
         raise ctx.error(

@@ -193,7 +193,9 @@ def _target_row(get, err, default_name, text=False, horizon=None) -> tuple:
         rng = bounds(f"targets[].{key or col}", horizon)
         return check_float(get(col), err(col), text=text, **rng, **kw)
 
-    name = _string(get, err, "name", default_name) or default_name
+    name = _string(get, err, "name", default_name)
+    if not name:  # given but blank: as a satellite's or an area's name, refused
+        raise err("name")(f"must be a non-empty string, got {get('name')!r}")
     kind = _string(get, err, "kind", "point")
     if kind not in _KINDS:
         raise err("kind")(f"must be 'point' or 'strip', got {kind!r}")

@@ -455,7 +455,8 @@ def check_solution(case: Case, solution) -> CheckReport:
       solution: ``{"actions": [...]}`` or the list of actions.
     Returns:
       CheckReport (coverage is reported over the actions that passed their own rules,
-      also when the solution is invalid).
+      also when the solution is invalid; a solution over the action cap is refused by
+      that rule alone, at once, with the scores 0).
     Raises:
       ValueError: ``solution`` is not a list of actions nor an object holding one.
     """
@@ -463,10 +464,12 @@ def check_solution(case: Case, solution) -> CheckReport:
     if not isinstance(actions, list):
         raise ValueError("solution: actions: expected a list of action objects")
     out: list = []
-    if len(actions) > case.max_actions:
-        out.append(
-            Violation("action_cap", None, f"{len(actions)} actions > cap {case.max_actions}")
-        )
+    if len(actions) > case.max_actions:  # first, and alone: the rest is work for nothing
+        cap = case.max_actions
+        why = f"{len(actions)} actions > cap {cap} (scoring.max_actions_total); the other "
+        out.append(Violation("action_cap", None, why + "rules and the coverage are not checked"))
+        zero = {r.id: 0.0 for r in case.regions}
+        return CheckReport(False, out, 0.0, 0.0, zero, len(actions), 0.0)
     acts = []
     for act in _parse(case, actions, out):
         own = _own_rules(case, act)

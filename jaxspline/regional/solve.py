@@ -130,10 +130,14 @@ def start_bound(prob, target: float, seconds: float):
     Returns:
       (process, temporary file path), or None if it could not start.
     """
+    import functools
     import os
     import pickle
     import subprocess
     import tempfile
+    import warnings
+
+    from jaxspline.search.orphans import die_with_parent
 
     try:
         fd, path = tempfile.mkstemp(prefix="jaxspline-bound-", suffix=".pkl")
@@ -147,9 +151,13 @@ def start_bound(prob, target: float, seconds: float):
             f"{max(seconds, 1.0):.3f}",
         ]
         env = dict(os.environ, JAX_PLATFORMS=os.environ.get("JAX_PLATFORMS", "cpu"))
-        proc = subprocess.Popen(
-            cmd, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env
-        )
+        ends = functools.partial(die_with_parent, os.getpid(), watch=False)  # with us
+        out, err = subprocess.PIPE, subprocess.DEVNULL
+        with warnings.catch_warnings():  # JAX warns of any fork; the child execs at once
+            warnings.filterwarnings("ignore", message=r"os\.fork\(\) was called")
+            proc = subprocess.Popen(
+                cmd, stdout=out, stderr=err, text=True, env=env, preexec_fn=ends
+            )
         return proc, path
     except (OSError, ValueError):
         return None

@@ -57,6 +57,7 @@ from jaxspline.search.lagrangian import BOUND_MU_MIN, BoundResult, plan_from_pat
 from jaxspline.search.lns import greedy, greedy_order, lns
 from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.memory import trim_heap
+from jaxspline.search.orphans import die_with_parent
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
 from jaxspline.search.sweep import sweeps
@@ -166,6 +167,7 @@ def _run(conn, pb: Problem, plan_value: float, deadline: float, max_iters, dp, s
     plan of order ``first`` first unless None), send (bound, iterations, status,
     seconds)."""
     gc.disable()  # never finalize the parent's (JAX) objects in the child
+    die_with_parent(mp.parent_process().pid)  # even when the parent is killed (SIGKILL)
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     signal.signal(signal.SIGTERM, signal.SIG_DFL)
     if dp is None:

@@ -166,6 +166,37 @@ def test_every_subcommand_takes_debug():
     assert parser.parse_args(["view", "p.json"]).debug is False
 
 
+UNPARSABLE = [  # (command line, the one line argparse's error becomes)
+    ("plan --time-limit abc", "jaxspline plan: error: --time-limit: 'abc' is not a number"),
+    ("plan --max-iters 1.5", "jaxspline plan: error: --max-iters: '1.5' is not an integer"),
+    ("plan --aem-step", "jaxspline plan: error: --aem-step: expected one argument"),
+    ("bound --search-iters 2e3", "jaxspline bound: error: --search-iters: '2e3' is not an integer"),
+    ("bound --target x", "jaxspline bound: error: --target: 'x' is not a number"),
+    ("view p.json -o", "jaxspline view: error: -o/--output: expected one argument"),
+    (
+        "aeossp solve c -o s.json --time-limit 1m",
+        "jaxspline aeossp solve: error: --time-limit: '1m' is not a number",
+    ),
+    (
+        "aeossp check",
+        "jaxspline aeossp check: error: the following arguments are required: case_dir, solution",
+    ),
+    (
+        "regional solve c -o s.json --seed -",
+        "jaxspline regional solve: error: --seed: '-' is not an integer",
+    ),
+    ("plan --bogus", "jaxspline: error: unrecognized arguments: --bogus"),
+]
+
+
+@pytest.mark.parametrize(("argv", "line"), UNPARSABLE, ids=[a for a, _ in UNPARSABLE])
+def test_a_flag_argparse_cannot_parse_is_one_line_with_exit_2(capsys, argv, line):
+    with pytest.raises(SystemExit) as exc:
+        main(argv.split())
+    assert exc.value.code == EXIT_BAD_INPUT
+    assert capsys.readouterr().err == line + "\n"
+
+
 def test_an_unexpected_error_is_one_line_and_debug_shows_the_traceback(monkeypatch, capsys):
     def boom(args):
         raise KeyError("surprise")
@@ -302,7 +333,7 @@ def test_stage_deadline_estimate_and_compile_time(monkeypatch):
     e = exc.value
     assert (e.stage, e.elapsed) == ("options", 25.0)
     assert e.estimate == pytest.approx(5.0 + 20.0 / 0.25 - 5.0)  # 80 s
-    assert "give a time limit of 300 s" in str(e) and "700 options; 5 targets" in str(e)
+    assert "give a time limit of 180 s" in str(e) and "700 options; 5 targets" in str(e)
     assert dl.suggested_limit(4.0) == 10 and dl.suggested_limit(1e6) == 2_000_000
 
 
@@ -319,10 +350,44 @@ def test_a_stage_stopped_before_its_first_share_estimates_its_work(monkeypatch):
         d.check("screening", 0.0, 150.0, "", lambda: (918_734, "options"))
     e, msg = exc.value, str(exc.value)
     each = dl.WORK_SECONDS["screening"]
-    assert e.estimate == pytest.approx(50.0 + 918_734 * each * 2.0)  # 50 s + 551 s
+    assert e.estimate == pytest.approx(50.0 + 918_734 * each * 2.0)  # 50 s + 184 s
     assert "0 % through it of 918,734 options; 50000 targets)" in msg, msg
-    assert "need ~601 s or more (its work: 918,734 options at ~0.3 ms of CPU each" in msg, msg
+    assert "need ~234 s or more (its work: 918,734 options at ~0.1 ms of CPU each" in msg, msg
+    assert "give a time limit of 600 s or more" in msg, msg
+
+
+def test_the_estimate_covers_every_stage_still_to_come(monkeypatch):
+    """Given the run's size, the estimate adds the later stages' work models, the repair
+    and the outputs to the running stage's rest (the numbers below by hand)."""
+    from jaxspline.planner import deadline as dl
+
+    clock = {"now": 100.0}
+    monkeypatch.setattr(dl.time, "monotonic", lambda: clock["now"])
+    monkeypatch.setattr(dl, "compile_seconds", lambda: 0.0)
+    size = dl.RunSize(targets=50_000, satellites=12, duration_s=43_200.0, time_step_s=10.0)
+    d = dl.StageDeadline(100.0, 5.0, "50000 targets", after_s=10.0, size=size)
+    monkeypatch.setattr(d, "pace", lambda: 1.0)
+    clock["now"] = 106.0  # the windows started at 104 s, 25 % done
+    with pytest.raises(dl.TimeLimitError) as exc:
+        d.check("windows", 0.25, 104.0, "", lambda: (600_000, "target-satellite pairs"))
+    # windows: 6 s more (2 s for 25 %); options: 2 s + 600,000 pairs x 4,320 steps x 7e-4
+    # candidates x 2e-5 s = 38.288 s; screening of as many options: 2 s + 1,814,400 x 1e-4 s
+    # + 4 x 150 s x 1,814,400^2 / (12 x 43,200 s) pairs x 1.5e-7 s = 754.976 s; repair:
+    # 6 s + min(25,000, 1,814,400, 17,280) observations x 3e-3 s = 57.84 s; outputs 10 s
+    later = 38.288 + 754.976 + 57.84 + 10.0
+    assert exc.value.estimate == pytest.approx(6.0 + 6.0 + later)
+    msg = str(exc.value)
+    assert "the whole run needs ~873 s or more (~12 s until the search, then ~861 s" in msg, msg
     assert "give a time limit of 1800 s or more" in msg, msg
+    # the options' own count, once known, replaces the prior (here 7x fewer candidates)
+    clock["now"] = 120.0
+    with pytest.raises(dl.TimeLimitError) as exc:
+        d.check("options", 0.0, 110.0, "", lambda: (259_200, "candidate options"))
+    options = 2.0 + 259_200 * 2e-5  # 7.184 s, 10 s of it spent
+    screening = 2.0 + 259_200 * 1e-4 + 600.0 * 259_200**2 / (12 * 43_200) * 1.5e-7
+    repair = 6.0 + 17_280 * 3e-3
+    assert exc.value.estimate == pytest.approx(20.0 + screening + repair + 10.0)
+    assert options < 10.0  # the running stage is past its model: none of it left
 
 
 def test_the_start_up_handlers_belong_to_the_command_only():

@@ -322,6 +322,32 @@ def test_plan_missing_scenario_file(tmp_path, capsys):
     assert "scenario file not found" in capsys.readouterr().err
 
 
+def test_a_full_disk_names_the_page_being_written(runs, tmp_path, monkeypatch, capsys):
+    import errno
+
+    from test_files import _FullFile
+
+    from jaxspline.planner import files
+
+    page = tmp_path / "page.html"
+    monkeypatch.setattr(files, "open", _FullFile, raising=False)  # ENOSPC at the first write
+    assert main(["view", str(runs["out"] / "plan.json"), "-o", str(page)]) == 4
+    err = capsys.readouterr().err
+    assert err == f"jaxspline: cannot write: {page}: {os.strerror(errno.ENOSPC)}\n", err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_real_full_disk_names_the_page_being_written(runs, tmp_path):
+    from _full_disk import full_disk
+
+    with full_disk(tmp_path) as full:
+        page = full / "page.html"
+        cmd = [sys.executable, "-m", "jaxspline.cli", "view", str(runs["out"] / "plan.json")]
+        done = subprocess.run([*cmd, "-o", str(page)], capture_output=True, text=True, timeout=120)
+        assert done.returncode == 4, done.stderr
+        assert done.stderr == f"jaxspline: cannot write: {page}: No space left on device\n"
+
+
 def test_compile_cache_directory_from_the_environment(monkeypatch, tmp_path):
     from jaxspline.cli import CACHE_ENV, cache_dir
 

@@ -1,5 +1,7 @@
-"""Atomic output: permissions follow the umask, failures never clobber existing files."""
+"""Atomic output: permissions follow the umask, failures never clobber existing files, and
+a full disk is named by the file being written."""
 
+import errno
 import os
 import stat
 
@@ -39,3 +41,41 @@ def test_failed_write_leaves_existing_file_untouched(tmp_path):
         raise RuntimeError("disk full")
     assert p.read_text() == "previous result"
     assert [f.name for f in tmp_path.iterdir()] == ["plot.png"]
+
+
+class _FullFile:
+    """A file open for writing on a full disk: every write fails as the kernel says."""
+
+    def __init__(self, *args, **kwargs):
+        pass
+
+    def write(self, text):
+        raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))  # names no file
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        return False
+
+
+def test_a_full_disk_is_named_by_the_file_being_written(tmp_path, monkeypatch):
+    from jaxspline.planner import files
+
+    p = tmp_path / "page.html"
+    monkeypatch.setattr(files, "open", _FullFile, raising=False)
+    with pytest.raises(OSError) as exc:
+        atomic_write_text(p, "x")
+    assert (exc.value.errno, exc.value.filename) == (errno.ENOSPC, str(p))
+    assert list(tmp_path.iterdir()) == []  # no temporary file left
+
+
+def test_a_real_full_disk_is_named_by_the_file_being_written(tmp_path):
+    from _full_disk import full_disk
+
+    with full_disk(tmp_path) as full:
+        p = full / "sol.json"
+        with pytest.raises(OSError) as exc:
+            atomic_write_text(p, "x" * 200_000)
+        assert (exc.value.errno, exc.value.filename) == (errno.ENOSPC, str(p))
+        assert [f.name for f in full.iterdir()] == ["filler"]  # no temporary file left

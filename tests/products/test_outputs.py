@@ -8,13 +8,16 @@
   previous set untouched and no staging directory, and removes the folders the run made;
 * the lock: a second set on the same directory fails at once (also from another
   process, where the command exits 5), and works again once the first is closed;
-  a killed run's staging directory is removed by the next run.
+  a killed run's staging directory is removed by the next run; the lock of a killed
+  run that a child of it still holds is taken over, with a note naming it.
 """
 
 from __future__ import annotations
 
+import contextlib
 import errno
 import os
+import signal
 import subprocess
 import sys
 import textwrap
@@ -217,3 +220,46 @@ def test_the_command_exits_5_while_another_process_holds_the_directory(tmp_path,
     finally:
         holder.kill()
         holder.wait()
+
+
+# a run whose child (forked while it held the lock) outlives it: the child keeps the lock
+HOLD_WITH_CHILD = textwrap.dedent(
+    """
+    import os, sys, time
+    from jaxspline.products.outputs import OutputSet
+    with OutputSet(sys.argv[1]):
+        child = os.fork()
+        if child == 0:
+            time.sleep(60)
+            os._exit(0)
+        print(os.getpid(), child, flush=True)
+        time.sleep(60)
+    """
+)
+
+
+def test_a_lock_whose_run_was_killed_is_taken_over_with_a_note(tmp_path, capsys):
+    out = tmp_path / "out"
+    holder = subprocess.Popen(
+        [sys.executable, "-c", HOLD_WITH_CHILD, str(out)], stdout=subprocess.PIPE, text=True
+    )
+    child = None
+    try:
+        pid, child = (int(x) for x in holder.stdout.readline().split())
+        with pytest.raises(OutputBusyError, match=f"process {pid}"):  # it runs: busy
+            OutputSet(out).open()
+        holder.kill()  # SIGKILL: its child still holds the lock
+        holder.wait()
+        os.kill(child, 0)  # (it does)
+        _publish(out)
+        err = capsys.readouterr().err
+        lock = tmp_path / ".out.lock"
+        note = f"jaxspline: note: taking over the lock {lock} of process {pid}, which has ended"
+        assert err == note + "\n"
+        assert (out / "plan.json").exists()
+    finally:
+        holder.kill()
+        holder.wait()
+        if child is not None:
+            with contextlib.suppress(ProcessLookupError):
+                os.kill(child, signal.SIGKILL)

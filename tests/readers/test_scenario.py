@@ -324,6 +324,13 @@ BAD = [
         5,
         "a number",
     ),
+    (  # the value as written, in km, and the way out
+        HEAD + "[[satellites]]\naltitude_km = 30000\n" + POINT_TARGET,
+        "satellites[0].altitude_km",
+        5,
+        "30000 km admits no Sun-synchronous orbit (the orbit of a satellite without "
+        "inclination_deg): give inclination_deg",
+    ),
     (HEAD + SAT + "model = 'flexible'\n" + POINT_TARGET, "satellites[0].model", 6, "flex ="),
     (
         HEAD + SAT + "model = 'eigen_axis'\nrate_deg_s = [1, 1, 1]\n" + POINT_TARGET,
@@ -399,6 +406,27 @@ BAD = [
         2,
         "ISO-8601",
     ),
+    # an epoch without a time zone: refused, whatever zone it was meant in
+    *[
+        (
+            f"[scenario]\nepoch = {epoch}\nduration_s = 600.0\n" + SAT + POINT_TARGET,
+            "scenario.epoch",
+            2,
+            f"{shown} has no time zone: add Z (UTC) or an offset",
+        )
+        for epoch, shown in [
+            ('"2026-04-14"', "2026-04-14"),
+            ('"2026-04-14T12:30:00"', "2026-04-14T12:30:00"),
+            ("2026-04-14T12:30:00", "2026-04-14T12:30:00"),  # a TOML local date-time
+            ("2026-04-14", "2026-04-14"),  # a TOML local date
+        ]
+    ],
+    # a blank name is refused for a target as for a satellite
+    *[
+        (HEAD + SAT + POINT_TARGET + f"name = {name}\n", field, 9, "must be a non-empty string")
+        for name, field in [('""', "targets[0].name"), ('"   "', "targets[0].name")]
+    ],
+    (HEAD + "[[satellites]]\nname = '  '\n" + POINT_TARGET, "satellites[0].name", 5, "non-empty"),
     (
         '[scenario]\nepoch = "2026-04-14T00:00:00Z"\n' + SAT + POINT_TARGET,
         "scenario.duration_s",
@@ -444,6 +472,27 @@ BAD = [
         "unknown key",
     ),
 ]
+
+
+def test_an_epoch_with_a_zone_is_converted_to_utc_and_a_nameless_target_named(tmp_path):
+    text = HEAD.replace('"2026-04-14T00:00:00Z"', "2026-04-14T02:30:00+02:00") + SAT
+    sc = load_scenario(_write(tmp_path, text + POINT_TARGET + POINT_TARGET.replace("15.0", "16")))
+    assert sc.epoch.isoformat() == "2026-04-14T00:30:00+00:00"
+    assert sc.targets.name.tolist() == ["target_1", "target_2"]  # no name key: the default
+
+
+def test_a_case_time_without_a_zone_is_refused():
+    import datetime as dt
+
+    from jaxspline.readers.case_files import parse_time
+
+    with pytest.raises(ValueError, match=r"horizon_start: '2026-04-14T04:00:05' has no time "):
+        parse_time("2026-04-14T04:00:05", where="horizon_start")
+    with pytest.raises(ValueError, match="add Z"):
+        parse_time("2026-04-14", where="x")
+    # a YAML timestamp is a datetime; without a zone YAML's rules make it UTC
+    naive = dt.datetime(2026, 4, 14, 4, 0, 5)
+    assert parse_time(naive, allow_datetime=True) == parse_time("2026-04-14T04:00:05Z")
 
 
 def test_tle_angles_are_checked(tmp_path):

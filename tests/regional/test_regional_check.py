@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import math
+import time
 from dataclasses import replace
 from datetime import timedelta
 from pathlib import Path
@@ -170,6 +171,21 @@ def test_action_cap(mini):
     two = [act(mini), act(mini, start=3000)]
     assert rules(check_solution(replace(mini, max_actions=1), two)) == ["action_cap"]
     assert check_solution(replace(mini, max_actions=2), two).valid
+
+
+def test_a_solution_over_the_action_cap_fails_at_once_naming_it(mini):
+    """100,000 actions against a cap of 64: refused by the cap alone, before the rules of
+    every action and the coverage are worked out (a minute of work for nothing)."""
+    many = [act(mini, start=BASE_START + 10 * (i % 500)) for i in range(100_000)]
+    t0 = time.monotonic()
+    report = check_solution(replace(mini, max_actions=64), {"actions": many})
+    assert time.monotonic() - t0 < 2.0
+    assert not report.valid and rules(report) == ["action_cap"]
+    assert report.violations[0].message.startswith(
+        "100000 actions > cap 64 (scoring.max_actions_total); the other rules and the coverage"
+    )
+    assert report.num_actions == 100_000 and report.coverage_ratio == 0.0
+    json.loads(report.to_json())  # the scores are numbers (0), not NaN
 
 
 @pytest.mark.parametrize(
