@@ -26,3 +26,5 @@ from .check import CheckReport as CheckReport
 from .check import Violation as Violation
 from .check import check_solution as check_solution
 from .check import format_report as format_report
+from .bound import CoverageBound as CoverageBound
+from .bound import coverage_bound as coverage_bound
