@@ -10,6 +10,8 @@ no other look competes (an upper bound on coverage); ``cli`` registers
 ``jaxspline stereo ...``.
 """
 
+from .bound import CoverageBound as CoverageBound
+from .bound import coverage_bound as coverage_bound
 from .case import Case as Case
 from .case import Mission as Mission
 from .case import Observation as Observation
@@ -26,5 +28,3 @@ from .check import CheckReport as CheckReport
 from .check import Violation as Violation
 from .check import check_solution as check_solution
 from .check import format_report as format_report
-from .bound import CoverageBound as CoverageBound
-from .bound import coverage_bound as coverage_bound

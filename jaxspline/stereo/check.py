@@ -180,7 +180,7 @@ class CheckReport:
         data["best"] = {k: (asdict(v) if v else None) for k, v in self.best.items()}
         data["pairs"] = [dict(asdict(p), valid=p.valid) for p in self.pairs]
         data["triples"] = [dict(asdict(t), valid=t.valid) for t in self.triples]
-        return json.loads(json.dumps(data, default=_jsonable))
+        return _finite_or_none(json.loads(json.dumps(data, default=_jsonable)))
 
     def to_json(self) -> str:
         """The report as indented JSON text (NaN written as null).
@@ -189,6 +189,17 @@ class CheckReport:
           str.
         """
         return json.dumps(self.to_dict(), indent=2, allow_nan=False)
+
+
+def _finite_or_none(value):
+    """``value`` with every NaN / infinity replaced by None (JSON has no such numbers)."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, list):
+        return [_finite_or_none(v) for v in value]
+    if isinstance(value, dict):
+        return {k: _finite_or_none(v) for k, v in value.items()}
+    return value
 
 
 def _jsonable(value):
@@ -299,7 +310,7 @@ def _grow(case, track, point, sat, edge: float, direction: int) -> float:
     bound = 0.0 if direction < 0 else case.horizon_s
     step, reach = sat.access_step_s, edge
     min_sun = case.mission.thresholds.min_solar_elevation_deg
-    while reach != bound:
+    while (reach > bound) if direction < 0 else (reach < bound):
         k = np.arange(1, GROW_CHUNK + 1, dtype=float)
         t = reach + direction * step * k
         t = np.maximum(t, bound) if direction < 0 else np.minimum(t, bound)

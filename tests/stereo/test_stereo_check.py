@@ -191,3 +191,5 @@ def test_the_report_reads_and_serialises(case1, example):
     assert data["valid"] is False and data["num_covered"] == 1
     assert data["best"]["rugged_060"]["kind"] == "pair" and data["best"]["open_090"] is None
     assert data["pairs"][0]["valid"] is True
+    r.derived[0] = replace(r.derived[0], slant_range_m=float("nan"))
+    assert json.loads(r.to_json())["derived"][0]["slant_range_m"] is None
