@@ -341,6 +341,7 @@ def _look(case, o, k, t, tracks, intervals, out) -> tuple[Derived, Look | None]:
     pos, vel = track.ecef(np.array([mid]))
     g = ground_point(pos[0], vel[0], o.along_deg, o.across_deg)
     slant = float(np.linalg.norm(g - pos[0]))
+    scale = slant * math.radians(sat.ifov_deg)
     off = float(combined_off_nadir_deg(o.along_deg, o.across_deg))
     sun = float(solar_elevation_deg(point, track.unix(mid)))
     look, aid = None, "none"
@@ -356,11 +357,9 @@ def _look(case, o, k, t, tracks, intervals, out) -> tuple[Derived, Look | None]:
             aid = f"{sat.id}::{target.id}::{n}"
             basis = enu_basis(point)
             poly = strip_polyline(track, basis, point, s0, s1, o.along_deg, o.across_deg)
-            scale = slant * math.radians(sat.ifov_deg)
             half = slant * math.tan(math.radians(sat.fov_deg / 2.0))
             look = Look(o.index, k, t, s0, s1, mid, pos[0], off, slant, scale, half, poly, n)
     when = format_time(case.time_at(round(mid, 6)))
-    scale = slant * math.radians(sat.ifov_deg)
     return Derived(o.index, sat.id, target.id, when, off, slant, scale, sun, aid), look
 
 
