@@ -21,7 +21,9 @@ then the path a plan's data takes:
   web page;
 - :mod:`jaxspline.cli` - the ``jaxspline`` command (parse and print);
 - :mod:`jaxspline.aeossp` - the aeossp_standard benchmark adapter;
-- :mod:`jaxspline.regional` - the regional_coverage benchmark adapter (area coverage).
+- :mod:`jaxspline.regional` - the regional_coverage benchmark adapter (area coverage);
+- :mod:`jaxspline.stereo` - the stereo_imaging benchmark adapter (its case files and
+  independent checker).
 
 This namespace holds the entry points and the headline types and kernels; everything
 else lives in the folders' namespaces (``jaxspline.geometry.gmst``). The library never

@@ -4,7 +4,7 @@ The folders, one subsystem each, in the order the façade's docstring lists them
 engine's foundations, then the path a plan's data takes::
 
     kernels (0) <- geometry (1) <- screen (2) <- readers (3) <- search (4)
-        <- sequences (5) <- planner (6) <- products (7) <- cli (8) <- aeossp, regional (9)
+        <- sequences (5) <- planner (6) <- products (7) <- cli (8) <- aeossp, regional, stereo (9)
 
 Every module of the package is parsed with ``ast`` (no import side effects). A module
 imports nothing of a higher layer; ``jaxspline/__init__.py`` is the façade on top and may
@@ -55,6 +55,7 @@ RANK = {
     "cli": 8,
     "aeossp": 9,
     "regional": 9,
+    "stereo": 9,
 }
 FACADE = 10  # jaxspline/__init__.py: on top of everything
 MAX_LINES = 600

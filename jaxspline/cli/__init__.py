@@ -117,6 +117,7 @@ _SUBCOMMAND_MODULES = {
     "view": "jaxspline.cli.view",
     "aeossp": "jaxspline.aeossp.cli",
     "regional": "jaxspline.regional.cli",
+    "stereo": "jaxspline.stereo.cli",
 }
 _HELP_FLAGS = ("-h", "--help")
 

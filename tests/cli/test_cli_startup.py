@@ -19,7 +19,7 @@ import pytest
 
 from jaxspline.cli import build_parser, command_of
 
-_HEAVY = ("optax", "yaml", "sgp4", "jaxspline.aeossp", "jaxspline.regional")
+_HEAVY = ("optax", "yaml", "sgp4", "jaxspline.aeossp", "jaxspline.regional", "jaxspline.stereo")
 
 _PROBE = """
 import sys
@@ -51,7 +51,7 @@ def test_the_full_parser_has_every_sub_command_and_one_has_only_its_own():
         sub = next(a for a in parser._actions if isinstance(a.choices, dict))
         return set(sub.choices)
 
-    assert choices(build_parser()) == {"plan", "bound", "view", "aeossp", "regional"}
+    assert choices(build_parser()) == {"plan", "bound", "view", "aeossp", "regional", "stereo"}
     for name in ("plan", "aeossp"):
         assert choices(build_parser(name)) == {name}
 
