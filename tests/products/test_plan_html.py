@@ -26,6 +26,7 @@ import shutil
 
 import numpy as np
 import pytest
+from jaxspline.readers.areas import area_coverage
 
 from jaxspline.cli import main
 from jaxspline.geometry.orbit import circular_orbit
@@ -33,7 +34,6 @@ from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planner.result import Observations, PlanResult
 from jaxspline.products.plan_html import PASS_PAD_S, plan_document, read_plan, write_plan_html
 from jaxspline.products.plan_view import view_data
-from jaxspline.readers.areas import area_coverage
 from jaxspline.readers.mission import Area, Satellite, Scenario, make_targets
 
 ISS_TLE = (
