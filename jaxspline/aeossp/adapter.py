@@ -41,7 +41,7 @@ from jaxspline.readers.mission import (
     make_targets,
 )
 
-__all__ = ["AEOSSP_MARGINS", "case_scenario", "solve_case"]
+__all__ = ["AEOSSP_MARGINS", "case_scenario", "solution_of", "solve_case"]
 
 AEOSSP_MARGINS = Margins(
     off_nadir=math.radians(0.005), horizon=0.02, gap=0.05, battery_wh=10.0, shadow_guard=1
@@ -116,7 +116,7 @@ def case_scenario(case, *, margins: Margins = AEOSSP_MARGINS, time_limit: float 
     )
 
 
-def _solution_from_result(case, result) -> dict:
+def solution_of(case, result) -> dict:
     """The benchmark's solution document ``{"actions": [...]}`` of a PlanResult.
 
     Args:
@@ -163,4 +163,4 @@ def solve_case(
     case = load_case(case_dir) if isinstance(case_dir, str | Path) else case_dir
     sc = case_scenario(case, time_limit=time_limit)
     result = plan(sc, time_limit=time_limit, seed=seed, progress=progress, max_iters=max_iters)
-    return _solution_from_result(case, result), result
+    return solution_of(case, result), result

@@ -27,7 +27,6 @@ import yaml
 
 from jaxspline.geometry.frames import jd_split, julian_date
 from jaxspline.geometry.orbit import propagate_tle
-from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 from jaxspline.readers.case_files import UniqueKeyLoader, format_time
 from jaxspline.readers.case_files import parse_time as _parse_time
 from jaxspline.readers.fields import read_text
@@ -41,7 +40,6 @@ __all__ = [
     "load_case",
     "load_solution",
     "parse_time",
-    "write_solution",
 ]
 
 
@@ -419,23 +417,3 @@ def load_solution(path: str | os.PathLike) -> dict:
     if not isinstance(data, dict) or not isinstance(data.get("actions"), list):
         raise ValueError(f"{path}: expected an object with an 'actions' list")
     return data
-
-
-def write_solution(path: str | os.PathLike, actions, force: bool = False) -> Path:
-    """Write ``{"actions": actions}`` atomically (temp file + ``os.replace``).
-
-    Args:
-      path: destination.
-      actions: a list of action dicts or a full solution dict with an ``actions`` key.
-      force: overwrite an existing file.
-    Returns:
-      Path of the written file.
-    Raises:
-      FileExistsError: the file exists and ``force`` is false.
-    """
-    path = Path(path)
-    refuse_overwrite(path, force)
-    data = dict(actions) if isinstance(actions, dict) else {"actions": list(actions)}
-    if not isinstance(data.get("actions"), list):
-        raise ValueError("actions: expected a list of action objects")
-    return atomic_write_text(path, json.dumps(data, indent=2) + "\n")

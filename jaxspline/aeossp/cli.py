@@ -5,17 +5,16 @@ report and the JSON result (to OUT, or stdout when OUT is ``-``); exit code 0 if
 solution is valid, 1 if not. ``jaxspline aeossp solve CASE_DIR -o solution.json
 [--time-limit S] [--seed N] [--force]`` plans the case through :func:`jaxspline.plan`
 (:mod:`jaxspline.aeossp.adapter`), prints the plan's bound and gap, writes the solution
-atomically, then checks it with the independent checker (exit code as for ``check``).
+atomically, then checks it with the independent checker (exit code as for ``check``);
+its run lifecycle (output checked before planning, Ctrl-C or SIGTERM writes the best
+plan so far and exits 130, the TLEs' age) is
+:func:`jaxspline.cli.case_commands.run_solve`'s.
 """
 
 from __future__ import annotations
 
-import sys
-import time
-from pathlib import Path
-
-from jaxspline.cli.case_commands import check_and_print, check_case_paths
-from jaxspline.cli.flags import MAX_SEED, check_int, check_output_file, check_path, check_seconds
+from jaxspline.cli.case_commands import CaseAdapter, check_and_print, check_case_paths, run_solve
+from jaxspline.cli.flags import check_path
 
 __all__ = ["register"]
 
@@ -36,29 +35,30 @@ def _cmd_check(args) -> int:
     return _check_and_print(case, solution, args.json)
 
 
-def _cmd_solve(args) -> int:
-    from jaxspline.aeossp.case import load_case, write_solution
-
-    check_seconds("--time-limit", args.time_limit)
-    check_int("--seed", args.seed, 0, MAX_SEED)
-    check_output_file("-o/--output", args.output, force=args.force)
-    check_case_paths(args)
-    out = Path(args.output)
-    case = load_case(args.case_dir)
-    from jaxspline.aeossp.adapter import solve_case
-
-    t0 = time.perf_counter()
-    solution, result = solve_case(case, time_limit=args.time_limit, seed=args.seed)
-    elapsed = time.perf_counter() - t0
-    write_solution(out, solution, force=args.force)
+def _summary(result) -> str:
+    """The plan's line in the benchmark's units (the weighted completion ratio)."""
     tw = result.total_value or 1.0
-    print(
-        f"wrote {out} ({len(solution['actions'])} actions, planned in {elapsed:.1f} s): "
-        f"WCR {result.value / tw:.4f}, bound {result.bound / tw:.4f} "
-        f"({result.stats['bound_status']}), gap {result.gap / tw:.4f}",
-        file=sys.stderr,
+    return (
+        f"{len(result.observations)} actions, WCR {result.value / tw:.4f}, bound "
+        f"{result.bound / tw:.4f} ({result.stats['bound_status']}), gap {result.gap / tw:.4f}"
     )
-    return _check_and_print(case, solution, args.json)
+
+
+def _cmd_solve(args) -> int:
+    from jaxspline.aeossp.adapter import case_scenario, solution_of
+    from jaxspline.aeossp.case import load_case
+    from jaxspline.aeossp.check import check_solution, format_report
+
+    adapter = CaseAdapter(
+        load_case=load_case,
+        case_scenario=lambda case, limit: case_scenario(case, time_limit=limit),
+        solution_of=solution_of,
+        check_solution=check_solution,
+        format_report=format_report,
+        summary=_summary,
+        tle_file="satellites.yaml",
+    )
+    return run_solve(args, adapter)
 
 
 def register(sub) -> None:

@@ -119,15 +119,16 @@ def check_path(flag: str, value, *, kind: str | None = None, exists: bool = Fals
     return value
 
 
-def check_output_file(flag: str, value, *, force: bool = True):
+def check_output_file(flag: str, value, *, force: bool = True, room: int = 0):
     """An output file flag, checked before any work: a usable path (:func:`check_path`),
-    in an existing folder where a new file can be created; an existing file only with
-    ``force``. ``None`` and ``-`` (stdout) pass.
+    in an existing folder where a new file can be created (of ``room`` bytes, written and
+    synced); an existing file only with ``force``. ``None`` and ``-`` (stdout) pass.
 
     Args:
       flag: the flag's name (``--json``).
       value: str or None.
       force: an existing file may be replaced.
+      room: bytes the folder must take (0: an empty file).
     Returns:
       the value.
     Raises:
@@ -146,10 +147,20 @@ def check_output_file(flag: str, value, *, force: bool = True):
         raise FileExistsError(f"{flag}: {value} exists (use --force to overwrite)")
     try:
         fd, tmp = tempfile.mkstemp(prefix=".write-check.", dir=folder)
-        os.close(fd)
-        os.unlink(tmp)
+        try:
+            block = b"\0" * min(room, 1 << 16)
+            for _ in range(room // max(len(block), 1)):
+                os.write(fd, block)
+            if room:
+                os.fsync(fd)
+        finally:
+            os.close(fd)
+            os.unlink(tmp)
     except OSError as exc:
-        raise OSError(f"{flag}: cannot write in {folder}: {exc.strerror or exc}") from None
+        what = f"{room} bytes" if room else "a file"
+        raise OSError(
+            f"{flag}: cannot write {what} in {folder} for {value}: {exc.strerror or exc}"
+        ) from None
     return value
 
 

@@ -18,7 +18,6 @@ from .case import format_time as format_time
 from .case import load_case as load_case
 from .case import load_solution as load_solution
 from .case import parse_time as parse_time
-from .case import write_solution as write_solution
 from .check import CheckReport as CheckReport
 from .check import Violation as Violation
 from .check import check_solution as check_solution

@@ -18,10 +18,8 @@ Times are timezone-aware UTC ``datetime`` objects; the solution format writes th
 
 from __future__ import annotations
 
-import json
 import math
 import os
-import tempfile
 from dataclasses import dataclass
 from datetime import datetime, timedelta
 from pathlib import Path
@@ -495,39 +493,3 @@ def load_solution(path: str | os.PathLike) -> dict:
     if not isinstance(data, dict) or not isinstance(data.get("actions"), list):
         raise ValueError(f"{path}: actions: expected an object with an 'actions' list")
     return data
-
-
-def write_solution(path: str | os.PathLike, actions, force: bool = False) -> Path:
-    """Write ``{"actions": actions}`` atomically (temp file in the same folder + ``os.replace``).
-
-    Args:
-      path: destination.
-      actions: list of action dicts, or a solution dict with an ``actions`` list.
-      force: overwrite an existing file.
-    Returns:
-      Path written.
-    Raises:
-      FileExistsError: the file exists and ``force`` is false.
-      ValueError: ``actions`` is not a list.
-    """
-    path = Path(path)
-    if path.exists() and not force:
-        raise FileExistsError(f"{path}: exists (pass force=True to overwrite)")
-    data = dict(actions) if isinstance(actions, dict) else {"actions": list(actions)}
-    if not isinstance(data.get("actions"), list):
-        raise ValueError("actions: expected a list of action objects")
-    text = json.dumps(data, indent=2, allow_nan=False) + "\n"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path

@@ -4,27 +4,23 @@
 the independent checker (:mod:`jaxspline.regional.check`), prints coverage_ratio,
 weighted_coverage_ratio, num_actions, the lowest battery level and the violations, and
 writes the JSON report to OUT (``-`` = stdout). Exit code 0 if the solution is valid,
-1 if not, 2 on unreadable input files (the ``jaxspline`` entry point maps ``ValueError``
-to 2).
+1 if not, 2 on unreadable input files.
 
 ``jaxspline regional solve CASE_DIR -o solution.json [--time-limit S] [--seed N] [--force]
-[--json OUT]`` plans the case (:func:`jaxspline.regional.solve.solve_case`) within S seconds
-counted from the command's start, writes the solution atomically (an existing file only
-with ``--force``), prints coverage, actions, bound and gap, then checks the solution as
-``check`` does (same exit codes).
-
-Each sub-command is one ``_cmd_*`` function plus a few lines in :func:`register`; a new
-one adds its parser there; the checking and printing are
-:mod:`jaxspline.cli.case_commands`, shared with the aeossp adapter.
+[--json OUT]`` translates the case (:func:`jaxspline.regional.adapter.case_scenario`),
+plans it with :func:`jaxspline.plan` within S seconds counted from the command's start,
+writes the solution atomically, prints coverage, actions, bound and gap, then checks the
+solution as ``check`` does; the run lifecycle (output checked before planning, Ctrl-C or
+SIGTERM writes the best plan so far and exits 130, the TLEs' age) is the one of
+:func:`jaxspline.cli.case_commands.run_solve`.
 """
 
 from __future__ import annotations
 
-import time
-from pathlib import Path
+from jaxspline.cli.case_commands import CaseAdapter, check_and_print, check_case_paths, run_solve
+from jaxspline.cli.flags import check_path
 
-from jaxspline.cli.case_commands import check_and_print, check_case_paths, write_report
-from jaxspline.cli.flags import MAX_SEED, check_int, check_output_file, check_path, check_seconds
+__all__ = ["register"]
 
 
 def _check_and_print(case, solution, json_out: str | None) -> int:
@@ -43,31 +39,34 @@ def _cmd_check(args) -> int:
     return _check_and_print(case, solution, args.json)
 
 
-def _cmd_solve(args) -> int:
-    import json
-
-    from jaxspline.regional.case import load_case
-    from jaxspline.regional.solve import solve_case
-
-    t0 = time.perf_counter()
-    check_seconds("--time-limit", args.time_limit)
-    check_int("--seed", args.seed, 0, MAX_SEED)
-    check_output_file("-o/--output", args.output, force=args.force)
-    check_case_paths(args)
-    out = Path(args.output)
-    case = load_case(args.case_dir)
-    solution, st = solve_case(case, time_limit=args.time_limit, seed=args.seed, t_start=t0)
-    write_report(str(out), json.dumps(solution, indent=1))
-    print(
-        f"wrote {out}: coverage_ratio {st['coverage_ratio']:.5f}, weighted "
-        f"{st['weighted_coverage_ratio']:.5f}, {st['actions']} actions, bound {st['bound']:.5f}, "
-        f"gap {st['gap']:.5f} ({time.perf_counter() - t0:.1f} s)"
+def _summary(result) -> str:
+    """The plan's line in the benchmark's units (coverage_ratio is the plan's value)."""
+    actions = int(sum(1 for r in result.observations.roll if r == r))
+    return (
+        f"coverage_ratio {result.value:.5f}, {actions} actions, bound {result.bound:.5f} "
+        f"({result.stats['bound_status']}), gap {result.gap:.5f}"
     )
-    return _check_and_print(case, solution, args.json)
+
+
+def _cmd_solve(args) -> int:
+    from jaxspline.regional.adapter import case_scenario, solution_of
+    from jaxspline.regional.case import load_case
+    from jaxspline.regional.check import check_solution, format_report
+
+    adapter = CaseAdapter(
+        load_case=load_case,
+        case_scenario=lambda case, limit: case_scenario(case, time_limit=limit),
+        solution_of=solution_of,
+        check_solution=check_solution,
+        format_report=format_report,
+        summary=_summary,
+        tle_file="satellites.yaml",
+    )
+    return run_solve(args, adapter)
 
 
 def register(sub) -> None:
-    """Register ``regional check`` on the ``jaxspline`` sub-parsers.
+    """Register ``regional check`` and ``regional solve`` on the ``jaxspline`` sub-parsers.
 
     Args:
       sub: the ``argparse`` sub-parsers object of the ``jaxspline`` command.

@@ -24,9 +24,7 @@ seconds from ``Case.start`` (:meth:`Case.seconds`, :meth:`Case.time_at`).
 
 from __future__ import annotations
 
-import json
 import os
-import tempfile
 from dataclasses import dataclass, field
 from datetime import datetime, timedelta
 from pathlib import Path
@@ -64,7 +62,6 @@ __all__ = [
     "load_solution",
     "parse_solution",
     "parse_time",
-    "write_solution",
 ]
 
 MISSION = "mission.yaml"
@@ -454,39 +451,3 @@ def _action_dicts(solution) -> list:
             raise ValueError("solution: actions: expected a list of action objects")
         return list(actions)
     return [o.to_dict() if isinstance(o, Observation) else o for o in solution]
-
-
-def write_solution(path: str | os.PathLike, solution, force: bool = False) -> Path:
-    """Write a solution atomically (temp file in the same folder + ``os.replace``).
-
-    Args:
-      path: destination.
-      solution: a Solution, a list of Observation (or action dicts), or a document with
-        an ``actions`` list.
-      force: overwrite an existing file.
-    Returns:
-      Path written.
-    Raises:
-      FileExistsError: the file exists and ``force`` is false.
-      ValueError: the solution is not readable back (checked by :func:`parse_solution`).
-    """
-    path = Path(path)
-    if path.exists() and not force:
-        raise FileExistsError(f"{path}: exists (pass force=True to overwrite)")
-    data = {"actions": _action_dicts(solution)}
-    parse_solution(data, where=path.name)
-    text_out = json.dumps(data, indent=2, allow_nan=False) + "\n"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
-            fh.write(text_out)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.chmod(tmp, 0o644)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
-    return path
