@@ -100,6 +100,7 @@ def pass_candidates(case, tr, roll_step_deg=ROLL_STEP_DEG, start_every_s=START_E
 
 def _setup(case_dir):
     from jaxspline.geometry.coverage_tracks import build_tracks
+
     from jaxspline.regional.case import load_case
 
     case = load_case(case_dir)

@@ -16,7 +16,8 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from jaxspline.geometry.frames import R_EARTH, WGS84_F, ecef_to_geodetic
+from jaxspline.base.elements import R_EARTH, WGS84_F
+from jaxspline.geometry.frames import ecef_to_geodetic
 
 __all__ = ["look_points_np", "edges_np", "covered_baseline"]
 

@@ -324,7 +324,7 @@ def screening_stream(n_routes: int, search: str) -> dict:
     """Screen and search in one pass, in a fresh process: time and peak RSS.
 
     ``search="greedy"``: every feasible row of :func:`jaxspline.screen_chunks` streams
-    into :func:`jaxspline.sequences.greedy`; ``"beam"``: the ``TOP_K`` feasible successors of
+    into :func:`jaxspline.sequences.greedy_chain`; ``"beam"``: the ``TOP_K`` feasible successors of
     largest value density per option (``top_k_by="density"``) stream into
     :func:`jaxspline.sequences.beam_search` (width ``BEAM_WIDTH``). Compile included.
     """
@@ -350,7 +350,7 @@ def screening_stream(n_routes: int, search: str) -> dict:
 
         t0 = time.perf_counter()
         if search == "greedy":
-            plan = js.sequences.greedy(opts, chunks())
+            plan = js.sequences.greedy_chain(opts, chunks())
         else:
             plan = js.sequences.beam_search(opts, chunks(), width=BEAM_WIDTH)
         dt = time.perf_counter() - t0

@@ -32,7 +32,7 @@ import time
 
 import numpy as np
 
-from jaxspline.readers.mission import Margins
+from jaxspline.readers.config import Margins
 
 LOOSE = Margins(off_nadir=math.radians(-1e-5), horizon=0.0, gap=-0.01)
 
@@ -42,7 +42,7 @@ def upper_bound(case_dir: str, iterations: int, achieved: float, mip: float = 0.
     HiGHS dual bound after ``mip`` seconds if > 0)."""
     from jaxspline.aeossp.adapter import case_scenario
     from jaxspline.aeossp.case import load_case
-    from jaxspline.planner.pipeline import build_problem
+    from jaxspline.planner.build import build_problem
     from jaxspline.search import mip_bound
     from jaxspline.search import upper_bound as lagrangian_bound
 

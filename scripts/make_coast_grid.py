@@ -1,7 +1,7 @@
 """Write the shipped coastline grid, ``jaxspline/data/coast_cells_30.npz``.
 
 The plan page and the ground-track figure draw coastlines from
-:func:`jaxspline.readers.land.land_fraction`, and :func:`jaxspline.readers.land.is_land`
+:func:`jaxspline.base.land.land_fraction`, and :func:`jaxspline.base.land.is_land`
 answers land tests, from this file: the ocean cell counts of the GLOBE land mask
 (``global_land_mask`` package) per 30 x 30 block with the cell centres, the mask bits
 of every block the coast crosses, and the mask's axes. Run from the repository root:
@@ -11,7 +11,7 @@ of every block the coast crosses, and the mask's axes. Run from the repository r
 
 import numpy as np
 
-from jaxspline.readers.land import COAST_BLOCK, COAST_FILE, coast_bits, mask_axes, ocean_cells
+from jaxspline.base.land import COAST_BLOCK, COAST_FILE, coast_bits, mask_axes, ocean_cells
 
 
 def main() -> None:

@@ -25,7 +25,7 @@ same files byte for byte):
   ``--cities`` first the rows of the packaged ``cities.csv`` unchanged; the rest are
   random land targets: positions uniform in area over latitudes ``LAT_RANGE_DEG``
   (uniform ``sin(lat)``), rounded to 1e-5 deg, then kept where
-  :func:`jaxspline.readers.land.is_land` (the package's offline GLOBE mask) says land, in
+  :func:`jaxspline.base.land.is_land` (the package's offline GLOBE mask) says land, in
   rounds of ``max(4 n, 4096)`` draws. Exactly ``round(strip_fraction * n)`` of them,
   chosen at random, are strips (length uniform in ``LENGTH_KM``, azimuth uniform in
   [0, 360) deg); the others points (imaging time 10, 15, ..., 30 s); priorities are
@@ -167,7 +167,8 @@ def _model_templates(default: dict) -> dict[str, dict]:
 
 def sun_right_ascension_deg(epoch: str) -> float:
     """Right ascension of the Sun at ``epoch`` [deg] in [0, 360) (mean equator of date)."""
-    from jaxspline.geometry.frames import jd_split, julian_date, sun_direction
+    from jaxspline.base.elements import jd_split, julian_date
+    from jaxspline.geometry.frames import sun_direction
 
     s = sun_direction(*jd_split(julian_date(epoch), 0.0))
     return math.degrees(math.atan2(float(s[1]), float(s[0]))) % 360.0
@@ -220,7 +221,7 @@ def satellite_tables(spec: Spec) -> list[dict]:
 
 def _land_positions(rng, n: int) -> tuple[np.ndarray, np.ndarray]:
     """``n`` positions [deg] uniform in area over LAT_RANGE_DEG, rounded, on land."""
-    from jaxspline.readers.land import is_land
+    from jaxspline.base.land import is_land
 
     if n == 0:
         return np.zeros(0), np.zeros(0)

@@ -14,7 +14,7 @@ Scenario (the paper's data, with a self-contained geometry stated here):
   (Earth-fixed); body x is the strip direction projected perpendicular to the
   line of sight (image motion along the TDI columns, no transverse drift).
 * Maneuver: t = 600–633 s (T = 33 s), ω_max = 2°/s, ε_max = 1°/s², jerk 1°/s³,
-  degree-7 MRP join (``jaxspline.maneuver_plan``) matching Λ, ω, ε, ε' of both
+  degree-7 MRP join (``jaxspline.kernels.maneuver_plan``) matching Λ, ω, ε, ε' of both
   routes.
 
 The exact scan laws are closed-form attitude matrices; ω, ε, ε' are obtained by
@@ -157,8 +157,8 @@ def maneuver_example():
     qa, wa, ea, ja = (x[0] for x in _states(route1_dcm, [t_a]))
     qb, wb, eb, jb = (x[0] for x in _states(route2_dcm, [t_b]))
     T = MANEUVER["T"]
-    m = js.maneuver_plan(qa, wa, ea, qb, wb, eb, T, j0=ja, j1=jb)
-    chk = js.maneuver_check(qa, wa, ea, qb, wb, eb, T, LIMITS, j0=ja, j1=jb, n_samples=2001)
+    m = js.kernels.maneuver_plan(qa, wa, ea, qb, wb, eb, T, j0=ja, j1=jb)
+    chk = js.kernels.maneuver_check(qa, wa, ea, qb, wb, eb, T, LIMITS, j0=ja, j1=jb, n_samples=2001)
     r = sat_position(t_b)
     los = ground_point(t_b) - r
     off_nadir = float(jnp.arctan2(jnp.linalg.norm(jnp.cross(los, -r)), jnp.dot(los, -r)))
@@ -176,7 +176,7 @@ def spline_accuracy(dcm_fn, t0, T, pieces=1, n=801):
     """Max |angle error| [rad] and |ω error| [rad/s] of the vector spline vs the exact law.
 
     The law on [t0, t0 + T] is split into ``pieces`` equal segments, each fitted by
-    ``jaxspline.attitude_spline`` (σ, σ', σ'' at the ends, σ at 1/3 and 2/3);
+    ``jaxspline.kernels.attitude_spline`` (σ, σ', σ'' at the ends, σ at 1/3 and 2/3);
     neighbouring segments share their knot state (joined smoothly up to ε).
     """
     h = T / pieces
@@ -184,11 +184,11 @@ def spline_accuracy(dcm_fn, t0, T, pieces=1, n=801):
     thirds = np.concatenate([knots[:-1] + h / 3, knots[:-1] + 2 * h / 3])
     qk, wk, ek, _ = _states(dcm_fn, knots)
     qt = _states(dcm_fn, thirds)[0]
-    m = js.attitude_spline(
+    m = js.kernels.attitude_spline(
         qk[:-1], wk[:-1], ek[:-1], qt[:pieces], qt[pieces:], qk[1:], wk[1:], ek[1:], h
     )
     ts = np.linspace(0, h, n)
-    qs, ws, _, _ = js.maneuver_eval(m, ts[:, None])  # [n, pieces, ...]
+    qs, ws, _, _ = js.kernels.maneuver_eval(m, ts[:, None])  # [n, pieces, ...]
     qe, we, _, _ = _states(dcm_fn, (knots[:-1][None, :] + ts[:, None]).ravel())
     qe = qe.reshape(n, pieces, 4)
     we = we.reshape(n, pieces, 3)
@@ -211,7 +211,7 @@ def make_maneuver_figures(outdir) -> list[Path]:
     m = ex["maneuver"]
     t_a, T = MANEUVER["t0"], MANEUVER["T"]
     tm = np.linspace(0, T, 661)
-    _, wm, em, jm = (np.asarray(x) for x in js.maneuver_eval(m, tm))
+    _, wm, em, jm = (np.asarray(x) for x in js.kernels.maneuver_eval(m, tm))
     t1 = np.linspace(ROUTE1["t0"], t_a, 201)
     t2 = np.linspace(t_a + T, ROUTE2["t0"] + ROUTE2["T"], 201)
     s1 = [np.asarray(x) for x in _states(route1_dcm, t1)[1:]]

@@ -37,7 +37,7 @@ from jaxspline.planner.files import atomic_write_text
 
 def measure(scenario, plan_value, time_limit, max_iters, fw_iters, joins=False) -> dict:
     """Floor and bound of ``scenario`` (path or None: the built-in one) as a dict."""
-    from jaxspline.planner.pipeline import build_problem
+    from jaxspline.planner.build import build_problem
     from jaxspline.readers.scenario import default_scenario, load_scenario
     from jaxspline.search import Timeline, greedy
     from jaxspline.search.floor import relaxation_floor

@@ -29,7 +29,7 @@ COLORS = {"A": "tab:blue", "B": "tab:orange", "C": "tab:green", "D": "tab:red"}
 def _time_vs_angle(out: Path) -> Path:
     import matplotlib.pyplot as plt
 
-    from jaxspline import bang_coast_bang_time, scurve_time, slew_profile_time
+    from jaxspline.kernels import bang_coast_bang_time, scurve_time, slew_profile_time
 
     b2 = W * W / E
     phi = np.linspace(1e-4, 1.2, 1200)
@@ -118,7 +118,7 @@ def _time_vs_angle(out: Path) -> Path:
 def _topology(out: Path) -> Path:
     import matplotlib.pyplot as plt
 
-    from jaxspline import profile_state, slew_profile
+    from jaxspline.kernels import profile_state, slew_profile
 
     b = W / E
     b2 = W * W / E
@@ -170,7 +170,7 @@ def _topology(out: Path) -> Path:
 def _flex_response(out: Path) -> Path:
     import matplotlib.pyplot as plt
 
-    from jaxspline import flexible_body_rate, profile_state, settling_time, slew_profile
+    from jaxspline.kernels import flexible_body_rate, profile_state, settling_time, slew_profile
 
     eps, phi = 0.004, math.radians(3.0)
     tol = math.radians(0.001)

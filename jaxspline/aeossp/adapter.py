@@ -31,15 +31,8 @@ import numpy as np
 
 from jaxspline.aeossp.case import format_time, load_case
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.readers.mission import (
-    POINT,
-    Margins,
-    PlannerConfig,
-    Power,
-    Satellite,
-    Scenario,
-    make_targets,
-)
+from jaxspline.readers.config import Margins, PlannerConfig
+from jaxspline.readers.mission import POINT, Power, Satellite, Scenario, make_targets
 
 __all__ = ["AEOSSP_MARGINS", "case_scenario", "solution_of", "solve_case"]
 

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 import yaml
 
-from jaxspline.geometry.frames import jd_split, julian_date
+from jaxspline.base.elements import jd_split, julian_date
 from jaxspline.geometry.orbit import propagate_tle
 from jaxspline.readers.case_files import UniqueKeyLoader, format_time
 from jaxspline.readers.case_files import parse_time as _parse_time

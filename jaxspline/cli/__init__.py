@@ -344,8 +344,8 @@ def _classify(exc, time_limit, memory_limit, busy, output) -> tuple[int, str]:
 
 def _terminate(signum, frame):
     """Ctrl-C and SIGTERM: ``KeyboardInterrupt``, and the signal remembered in case the
-    exception lands in a finalizer that drops it (:func:`jaxspline.search.clock.note_signal`)."""
-    from jaxspline.search.clock import note_signal
+    exception lands in a finalizer that drops it (:func:`jaxspline.base.clock.note_signal`)."""
+    from jaxspline.base.clock import note_signal
 
     note_signal(signal.Signals(signum).name)
     raise KeyboardInterrupt

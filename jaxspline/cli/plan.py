@@ -416,8 +416,8 @@ def _plan(sc, deadline, seed, max_iters, certify, progress, aem, memory):
 def _write(result, outputs, plots, aem, aem_step, html, deadline=None):
     """Write the set into the staging folder and publish it, signals held until it is
     whole; a signal during writing is recorded in plan.json. Returns (page, seconds)."""
+    from jaxspline.base.clock import catch_signals
     from jaxspline.products.outputs import rewrite_plan_json, write_plan_outputs
-    from jaxspline.search.clock import catch_signals
 
     def late(name):  # plan.json says so
         result.report.setdefault("interrupted", name)

@@ -22,10 +22,12 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
-from jaxspline.geometry.frames import ecef_to_geodetic, geodetic_to_ecef
-from jaxspline.geometry.ground import gnomonic, gnomonic_inverse, surface_point, unit_vectors
+from jaxspline.base.elements import geodetic_to_ecef, unit_vectors
+from jaxspline.geometry.frames import ecef_to_geodetic
+from jaxspline.geometry.ground import gnomonic, gnomonic_inverse, surface_point
+from jaxspline.readers.area_files import polygon_center
 
-__all__ = ["DENSIFY_DEG", "AreaGrid", "area_grid", "polygon_center"]
+__all__ = ["DENSIFY_DEG", "AreaGrid", "area_grid"]
 
 #: Longest polygon edge [deg] before projection (edges are straight in lon / lat).
 DENSIFY_DEG = 0.05
@@ -48,18 +50,6 @@ class AreaGrid:
 
     def __len__(self) -> int:
         return int(self.weight.shape[0])
-
-
-def polygon_center(polygon) -> np.ndarray:
-    """Unit vector (Earth-fixed) of a polygon's centre: its lon / lat centroid.
-
-    Args:
-      polygon: shapely Polygon / MultiPolygon in (lon, lat) [deg].
-    Returns:
-      float [3].
-    """
-    c = polygon.centroid
-    return unit_vectors(geodetic_to_ecef(np.radians(c.y), np.radians(c.x), 0.0))
 
 
 def area_grid(polygon, spacing: float) -> AreaGrid:

@@ -36,7 +36,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jaxspline.geometry.frames import R_EARTH
+from jaxspline.base.elements import R_EARTH
 from jaxspline.geometry.pointing import roll_frame
 
 __all__ = [

@@ -21,27 +21,24 @@ Units: metres, seconds, radians.
 
 from __future__ import annotations
 
-import datetime as _dt
-import math
-
 import jax
 import jax.numpy as jnp
 import numpy as np
 
+from jaxspline.base.elements import (
+    OMEGA_EARTH,
+    R_EARTH,
+    WGS84_E2,
+)
+
+_JD_J2000 = 2451545.0  # Julian date of J2000.0
+_DAYS_PER_CENTURY = 36525.0
+
 __all__ = [
-    "R_EARTH",
-    "WGS84_F",
-    "WGS84_E2",
-    "OMEGA_EARTH",
-    "SECONDS_PER_DAY",
-    "julian_date",
-    "jd_split",
-    "gmst",
     "earth_rotation_angle",
     "rot_z",
     "teme_to_ecef",
     "ecef_to_teme",
-    "geodetic_to_ecef",
     "ecef_to_geodetic",
     "sun_direction",
     "angle_between",
@@ -49,81 +46,10 @@ __all__ = [
     "sun_elevation",
 ]
 
-R_EARTH = 6378137.0  # m, WGS84 equatorial radius
-WGS84_F = 1.0 / 298.257223563
-WGS84_E2 = WGS84_F * (2.0 - WGS84_F)
-OMEGA_EARTH = 7.292115146706979e-5  # rad/s, rate of GMST (IAU 1982) per UT1 second
-SECONDS_PER_DAY = 86400.0
-_JD_UNIX0 = 2440587.5  # Julian date of 1970-01-01T00:00:00 UTC
-_JD_J2000 = 2451545.0
-_DAYS_PER_CENTURY = 36525.0
-
 
 def _xp(*xs):
     """jax.numpy if any argument is a JAX array or tracer, else numpy."""
     return jnp if any(isinstance(x, jax.Array) for x in xs) else np
-
-
-def julian_date(when) -> float:
-    """Julian date (UTC) of a datetime or ISO-8601 string (naive = UTC).
-
-    Args:
-      when: datetime or ISO-8601 string.
-    Returns:
-      float, Julian date [days].
-    Raises:
-      ValueError: naming the value if it is not a date-time.
-    """
-    if isinstance(when, str):
-        text = when.strip()
-        if text.endswith(("Z", "z")):
-            text = text[:-1] + "+00:00"
-        try:
-            when = _dt.datetime.fromisoformat(text)
-        except ValueError as exc:
-            raise ValueError(f"epoch must be an ISO-8601 date-time, got {when!r}") from exc
-    if not isinstance(when, _dt.datetime):
-        raise ValueError(f"epoch must be a datetime or ISO string, got {when!r}")
-    if when.tzinfo is None:
-        when = when.replace(tzinfo=_dt.UTC)
-    return _JD_UNIX0 + when.timestamp() / SECONDS_PER_DAY
-
-
-def jd_split(epoch_jd: float, t):
-    """Two-part Julian dates ``(jd, fr)`` of ``epoch_jd + t / 86400`` (numpy).
-
-    ``jd`` is the epoch's preceding midnight (x.5) and ``fr`` the day fraction from it,
-    so ``fr`` keeps float64 resolution of ~1e-11 s over days (SGP4 and GMST take the
-    split form; a single float64 Julian date resolves only ~40 microseconds).
-
-    Args:
-      epoch_jd: float, Julian date of the epoch [days].
-      t: float [...], seconds from the epoch.
-    Returns:
-      (jd, fr), float64 [...] each [days].
-    """
-    t = np.asarray(t, np.float64)
-    jd0 = math.floor(epoch_jd - 0.5) + 0.5
-    fr0 = epoch_jd - jd0
-    return np.full(t.shape, jd0), fr0 + t / SECONDS_PER_DAY
-
-
-def gmst(jd, fr=0.0):
-    """Greenwich mean sidereal time (IAU 1982) at Julian date jd + fr.
-
-    ``GMST = 67310.54841 + (876600 h + 8640184.812866) T + 0.093104 T^2 - 6.2e-6 T^3``
-    seconds of time, ``T`` Julian centuries of UT1 (UTC used) from J2000 (Vallado 4th
-    ed. eq. 3-45; identical to ``sgp4.propagation.gstime``). numpy float64.
-
-    Args:
-      jd: float [...], Julian date (whole part) [days].
-      fr: float [...], day fraction [days].
-    Returns:
-      float64 [...], GMST [rad] in [0, 2 pi).
-    """
-    t = ((np.asarray(jd, np.float64) - _JD_J2000) + np.asarray(fr, np.float64)) / _DAYS_PER_CENTURY
-    sec = -6.2e-6 * t**3 + 0.093104 * t**2 + (876600.0 * 3600.0 + 8640184.812866) * t + 67310.54841
-    return np.mod(np.mod(sec, SECONDS_PER_DAY) * (2.0 * np.pi / SECONDS_PER_DAY), 2.0 * np.pi)
 
 
 def earth_rotation_angle(gmst0, t):
@@ -187,33 +113,6 @@ def ecef_to_teme(r, theta):
       float [..., 3], TEME vectors (unit of r).
     """
     return rot_z(-theta, r)
-
-
-def geodetic_to_ecef(lat, lon, h=0.0):
-    """WGS84 geodetic coordinates to Earth-fixed position (generic: numpy or JAX).
-
-    ``N = a / sqrt(1 - e^2 sin^2 lat)``; ``x = (N + h) cos lat cos lon``,
-    ``y = (N + h) cos lat sin lon``, ``z = (N (1 - e^2) + h) sin lat`` (Vallado eq. 3-7).
-
-    Args:
-      lat: float [...], geodetic latitude [rad].
-      lon: float [...], longitude [rad].
-      h: float [...], height above the ellipsoid [m].
-    Returns:
-      float [..., 3], Earth-fixed position [m].
-    """
-    xp = _xp(lat, lon, h)
-    lat, lon, h = xp.asarray(lat), xp.asarray(lon), xp.asarray(h)
-    sl = xp.sin(lat)
-    n = R_EARTH / xp.sqrt(1.0 - WGS84_E2 * sl**2)
-    return xp.stack(
-        [
-            (n + h) * xp.cos(lat) * xp.cos(lon),
-            (n + h) * xp.cos(lat) * xp.sin(lon),
-            (n * (1.0 - WGS84_E2) + h) * sl,
-        ],
-        -1,
-    )
 
 
 def ecef_to_geodetic(r):

@@ -27,7 +27,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from jaxspline.geometry.frames import R_EARTH, WGS84_E2, ecef_to_geodetic, geodetic_to_ecef
+from jaxspline.base.elements import R_EARTH, WGS84_E2, geodetic_to_ecef, unit_vectors
+from jaxspline.geometry.frames import ecef_to_geodetic
 
 __all__ = [
     "equal_area",
@@ -41,23 +42,10 @@ __all__ = [
     "footprint_lonlat",
     "strip_footprint",
     "surface_point",
-    "unit_vectors",
 ]
 
 _B2 = R_EARTH**2 * (1.0 - WGS84_E2)  # squared polar radius [m^2]
 FOOTPRINT_STEP_M = 2000.0  # footprint rings get a point on each side every this [m]
-
-
-def unit_vectors(x):
-    """``x / |x|`` along the last axis.
-
-    Args:
-      x: float [..., 3].
-    Returns:
-      float [..., 3], unit vectors.
-    """
-    x = np.asarray(x, np.float64)
-    return x / np.linalg.norm(x, axis=-1, keepdims=True)
 
 
 def surface_point(u):

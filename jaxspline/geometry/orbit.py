@@ -30,17 +30,20 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import OMEGA_EARTH, R_EARTH, SECONDS_PER_DAY, jd_split
-from jaxspline.kernels.validate import check_finite, check_positive, to_device
+from jaxspline.base.elements import (
+    J2_EARTH,
+    MU_EARTH,
+    R_EARTH,
+    SECONDS_PER_DAY,
+    CircularOrbit,
+    jd_split,
+    parse_tle,
+)
+from jaxspline.kernels.validate import check_positive, to_device
 
 __all__ = [
-    "MU_EARTH",
-    "CircularOrbit",
     "HermiteOrbit",
     "padded_orbit",
-    "sso_inclination",
-    "circular_orbit",
-    "circular_orbit_over",
     "orbit_position",
     "orbit_state",
     "propagate_tle",
@@ -50,33 +53,7 @@ __all__ = [
     "tabulate_orbits",
 ]
 
-MU_EARTH = 3.986004418e14  # m^3/s^2 (WGS84)
-_J2_EARTH = 1.08262668e-3
-_TROPICAL_YEAR = 365.2421897 * SECONDS_PER_DAY  # s
 _KM = 1e3
-
-
-class CircularOrbit(NamedTuple):
-    """A circular orbit with secular J2 nodal regression (a pytree of scalars).
-
-    Attributes:
-      radius: orbit radius a [m].
-      inclination: i [rad].
-      raan: right ascension of the ascending node at t = 0 [rad].
-      arg_lat: argument of latitude u at t = 0 [rad].
-      mean_motion: n [rad/s] (Keplerian, sqrt(mu / a^3)).
-      raan_rate: dOmega/dt [rad/s] (-1.5 n J2 (R/a)^2 cos i, or 0).
-
-    Position in ECI: r = a [cos W cos u - sin W cos i sin u,
-    sin W cos u + cos W cos i sin u, sin i sin u], u = u0 + n t, W = W0 + W' t.
-    """
-
-    radius: jnp.ndarray
-    inclination: jnp.ndarray
-    raan: jnp.ndarray
-    arg_lat: jnp.ndarray
-    mean_motion: jnp.ndarray
-    raan_rate: jnp.ndarray
 
 
 class HermiteOrbit(NamedTuple):
@@ -118,110 +95,6 @@ def padded_orbit(orb: HermiteOrbit, min_knots: int = 64) -> HermiteOrbit:
     tab = [np.pad(np.asarray(x), [(0, s2 - s), (0, m2 - m), (0, 0)]) for x in orb[1:4]]
     t = np.pad(np.asarray(orb.t), (0, m2 - m), mode="edge")
     return HermiteOrbit(*(to_device(x) for x in (t, *tab, np.int32(m))))
-
-
-def sso_inclination(altitude: float) -> float:
-    """Inclination of a circular Sun-synchronous orbit.
-
-    cos i = -W'_sun / (1.5 n J2 (R/a)^2), with W'_sun = 2 pi / tropical year,
-    n = sqrt(mu / a^3), a = R + h (Vallado eq. 9-41). 600 km -> 97.79 deg.
-
-    Args:
-      altitude: float, height above the equatorial radius [m].
-    Returns:
-      float, inclination [rad].
-    Raises:
-      ValueError: the altitude admits no Sun-synchronous orbit.
-    """
-    check_positive("altitude", altitude)
-    a = R_EARTH + float(altitude)
-    n = np.sqrt(MU_EARTH / a**3)
-    cos_i = -(2.0 * np.pi / _TROPICAL_YEAR) / (1.5 * n * _J2_EARTH * (R_EARTH / a) ** 2)
-    if not -1.0 <= cos_i <= 1.0:
-        raise ValueError(f"altitude={altitude!r} m admits no Sun-synchronous orbit")
-    return float(np.arccos(cos_i))
-
-
-def circular_orbit(
-    altitude: float = 600e3,
-    inclination: float | None = None,
-    raan: float = 0.0,
-    arg_lat: float = 0.0,
-    j2_drift: bool = True,
-) -> CircularOrbit:
-    """Build a :class:`CircularOrbit` from elements.
-
-    Args:
-      altitude: float, height above the equatorial radius [m].
-      inclination: float [rad] in [0, pi]; None gives the Sun-synchronous inclination
-        (:func:`sso_inclination`).
-      raan: float, right ascension of the ascending node at t = 0 [rad].
-      arg_lat: float, argument of latitude at t = 0 [rad].
-      j2_drift: add the secular nodal regression W' = -1.5 n J2 (R/a)^2 cos i.
-    Returns:
-      CircularOrbit.
-    Raises:
-      ValueError: inclination outside [0, pi] or no Sun-synchronous orbit at altitude.
-    """
-    check_positive("altitude", altitude)
-    for name, val in (("raan", raan), ("arg_lat", arg_lat)):
-        check_finite(name, val)
-    if inclination is None:
-        inclination = sso_inclination(altitude)
-    check_finite("inclination", inclination)
-    if not 0.0 <= float(inclination) <= np.pi:
-        raise ValueError(f"inclination must be in [0, pi] rad, got {inclination!r}")
-    a = R_EARTH + float(altitude)
-    n = np.sqrt(MU_EARTH / a**3)
-    rate = -1.5 * n * _J2_EARTH * (R_EARTH / a) ** 2 * np.cos(inclination) if j2_drift else 0.0
-    # numpy float64 scalars: jnp arrays made here would be float32 whenever the caller has
-    # not switched JAX to float64 (a scenario read before plan() enters its float64 context)
-    return CircularOrbit(*(np.float64(x) for x in (a, inclination, raan, arg_lat, n, rate)))
-
-
-def circular_orbit_over(
-    lat: float,
-    lon: float,
-    t: float,
-    gmst0: float,
-    altitude: float = 600e3,
-    inclination: float | None = None,
-    descending: bool = True,
-    j2_drift: bool = True,
-) -> CircularOrbit:
-    """A circular orbit whose sub-satellite point is at geocentric (lat, lon) at time t.
-
-    sin(lat) = sin i sin u gives u (ascending or descending branch); the node follows
-    from lon + theta(t) = W + atan2(cos i sin u, cos u), theta(t) = gmst0 + w_E t.
-
-    Args:
-      lat: float, geocentric latitude [rad].
-      lon: float, longitude [rad].
-      t: float, seconds from the epoch.
-      gmst0: float, GMST at the epoch [rad].
-      altitude: float [m].
-      inclination: float [rad]; None gives the Sun-synchronous inclination.
-      descending: pass over the point on the descending branch.
-      j2_drift: as in :func:`circular_orbit`.
-    Returns:
-      CircularOrbit.
-    Raises:
-      ValueError: |lat| is not reachable with the inclination.
-    """
-    base = circular_orbit(altitude, inclination, 0.0, 0.0, j2_drift)
-    inc = float(base.inclination)
-    s = np.sin(lat) / np.sin(inc)
-    if abs(s) > 1.0:
-        raise ValueError(f"lat={np.degrees(lat)!r} deg is not reachable with inclination {inc!r}")
-    u = np.arcsin(s)
-    if descending:
-        u = np.pi - u
-    raan_t = lon + gmst0 + OMEGA_EARTH * t - np.arctan2(np.cos(inc) * np.sin(u), np.cos(u))
-    u0 = u - float(base.mean_motion) * t
-    raan0 = raan_t - float(base.raan_rate) * t
-    return base._replace(
-        raan=np.float64(np.mod(raan0, 2 * np.pi)), arg_lat=np.float64(np.mod(u0, 2 * np.pi))
-    )
 
 
 def _circular_position(orb: CircularOrbit, t):
@@ -325,34 +198,6 @@ def orbit_state(orbit, t, sat=None):
     raise ValueError(f"orbit must be a CircularOrbit or HermiteOrbit, got {type(orbit).__name__}")
 
 
-_GRAVITY_MODELS = ("wgs72", "wgs84")
-
-
-def _parse_tle(line1: str, line2: str, who: str = "tle", gravity: str = "wgs84"):
-    """``Satrec`` of two TLE lines; ValueError naming ``who`` if malformed.
-
-    ``gravity`` picks SGP4's geopotential constants: "wgs84" (default, as the aeossp
-    benchmark's propagator) or "wgs72" (the constants of Vallado's verification set).
-    """
-    from sgp4.api import WGS72, WGS84, Satrec
-
-    if gravity not in _GRAVITY_MODELS:
-        raise ValueError(f"gravity must be one of {_GRAVITY_MODELS}, got {gravity!r}")
-
-    for k, line in ((1, line1), (2, line2)):
-        if not isinstance(line, str) or len(line.rstrip()) < 64 or line[:2] != f"{k} ":
-            raise ValueError(
-                f"{who} line {k} must be a 69-column TLE line starting '{k} ', got {line!r}"
-            )
-    try:
-        sat = Satrec.twoline2rv(line1, line2, WGS84 if gravity == "wgs84" else WGS72)
-    except Exception as exc:  # sgp4 raises ValueError / IndexError on malformed lines
-        raise ValueError(f"{who} lines could not be parsed: {exc}") from exc
-    if sat.error != 0:
-        raise ValueError(f"{who}: SGP4 initialisation error code {sat.error}")
-    return sat
-
-
 def propagate_tle(line1: str, line2: str, jd, fr=0.0, gravity: str = "wgs84"):
     """Propagate one TLE with SGP4 (vectorized ``SatrecArray.sgp4``) on numpy arrays.
 
@@ -368,7 +213,7 @@ def propagate_tle(line1: str, line2: str, jd, fr=0.0, gravity: str = "wgs84"):
     """
     from sgp4.api import SatrecArray
 
-    sat = _parse_tle(line1, line2, gravity=gravity)
+    sat = parse_tle(line1, line2, gravity=gravity)
     jd = np.atleast_1d(np.asarray(jd, dtype=np.float64))
     fr = np.broadcast_to(np.asarray(fr, dtype=np.float64), jd.shape)
     shape = jd.shape
@@ -379,7 +224,7 @@ def propagate_tle(line1: str, line2: str, jd, fr=0.0, gravity: str = "wgs84"):
 def _gravity_j2(r):
     rn = np.linalg.norm(r, axis=-1, keepdims=True)
     z2 = (r[..., 2:3] / rn) ** 2
-    k = 1.5 * _J2_EARTH * (R_EARTH / rn) ** 2
+    k = 1.5 * J2_EARTH * (R_EARTH / rn) ** 2
     fac = np.concatenate([1 + k * (1 - 5 * z2), 1 + k * (1 - 5 * z2), 1 + k * (3 - 5 * z2)], -1)
     return -MU_EARTH * r / rn**3 * fac
 
@@ -508,7 +353,7 @@ def tabulate_orbits(sources, epoch_jd: float, t_end: float, step: float) -> Orbi
     if tle_idx:
         from sgp4.api import SatrecArray
 
-        sats = [_parse_tle(*sources[i], who=f"satellite {i}: tle") for i in tle_idx]
+        sats = [parse_tle(*sources[i], who=f"satellite {i}: tle") for i in tle_idx]
         jd, fr = jd_split(epoch_jd, t)
         err, rr, vv = SatrecArray(sats).sgp4(jd, fr)
         good = (err == 0) & np.all(np.isfinite(rr), axis=-1)

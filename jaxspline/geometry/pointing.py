@@ -35,10 +35,11 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import OMEGA_EARTH, R_EARTH, earth_rotation_angle, rot_z
+from jaxspline.base.elements import OMEGA_EARTH, R_EARTH
+from jaxspline.geometry.frames import earth_rotation_angle, rot_z
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.kernels.batch import batched, padded_size
-from jaxspline.kernels.validate import check_finite, check_positive, is_concrete, to_device
+from jaxspline.kernels.validate import check_finite, is_concrete, to_device
 
 __all__ = [
     "Scene",
@@ -51,7 +52,6 @@ __all__ = [
     "off_nadir",
     "off_nadir_flat",
     "boresight",
-    "visibility_windows",
     "roll_frame",
     "roll_look_direction",
     "roll_pointing",
@@ -539,54 +539,3 @@ def roll_pointing(pos, vel, roll_deg):
         raise ValueError(f"roll_deg must lie in (-90, 90), got {roll_deg!r}")
     dt = jnp.result_type(pos, vel, float)
     return _roll_unit_batched(pos.astype(dt), vel.astype(dt), jnp.asarray(roll_deg, dt))
-
-
-def visibility_windows(scene: Scene, targets_ecef, t_begin, t_end, max_off_nadir, step=10.0):
-    """Intervals where each ground point is within ``max_off_nadir`` of nadir.
-
-    The off-nadir angle is sampled every ``step`` seconds on [t_begin, t_end]; each
-    sign change of ``off_nadir - max_off_nadir`` is refined by 50 bisection steps
-    (vectorized over all crossings). A window narrower than ``step`` can be missed.
-
-    Args:
-      scene: Scene, the orbit(s) and the Earth rotation angle at t = 0.
-      targets_ecef: float [K, 3], ground points, Earth-fixed [m].
-      t_begin: float, start of the search [s from the epoch].
-      t_end: float, end of the search [s from the epoch].
-      max_off_nadir: float, off-nadir limit [rad].
-      step: float, sampling step [s].
-    Returns:
-      list of K float64 arrays [W, 2] of (start, end) [s from the epoch].
-    """
-    check_positive("max_off_nadir", max_off_nadir)
-    check_positive("step", step)
-    if not t_end > t_begin:
-        raise ValueError(f"t_end must be > t_begin, got t_begin={t_begin!r}, t_end={t_end!r}")
-    targets = np.asarray(targets_ecef, dtype=np.float64).reshape(-1, 3)
-    m = int(np.ceil((t_end - t_begin) / step)) + 1
-    grid = np.linspace(t_begin, t_end, m)
-    nt = targets.shape[0]
-    g = off_nadir_flat(scene, np.repeat(targets, m, 0), np.tile(grid, nt)).reshape(nt, m)
-    g = g - max_off_nadir
-    inside = g <= 0
-    ti, ki = np.nonzero(inside[:, 1:] != inside[:, :-1])
-    lo, hi = grid[ki].copy(), grid[ki + 1].copy()
-    if ti.size:
-        lo_in = inside[ti, ki]
-        for _ in range(50):
-            mid = 0.5 * (lo + hi)
-            gm = off_nadir_flat(scene, targets[ti], mid) - max_off_nadir
-            same = (gm <= 0) == lo_in
-            lo = np.where(same, mid, lo)
-            hi = np.where(same, hi, mid)
-    cross = 0.5 * (lo + hi)
-    out = []
-    for i in range(targets.shape[0]):
-        sel = ti == i
-        edges = list(cross[sel])
-        if inside[i, 0]:
-            edges.insert(0, grid[0])
-        if inside[i, -1]:
-            edges.append(grid[-1])
-        out.append(np.asarray(edges, dtype=np.float64).reshape(-1, 2))
-    return out

@@ -27,30 +27,21 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import (
-    OMEGA_EARTH,
-    ecef_to_geodetic,
-    geodetic_to_ecef,
-)
+from jaxspline.base.elements import OMEGA_EARTH, geodetic_to_ecef
+from jaxspline.geometry.frames import ecef_to_geodetic
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.geometry.pointing import Scene, aim_state, off_nadir_flat
 from jaxspline.kernels.batch import map_chunked
 from jaxspline.kernels.validate import check_finite, check_positive
+from jaxspline.readers.mission import AREA, POINT, STRIP  # noqa: F401 (the kinds, read here too)
 
 __all__ = [
-    "AREA",
-    "POINT",
-    "STRIP",
     "RouteSet",
     "make_route_spec",
     "make_route_set",
     "strip_direction",
     "sample_aim_states",
 ]
-
-POINT = 0  # a target imaged from one point
-STRIP = 1  # a target imaged along a strip
-AREA = 2  # a target imaged by strips at a held roll, valued by the share of its samples covered
 
 
 class RouteSpec(NamedTuple):
@@ -317,7 +308,8 @@ def make_route_set(
     Returns:
       RouteSet of R routes.
     """
-    from jaxspline.geometry.pointing import aim_params, visibility_windows
+    from jaxspline.geometry.pointing import aim_params
+    from jaxspline.geometry.windows import visibility_windows
 
     check_positive("max_off_nadir", max_off_nadir)
     check_positive("nominal_speed", nominal_speed)

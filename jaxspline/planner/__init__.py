@@ -14,9 +14,15 @@ search and the stages after it; ``memory_guard`` the memory the stages before th
 search may take.
 """
 
+from jaxspline.planner.area_options import AreaOptions as AreaOptions
+from jaxspline.planner.area_options import area_options as area_options
+from jaxspline.planner.area_options import cover_table as cover_table
+from jaxspline.planner.area_options import merge_options as merge_options
+from jaxspline.planner.area_report import area_report as area_report
 from jaxspline.planner.bound import SEARCH_TIME_S as SEARCH_TIME_S
 from jaxspline.planner.bound import BoundRun as BoundRun
 from jaxspline.planner.bound import run_bound as run_bound
+from jaxspline.planner.build import build_problem as build_problem
 from jaxspline.planner.context import PlanContext as PlanContext
 from jaxspline.planner.deadline import COMPILE_ALLOWANCE_S as COMPILE_ALLOWANCE_S
 from jaxspline.planner.deadline import StageDeadline as StageDeadline
@@ -33,7 +39,6 @@ from jaxspline.planner.flown_joins import plan_joins as plan_joins
 from jaxspline.planner.flown_joins import reject_unflyable as reject_unflyable
 from jaxspline.planner.memory_guard import MemoryGuard as MemoryGuard
 from jaxspline.planner.memory_guard import MemoryLimitError as MemoryLimitError
-from jaxspline.planner.pipeline import build_problem as build_problem
 from jaxspline.planner.pipeline import plan as plan
 from jaxspline.planner.result import Observations as Observations
 from jaxspline.planner.result import PlanResult as PlanResult

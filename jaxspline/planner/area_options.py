@@ -34,12 +34,11 @@ from typing import NamedTuple
 import numpy as np
 from shapely.geometry import shape
 
+from jaxspline.base.elements import R_EARTH, geodetic_to_ecef
 from jaxspline.geometry.area_grid import AreaGrid, area_grid
 from jaxspline.geometry.area_passes import AreaSamples, Groups, StripSensor, find_groups
 from jaxspline.geometry.frames import (
-    R_EARTH,
     earth_rotation_angle,
-    geodetic_to_ecef,
     rot_z,
     sun_direction,
     sun_elevation,

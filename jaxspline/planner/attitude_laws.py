@@ -31,7 +31,7 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import R_EARTH
+from jaxspline.base.elements import R_EARTH
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.kernels.attitude import dcm_to_quat_kernel, quat_to_dcm_kernel
 from jaxspline.planner.opportunities import evaluate, state_batched

@@ -33,9 +33,9 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
+from jaxspline.planner.build import build_problem
 from jaxspline.planner.deadline import RunSize, StageDeadline
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
-from jaxspline.planner.pipeline import build_problem
 from jaxspline.planner.repair import drop_failing
 from jaxspline.planner.sharded import (
     jax_allgather,

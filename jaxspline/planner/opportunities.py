@@ -28,13 +28,8 @@ from typing import NamedTuple
 import jax
 import numpy as np
 
-from jaxspline.geometry.frames import (
-    earth_rotation_angle,
-    geodetic_to_ecef,
-    rot_z,
-    sun_direction,
-    sun_elevation,
-)
+from jaxspline.base.elements import geodetic_to_ecef
+from jaxspline.geometry.frames import earth_rotation_angle, rot_z, sun_direction, sun_elevation
 from jaxspline.geometry.orbit import HermiteOrbit, padded_orbit
 from jaxspline.geometry.pointing import Scene, aim_geometry, aim_params, aim_point, aim_state
 from jaxspline.geometry.routes import strip_direction

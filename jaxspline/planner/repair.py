@@ -51,11 +51,12 @@ from typing import NamedTuple
 
 import numpy as np
 
+from jaxspline.base import clock
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.flown_joins import reject_unflyable
 from jaxspline.planner.plan_check import check_plan
 from jaxspline.planner.refine_starts import refine_starts
-from jaxspline.search import Timeline, clock, greedy, lns
+from jaxspline.search import Timeline, greedy, lns
 
 __all__ = ["DROP_REASONS", "Repaired", "drop_failing", "dropped_line", "repair"]
 

@@ -50,7 +50,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from jaxspline.search import Timeline, clock, greedy, lns, solve
+from jaxspline.base import clock
+from jaxspline.search import Timeline, greedy, lns, solve
 from jaxspline.search.dp import dp_paths
 from jaxspline.search.lagrangian import BOUND_MU_MIN, BoundResult, Prices
 from jaxspline.search.problem import Problem

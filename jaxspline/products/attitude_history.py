@@ -23,11 +23,12 @@ import jax
 import numpy as np
 
 from jaxspline.geometry.pointing import Scene, roll_params
+from jaxspline.geometry.routes import STRIP
+from jaxspline.geometry.windows import orbit_scene
 from jaxspline.kernels.joins import Maneuver, maneuver_eval
 from jaxspline.planner.attitude_laws import NADIR_LAW, law_modes, law_states
 from jaxspline.planner.flown_joins import NADIR, Joins, join_summary, plan_joins
 from jaxspline.planner.opportunities import aim_laws
-from jaxspline.readers.mission import STRIP, orbit_scene
 
 __all__ = ["PHASES", "AttitudeHistory", "PlanAttitude", "attitude_history", "plan_scene"]
 

@@ -38,9 +38,10 @@ from pathlib import Path
 import jax
 import numpy as np
 
-from jaxspline.geometry.frames import earth_rotation_angle, gmst, teme_to_ecef
+from jaxspline.base.elements import MU_EARTH, gmst
+from jaxspline.geometry.frames import earth_rotation_angle, teme_to_ecef
 from jaxspline.geometry.ground import footprint_lonlat
-from jaxspline.geometry.orbit import MU_EARTH, orbit_position, tabulate_orbits
+from jaxspline.geometry.orbit import orbit_position, tabulate_orbits
 from jaxspline.geometry.routes import AREA, STRIP
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 

@@ -10,7 +10,7 @@ scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
   covered, search statistics and stage timings (each number in a cell with a
   ``data-key`` attribute);
 * ``map`` (equirectangular, pan / zoom): land and coastlines from the package's
-  offline land data (:func:`jaxspline.readers.land.land_fraction`, contoured at land
+  offline land data (:func:`jaxspline.base.land.land_fraction`, contoured at land
   fraction 0.5), area polygons (``areas``), the samples of the areas
   (``area_samples_covered`` green, ``area_samples_uncovered`` red),
   strip centrelines (``strips``), ground

@@ -46,7 +46,7 @@ def coast():
     """
     import contourpy
 
-    from jaxspline.readers.land import land_fraction
+    from jaxspline.base.land import land_fraction
 
     lat, lon, land = land_fraction()
     d = COAST_DECIMATE

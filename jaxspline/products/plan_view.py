@@ -35,12 +35,11 @@ import math
 import jax
 import numpy as np
 
+from jaxspline.base.elements import geodetic_to_ecef, gmst
 from jaxspline.geometry.frames import (
     angle_between,
     earth_rotation_angle,
     ecef_to_geodetic,
-    geodetic_to_ecef,
-    gmst,
     teme_to_ecef,
 )
 from jaxspline.geometry.ground import FOOTPRINT_STEP_M, footprint_lonlat, strip_centerline

@@ -6,18 +6,18 @@ backend). Satellite k is drawn in ``SATELLITE_COLORS[k]`` (shared with the CZML 
 :mod:`jaxspline.products.czml`).
 
 Coastlines are drawn offline from the land mask of the ``global_land_mask`` package,
-streamed by :func:`jaxspline.readers.land.land_fraction` (blocks of
-:data:`jaxspline.readers.land.COAST_BLOCK` cells, 0.25 deg), contoured at land fraction 0.5.
+streamed by :func:`jaxspline.base.land.land_fraction` (blocks of
+:data:`jaxspline.base.land.COAST_BLOCK` cells, 0.25 deg), contoured at land fraction 0.5.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from jaxspline.base.land import land_fraction
 from jaxspline.geometry.frames import ecef_to_geodetic
 from jaxspline.products.czml import SATELLITE_COLORS, satellite_tracks
 from jaxspline.products.plot import pyplot, save_figure
-from jaxspline.readers.land import land_fraction
 
 __all__ = ["land_fraction", "plot_plan_ground_tracks", "plot_plan_slack", "plot_plan_timeline"]
 

@@ -1,9 +1,10 @@
 """Readers: scenario files in, validated mission types out.
 
-``mission`` holds the types every later stage reads (:class:`Scenario`,
-:class:`Satellite`, :class:`Targets`, :class:`Area`, ...) and :func:`orbit_scene`;
-``fields`` the checked TOML/CSV field readers; ``ranges`` the physical range of every
-number of a scenario file; ``land`` the land mask; ``satellites`` the satellite tables
+``config`` holds the planner's settings (:class:`PlannerConfig`, :class:`Margins`);
+``mission`` the types every later stage reads (:class:`Scenario`, :class:`Satellite`,
+:class:`Targets`, :class:`Area`, ...); ``fields`` the checked TOML/CSV field readers;
+``ranges`` the physical range of every number of a scenario file; ``case_files`` the
+benchmark cases' shared file checks; ``satellites`` the satellite tables
 (TLE checks); ``targets`` the target tables (CSV and TOML); ``area_files`` the
 GeoJSON/TOML areas and their sample files; ``scenario`` the TOML scenario reader (the
 full schema is its docstring). Readers read: the planner lays areas out and plans them
@@ -19,19 +20,17 @@ from jaxspline.readers.area_files import parse_areas as parse_areas
 from jaxspline.readers.area_files import polygon_center as polygon_center
 from jaxspline.readers.area_files import read_geojson as read_geojson
 from jaxspline.readers.area_files import read_samples as read_samples
+from jaxspline.readers.config import MAX_EXACT_OPTIONS as MAX_EXACT_OPTIONS
+from jaxspline.readers.config import Margins as Margins
+from jaxspline.readers.config import PlannerConfig as PlannerConfig
 from jaxspline.readers.mission import DEFAULT_SWATH as DEFAULT_SWATH
-from jaxspline.readers.mission import MAX_EXACT_OPTIONS as MAX_EXACT_OPTIONS
-from jaxspline.readers.mission import MODELS as MODELS
 from jaxspline.readers.mission import Area as Area
 from jaxspline.readers.mission import FlexMode as FlexMode
-from jaxspline.readers.mission import Margins as Margins
-from jaxspline.readers.mission import PlannerConfig as PlannerConfig
 from jaxspline.readers.mission import Power as Power
 from jaxspline.readers.mission import Satellite as Satellite
 from jaxspline.readers.mission import Scenario as Scenario
 from jaxspline.readers.mission import Targets as Targets
 from jaxspline.readers.mission import make_targets as make_targets
-from jaxspline.readers.mission import orbit_scene as orbit_scene
 from jaxspline.readers.ranges import EPOCH_RANGE as EPOCH_RANGE
 from jaxspline.readers.ranges import HORIZON as HORIZON
 from jaxspline.readers.ranges import MAX_NAME_CHARS as MAX_NAME_CHARS

@@ -38,8 +38,7 @@ import shapely
 from shapely.geometry import MultiPolygon, Polygon, shape
 from shapely.validation import explain_validity
 
-from jaxspline.geometry.frames import geodetic_to_ecef
-from jaxspline.geometry.ground import unit_vectors
+from jaxspline.base.elements import geodetic_to_ecef, unit_vectors
 from jaxspline.readers.fields import (
     check_float,
     field_number,

@@ -1,4 +1,4 @@
-"""What a planning problem is: satellites, targets, planner settings (the planner's data types).
+"""What a planning problem is: satellites, targets, areas, the scenario (the planner's data types).
 
 A :class:`Scenario` is everything :func:`jaxspline.plan` needs; the product layer
 builds it from TOML/CSV files (:mod:`jaxspline.readers.scenario`) and the aeossp adapter from a
@@ -6,7 +6,7 @@ benchmark case (:mod:`jaxspline.aeossp.adapter`). All fields are SI units and ra
 times are seconds from the scenario epoch. Every constructor validates eagerly and
 raises ``ValueError`` naming the field and the value.
 
-Maneuver models (:data:`MODELS` names the built-in ones; each is a
+Maneuver models (:data:`jaxspline.base.models.BUILTIN_MODELS` names the built-in ones; each is a
 :class:`~jaxspline.screen.models.ManeuverModel`, ``Satellite.maneuver``), one per
 satellite:
 
@@ -28,47 +28,32 @@ import math
 
 import numpy as np
 
-from jaxspline.geometry.frames import gmst, julian_date
-from jaxspline.geometry.orbit import CircularOrbit, tabulate_orbits
-from jaxspline.geometry.pointing import Scene
-from jaxspline.geometry.routes import AREA, POINT, STRIP
+from jaxspline.base.elements import CircularOrbit, julian_date
+from jaxspline.base.models import ManeuverModel, maneuver_model
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.screen.models import ManeuverModel, maneuver_model, model_names
+from jaxspline.readers.config import PlannerConfig, positive_number
 
 __all__ = [
-    "DEFAULT_ROLL_STEP_DEG",
+    "AREA",
+    "POINT",
+    "STRIP",
     "DEFAULT_STRIP_DURATION",
     "DEFAULT_SWATH",
-    "MAX_EXACT_OPTIONS",
-    "MODELS",
     "Area",
     "FlexMode",
-    "Margins",
-    "PlannerConfig",
     "Power",
     "Satellite",
     "Scenario",
     "Targets",
     "make_targets",
-    "orbit_scene",
 ]
 
-MODELS = model_names()  # the built-in maneuver models
-DEFAULT_ROLL_STEP_DEG = 0.25  # [deg] roll grid of area strips (~3 km at 30 deg from 550 km)
+POINT = 0  # a target imaged from one point
+STRIP = 1  # a target imaged along a strip
+AREA = 2  # a target imaged by strips at a held roll, valued by the share of its samples covered
 DEFAULT_STRIP_DURATION = (0.0, 60.0)  # [s] shortest and longest area strip when unnamed
 _SHARE_TOL = 1e-9  # the samples' shares may exceed 1 by rounding this much
 DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
-# the exact search recurses once per option (Python's stack: ~1000 frames); beyond a
-# few hundred options branch and bound cannot finish anyway
-MAX_EXACT_OPTIONS = 500
-
-
-def _positive(name: str, value, allow_zero: bool = False) -> float:
-    v = float(value)
-    if not math.isfinite(v) or v < 0 or (v == 0 and not allow_zero):
-        bound = ">= 0" if allow_zero else "> 0"
-        raise ValueError(f"{name} must be finite and {bound}, got {value!r}")
-    return v
 
 
 @dataclasses.dataclass(frozen=True)
@@ -92,9 +77,9 @@ class Power:
     charge_w: float = 0.0
 
     def __post_init__(self):
-        _positive("power.capacity_wh", self.capacity_wh)
+        positive_number("power.capacity_wh", self.capacity_wh)
         for f in ("initial_wh", "idle_w", "imaging_w", "slew_w", "charge_w"):
-            _positive(f"power.{f}", getattr(self, f), allow_zero=True)
+            positive_number(f"power.{f}", getattr(self, f), allow_zero=True)
         if self.initial_wh > self.capacity_wh:
             raise ValueError(
                 f"power.initial_wh={self.initial_wh!r} exceeds capacity_wh={self.capacity_wh!r}"
@@ -116,9 +101,9 @@ class FlexMode:
     tolerance: float = 1e-7
 
     def __post_init__(self):
-        _positive("flex.freq", self.freq)
-        _positive("flex.damping", self.damping, allow_zero=True)
-        _positive("flex.tolerance", self.tolerance)
+        positive_number("flex.freq", self.freq)
+        positive_number("flex.damping", self.damping, allow_zero=True)
+        positive_number("flex.tolerance", self.tolerance)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -129,7 +114,7 @@ class Satellite:
       name: identifier (unique in a scenario).
       orbit: a :class:`jaxspline.geometry.orbit.CircularOrbit` or the two TLE lines
         ``(line1, line2)`` (SGP4, WGS84 constants).
-      model: maneuver model, one of :data:`MODELS`.
+      model: maneuver model, a registered name (:func:`jaxspline.base.model_names`).
       limits: :class:`AxisLimits`; per_channel: rate [rad/s] and accel [rad/s^2] per
         channel (roll, pitch, yaw), arrays [3]; eigen_axis / flexible: scalars about
         the eigen-axis.
@@ -194,8 +179,8 @@ class Satellite:
             raise ValueError(
                 f"{who}: off_nadir_max must be in (0, pi/2), got {self.off_nadir_max!r}"
             )
-        _positive(f"{who}: settle", self.settle, allow_zero=True)
-        _positive(f"{who}: swath", self.swath)
+        positive_number(f"{who}: settle", self.settle, allow_zero=True)
+        positive_number(f"{who}: swath", self.swath)
         self._check_area_fields(who)
         maneuver.check(self)
 
@@ -217,7 +202,7 @@ class Satellite:
                 f"finite, got {self.strip_duration!r}"
             )
         if self.duty is not None:
-            _positive(f"{who}: duty", self.duty)
+            positive_number(f"{who}: duty", self.duty)
 
     @property
     def maneuver(self) -> ManeuverModel:
@@ -459,106 +444,10 @@ class Area:
         if smp.shape[0] == 0:
             if self.geometry is None:
                 raise ValueError(f"{who}: give a polygon (geometry) or the samples")
-            _positive(f"{who}: spacing", self.spacing)
+            positive_number(f"{who}: spacing", self.spacing)
         m = float(self.min_share)
         if not (math.isnan(m) or 0.0 <= m <= 1.0):
             raise ValueError(f"{who}: min_share must be in [0, 1] (NaN: none), got {m!r}")
-
-
-@dataclasses.dataclass(frozen=True)
-class Margins:
-    """Safety margins of the planner (what it keeps back from each limit).
-
-    Attributes:
-      off_nadir: observations keep off-nadir <= limit - this [rad].
-      horizon: sine of the target elevation must exceed this (> 0 is the rule).
-      gap: added to every required rest-to-rest slew time [s] (eigen_axis, flexible,
-        roll_only).
-      battery_wh: the battery level must stay >= this [Wh].
-      duty: imaging seconds kept below a satellite's duty limit per orbit [s].
-      shadow_guard: charging counts only if sunlit this many battery steps around
-        a step (covers shadow-entry timing differences).
-    """
-
-    off_nadir: float = 0.0
-    horizon: float = 0.0
-    gap: float = 0.0
-    battery_wh: float = 0.0
-    shadow_guard: int = 0
-    duty: float = 0.0
-
-
-@dataclasses.dataclass(frozen=True)
-class PlannerConfig:
-    """Static planner settings (one frozen object instead of many keyword arguments).
-
-    Attributes:
-      time_step: action grid [s]: observation starts are multiples of it (aeossp: 5 s).
-      geometry_step: ephemeris knot / visibility grid step [s]; ``time_step`` must be
-        a multiple of it, so that every start is an exact ephemeris knot.
-      scan_speeds: strip ground scan speeds [m/s] (one option per speed).
-      sun_elevation_min: targets must see the Sun at least this high at the start
-        [rad] (None: no daylight rule).
-      margins: :class:`Margins`.
-      exact_max_options: instances with at most this many options are solved exactly
-        (branch and bound over the per-satellite timelines), at most
-        :data:`MAX_EXACT_OPTIONS`.
-      lagrangian_share: search share of the Lagrangian phase (none in timed runs with the worker).
-      bound_worker: on a machine with at least two CPUs, iterate the bound (and repair
-        its paths into plans for a time-limited LNS) in a second process (BoundWorker).
-      refine_steps: optax steps of start-time refinement of per-channel satellites'
-        sequences (:mod:`jaxspline.planner.refine_starts`; 0 = off).
-      default_time_limit: search budget [s] when :func:`plan` gets no time limit.
-      max_actions: most observations of a plan, all satellites together (None: no cap).
-      area_roll_step: roll grid step of area strips [rad].
-      area_pitch_step: pitch grid step of an agile satellite's area strips [rad] (their
-        pitches are its multiples within the off-nadir limit); None: per satellite, the
-        pitch that moves the imaged ground by one action-grid step of its ground track
-        (``atan(ground speed * time_step / altitude)``), so that a strip of any row can
-        start at any step of the pass.
-    """
-
-    time_step: float = 5.0
-    geometry_step: float = 5.0
-    scan_speeds: tuple[float, ...] = (7000.0,)
-    sun_elevation_min: float | None = None
-    margins: Margins = Margins()
-    exact_max_options: int = 60
-    lagrangian_share: float = 0.3
-    bound_worker: bool = True
-    refine_steps: int = 100
-    default_time_limit: float = 30.0
-    max_actions: int | None = None
-    area_roll_step: float = math.radians(DEFAULT_ROLL_STEP_DEG)
-    area_pitch_step: float | None = None
-
-    def __post_init__(self):
-        for f in ("time_step", "geometry_step", "default_time_limit"):
-            _positive(f"planner.{f}", getattr(self, f))
-        ratio = self.time_step / self.geometry_step
-        if abs(ratio - round(ratio)) > 1e-9:
-            raise ValueError(
-                f"planner.time_step={self.time_step!r} must be a multiple of "
-                f"planner.geometry_step={self.geometry_step!r}"
-            )
-        if int(self.refine_steps) < 0:
-            raise ValueError(f"planner.refine_steps must be >= 0, got {self.refine_steps!r}")
-        if not 0 <= int(self.exact_max_options) <= MAX_EXACT_OPTIONS:
-            raise ValueError(
-                f"planner.exact_max_options must be in [0, {MAX_EXACT_OPTIONS}], got "
-                f"{self.exact_max_options!r}"
-            )
-        if not self.scan_speeds or any(not s > 0 for s in self.scan_speeds):
-            raise ValueError(f"planner.scan_speeds must be > 0, got {self.scan_speeds!r}")
-        if not 0.0 <= self.lagrangian_share < 1.0:
-            raise ValueError(
-                f"planner.lagrangian_share must be in [0, 1), got {self.lagrangian_share!r}"
-            )
-        if self.max_actions is not None and int(self.max_actions) < 1:
-            raise ValueError(f"planner.max_actions must be >= 1, got {self.max_actions!r}")
-        _positive("planner.area_roll_step", self.area_roll_step)
-        if self.area_pitch_step is not None:
-            _positive("planner.area_pitch_step", self.area_pitch_step)
 
 
 @dataclasses.dataclass(frozen=True)
@@ -588,7 +477,7 @@ class Scenario:
             raise ValueError(f"epoch must be a datetime, got {self.epoch!r}")
         if self.epoch.tzinfo is None:
             object.__setattr__(self, "epoch", self.epoch.replace(tzinfo=_dt.UTC))
-        _positive("duration", self.duration)
+        positive_number("duration", self.duration)
         sats = tuple(self.satellites)
         if not sats:
             raise ValueError("satellites: a scenario needs at least one satellite")
@@ -628,17 +517,3 @@ class Scenario:
           datetime (UTC).
         """
         return self.epoch + _dt.timedelta(seconds=float(seconds))
-
-
-def orbit_scene(sc: Scenario):
-    """Orbit table and :class:`Scene` of a scenario's satellites, as the planner builds them.
-
-    Args:
-      sc: Scenario.
-    Returns:
-      (OrbitTable on the common geometry-step knots, Scene of all satellites).
-    """
-    table = tabulate_orbits(
-        [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, sc.planner.geometry_step
-    )
-    return table, Scene(table.orbit, np.float64(gmst(sc.epoch_jd)))

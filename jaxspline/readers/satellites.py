@@ -19,13 +19,16 @@ import math
 
 import numpy as np
 
-from jaxspline.geometry.frames import gmst, jd_split, julian_date
-from jaxspline.geometry.orbit import (
+from jaxspline.base.elements import (
     circular_orbit,
     circular_orbit_over,
-    propagate_tle,
+    gmst,
+    jd_split,
+    julian_date,
+    parse_tle,
     sso_inclination,
 )
+from jaxspline.base.models import maneuver_model
 from jaxspline.kernels.flex import mode_suppressible
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.fields import (
@@ -38,7 +41,6 @@ from jaxspline.readers.fields import (
 )
 from jaxspline.readers.mission import DEFAULT_SWATH, FlexMode, Power, Satellite
 from jaxspline.readers.ranges import MAX_NAME_CHARS, MAX_TLE_AGE_DAYS, bounds
-from jaxspline.screen.models import maneuver_model
 
 __all__ = ["SATELLITE_KEYS", "parse_satellites", "tle_epoch", "tle_line_problem"]
 
@@ -187,11 +189,11 @@ def _tle(ctx, f, sat, epoch, duration) -> tuple[str, str]:
             f"is meaningful within {MAX_TLE_AGE_DAYS:g} days: use a TLE of the scenario's dates",
         )
     try:
-        err = propagate_tle(lines[0], lines[1], *jd_split(julian_date(epoch), 0.0))[2]
+        err = parse_tle(lines[0], lines[1]).sgp4(*jd_split(julian_date(epoch), 0.0))[0]
     except ValueError as exc:
         raise ctx.error(f"{f}.tle", str(exc)) from None
-    if int(err[0]) != 0:
-        raise ctx.error(f"{f}.tle", f"SGP4 error code {int(err[0])} at the epoch")
+    if int(err) != 0:
+        raise ctx.error(f"{f}.tle", f"SGP4 error code {int(err)} at the epoch")
     return lines
 
 

@@ -155,6 +155,7 @@ from pathlib import Path
 import numpy as np
 import shapely.geometry
 
+from jaxspline.readers.config import Margins, PlannerConfig
 from jaxspline.readers.fields import (
     FieldContext,
     field_bool,
@@ -164,14 +165,7 @@ from jaxspline.readers.fields import (
     field_table,
     read_text,
 )
-from jaxspline.readers.mission import (
-    AREA,
-    Area,
-    Margins,
-    PlannerConfig,
-    Scenario,
-    make_targets,
-)
+from jaxspline.readers.mission import AREA, Area, Scenario, make_targets
 from jaxspline.readers.ranges import EPOCH_RANGE, MAX_SCAN_SPEEDS, RANGES, bounds
 from jaxspline.readers.satellites import parse_satellites
 from jaxspline.readers.targets import TARGET_SECTIONS, scenario_targets

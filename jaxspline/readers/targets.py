@@ -387,7 +387,7 @@ def _land_positions(ctx, rng, count, lat, lon):
     about a second: 200 single-round reads of a sea box took minutes). The points and the
     state ``rng`` is left in are those of testing the rounds one at a time.
     """
-    from jaxspline.readers.land import is_land
+    from jaxspline.base.land import is_land
 
     batch = max(4 * count, LAND_BATCH_MIN)
     per_pass = max(1, LAND_PASS_POINTS // batch)

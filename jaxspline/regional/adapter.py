@@ -30,15 +30,8 @@ import numpy as np
 
 from jaxspline.geometry.routes import AREA
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.readers.mission import (
-    Area,
-    Margins,
-    PlannerConfig,
-    Power,
-    Satellite,
-    Scenario,
-    make_targets,
-)
+from jaxspline.readers.config import Margins, PlannerConfig
+from jaxspline.readers.mission import Area, Power, Satellite, Scenario, make_targets
 from jaxspline.regional.case import format_time, load_case
 
 __all__ = ["REGIONAL_MARGINS", "case_scenario", "solution_of", "solve_case"]

@@ -8,17 +8,19 @@ Inside, imports point one way: ``options`` (the option table) -> ``slew_table``
 (the :class:`ManeuverModel` protocol and the built-in models, one file a model).
 """
 
+from jaxspline.screen.coverage import Candidates as Candidates
+from jaxspline.screen.coverage import CoverageSlices as CoverageSlices
+from jaxspline.screen.coverage import CoverageTable as CoverageTable
+from jaxspline.screen.coverage import coverage_slices as coverage_slices
+from jaxspline.screen.coverage import coverage_table as coverage_table
+from jaxspline.screen.coverage import covered_samples as covered_samples
 from jaxspline.screen.models import EigenAxis as EigenAxis
 from jaxspline.screen.models import Flexible as Flexible
-from jaxspline.screen.models import ManeuverModel as ManeuverModel
 from jaxspline.screen.models import PerChannel as PerChannel
 from jaxspline.screen.models import RestToRest as RestToRest
 from jaxspline.screen.models import RollLimits as RollLimits
 from jaxspline.screen.models import RollOnly as RollOnly
 from jaxspline.screen.models import RollTransition as RollTransition
-from jaxspline.screen.models import maneuver_model as maneuver_model
-from jaxspline.screen.models import model_names as model_names
-from jaxspline.screen.models import register_model as register_model
 from jaxspline.screen.models import roll_min_gap as roll_min_gap
 from jaxspline.screen.models import roll_need as roll_need
 from jaxspline.screen.models import roll_profile as roll_profile

@@ -25,12 +25,13 @@ Public API (float64 inside; array arguments are numpy):
 
 Semantics: RULES.md's geometry (see :mod:`jaxspline.screen.coverage_kernels`), a sample
 inside or on the border of any quad. Longitudes are unwrapped across the antimeridian (the
-true geometry); the official verifier (per R1's reading, ``jaxspline.regional.check``) builds
+true geometry); the official verifier (as ``jaxspline.regional.check`` reads it) builds
 quads from raw longitudes, so a quad crossing +-180 deg spans the long way round there. No
 region of the benchmark's library lies within 44 deg of +-180 deg, so a strip that covers a
 region sample never crosses it and both agree; strips crossing it are scored differently
 (this engine never claims the verifier's long-way "phantom" coverage). Per action, the
-covered sets equal those of R1's independent checker (tested).
+covered sets equal those of the independent checker :mod:`jaxspline.regional.check`
+(tested).
 
 How (the sweep structure). Candidates are grouped by (satellite, roll). Per group the
 edge points are computed once on the union of the candidates' sample ranges; quads whose

@@ -31,7 +31,7 @@ from __future__ import annotations
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import R_EARTH, WGS84_E2, WGS84_F
+from jaxspline.base.elements import R_EARTH, WGS84_E2, WGS84_F
 from jaxspline.geometry.pointing import roll_look_direction
 
 __all__ = [

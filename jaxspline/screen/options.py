@@ -17,7 +17,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.frames import SECONDS_PER_DAY, gmst, sun_direction
+from jaxspline.base.elements import SECONDS_PER_DAY, gmst
+from jaxspline.geometry.frames import sun_direction
 from jaxspline.geometry.routes import STRIP, RouteSet, sample_aim_states
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.validate import check_positive

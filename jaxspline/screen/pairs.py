@@ -238,7 +238,7 @@ def screen_transitions(
         ``"margin"`` (the reach margin: the most robust transitions), ``"value"``
         (``value[j]``) or ``"density"`` (``value[j] / (t_end[j] - t_end[i])``, the
         value per second of timeline the successor takes, transfer and imaging:
-        the score of :func:`~jaxspline.sequences.sequencer.greedy`, and the one to use
+        the score of :func:`~jaxspline.sequences.sequencer.greedy_chain`, and the one to use
         when a sequencer consumes the top-k rows; > 0 for every feasible pair).
         Ties go to the earlier destination in ``(t_start, index)`` order.
 

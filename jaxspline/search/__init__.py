@@ -1,30 +1,29 @@
 """The search: timelines, greedy, large-neighbourhood search, Lagrangian/DP bound, exact search.
 
 Its input is a :class:`Problem` of plain arrays (built by :mod:`jaxspline.planner`), so
-it imports nothing of the package outside this folder. Inside, imports point one way:
-``store`` / ``battery`` -> ``problem`` -> ``dp`` / ``timeline`` / ``energy`` / ``mip`` ->
-``lns_energy`` -> ``lns`` -> ``lagrangian`` / ``exact`` / ``sweep`` -> ``bound_worker`` /
-``floor`` (how low the relaxation's bound can go) ->
-``solve``
-(:func:`solve`, the stages run until a deadline); ``memory`` (the heap trim) comes
-first. ``clock`` is the search's one time
-source; ``construct`` is the one greedy strategy (``greedy_pass``), used by ``timeline``,
-``lns`` and :mod:`jaxspline.sequences.sequencer`; ``status`` (:class:`BoundStatus`) is how
-every bound ended. The search speaks of *targets* (what may be imaged once) and
-*options* (one way to image a target: satellite, start).
-
-The ``coverage_*`` modules are the unique-coverage search (strips that cover samples,
-each sample counted once): ``coverage_rules`` -> ``coverage_problem`` ->
-``coverage_state`` -> ``coverage_passdp`` / ``coverage_passmoves`` -> ``coverage_search``
-(CELF greedy + LNS) and ``coverage_bound`` (Lagrangian bound), on the roll-only rules
-of the regional_coverage benchmark (:mod:`jaxspline.regional` is their adapter).
-Imported by module (``jaxspline.search.coverage_search``), not re-exported here.
+it imports nothing of the package but :mod:`jaxspline.base` and this folder. The one
+objective is the weight of samples covered at least once: a point or strip target is one
+sample, an area its sample grid (``cover``: which samples each area option covers).
+Inside, imports point one way:
+``store`` / ``battery`` / ``cover`` -> ``problem`` -> ``dp`` / ``timeline`` / ``energy`` /
+``mip`` -> ``pass_dp`` / ``area_moves`` (the moves of area strips inside one pass) ->
+``lns_energy`` -> ``lns`` -> ``pass_bound`` / ``lagrangian`` (the one bound: point DPs,
+per-pass area DPs, prices on samples) / ``exact`` / ``sweep`` -> ``bound_worker`` (the
+bound in another process; ``orphans`` ends it with its parent) / ``floor`` (how low the
+relaxation's bound can go) -> ``solve`` (:func:`solve`, the stages run until a
+deadline); ``memory`` (the heap trim) comes first. ``construct`` is the one greedy
+strategy (``greedy_pass``), used by ``timeline``, ``lns`` and
+:mod:`jaxspline.sequences.sequencer`; ``status`` (:class:`BoundStatus`) is how every
+bound ended. Time and stop requests come from :mod:`jaxspline.base.clock`. The search
+speaks of *targets* (what may be imaged once), *samples* (what an option covers) and
+*options* (one way to image a target: satellite, start; for an area also its pointing).
 """
 
-from jaxspline.search import clock as clock
 from jaxspline.search.battery import BatteryModel as BatteryModel
 from jaxspline.search.battery import Levels as Levels
 from jaxspline.search.bound_worker import BoundWorker as BoundWorker
+from jaxspline.search.cover import CoverCounts as CoverCounts
+from jaxspline.search.cover import CoverTable as CoverTable
 from jaxspline.search.dp import DPData as DPData
 from jaxspline.search.dp import NeedPrice as NeedPrice
 from jaxspline.search.dp import backtrack as backtrack

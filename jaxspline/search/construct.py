@@ -18,7 +18,7 @@ only what its decisions are, what is admissible and what it costs:
   cost the timeline time they consume plus a small end-time term
   (:meth:`jaxspline.search.timeline.Timeline.insert_choices`). The LNS re-inserts the
   targets of a destroyed window with the same pass, on noisy costs.
-* :func:`jaxspline.sequences.greedy` (one chain over screened transitions,
+* :func:`jaxspline.sequences.greedy_chain` (one chain over screened transitions,
   :mod:`jaxspline.sequences.sequencer`): one decision per position of the chain; the
   candidates are the feasible successors of the last option (every option at the
   start) whose route is unvisited, in ``(t_start, index)`` order, their cost minus the
@@ -31,7 +31,7 @@ import math
 
 import numpy as np
 
-from jaxspline.search import clock
+from jaxspline.base import clock
 
 __all__ = ["first_least", "greedy_pass"]
 
@@ -62,7 +62,7 @@ def greedy_pass(decisions, choices, commit, deadline: float = math.inf) -> int:
         tie-break order.
       commit: callable ``commit(candidate)`` applying the chosen candidate.
       deadline: ``time.monotonic()`` value after which no further decision is taken
-        (compared with :func:`jaxspline.search.clock.now` every few decisions);
+        (compared with :func:`jaxspline.base.clock.now` every few decisions);
         ``+inf``: every decision is taken, even after a stop request.
     Returns:
       int, the number of commits.

@@ -9,7 +9,7 @@ later cannot beat the best plan found.
 
 from __future__ import annotations
 
-from jaxspline.search import clock
+from jaxspline.base import clock
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["exact_search"]

@@ -60,7 +60,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from jaxspline.search import clock
+from jaxspline.base import clock
 from jaxspline.search.cover import gather_ranges
 from jaxspline.search.dp import dp_paths, dp_prepare
 from jaxspline.search.energy import EnergyBudgets

@@ -34,8 +34,9 @@ import itertools
 import math
 import time
 
-from jaxspline.search import clock
-from jaxspline.search.area_moves import AreaWalk, area_index, area_move, fill
+from jaxspline.base import clock
+from jaxspline.search.area_fill import area_index, fill
+from jaxspline.search.area_moves import AreaWalk, area_move
 from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
 from jaxspline.search.timeline import Timeline
@@ -81,7 +82,7 @@ def greedy(tl: Timeline, deadline: float, order=None):
     The greedy strategy of :func:`jaxspline.search.construct.greedy_pass`: one decision
     per target of ``order``, the target's options that fit as candidates, their
     :meth:`Timeline.insert_choices` costs; then, where the problem has areas, the lazy
-    greedy of :func:`jaxspline.search.area_moves.fill` (always complete when the
+    greedy of :func:`jaxspline.search.area_fill.fill` (always complete when the
     deadline is infinite).
 
     Args:

@@ -8,7 +8,7 @@ runs (strips) maximizing ``sum of row values - price * runs`` exactly, with:
 * each run one group over consecutive allowed slots, ``lmin <= length <= lmax``;
 * consecutive runs ``(g', ends at t')`` -> ``(g, starts at s)`` separated by
   ``s - t' >= gaps[g', g]`` slots (the maneuver between them,
-  :func:`jaxspline.search.area_moves.pass_gaps`);
+  :func:`jaxspline.search.area_fill.pass_gaps`);
 * at most ``rmax`` runs.
 
 ``F_r[t, g]`` = best value of ``r`` runs, the last of group ``g`` ending at slot ``t``;

@@ -120,7 +120,7 @@ class Problem:
         period ending at an observation's start or end is at most ``limit`` (None, or a
         None entry: no duty rule).
       area_index: what the area moves precompute, built once on first use
-        (:func:`jaxspline.search.area_moves.area_index`).
+        (:func:`jaxspline.search.area_fill.area_index`).
       channels: with areas, per option its boundary states ``(start angle, start rate,
         end angle, end rate)`` [N, 3] each (per-channel satellites' transitions into and
         out of area options, :func:`rest_need`); None without areas.
@@ -256,23 +256,9 @@ class Problem:
         return t
 
     @classmethod
-    def build(
-        cls,
-        opp,
-        sats,
-        first,
-        near_pairs,
-        far,
-        tables,
-        battery,
-        target_values,
-        lookup=None,
-        cover=None,
-        max_actions=None,
-        duty=None,
-        gap_margin=0.0,
-        joins=None,
-    ):
+    def build(cls, opp, sats, first, near_pairs, far, tables, battery, target_values,
+              lookup=None, cover=None, max_actions=None, duty=None, gap_margin=0.0,
+              joins=None):  # fmt: skip
         """Assemble from numpy data.
 
         Args:
@@ -309,16 +295,7 @@ class Problem:
             near_pairs = NearPairs.from_arrays(n, *near_pairs, rows=start_order(o.t_start, sat))
         pc = np.array([not s.maneuver.rest_to_rest for s in sats], bool)
         look = pc if lookup is None else np.asarray(lookup, bool) | pc
-        channels = limits = None
-        if cover is not None:
-            channels = tuple(np.asarray(x, np.float64) for x in
-                             (o.start_angle, o.start_rate, o.end_angle, o.end_rate))  # fmt: skip
-            limits = [
-                (np.broadcast_to(s.limits.rate, 3), np.broadcast_to(s.limits.accel, 3))
-                if p
-                else None
-                for s, p in zip(sats, pc, strict=True)
-            ]
+        channels, limits = _channel_rules(o, sats, pc) if cover is not None else (None, None)
         return cls(
             n_sats=n_s,
             target_value=[float(v) for v in target_values],
@@ -348,3 +325,17 @@ class Problem:
             gap_margin=gap_margin,
             joins=joins,
         )
+
+
+def _channel_rules(o, sats, per_channel):
+    """The options' channel states (start angle, start rate, end angle, end rate, each
+    [N, 3]) and per satellite its (rate, accel) bounds [3] (None for rest-to-rest ones):
+    what the closed-form area transitions of per-channel satellites read."""
+    channels = tuple(
+        np.asarray(x, np.float64) for x in (o.start_angle, o.start_rate, o.end_angle, o.end_rate)
+    )
+    limits = [
+        (np.broadcast_to(s.limits.rate, 3), np.broadcast_to(s.limits.accel, 3)) if p else None
+        for s, p in zip(sats, per_channel, strict=True)
+    ]
+    return channels, limits

@@ -39,7 +39,7 @@ import time
 from dataclasses import dataclass
 from typing import NamedTuple
 
-from jaxspline.search import clock
+from jaxspline.base import clock
 from jaxspline.search.bound_worker import BoundWorker
 from jaxspline.search.dp import dp_prepare
 from jaxspline.search.exact import exact_search
@@ -110,7 +110,7 @@ def solve(
         many options (0: never).
       max_iters: caps the LNS iterations and (at 1/10) the Lagrangian iterations;
         the stages then run to their caps and the deadline no longer cuts them (only
-        a stop request does, :mod:`jaxspline.search.clock`), so the plan is a
+        a stop request does, :mod:`jaxspline.base.clock`), so the plan is a
         function of the problem, ``seed`` and ``max_iters`` alone. None: the deadline
         alone.
       report: callable ``report(stage, message)`` receiving progress lines, or None.

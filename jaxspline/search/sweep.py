@@ -34,7 +34,7 @@ import time
 
 import numpy as np
 
-from jaxspline.search import clock
+from jaxspline.base import clock
 from jaxspline.search.dp import DPData, dp_paths
 from jaxspline.search.lns_energy import option_wh
 from jaxspline.search.timeline import Timeline

@@ -16,7 +16,7 @@ from jaxspline.sequences.route_screen import screen_sequences as screen_sequence
 from jaxspline.sequences.sequencer import Plan as Plan
 from jaxspline.sequences.sequencer import beam_search as beam_search
 from jaxspline.sequences.sequencer import exact_plan as exact_plan
-from jaxspline.sequences.sequencer import greedy as greedy
+from jaxspline.sequences.sequencer import greedy_chain as greedy_chain
 from jaxspline.sequences.sequencer import path_bound as path_bound
 from jaxspline.sequences.sequencer import plan_value as plan_value
 from jaxspline.sequences.steps_check import StepsReport as StepsReport

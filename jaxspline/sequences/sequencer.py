@@ -16,7 +16,7 @@ any order (:mod:`jaxspline.sequences.stream`). A single ``Transitions``
 is sorted into that order first, so any row order works. Memory is one chunk
 plus O(options x width) states; the candidate table is never held.
 
-* :func:`greedy` — one chronological pass, each time taking the unvisited
+* :func:`greedy_chain` — one chronological pass, each time taking the unvisited
   feasible successor of best value density value / (time it ends - now); it
   looks only at the rows of the option it stands on. It is the search's greedy
   strategy (:func:`jaxspline.search.construct.greedy_pass`, also the one of
@@ -56,7 +56,7 @@ from jaxspline.sequences.stream import (
     option_order,
 )
 
-__all__ = ["Plan", "greedy", "beam_search", "exact_plan", "path_bound", "plan_value"]
+__all__ = ["Plan", "greedy_chain", "beam_search", "exact_plan", "path_bound", "plan_value"]
 
 _BLOCK_BYTES = 1 << 25  # [bytes] candidate states expanded at once: 32 MiB
 _STATE_WORDS = 12  # 8-byte words a candidate state takes besides its visited-route bits
@@ -368,7 +368,7 @@ def beam_search(options: RouteOptions, transitions, width: int = 16, seed: int =
 
 
 class _Chain:
-    """The problem of :func:`greedy` for :func:`~jaxspline.search.construct.greedy_pass`:
+    """The problem of :func:`greedy_chain` for :func:`~jaxspline.search.construct.greedy_pass`:
     one chain over the options, extended at its end.
 
     A decision is ``(candidates, now)``: the rows read for the last option (every
@@ -434,7 +434,7 @@ class _Chain:
             cur, succ = self._last(n), []
 
 
-def greedy(options: RouteOptions, transitions) -> Plan:
+def greedy_chain(options: RouteOptions, transitions) -> Plan:
     """Chronological greedy plan (a fast baseline).
 
     Starting before the earliest option, repeatedly append the admissible
@@ -470,7 +470,7 @@ def path_bound(options: RouteOptions, transitions) -> float:
     (both options ``scan_ok``, different routes, T > 0) of the summed value,
     without the each-route-once rule (one push pass, O(options) memory). Every
     plan built from the same transitions is such a chain, so B bounds every
-    :func:`greedy`, :func:`beam_search` and :func:`exact_plan` value from above
+    :func:`greedy_chain`, :func:`beam_search` and :func:`exact_plan` value from above
     (and equals the optimum when no route has two options). It bounds the plans
     over the transitions given only: transitions screened with ``top_k`` (or
     ``max_gap``) are a subset of all feasible ones, so B is then no bound of

@@ -62,6 +62,7 @@ __all__ = [
     "load_solution",
     "parse_solution",
     "parse_time",
+    "solution_document",
 ]
 
 MISSION = "mission.yaml"
@@ -440,6 +441,23 @@ def load_solution(
     """
     path = Path(path)
     return parse_solution(read_json(path), case, where=path.name, strict=strict)
+
+
+def solution_document(solution, where: str = "solution") -> dict:
+    """The JSON document of a solution, checked by :func:`parse_solution` (what
+    :func:`jaxspline.cli.case_commands.write_solution` writes).
+
+    Args:
+      solution: a Solution, a list of Observation (or action dicts), or a document with
+        an ``actions`` list; where: the name errors start with.
+    Returns:
+      ``{"actions": [...]}``.
+    Raises:
+      ValueError: the solution is not readable back, naming the first bad action.
+    """
+    data = {"actions": _action_dicts(solution)}
+    parse_solution(data, where=where)
+    return data
 
 
 def _action_dicts(solution) -> list:

@@ -17,8 +17,8 @@ from jaxspline.aeossp.case import (
     load_case,
     load_solution,
     parse_time,
-    write_solution,
 )
+from jaxspline.cli.case_commands import write_solution
 
 DATA = Path("/work/shared/data/aeossp_standard")
 CASE1 = DATA / "train" / "case_0001"
@@ -168,11 +168,11 @@ def test_solution_io(tmp_path):
         }
     ]
     path = tmp_path / "sub" / "sol.json"
-    write_solution(path, actions)
+    write_solution(path, {"actions": actions})
     assert load_solution(path) == {"actions": actions}
     assert [p.name for p in path.parent.iterdir()] == ["sol.json"]  # no temp file left
     with pytest.raises(FileExistsError):
-        write_solution(path, [])
+        write_solution(path, {"actions": []})
     write_solution(path, {"actions": []}, force=True)
     assert json.loads(path.read_text()) == {"actions": []}
     bad = tmp_path / "bad.json"

@@ -474,36 +474,45 @@ def test_cli_check_and_solve(setup, tmp_path, monkeypatch, capsys):
     assert "rule 1" in capsys.readouterr().out
     assert main(["aeossp", "check", str(tmp_path / "missing"), str(bad)]) == 2
 
-    # stand-in for the adapter: solve_case(case, time_limit=, seed=) -> (solution, result)
+    # stand-ins for the adapter's translation and the planner: case -> scenario -> plan
+    from jaxspline.aeossp import adapter as real
+    from jaxspline.planner import pipeline
+
     fake = types.ModuleType("jaxspline.aeossp.adapter")
     calls = []
 
-    def solve_case(case, time_limit=60.0, seed=0, **kw):
-        calls.append((case, time_limit, seed, kw))
-        result = types.SimpleNamespace(
-            value=3.0, bound=4.0, gap=1.0, total_value=8.0, stats={"bound_status": "converged"}
-        )
-        return {"actions": []}, result
+    def case_scenario(case, *, time_limit=60.0, **kw):
+        calls.append((case, time_limit, kw))
+        return real.case_scenario(case, time_limit=time_limit, **kw)
 
-    fake.solve_case = solve_case
+    def plan(sc, *, time_limit, seed, **kw):
+        calls.append((sc.name, time_limit, seed))
+        return types.SimpleNamespace(
+            value=3.0, bound=4.0, gap=1.0, total_value=8.0, observations=(),
+            stats={"bound_status": "converged"}, report={},
+        )  # fmt: skip
+
+    fake.case_scenario = case_scenario
+    fake.solution_of = lambda case, result: {"actions": []}
     monkeypatch.setitem(sys.modules, "jaxspline.aeossp.adapter", fake)
+    monkeypatch.setattr(pipeline, "plan", plan)
     capsys.readouterr()
     sol = tmp_path / "sol.json"
     assert main(["aeossp", "solve", str(small), "-o", str(sol), "--time-limit", "5"]) == 0
-    assert len(calls) == 1
-    case, limit, seed, kw = calls[0]
+    assert len(calls) == 2
+    (case, limit, kw), (_, left, seed) = calls
     assert isinstance(case, Case) and case.case_id == load_case(small).case_id
-    assert (limit, seed, kw) == (5.0, 0, {})
+    assert (limit, kw, seed) == (5.0, {}, 0) and 0 < left < 5.0  # the whole command's limit
     assert json.loads(sol.read_text()) == {"actions": []}
-    err = capsys.readouterr().err
-    assert "WCR 0.3750" in err and "bound 0.5000 (converged)" in err and "gap 0.1250" in err
+    out = capsys.readouterr().out
+    assert "WCR 0.3750" in out and "bound 0.5000 (converged)" in out and "gap 0.1250" in out
     assert main(["aeossp", "solve", str(small), "-o", str(sol)]) == 2  # exists, no --force
-    assert len(calls) == 1  # refused before planning
+    assert len(calls) == 2  # refused before planning
     assert main(["aeossp", "solve", str(small), "-o", str(sol), "--force", "--seed", "7"]) == 0
-    assert calls[-1][1:] == (60.0, 7, {})
+    assert calls[-2][1] == 60.0 and calls[-1][2] == 7
     bad_limit = ["aeossp", "solve", str(small), "-o", str(tmp_path / "x.json")]
     assert main([*bad_limit, "--time-limit", "0"]) == 2
-    assert "--time-limit" in capsys.readouterr().err and len(calls) == 2
+    assert "--time-limit" in capsys.readouterr().err and len(calls) == 4
 
 
 @pytest.mark.slow

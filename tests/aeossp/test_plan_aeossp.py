@@ -22,26 +22,19 @@ import pytest
 
 from jaxspline import build_problem, plan
 from jaxspline.aeossp.adapter import AEOSSP_MARGINS, case_scenario, solve_case
-from jaxspline.geometry.frames import (
+from jaxspline.base.elements import (
     R_EARTH,
     WGS84_F,
-    earth_rotation_angle,
-    ecef_to_geodetic,
+    circular_orbit_over,
     geodetic_to_ecef,
     gmst,
     julian_date,
-    rot_z,
 )
-from jaxspline.geometry.orbit import circular_orbit_over, orbit_position
+from jaxspline.geometry.frames import earth_rotation_angle, ecef_to_geodetic, rot_z
+from jaxspline.geometry.orbit import orbit_position
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.readers.mission import (
-    POINT,
-    PlannerConfig,
-    Power,
-    Satellite,
-    Scenario,
-    make_targets,
-)
+from jaxspline.readers.config import PlannerConfig
+from jaxspline.readers.mission import POINT, Power, Satellite, Scenario, make_targets
 from jaxspline.search import (
     BatteryModel,
     BoundStatus,

@@ -59,6 +59,7 @@ NAMESPACES = (
         f"jaxspline.{n}"
         for n in (
             "kernels",
+            "base",
             "geometry",
             "screen",
             "readers",

@@ -15,11 +15,8 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxspline.geometry.frames import (
-    earth_rotation_angle,
-    geodetic_to_ecef,
-    teme_to_ecef,
-)
+from jaxspline.base.elements import circular_orbit, geodetic_to_ecef, unit_vectors
+from jaxspline.geometry.frames import earth_rotation_angle, teme_to_ecef
 from jaxspline.geometry.ground import (
     equal_area,
     gnomonic,
@@ -30,9 +27,8 @@ from jaxspline.geometry.ground import (
     strip_centerline,
     strip_footprint,
     surface_point,
-    unit_vectors,
 )
-from jaxspline.geometry.orbit import circular_orbit, orbit_state
+from jaxspline.geometry.orbit import orbit_state
 from jaxspline.geometry.pointing import aim_params, aim_point
 from jaxspline.geometry.routes import strip_direction
 

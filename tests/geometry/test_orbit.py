@@ -7,24 +7,22 @@ import pytest
 from sgp4.api import Satrec
 from sgp4.propagation import gstime
 
-from jaxspline.geometry.frames import (
+from jaxspline.base.elements import (
+    MU_EARTH,
     R_EARTH,
-    ecef_to_geodetic,
+    circular_orbit,
+    circular_orbit_over,
     geodetic_to_ecef,
     gmst,
     julian_date,
-    sun_direction,
-    teme_to_ecef,
+    sso_inclination,
 )
+from jaxspline.geometry.frames import ecef_to_geodetic, sun_direction, teme_to_ecef
 from jaxspline.geometry.orbit import (
-    MU_EARTH,
-    circular_orbit,
-    circular_orbit_over,
     orbit_position,
     orbit_state,
     padded_orbit,
     propagate_tle,
-    sso_inclination,
     tabulate_orbits,
     tle_orbit,
 )

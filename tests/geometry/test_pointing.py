@@ -5,13 +5,15 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxspline.geometry.frames import OMEGA_EARTH, geodetic_to_ecef, gmst, julian_date
-from jaxspline.geometry.orbit import (
+from jaxspline.base.elements import (
+    OMEGA_EARTH,
     circular_orbit,
     circular_orbit_over,
-    orbit_position,
-    orbit_state,
+    geodetic_to_ecef,
+    gmst,
+    julian_date,
 )
+from jaxspline.geometry.orbit import orbit_position, orbit_state
 from jaxspline.geometry.pointing import (
     Scene,
     aim_angles,
@@ -21,8 +23,8 @@ from jaxspline.geometry.pointing import (
     off_nadir,
     pointing_angles,
     pointing_state,
-    visibility_windows,
 )
+from jaxspline.geometry.windows import visibility_windows
 
 G0 = float(gmst(julian_date("2026-06-21T10:00:00Z")))
 ORB = circular_orbit_over(np.radians(46.0), np.radians(15.0), 300.0, G0)

@@ -7,8 +7,7 @@ import jax.numpy as jnp
 import numpy as np
 import pytest
 
-from jaxspline.geometry.frames import geodetic_to_ecef, gmst, julian_date
-from jaxspline.geometry.orbit import circular_orbit_over
+from jaxspline.base.elements import circular_orbit_over, geodetic_to_ecef, gmst, julian_date
 from jaxspline.geometry.pointing import Scene, off_nadir, pointing_angles
 from jaxspline.geometry.routes import (
     POINT,

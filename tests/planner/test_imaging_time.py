@@ -17,18 +17,11 @@ import numpy as np
 import pytest
 
 from jaxspline import build_problem, plan
-from jaxspline.geometry.frames import gmst, julian_date
-from jaxspline.geometry.orbit import circular_orbit_over
+from jaxspline.base.elements import circular_orbit_over, gmst, julian_date
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planner.plan_check import check_plan
-from jaxspline.readers.mission import (
-    POINT,
-    STRIP,
-    PlannerConfig,
-    Satellite,
-    Scenario,
-    make_targets,
-)
+from jaxspline.readers.config import PlannerConfig
+from jaxspline.readers.mission import POINT, STRIP, Satellite, Scenario, make_targets
 
 EPOCH = dt.datetime(2026, 4, 14, 9, 0, tzinfo=dt.UTC)
 DESIRED, TOL = 610.0, 7.0  # [s] target 1: midpoint within [603, 617]

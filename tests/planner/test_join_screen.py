@@ -14,14 +14,14 @@ import jax
 import numpy as np
 import pytest
 
-from jaxspline.geometry.frames import gmst, julian_date
-from jaxspline.geometry.orbit import circular_orbit_over
+from jaxspline.base.elements import circular_orbit_over, gmst, julian_date
+from jaxspline.geometry.windows import orbit_scene
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planner.flown_joins import NADIR, plan_joins
 from jaxspline.planner.join_screen import channel_states, screen_first_joins, screen_joins
-from jaxspline.planner.pipeline import orbit_scene
 from jaxspline.products.attitude_history import observation_laws
-from jaxspline.readers.mission import FlexMode, PlannerConfig, Satellite, Scenario, make_targets
+from jaxspline.readers.config import PlannerConfig
+from jaxspline.readers.mission import FlexMode, Satellite, Scenario, make_targets
 from jaxspline.search import Problem
 
 EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)

@@ -117,7 +117,7 @@ geometry_step_s = 1.0
 
 
 def test_the_windows_estimate_stops_the_run_before_the_stage(monkeypatch):
-    from jaxspline.planner import pipeline
+    from jaxspline.planner import build as pipeline
 
     def never(*args, **kwargs):
         raise AssertionError("the windows stage ran")
@@ -141,7 +141,7 @@ def test_the_windows_estimate_stays_above_what_the_stage_allocates():
 
     import jax
 
-    from jaxspline.planner import pipeline
+    from jaxspline.planner import build as pipeline
 
     toml = WINDOWS_TOML.replace("259200.0", "86400.0").replace("count = 600", "count = 200")
     sc = parse_scenario(tomllib.loads(toml), "day.toml", toml)

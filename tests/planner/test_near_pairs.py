@@ -12,7 +12,7 @@ import pytest
 from test_planner import _scenario
 
 from jaxspline.kernels.batch import ragged_positions
-from jaxspline.planner import pipeline as planner
+from jaxspline.planner import build as planner
 from jaxspline.search.store import NearPairs, start_order
 
 _PAIR_BLOCK = 1 << 20

@@ -18,27 +18,13 @@ import numpy as np
 import pytest
 
 from jaxspline import build_problem, plan
-from jaxspline.geometry.frames import (
-    earth_rotation_angle,
-    ecef_to_geodetic,
-    ecef_to_teme,
-    geodetic_to_ecef,
-    gmst,
-    julian_date,
-    rot_z,
-)
-from jaxspline.geometry.orbit import circular_orbit_over, orbit_position, orbit_state
+from jaxspline.base.elements import circular_orbit_over, geodetic_to_ecef, gmst, julian_date
+from jaxspline.geometry.frames import earth_rotation_angle, ecef_to_geodetic, ecef_to_teme, rot_z
+from jaxspline.geometry.orbit import orbit_position, orbit_state
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.slew import bang_coast_bang_time
-from jaxspline.readers.mission import (
-    POINT,
-    STRIP,
-    FlexMode,
-    PlannerConfig,
-    Satellite,
-    Scenario,
-    make_targets,
-)
+from jaxspline.readers.config import PlannerConfig
+from jaxspline.readers.mission import POINT, STRIP, FlexMode, Satellite, Scenario, make_targets
 from jaxspline.search import BoundStatus
 
 EPOCH = dt.datetime(2026, 6, 21, 10, 0, tzinfo=dt.UTC)

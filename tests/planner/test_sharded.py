@@ -24,7 +24,7 @@ import jax
 import numpy as np
 import pytest
 
-from jaxspline.planner.pipeline import build_problem
+from jaxspline.planner.build import build_problem
 from jaxspline.planner.plan_check import check_plan
 from jaxspline.planner.repair import drop_failing
 from jaxspline.planner.sharded import (

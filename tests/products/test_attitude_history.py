@@ -22,8 +22,15 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.interpolate import BPoly
 
-from jaxspline.geometry.frames import OMEGA_EARTH, geodetic_to_ecef, gmst, julian_date, rot_z
-from jaxspline.geometry.orbit import circular_orbit_over, orbit_state
+from jaxspline.base.elements import (
+    OMEGA_EARTH,
+    circular_orbit_over,
+    geodetic_to_ecef,
+    gmst,
+    julian_date,
+)
+from jaxspline.geometry.frames import rot_z
+from jaxspline.geometry.orbit import orbit_state
 from jaxspline.geometry.pointing import Scene, pointing_state
 from jaxspline.kernels.attitude import attitude_angle, quat_to_dcm
 from jaxspline.kernels.joins import Maneuver, maneuver_eval
@@ -32,7 +39,8 @@ from jaxspline.planner.flown_joins import NADIR, join_limits, plan_joins, reject
 from jaxspline.planner.result import Observations, PlanResult
 from jaxspline.products.aem import aem_file_name, read_aem, write_aems
 from jaxspline.products.attitude_history import attitude_history, plan_scene
-from jaxspline.readers.mission import FlexMode, PlannerConfig, Satellite, Scenario, make_targets
+from jaxspline.readers.config import PlannerConfig
+from jaxspline.readers.mission import FlexMode, Satellite, Scenario, make_targets
 
 EPOCH = dt.datetime(2026, 4, 14, 12, 30, tzinfo=dt.UTC)
 DURATION = 900.0

@@ -6,7 +6,7 @@ import json
 import numpy as np
 import pytest
 
-from jaxspline.geometry.orbit import circular_orbit
+from jaxspline.base.elements import circular_orbit
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planner.result import Observations, PlanResult
 from jaxspline.products.czml import write_czml

@@ -14,7 +14,7 @@ from pathlib import Path
 
 import pytest
 
-from jaxspline.readers.mission import MAX_EXACT_OPTIONS, PlannerConfig
+from jaxspline.readers.config import MAX_EXACT_OPTIONS, PlannerConfig
 from jaxspline.readers.ranges import MAX_TLE_AGE_DAYS, RANGES, bounds, range_text
 from jaxspline.readers.satellites import tle_epoch
 from jaxspline.readers.scenario import parse_scenario

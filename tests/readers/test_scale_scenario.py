@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from jaxspline import load_scenario
-from jaxspline.readers.land import is_land
+from jaxspline.base.land import is_land
 from jaxspline.readers.mission import STRIP
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -79,7 +79,7 @@ def test_every_target_on_land(tiny):
 
 
 def test_models_cycle_and_orbits_are_sun_synchronous_550_km(tiny):
-    from jaxspline.geometry.orbit import sso_inclination
+    from jaxspline.base.elements import sso_inclination
 
     sats = tiny[2].satellites
     assert [s.model for s in sats] == [mss.MODEL_CYCLE[i % 3] for i in range(7)]

@@ -7,8 +7,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from jaxspline.geometry.orbit import CircularOrbit, sso_inclination, tabulate_orbits
-from jaxspline.readers.land import is_land
+from jaxspline.base.elements import CircularOrbit, sso_inclination
+from jaxspline.base.land import is_land
+from jaxspline.geometry.orbit import tabulate_orbits
 from jaxspline.readers.mission import POINT, STRIP
 from jaxspline.readers.scenario import (
     DEFAULT_SCENARIO_PATH,

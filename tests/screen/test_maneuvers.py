@@ -15,9 +15,10 @@ import numpy as np
 import pytest
 from test_screen_models import _los_options
 
-from jaxspline.geometry.orbit import circular_orbit_over
+from jaxspline.base.elements import circular_orbit_over
+from jaxspline.base.models import BUILTIN_MODELS as MODELS
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.readers.mission import MODELS, Satellite
+from jaxspline.readers.mission import Satellite
 from jaxspline.readers.scenario import parse_scenario
 from jaxspline.screen import pairs as screen
 from jaxspline.screen.models import (

@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 from test_screen import synthetic_options
 
+from jaxspline.base.elements import circular_orbit_over
 from jaxspline.geometry.frames import angle_between
-from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.kernels.slew import bang_coast_bang_time
 from jaxspline.readers.mission import FlexMode, Satellite

@@ -19,8 +19,8 @@ import numpy as np
 import pytest
 
 import jaxspline
+from jaxspline.base.elements import circular_orbit_over
 from jaxspline.geometry.frames import angle_between
-from jaxspline.geometry.orbit import circular_orbit_over
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.mission import FlexMode, Satellite
 from jaxspline.screen import pairs as screen

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from jaxspline.planner.pipeline import build_problem
+from jaxspline.planner.build import build_problem
 from jaxspline.readers.scenario import load_scenario
 from jaxspline.search import (
     BoundWorker,

@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 
-from jaxspline.search import clock
+from jaxspline.base import clock
 from jaxspline.search.construct import first_least, greedy_pass
 
 

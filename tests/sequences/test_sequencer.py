@@ -86,7 +86,7 @@ def test_exact_equals_brute_force_and_heuristics_ratio(reach_kernels):  # noqa: 
         ex = sequence.exact_plan(opt, tr)
         bf = brute_force(opt, tr)
         assert ex.value == pytest.approx(bf, rel=1e-12), seed
-        g = sequence.greedy(opt, tr)
+        g = sequence.greedy_chain(opt, tr)
         b16 = sequence.beam_search(opt, tr, width=16, seed=seed)
         b1 = sequence.beam_search(opt, tr, width=1, seed=seed)
         for p in (ex, g, b16, b1):
@@ -126,17 +126,17 @@ def test_edge_cases_and_errors(reach_kernels):  # noqa: F811
     tr = screen.screen_transitions(opt, LIMITS, progress=False)
     none = tr._replace(feasible=np.zeros_like(tr.feasible))
     # without feasible transitions the best plan is the single most valuable option
-    for solver in (sequence.exact_plan, sequence.greedy, sequence.beam_search):
+    for solver in (sequence.exact_plan, sequence.greedy_chain, sequence.beam_search):
         p = solver(opt, none)
         assert p.chosen.size == 1
     assert sequence.exact_plan(opt, none).value == pytest.approx(opt.value.max())
     dead = opt._replace(scan_ok=np.zeros(len(opt.route), bool))
     assert sequence.exact_plan(dead, tr).chosen.size == 0
-    assert sequence.greedy(dead, tr).value == 0.0
+    assert sequence.greedy_chain(dead, tr).value == 0.0
     with pytest.raises(ValueError, match="width"):
         sequence.beam_search(opt, tr, width=0)
     with pytest.raises(ValueError, match="transitions"):
-        sequence.greedy(opt, None)
+        sequence.greedy_chain(opt, None)
     with pytest.raises(ValueError, match="max_states"):
         sequence.exact_plan(opt, tr, max_states=1)
 
@@ -232,7 +232,7 @@ def stream(opt, tr, rng, cut="random"):
 def solve_all(opt, make, seed):
     """Every solver on a fresh ``make()`` (a stream is read once)."""
     return {
-        "greedy": sequence.greedy(opt, make()),
+        "greedy": sequence.greedy_chain(opt, make()),
         "beam1": sequence.beam_search(opt, make(), width=1, seed=seed),
         "beam3": sequence.beam_search(opt, make(), width=3, seed=seed),
         "exact": sequence.exact_plan(opt, make()),
@@ -288,7 +288,7 @@ def test_greedy_equals_the_pull_implementation(reach_kernels):  # noqa: F811
         opt, tr = instance(seed)
         ref = old_greedy(opt, tr)
         for tt in (tr, shuffled(tr, rng), stream(opt, tr, rng)):
-            p = sequence.greedy(opt, tt)
+            p = sequence.greedy_chain(opt, tt)
             np.testing.assert_array_equal(p.chosen, ref.chosen, err_msg=str(seed))
             assert p.value == ref.value
     rng = np.random.default_rng(7)
@@ -296,7 +296,9 @@ def test_greedy_equals_the_pull_implementation(reach_kernels):  # noqa: F811
     tr = screen.screen_transitions(opt, LIMITS, progress=False)
     ref = old_greedy(opt, tr)
     assert ref.chosen.size > 3
-    np.testing.assert_array_equal(sequence.greedy(opt, stream(opt, tr, rng)).chosen, ref.chosen)
+    np.testing.assert_array_equal(
+        sequence.greedy_chain(opt, stream(opt, tr, rng)).chosen, ref.chosen
+    )
 
 
 def test_path_bound_brute_force_and_bounds(reach_kernels):  # noqa: F811
@@ -306,7 +308,7 @@ def test_path_bound_brute_force_and_bounds(reach_kernels):  # noqa: F811
         assert b == pytest.approx(brute_force_path(opt, tr), rel=1e-12), seed
         ex = sequence.exact_plan(opt, tr)
         assert b >= ex.value - 1e-9
-        assert b >= sequence.greedy(opt, tr).value - 1e-9
+        assert b >= sequence.greedy_chain(opt, tr).value - 1e-9
         # one option per route: the each-route-once rule is void, the bound is the optimum
         solo = opt._replace(route=np.arange(len(opt.route), dtype=opt.route.dtype))
         assert sequence.exact_plan(solo, tr).value == pytest.approx(b, rel=1e-12), seed
@@ -341,7 +343,7 @@ def test_stream_errors(reach_kernels):  # noqa: F811
     bad = chunks[:k] + [chunks[k + 1], chunks[k]] + chunks[k + 2 :]
     late = int(chunks[k].src[0])
     for solver in (
-        sequence.greedy,
+        sequence.greedy_chain,
         sequence.beam_search,
         sequence.exact_plan,
         sequence.path_bound,

@@ -12,12 +12,13 @@ import pytest
 import yaml
 from _ref_stereo import DATA, EXAMPLE
 
+from jaxspline.cli.case_commands import write_solution
 from jaxspline.stereo.case import (
     SCENE_TYPES,
     load_case,
     load_solution,
     parse_solution,
-    write_solution,
+    solution_document,
 )
 
 pytestmark = pytest.mark.skipif(not DATA.is_dir(), reason="training cases not available")
@@ -260,14 +261,14 @@ def test_other_action_types_are_skipped(case1):
 
 def test_write_solution_round_trips_atomically(tmp_path, case1):
     sol = load_solution(EXAMPLE, case1)
-    out = write_solution(tmp_path / "sub" / "s.json", sol)
+    out = write_solution(tmp_path / "sub" / "s.json", solution_document(sol))
     again = load_solution(out, case1, strict=True)
     assert again.observations == sol.observations
     assert [p.name for p in out.parent.iterdir()] == ["s.json"]  # no temp file left
     with pytest.raises(FileExistsError, match="exists"):
-        write_solution(out, sol)
-    write_solution(out, list(sol.observations[:1]), force=True)
+        write_solution(out, solution_document(sol))
+    write_solution(out, solution_document(list(sol.observations[:1])), force=True)
     assert len(load_solution(out).observations) == 1
     with pytest.raises(ValueError, match=r"actions\[0\]"):
-        write_solution(tmp_path / "bad.json", [{"type": "observation"}])
+        write_solution(tmp_path / "bad.json", solution_document([{"type": "observation"}]))
     assert not (tmp_path / "bad.json").exists()

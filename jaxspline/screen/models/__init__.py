@@ -21,7 +21,8 @@ Part of layer 2 (``screen``): ``base`` <- ``per_channel`` (screens pairs with
 :mod:`jaxspline.screen.slew_table`) <- ``eigen_axis``, ``flexible``, ``roll_only``.
 """
 
-from jaxspline.screen.models.base import (
+from jaxspline.base.models import (
+    BUILTIN_MODELS,
     ManeuverModel,
     maneuver_model,
     model_names,
@@ -68,3 +69,4 @@ __all__ = [
 for _model in (PerChannel(), EigenAxis(), Flexible(), RollOnly()):
     register_model(_model)
 del _model
+assert model_names()[: len(BUILTIN_MODELS)] == BUILTIN_MODELS  # noqa: S101  (the names' one list)

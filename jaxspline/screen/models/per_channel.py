@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
+from jaxspline.base.models import FAR_SAFETY
 from jaxspline.kernels.batch import pad_rows, round_up
 from jaxspline.kernels.limits import AxisLimits
-from jaxspline.screen.models.base import FAR_SAFETY
 from jaxspline.screen.pairs import screen_pairs
 
 __all__ = ["PerChannel"]

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from jaxspline.screen.models.base import FAR_SAFETY
+from jaxspline.base.models import FAR_SAFETY
 from jaxspline.screen.slew_table import SlewTable, slew_table, table_time
 
 __all__ = ["RestToRest"]

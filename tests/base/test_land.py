@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from jaxspline.readers.land import COAST_BLOCK, is_land, land_fraction, ocean_cells
+from jaxspline.base.land import COAST_BLOCK, is_land, land_fraction, ocean_cells
 
 
 def test_is_land_equals_the_package_on_random_points():

@@ -1,4 +1,4 @@
-"""The maneuver-model protocol and the registry that names the models.
+"""The maneuver-model protocol and the registry that names the models (base layer).
 
 A satellite's ``model`` (a scenario key, e.g. ``"eigen_axis"``) names one
 :class:`ManeuverModel`; :func:`maneuver_model` looks it up. A model is a stateless object:
@@ -16,14 +16,17 @@ it is given. The pipeline asks the model, never the name, what a transition need
 
 A new model is one file: a class with these members (subclass
 :class:`~jaxspline.screen.models.rest_to_rest.RestToRest` for a rest-to-rest slew and
-give only its profile time), registered with :func:`register_model`.
+give only its profile time), registered with :func:`register_model`. The registry lives
+in the base layer so that a scenario's reader can check the model a satellite names
+without importing the screen; the built-in models register themselves when
+:mod:`jaxspline.screen.models` is imported (``import jaxspline`` does).
 """
 
 from __future__ import annotations
 
 from typing import Protocol, runtime_checkable
 
-__all__ = ["ManeuverModel", "maneuver_model", "model_names", "register_model"]
+__all__ = ["BUILTIN_MODELS", "ManeuverModel", "maneuver_model", "model_names", "register_model"]
 
 #: Relative safety factor of every model's far gap (rounding of the bound's arithmetic).
 FAR_SAFETY = 1.0 + 1e-9
@@ -31,6 +34,9 @@ FAR_SAFETY = 1.0 + 1e-9
 ATTITUDE_LAWS = ("pointing", "zero_yaw")
 #: Frames a model's slews may compare lines of sight in.
 LOS_FRAMES = ("inertial", "earth_fixed")
+
+#: The models :mod:`jaxspline.screen.models` registers on import, in that order.
+BUILTIN_MODELS = ("per_channel", "eigen_axis", "flexible", "roll_only")
 
 _REGISTRY: dict[str, ManeuverModel] = {}
 
