@@ -93,7 +93,8 @@ def _result(sc):
     end = start + np.tile([POINT_S] * 4 + [STRIP[2] / SPEED], n_sat)
     speed = np.tile([0.0] * 4 + [SPEED], n_sat)
     z = np.zeros(sat.size)
-    obs = Observations(sat, target, start, end, z, z, np.ones(sat.size), speed)
+    nan = np.full(sat.size, np.nan)
+    obs = Observations(sat, target, start, end, z, z, np.ones(sat.size), speed, nan, nan)
     return PlanResult(sc, obs, 1.0, 1.0, 0.0, True, {"valid": True}, {}, {})
 
 

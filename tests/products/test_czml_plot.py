@@ -63,6 +63,8 @@ def result():
         slack=np.array([0.0, 4.0, 350.0, 0.02, 2500.0]),
         value=np.ones(5),
         speed=np.zeros(5),
+        roll=np.full(5, np.nan),
+        pitch=np.full(5, np.nan),
     )
     tb = np.linspace(0.0, DURATION, 40)
     return PlanResult(
