@@ -1,14 +1,18 @@
 """Generated inputs over every key of the scenario schema (used by ``test_fuzz_readers.py``).
 
-One small valid scenario uses every section: a TLE satellite, a circular one with a
-battery, a flexible one placed with ``over``, point and strip targets with windows and
-desired times, a targets CSV with every column, random targets, an inline area ring
-and a GeoJSON area, and every planner key. For every numeric key (TOML keys and CSV
-columns, :data:`jaxspline.readers.ranges.RANGES`) the generator puts values outside
-its range (below, above, NaN, infinities, ``1e300``), values of the wrong type, and
-values at both ends of its range; for strings, control characters and over-long
-names; for TLEs, a damaged checksum, a cut line, swapped lines, an epoch months away;
-for GeoJSON, positions given as strings, collinear and zero-area polygons, a bowtie.
+One small valid scenario uses every section: a TLE satellite with every area-strip key
+(``fov_deg``, ``edge_off_nadir_deg``, ``strip_duration_s``, ``duty_s_per_orbit``), a
+circular one with a battery, a flexible one placed with ``over``, point and strip
+targets with windows and desired times, a targets CSV with every column, random
+targets, an inline area ring, a GeoJSON area and an area of samples (``smp.csv``)
+between them using every area key, and every planner key. For every numeric key (TOML
+keys and CSV columns, :data:`jaxspline.readers.ranges.RANGES`) the generator puts
+values outside its range (below, above, NaN, infinities, ``1e300``), values of the
+wrong type, and values at both ends of its range; for strings, control characters and
+over-long names; for TLEs, a damaged checksum, a cut line, swapped lines, an epoch
+months away; for GeoJSON, positions given as strings, collinear and zero-area polygons,
+a bowtie; for areas, the retired keys of the strip-cutting reader, two polygons or
+none, entries that are not tables, bad cells of the sample file.
 Each case says what must happen: ``error`` (a ``ValueError`` naming the file and the
 field), ``ok`` (accepted, the value where it belongs) or ``either`` (a value inside
 its range that another rule may still refuse, e.g. a geometry step the time step is
@@ -38,7 +42,8 @@ BASE = {
     "satellites": [
         {"name": "tle", "tle": TLE, "model": "per_channel", "rate_deg_s": [3.0, 3.0, 2.0],
          "accel_deg_s2": [1.5, 1.5, 1.0], "off_nadir_max_deg": 30.0, "sensor": "visible",
-         "swath_km": 15.0},
+         "swath_km": 15.0, "fov_deg": 1.2, "edge_off_nadir_deg": [0.0, 25.0],
+         "strip_duration_s": [5.0, 60.0], "duty_s_per_orbit": 600.0},
         {"name": "circ", "altitude_km": 600.0, "inclination_deg": 97.8, "raan_deg": 10.0,
          "arg_lat_deg": 20.0, "model": "eigen_axis", "rate_deg_s": 1.8, "accel_deg_s2": 0.4,
          "settle_s": 2.0, "power": {"capacity_wh": 1300.0, "initial_wh": 800.0,
@@ -60,15 +65,19 @@ BASE = {
                        "priority": [1, 5]},
     "areas": [
         {"name": "ring", "lonlat_deg": [[14.0, 45.9], [14.3, 45.9], [14.3, 46.1], [14.0, 46.1]],
-         "priority": 10.0, "swath_km": 12.0, "max_length_km": 30.0, "sensor": "",
-         "window_s": [0.0, DURATION_S], "grid_km": 4.0},
+         "priority": 10.0, "sensor": "", "window_s": [0.0, DURATION_S], "grid_km": 4.0,
+         "min_coverage": 0.2},
         {"name": "file", "geojson": "a.geojson", "priority": 4.0},
+        {"name": "samples", "samples_csv": "smp.csv", "priority": 2.0, "sensor": "visible",
+         "min_coverage": 0.5},
     ],
     "planner": {"time_step_s": 10.0, "geometry_step_s": 5.0, "scan_speeds_km_s": [5.0, 7.0],
                 "sun_elevation_min_deg": -10.0, "off_nadir_margin_deg": 0.01,
                 "horizon_margin": 0.0, "gap_margin_s": 0.1, "battery_margin_wh": 10.0,
                 "shadow_guard_steps": 1, "exact_max_options": 60, "lagrangian_share": 0.3,
-                "bound_worker": True, "refine_steps": 100, "time_limit_s": 30.0},
+                "bound_worker": True, "refine_steps": 100, "time_limit_s": 30.0,
+                "max_actions": 500, "area_roll_step_deg": 0.5, "area_pitch_step_deg": 5.0,
+                "duty_margin_s": 1.0},
 }  # fmt: skip
 CSV_HEAD = ("name,lat_deg,lon_deg,priority,kind,alt_m,duration_s,length_km,azimuth_deg,"
             "window_lo_s,window_hi_s,sensor,desired_s,tolerance_s,min_duration_s")  # fmt: skip
@@ -80,6 +89,10 @@ GEOJSON = {
     "type": "Polygon",
     "coordinates": [[[14.6, 46.0], [14.9, 46.0], [14.9, 46.2], [14.6, 46.2], [14.6, 46.0]]],
 }
+SAMPLES_HEAD = "lon_deg,lat_deg,weight"
+SAMPLES_ROWS = ["14.40,46.00,0.3", "14.45,46.02,0.3", "14.50,46.04,0.2"]
+#: A value of every retired area key (refused naming the key: "is no longer read").
+RETIRED = {"swath_km": 12.0, "max_length_km": 30.0, "objective": "coverage"}
 
 
 def _paths(prefix, table):
@@ -161,13 +174,23 @@ def _get(doc, path):
     return doc
 
 
-def _case(kind, doc, fields, expect, csv_rows=None, geojson=None, line_key=None):
+def _case(kind, doc, fields, expect, csv_rows=None, geojson=None, line_key=None, samples=None):
+    """A schema case; a spoiled ``csv_rows`` / ``geojson`` / ``samples`` (rows of
+    ``smp.csv``, header included) is the file its error must name."""
     files = {
         "s.toml": _toml(doc).encode(),
         "t.csv": "\n".join([CSV_HEAD, *(CSV_ROWS if csv_rows is None else csv_rows)]).encode(),
         "a.geojson": json.dumps(GEOJSON if geojson is None else geojson).encode(),
+        "smp.csv": "\n".join(
+            [SAMPLES_HEAD, *SAMPLES_ROWS] if samples is None else samples
+        ).encode(),
     }
-    file = "t.csv" if csv_rows is not None else "a.geojson" if geojson is not None else ""
+    file = (
+        "t.csv" if csv_rows is not None
+        else "a.geojson" if geojson is not None
+        else "smp.csv" if samples is not None
+        else ""
+    )  # fmt: skip
     return Fuzz(kind, files, "scenario", "s.toml", fields, expect, line_key, "schema", file)
 
 
@@ -268,6 +291,72 @@ def text_cases(rng) -> list[Fuzz]:
         doc["scenario"]["epoch"] = epoch
         out.append(_case(f"schema:epoch:{lab}", doc, ("scenario.epoch",), "error"))
     out += _polygon_cases()
+    out += area_cases()
+    return out
+
+
+def area_cases() -> list[Fuzz]:
+    """The area tables' own rules: retired keys, a polygon or samples, the sample file."""
+    out = []
+    for i in (0, 1, 2):  # the keys of the strip-cutting reader are refused by name
+        for key, value in RETIRED.items():
+            doc = copy.deepcopy(BASE)
+            doc["areas"][i][key] = value
+            fields = (f"areas[{i}].{key}", "is no longer read")
+            out.append(_case(f"schema:retired:{key}", doc, fields, "error", line_key=key))
+    wrong = {  # label: (area, changed keys (None: deleted), fields named, TOML line key)
+        "both_polygons": (0, {"geojson": "a.geojson"}, ("areas[0].geojson",), "geojson"),
+        "no_polygon": (0, {"lonlat_deg": None}, ("areas[0].geojson",), None),
+        "unknown_key": (1, {"swath": 10.0}, ("areas[1].swath",), None),
+        "no_sensor": (1, {"sensor": "radar"}, ("areas[1].sensor", "radar"), "sensor"),
+        "samples_number": (2, {"samples_csv": 3}, ("areas[2].samples_csv",), "samples_csv"),
+        "samples_empty": (2, {"samples_csv": ""}, ("areas[2].samples_csv",), "samples_csv"),
+        "samples_missing": (2, {"samples_csv": "none.csv"}, ("areas[2].samples_csv", "none.csv"),
+                            "samples_csv"),
+        "geojson_missing": (1, {"geojson": "none.geojson"}, ("areas[1].geojson", "none.geojson"),
+                            "geojson"),
+        "dup_name": (2, {"name": "ring"}, ("areas[2].name", "areas[0]"), "name"),
+    }  # fmt: skip
+    for lab, (i, change, fields, line_key) in wrong.items():
+        doc = copy.deepcopy(BASE)
+        for key, value in change.items():
+            if value is None:
+                del doc["areas"][i][key]
+            else:
+                doc["areas"][i][key] = value
+        out.append(_case(f"schema:area:{lab}", doc, fields, "error", line_key=line_key))
+    for lab, entry in (("number", 95.0), ("bool", True), ("text", "ring"), ("list", [1.0])):
+        doc = copy.deepcopy(BASE)  # an [[areas]] entry that is not a table
+        doc["areas"].append(entry)
+        out.append(_case(f"schema:area:entry_{lab}", doc, ("areas[3]",), "error"))
+    both = copy.deepcopy(BASE)  # samples with their polygon (drawn, not sampled)
+    both["areas"][2]["lonlat_deg"] = BASE["areas"][0]["lonlat_deg"]
+    out.append(_case("schema:area:samples_and_polygon", both, (), "either"))
+    cells = {
+        ("lon_deg", "nan"), ("lon_deg", "181"), ("lon_deg", "-180.5"), ("lon_deg", "abc"),
+        ("lon_deg", ""), ("lat_deg", "95"), ("lat_deg", "-inf"), ("lat_deg", "1e300"),
+        ("weight", "-0.1"), ("weight", "1.5"), ("weight", "nan"), ("weight", "true"),
+    }  # fmt: skip
+    head = SAMPLES_HEAD.split(",")
+    for col, cell in sorted(cells):
+        for row in (0, 2):
+            cells_ = SAMPLES_ROWS[row].split(",")
+            cells_[head.index(col)] = cell
+            rows = [SAMPLES_HEAD, *SAMPLES_ROWS]
+            rows[row + 1] = ",".join(cells_)
+            fields = ("areas[2].samples_csv", f"row {row + 2}", col)
+            out.append(_case(f"schema:samples:{col}:{cell or 'empty'}", BASE, fields, "error",
+                             line_key="samples_csv", samples=rows))  # fmt: skip
+    files = {
+        "sum": ([SAMPLES_HEAD, *SAMPLES_ROWS, "14.55,46.06,0.3"], "sum"),
+        "missing_column": (["lon_deg,lat_deg,w", *SAMPLES_ROWS], "'weight'"),
+        "no_rows": ([SAMPLES_HEAD], "no samples"),
+        "empty": ([], "lon_deg"),
+        "short_row": ([SAMPLES_HEAD, "14.40,46.00", *SAMPLES_ROWS[1:]], "row 2"),
+    }
+    for lab, (rows, what) in files.items():
+        out.append(_case(f"schema:samples:{lab}", BASE, ("areas[2].samples_csv", what), "error",
+                         line_key="samples_csv", samples=rows))  # fmt: skip
     return out
 
 

@@ -15,19 +15,25 @@ belongs, a latitude of 95 deg, an unknown key or column, a duplicate name, an em
 file): those must be rejected. No reader may write anything: an audit hook records
 every ``open`` for writing, rename, removal or directory creation while a reader runs.
 
-Areas across the antimeridian are refused with the remedy in the message (two areas,
-one each side), and that remedy is checked to cut both halves where they are. The
-generators live in ``_fuzz_inputs.py``; ``python tests/readers/test_fuzz_readers.py``
-prints a summary of the failing cases by kind.
+An area is read, not cut: one target row of kind AREA (its priority, window and
+sensor, at its centre) and one ``Area`` (its polygon and grid spacing, or its samples
+``(lon, lat, weight)``, and its least covered share); an accepted area must hold finite
+values in range there. Areas across the antimeridian are refused with the remedy in the
+message (two areas, one each side), and that remedy is checked to read both halves
+where they are. The generators live in ``_fuzz_inputs.py``;
+``python tests/readers/test_fuzz_readers.py`` prints a summary of the failing cases by
+kind.
 
-The schema cases (``_fuzz_schema.py``, ~900) go over every key of the schema instead of
+The schema cases (``_fuzz_schema.py``, ~1040) go over every key of the schema instead of
 mutating at random: every number outside its range, of the wrong type and at both ends
 of its range, names with control characters, damaged TLEs, far epochs, degenerate
-polygons, GeoJSON positions that are not numbers. The ~760 that must be refused stop at
-validation and run by default (a few seconds); the boundary values that may be
-accepted load whole scenarios (orbits, areas) and run with the ``slow`` marker, as
-does a handful that plans through the command (a plan or a named error, never a
-traceback). An accepted scenario must also hold every number within its range.
+polygons, GeoJSON positions that are not numbers, the retired area keys (``swath_km``,
+``max_length_km``, ``objective``: "is no longer read"), area entries that are not
+tables, bad cells of an area's sample file. The ~890 that must be refused stop at
+validation and run by default (a few seconds); the boundary values that may be accepted
+load whole scenarios (orbits, areas) and run with the ``slow`` marker, as does a handful
+that plans through the command (a plan or a named error, never a traceback). An
+accepted scenario must also hold every number within its range.
 
 The baseline results are parsed once per test; no plan is built. The random targets
 of ``default.toml`` are drawn with ``land_only = false`` in the mutated copies (the land
@@ -41,6 +47,7 @@ import json
 import os
 import re
 import sys
+import tomllib
 from collections import Counter
 from pathlib import Path
 
@@ -58,12 +65,12 @@ from _fuzz_inputs import (
     _toml_baselines,
     generated,
 )
-from _fuzz_schema import schema_cases
+from _fuzz_schema import RETIRED, schema_cases
 
 from jaxspline.aeossp.case import Case, load_case
-from jaxspline.geometry.orbit import CircularOrbit
-from jaxspline.readers.area_files import read_geojson
-from jaxspline.readers.mission import Scenario, Targets
+from jaxspline.base.elements import CircularOrbit
+from jaxspline.readers.area_files import AREA_KEYS, RETIRED_KEYS, read_geojson
+from jaxspline.readers.mission import AREA, Scenario, Targets
 from jaxspline.readers.ranges import RANGES
 from jaxspline.readers.scenario import load_scenario
 from jaxspline.readers.targets import load_targets_csv
@@ -147,6 +154,8 @@ def _check_scenario(sc: Scenario) -> list[str]:
     bad = [] if _finite(sc.duration) and sc.duration > 0 else ["duration"]
     for s in sc.satellites:
         nums = [s.limits.rate, s.limits.accel, s.off_nadir_max, s.settle, s.swath]
+        nums += [x for x in (s.fov, s.edge_band, s.duty) if x is not None]
+        nums += [s.strip_duration]
         if isinstance(s.orbit, CircularOrbit):
             nums += list(s.orbit)
         if s.flex is not None:
@@ -163,20 +172,56 @@ def _check_scenario(sc: Scenario) -> list[str]:
         pl.scan_speeds,
         pl.lagrangian_share,
         pl.default_time_limit,
+        pl.area_roll_step,
         m.off_nadir,
         m.horizon,
         m.gap,
         m.battery_wh,
+        m.duty,
     ]
+    nums += [x for x in (pl.max_actions, pl.area_pitch_step) if x is not None]
     if not _finite(*nums) or (
         pl.sun_elevation_min is not None and not _finite(pl.sun_elevation_min)
     ):
         bad.append("planner")
     bad += _check_targets(sc.targets)
-    for a in sc.areas:
-        xy = shapely.get_coordinates(shapely.geometry.shape(a.geometry))
-        if not _finite(xy, a.share, a.azimuth, a.value, a.swath):
-            bad.append(f"area {a.name}")
+    bad += [f"area {a.name}: {why}" for a in sc.areas for why in _check_area(sc, a)]
+    if sorted(a.target for a in sc.areas) != np.flatnonzero(sc.targets.kind == AREA).tolist():
+        bad.append("areas and the targets of kind AREA differ")
+    return bad
+
+
+def _check_area(sc: Scenario, a) -> list[str]:
+    """What is wrong with an :class:`Area` of an accepted scenario: its target row (kind
+    AREA, its name), its polygon (finite, in lon/lat range), its samples (finite [N, 3]
+    ``(lon, lat, weight)`` in range, weights >= 0 summing to at most 1), its grid
+    spacing (> 0 where it has no samples) and its least covered share ([0, 1] or NaN)."""
+    bad = []
+    tg = sc.targets
+    if not (0 <= a.target < len(tg) and tg.kind[a.target] == AREA and tg.name[a.target] == a.name):
+        bad.append("target row")
+    if a.geometry is not None:
+        geom = shapely.geometry.shape(a.geometry)
+        xy = shapely.get_coordinates(geom)
+        if geom.geom_type not in ("Polygon", "MultiPolygon") or geom.is_empty:
+            bad.append(f"a {geom.geom_type}")
+        elif not (_finite(xy) and np.all(np.abs(xy) <= (180.0, 90.0))):
+            bad.append("polygon coordinates")
+    smp = np.asarray(a.samples)
+    if smp.ndim != 2 or smp.shape[1] != 3 or not _finite(smp):
+        bad.append(f"samples of shape {smp.shape}")
+    elif smp.shape[0] and not (
+        np.all(np.abs(smp[:, :2]) <= (180.0, 90.0))
+        and np.all(smp[:, 2] >= 0.0)
+        and smp[:, 2].sum() <= 1.0 + 1e-9
+    ):
+        bad.append("sample values")
+    if a.geometry is None and smp.shape[0] == 0:
+        bad.append("neither a polygon nor samples")
+    if smp.shape[0] == 0 and not (_finite(a.spacing) and a.spacing > 0):
+        bad.append(f"spacing {a.spacing!r}")
+    if not (np.isnan(a.min_share) or 0.0 <= a.min_share <= 1.0):
+        bad.append(f"min_share {a.min_share!r}")
     return bad
 
 
@@ -224,6 +269,8 @@ def _same_scenario(a: Scenario, b: Scenario) -> list[str]:
         if (
             (s.name, s.model, s.sensor, s.flex, s.power)
             != (t.name, t.model, t.sensor, t.flex, t.power)
+            or (s.fov, s.edge_band, s.strip_duration, s.duty)
+            != (t.fov, t.edge_band, t.strip_duration, t.duty)
             or not all(
                 np.array_equal(x, y)
                 for x, y in ((s.limits.rate, t.limits.rate), (s.limits.accel, t.limits.accel))
@@ -235,10 +282,20 @@ def _same_scenario(a: Scenario, b: Scenario) -> list[str]:
     if len(a.satellites) != len(b.satellites):
         diff.append("satellite count")
     diff += _same_targets(a.targets, b.targets)
-    if [x.name for x in a.areas] != [x.name for x in b.areas] or not all(
-        np.array_equal(x.share, y.share) for x, y in zip(a.areas, b.areas, strict=False)
-    ):
+    if [(x.name, x.target) for x in a.areas] != [(y.name, y.target) for y in b.areas]:
         diff.append("areas")
+    for x, y in zip(a.areas, b.areas, strict=False):
+        if (x.geometry is None) != (y.geometry is None) or not (
+            x.geometry is None
+            or shapely.geometry.shape(x.geometry).equals(shapely.geometry.shape(y.geometry))
+        ):
+            diff.append(f"area {x.name}: polygon")
+        if not (
+            x.spacing == y.spacing
+            and np.array_equal(x.samples, y.samples)
+            and np.array_equal(x.min_share, y.min_share, equal_nan=True)
+        ):
+            diff.append(f"area {x.name}: spacing, samples or min_share")
     return diff
 
 
@@ -398,8 +455,25 @@ def _in_ranges(sc: Scenario) -> list[str]:
         within("satellites[].off_nadir_max_deg", np.degrees(s.off_nadir_max))
         within("satellites[].settle_s", s.settle)
         within("satellites[].swath_km", s.swath, 1e3)
+        if s.fov is not None:
+            within("satellites[].fov_deg", np.degrees(s.fov))
+        if s.edge_band is not None:
+            within("satellites[].edge_off_nadir_deg", np.degrees(s.edge_band))
+        within("satellites[].strip_duration_s", s.strip_duration)
+        if s.duty is not None:
+            within("satellites[].duty_s_per_orbit", s.duty)
     tg = sc.targets
-    within("targets[].priority", tg.value[: len(tg) - sum(a.targets.size for a in sc.areas)])
+    area = tg.kind == AREA
+    within("targets[].priority", tg.value[~area])
+    within("areas[].priority", tg.value[area])
+    for f in ("t_lo", "t_hi"):
+        v = getattr(tg, f)[area]
+        within("areas[].window_s", v[np.isfinite(v)])
+    for a in sc.areas:
+        if a.spacing:
+            within("areas[].grid_km", a.spacing, 1e3)
+        if not np.isnan(a.min_share):
+            within("areas[].min_coverage", a.min_share)
     point = tg.kind == 0
     within("targets[].duration_s", tg.duration[point])
     for f in ("t_lo", "t_hi"):  # finite windows lie in the horizon
@@ -410,6 +484,12 @@ def _in_ranges(sc: Scenario) -> list[str]:
     within("planner.geometry_step_s", pl.geometry_step)
     within("planner.time_limit_s", pl.default_time_limit)
     within("planner.exact_max_options", pl.exact_max_options)
+    if pl.max_actions is not None:
+        within("planner.max_actions", pl.max_actions)
+    within("planner.area_roll_step_deg", np.degrees(pl.area_roll_step))
+    if pl.area_pitch_step is not None:
+        within("planner.area_pitch_step_deg", np.degrees(pl.area_pitch_step))
+    within("planner.duty_margin_s", pl.margins.duty)
     return bad
 
 
@@ -450,6 +530,13 @@ def test_schema_cases_cover_every_key():
     assert kinds["error"] >= 700 and kinds["either"] >= 100, kinds
     covered = {c.kind.split(":")[1] for c in cases}
     assert set(RANGES) <= covered, sorted(set(RANGES) - covered)
+    # every retired area key is refused by name, and the base scenario uses every area key
+    assert set(RETIRED) == set(RETIRED_KEYS), sorted(set(RETIRED) ^ set(RETIRED_KEYS))
+    retired = {c.kind.split(":")[2] for c in cases if c.kind.startswith("schema:retired:")}
+    assert retired == set(RETIRED_KEYS), sorted(set(RETIRED_KEYS) - retired)
+    base = next(c for c in cases if c.kind == "schema:base")
+    used = set().union(*tomllib.loads(base.files["s.toml"].decode())["areas"])
+    assert used == AREA_KEYS, sorted(AREA_KEYS ^ used)
 
 
 def test_fuzz_schema_refusals(tmp_path, monkeypatch):
@@ -480,6 +567,9 @@ def test_fuzz_schema_boundaries(tmp_path, monkeypatch):
         "schema:satellites[].rate_deg_s:hi",
         "schema:planner.time_step_s:hi",
         "schema:satellites[].over.t_s:lo",
+        "schema:planner.max_actions:lo",
+        "schema:satellites[].duty_s_per_orbit:lo",
+        "schema:areas[].min_coverage:hi",
     ],  # fmt: skip
 )
 def test_fuzz_schema_cases_plan_or_fail_by_name(kind, tmp_path, capfd):
@@ -509,7 +599,7 @@ def _area_scenario(tmp_path, areas: str, name="s.toml"):
 
 def _ring_toml(name, lon0, lon1, lat0=10.0, lat1=10.8):
     ring = [[lon0, lat0], [lon1, lat0], [lon1, lat1], [lon0, lat1]]
-    return f'[[areas]]\nname = "{name}"\nlonlat_deg = {ring}\nmax_length_km = 40.0\n'
+    return f'[[areas]]\nname = "{name}"\nlonlat_deg = {ring}\ngrid_km = 4.0\n'
 
 
 @pytest.mark.parametrize(
@@ -539,19 +629,24 @@ def test_antimeridian_split_geojson_is_refused(tmp_path):
         load_scenario(_area_scenario(tmp_path, '[[areas]]\ngeojson = "d.geojson"\n'))
 
 
-def test_areas_either_side_of_the_antimeridian_are_cut_in_place(tmp_path):
-    """The remedy the error names: one area each side; each is cut about its own centre."""
+def test_areas_either_side_of_the_antimeridian_are_read_in_place(tmp_path):
+    """The remedy the error names: one area each side; each is read where it is (its
+    polygon as written, its target at its own centre, not on the far side of the Earth)."""
     text = _ring_toml("east", 179.6, 180.0) + _ring_toml("west", -180.0, -179.6)
     sc = load_scenario(_area_scenario(tmp_path, text))
     assert [a.name for a in sc.areas] == ["east", "west"]
-    assert not _check_scenario(sc)
+    assert not _check_scenario(sc) and not _in_ranges(sc)
+    assert [sc.targets.name[a.target] for a in sc.areas] == ["east", "west"]
     for area, lon0 in zip(sc.areas, (179.6, -180.0), strict=True):
-        idx = np.asarray(area.targets)
-        assert idx.size > 0  # the 12 h horizon has passes over both halves
-        lat, lon = np.degrees(sc.targets.lat[idx]), np.degrees(sc.targets.lon[idx])
-        # strip starts lie by the area (not on the far side of the Earth); |lon| wraps at 180
-        dlon = np.abs((lon - (lon0 + 0.2) + 180.0) % 360.0 - 180.0)
-        assert np.all(dlon < 0.6) and np.all(np.abs(lat - 10.4) < 0.6), (lon, lat)
+        assert sc.targets.kind[area.target] == AREA
+        assert area.spacing == 4e3 and area.samples.shape == (0, 3)
+        lon, lat = shapely.get_coordinates(shapely.geometry.shape(area.geometry)).T
+        np.testing.assert_allclose([lon.min(), lon.max()], [lon0, lon0 + 0.4])
+        np.testing.assert_allclose([lat.min(), lat.max()], [10.0, 10.8])
+        # its target lies in the area, at the centre's longitude; |lon| wraps at 180
+        lat, lon = np.degrees(sc.targets.lat[area.target]), np.degrees(sc.targets.lon[area.target])
+        dlon = abs((lon - (lon0 + 0.2) + 180.0) % 360.0 - 180.0)
+        assert dlon < 1e-6 and 10.0 < lat < 10.8, (lon, lat)
 
 
 if __name__ == "__main__":  # python tests/readers/test_fuzz_readers.py: the failure summary
