@@ -23,12 +23,12 @@ import json
 import numpy as np
 import pytest
 import shapely
+from jaxspline.readers.coverage_strips import area_grid, covered_samples, lazy_greedy
 from shapely.geometry import Polygon
 from test_areas import HEAD, RING, _write  # same folder
 
 from jaxspline.geometry.ground import equal_area, strip_footprint, surface_point
 from jaxspline.readers.area_files import polygon_center
-from jaxspline.readers.coverage_strips import area_grid, covered_samples, lazy_greedy
 from jaxspline.readers.scenario import load_scenario
 
 COVER = (
@@ -69,8 +69,7 @@ def test_lazy_greedy_equals_plain_greedy(seed):
 
 def _equal_area_poly(geom, center):
     radius = float(np.linalg.norm(surface_point(center)))
-    from jaxspline.geometry.frames import geodetic_to_ecef
-    from jaxspline.geometry.ground import unit_vectors
+    from jaxspline.base.elements import geodetic_to_ecef, unit_vectors
 
     def f(xy):
         u = unit_vectors(geodetic_to_ecef(np.radians(xy[:, 1]), np.radians(xy[:, 0]), 0.0))
@@ -108,8 +107,7 @@ def test_chosen_strips_cover_their_gains(scenario):
     tg = scenario.targets
     assert a.objective == "coverage" and a.targets.size > 0 and a.candidates > a.targets.size
     lon, lat = a.sample_lonlat[:, 0], a.sample_lonlat[:, 1]
-    from jaxspline.geometry.frames import geodetic_to_ecef
-    from jaxspline.geometry.ground import unit_vectors
+    from jaxspline.base.elements import geodetic_to_ecef, unit_vectors
 
     unit = unit_vectors(geodetic_to_ecef(np.radians(lat), np.radians(lon), 0.0))
     strips = np.stack([tg.lat, tg.lon, tg.azimuth, tg.length], -1)[a.targets]
