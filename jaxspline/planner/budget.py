@@ -168,8 +168,41 @@ def _refined_satellites(sc) -> np.ndarray:
 
 
 def _targets(ctx: PlanContext) -> int:
-    """The targets that have an option: the most observations a plan can have."""
-    return int(np.unique(ctx.opportunities.options.route).size)
+    """The most observations a plan can have: the targets that have an option, and per
+    pass of an area the strips it can hold (capped by the plan's action cap)."""
+    pb = ctx.problem
+    route = np.asarray(ctx.opportunities.options.route)
+    if pb.cover is None:
+        return int(np.unique(route).size)
+    cv = pb.cover
+    area = cv.option_group >= 0
+    n_pass = int(cv.group_pass.max()) + 1 if cv.n_groups else 0
+    lo = np.full(n_pass, np.iinfo(np.int64).max)
+    hi = np.zeros(n_pass, np.int64)
+    np.minimum.at(lo, cv.group_pass, cv.group_slot0)
+    np.maximum.at(hi, cv.group_pass, cv.group_slot0 + cv.group_nslots)
+    need = np.asarray(cv.min_slots, np.int64)[_pass_sat(cv, n_pass)]
+    strips = int(((hi - lo + 1) // (need + 1)).sum())
+    if pb.max_actions is not None:
+        strips = min(strips, int(pb.max_actions))
+    return int(np.unique(route[~area]).size) + strips
+
+
+def _pass_sat(cv, n_pass: int) -> np.ndarray:
+    """The satellite of every pass of a CoverTable."""
+    sat = np.zeros(n_pass, np.int64)
+    sat[cv.group_pass] = cv.group_sat
+    return sat
+
+
+def _movable_share(ctx: PlanContext, targets: int) -> float:
+    """The share of a plan's observations the start-time refinement may move: all but the
+    area strips (they hold their slots)."""
+    pb = ctx.problem
+    if pb.cover is None or not targets:
+        return 1.0
+    route = np.asarray(ctx.opportunities.options.route)
+    return float(np.unique(route[pb.cover.option_group < 0]).size) / targets
 
 
 def repair_seconds(
@@ -270,6 +303,7 @@ def deadline_budget(
             deadline, deadline.pace() * mandatory_seconds(ctx, flown_joins, deadline.must_s)
         )
     targets = _targets(ctx)
+    movable = _movable_share(ctx, targets)
     now = time.monotonic()
     earliest = now + SEARCH_MIN_SHARE * max(deadline.end - now, 0.0)
     deadline.split = {"before_search_s": round(now - deadline.t0, 2)}
@@ -283,9 +317,10 @@ def deadline_budget(
         per_sat = np.asarray(per_sat, np.float64)
         observations = float(per_sat.sum())
         size = min(PLAN_GROWTH * observations, targets)
-        refined = size * (per_sat[moved].sum() / observations if observations else 0.0)
+        refined = size * movable * (per_sat[moved].sum() / observations if observations else 0.0)
         pace = deadline.pace()
-        repair = repair_seconds(size, flown_joins, refining, refill_s, refined) * pace
+        repair = repair_seconds(size, flown_joins, refining and refined > 0, refill_s, refined)
+        repair *= pace
         outputs = deadline.after_s * pace
         end = max(deadline.end - repair - outputs, earliest)
         deadline.split.update(

@@ -49,6 +49,8 @@ __all__ = [
 
 #: Gains at or below this count as zero (value units).
 MIN_GAIN = 1e-10
+#: [rad] added to an angle read off a dot product (its rounding near 0 is ~1e-8 rad).
+ANGLE_GUARD = 1e-7
 #: Extra weight per unit of an area's share while areas miss their least share.
 MIN_BOOST = 10.0
 
@@ -77,6 +79,8 @@ class AreaIndex:
       roll_order: groups sorted by (pass, pitch, roll); roll_pos: each group's place there.
       los: per group the unit lines of sight at its slot boundaries ([n + 1, 3]), from its
         options (None where the satellite's model needs no lines of sight).
+      pitched: bool [P], passes with groups of several pitches (a sample may be imaged
+        at several slots of the pass); pass_windows: per pass its windows (ids).
     """
 
     def __init__(self, pb):
@@ -95,7 +99,12 @@ class AreaIndex:
         self.roll_pos = np.empty_like(order)
         self.roll_pos[order] = np.arange(order.size)
         self.los = _group_los(pb)
+        self.pitched = np.array([np.unique(cv.group_pitch[g]).size > 1 for g in self.passes])
+        wp = cv.group_pass[self.windows.g]
+        self.pass_windows = [np.flatnonzero(wp == p) for p in range(n)]
         self._gaps = {}
+        self.bounds = {}  # need_bound by (option, group, before)
+        self.ends = self.starts = None  # option ids by (group, end / start slot)
         nrow = cv.group_nslots
         group_of_row = np.repeat(np.arange(cv.n_groups), nrow)
         within = np.arange(cv.n_rows) - np.repeat(cv.group_row0, nrow)
@@ -105,11 +114,25 @@ class AreaIndex:
         )
         self.row_pass = cv.group_pass[group_of_row]
 
-    def gaps(self, p: int) -> np.ndarray:
-        """Slots between two strips of pass p's groups (int [G, G], >= 1; cached)."""
-        if p not in self._gaps:
-            self._gaps[p] = pass_gaps(self, self.passes[p])
-        return self._gaps[p]
+    def gaps(self, p: int, sub=None) -> np.ndarray:
+        """Slots between two strips of pass p's groups ``passes[p][sub]`` (int [K, K],
+        >= 1; every pair computed once, on first use).
+
+        Args:
+          p: pass; sub: int [K], positions in ``passes[p]`` (default: all of them).
+        """
+        groups = self.passes[p]
+        sub = np.arange(groups.size) if sub is None else np.asarray(sub, np.int64)
+        full = self._gaps.get(p)
+        if full is None:
+            full = self._gaps[p] = np.full((groups.size, groups.size), -1, np.int64)
+        block = full[np.ix_(sub, sub)]
+        ii, jj = np.nonzero(block < 0)
+        if ii.size:
+            found = pass_gaps(self, groups[sub[ii]], groups[sub[jj]])
+            full[sub[ii], sub[jj]] = found
+            block[ii, jj] = found
+        return block
 
 
 def area_index(pb) -> AreaIndex:
@@ -168,10 +191,10 @@ def _group_los(pb) -> list:
     return out
 
 
-def _angles(u: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """Angles [rad] between unit vectors u [..., 3] and v [..., 3]."""
-    c = np.cross(u, v)
-    return np.arctan2(np.sqrt(np.sum(c * c, axis=-1)), np.sum(u * v, axis=-1))
+def _widest(u: np.ndarray, los: np.ndarray) -> float:
+    """The largest angle [rad] between the unit vector u [3] and the rows of los [n, 3]
+    (from the smallest dot product, rounded up by :data:`ANGLE_GUARD`)."""
+    return math.acos(min(max(float((los @ u).min()), -1.0), 1.0)) + ANGLE_GUARD
 
 
 def need_bound(ix: AreaIndex, c: int, g: int, before: bool) -> float:
@@ -184,61 +207,83 @@ def need_bound(ix: AreaIndex, c: int, g: int, before: bool) -> float:
       sight and the group's boundary ones (0 when the model needs no lines of sight:
       the exact check decides).
     """
-    pb = ix.pb
-    k = int(ix.cv.group_sat[g])
-    table, los = pb.tables[k], ix.los[g]
-    if table is None or los is None:
-        return 0.0
-    u = np.asarray(pb.option_end_los[c] if before else pb.option_start_los[c])
-    return float(table.scalar(float(_angles(u[None, :], los).max())))
+    key = (c, g, before)
+    got = ix.bounds.get(key)
+    if got is None:
+        pb = ix.pb
+        k = int(ix.cv.group_sat[g])
+        table, los = pb.tables[k], ix.los[g]
+        if table is None or los is None:
+            got = 0.0
+        else:
+            u = np.asarray(pb.option_end_los[c] if before else pb.option_start_los[c])
+            got = float(table.scalar(_widest(u, los)))
+        ix.bounds[key] = got
+    return got
 
 
-def pass_gaps(ix: AreaIndex, groups) -> np.ndarray:
-    """Slots needed between a strip of ``groups[i]`` and a later one of ``groups[j]``: the
-    slew table at the largest angle between their boundary lines of sight (>= 1); for a
-    model that needs no lines of sight, the fewest slots after which the problem's own
-    transition (:meth:`Problem.need`) from an option of ``groups[i]`` ending mid-pass to
-    one of ``groups[j]`` fits (:func:`_exact_gaps`)."""
-    pb = ix.pb
-    cv = ix.cv
-    k = int(cv.group_sat[groups[0]])
-    table = pb.tables[k]
-    n = len(groups)
-    if table is None or any(ix.los[g] is None for g in groups):
-        return _exact_gaps(ix, groups)
-    b = max(ix.los[g].shape[0] for g in groups)
-    los = np.stack([np.pad(ix.los[g], ((0, b - ix.los[g].shape[0]), (0, 0)), mode="edge")
-                    for g in groups])  # fmt: skip
-    dots = np.einsum("ibc,jdc->ijbd", los, los).reshape(n, n, -1).min(axis=-1)
-    need = table(np.arccos(np.clip(dots, -1.0, 1.0)))
-    return np.maximum(np.ceil(np.asarray(need) / cv.slot_s - 1e-9).astype(np.int64), 1)
+def pass_gaps(ix: AreaIndex, gi, gj) -> np.ndarray:
+    """Slots needed between a strip of group ``gi[p]`` and a later one of group ``gj[p]``
+    (groups of one pass): the slew table at the largest angle between their boundary lines
+    of sight (>= 1); for a model that needs no lines of sight, the fewest slots after which
+    the problem's own transition (:meth:`Problem.need`) from an option of ``gi[p]`` ending
+    mid-pass to one of ``gj[p]`` fits (:func:`_exact_gaps`).
 
-
-def _exact_gaps(ix: AreaIndex, groups, most: int = 8) -> np.ndarray:
-    """The gap matrix of :func:`pass_gaps` from exact transitions: per pair of groups, an
-    option of the first ending at a boundary shared by both and options of the second
-    starting 1, 2, ... slots later (at most ``most``; never feasible: ``most``)."""
+    Args:
+      ix: AreaIndex; gi, gj: int [P], group ids.
+    Returns:
+      int [P].
+    """
     pb, cv = ix.pb, ix.cv
-    n = len(groups)
-    ends, starts = {}, {}
-    for c in np.flatnonzero(np.isin(cv.option_group, groups)).tolist():
-        g = int(cv.option_group[c])
-        ends.setdefault((g, int(cv.option_b[c])), c)
-        starts.setdefault((g, int(cv.option_a[c])), c)
-    out = np.full((n, n), most, np.int64)
-    for i, gi in enumerate(groups):
-        lo_i, hi_i = int(cv.group_slot0[gi]), int(cv.group_slot0[gi] + cv.group_nslots[gi])
-        for j, gj in enumerate(groups):
-            lo_j = int(cv.group_slot0[gj])
-            t = max(lo_i + 1, min(hi_i, lo_j + 1))  # the end slot the test is made at
-            c = ends.get((int(gi), t))
-            if c is None:
-                continue
-            for k in range(1, most):
-                d = starts.get((int(gj), t + k))
-                if d is not None and k * cv.slot_s >= pb.need(c, d):
-                    out[i, j] = k
-                    break
+    gi, gj = np.asarray(gi, np.int64), np.asarray(gj, np.int64)
+    table = pb.tables[int(cv.group_sat[gi[0]])] if gi.size else None
+    if table is None or any(ix.los[g] is None for g in np.unique(np.concatenate([gi, gj]))):
+        return _exact_gaps(ix, gi, gj)
+    out = np.empty(gi.size, np.int64)
+    for g in np.unique(gi).tolist():  # one group against all its partners at once
+        sel = np.flatnonzero(gi == g)
+        b = max(ix.los[int(h)].shape[0] for h in gj[sel])
+        los = np.stack([np.pad(ix.los[int(h)], ((0, b - ix.los[int(h)].shape[0]), (0, 0)),
+                               mode="edge") for h in gj[sel]])  # fmt: skip
+        dots = np.einsum("bc,jdc->jbd", ix.los[g], los).reshape(sel.size, -1).min(axis=-1)
+        need = table(np.arccos(np.clip(dots, -1.0, 1.0)))
+        out[sel] = np.maximum(np.ceil(np.asarray(need) / cv.slot_s - 1e-9).astype(np.int64), 1)
+    return out
+
+
+def _exact_gaps(ix: AreaIndex, gi, gj, most: int = 8) -> np.ndarray:
+    """The gaps of :func:`pass_gaps` from exact transitions: per pair of groups, an option
+    of the first ending at a boundary shared by both and options of the second starting 1,
+    2, ... slots later (at most ``most``; never feasible: ``most``)."""
+    pb, cv = ix.pb, ix.cv
+    if ix.ends is None:
+        ix.ends, ix.starts = {}, {}
+        for c in np.flatnonzero(cv.option_group >= 0).tolist():
+            g = int(cv.option_group[c])
+            ix.ends.setdefault((g, int(cv.option_b[c])), c)
+            ix.starts.setdefault((g, int(cv.option_a[c])), c)
+    lo_i = cv.group_slot0[gi]
+    hi_i = lo_i + cv.group_nslots[gi]
+    t = np.maximum(lo_i + 1, np.minimum(hi_i, cv.group_slot0[gj] + 1))  # the end tested at
+    src, dst, pair, step = [], [], [], []
+    for p, (a, b, s) in enumerate(zip(gi.tolist(), gj.tolist(), t.tolist(), strict=True)):
+        c = ix.ends.get((a, s))
+        if c is None:
+            continue
+        for k in range(1, most):
+            d = ix.starts.get((b, s + k))
+            if d is not None:
+                src.append(c)
+                dst.append(d)
+                pair.append(p)
+                step.append(k)
+    out = np.full(gi.size, most, np.int64)
+    if src:
+        step = np.asarray(step)
+        sat = int(cv.group_sat[gi[0]])
+        ok = step * cv.slot_s >= pb.closed_needs(src, dst, sat)
+        k = np.where(ok, step, most)
+        np.minimum.at(out, np.asarray(pair), k)
     return out
 
 
@@ -427,7 +472,7 @@ def _gain(tl: Timeline, cv, g: int, a: int, b: int, boosted: bool) -> float:
     return gain + MIN_BOOST * float(np.sum(np.where(short[cv.area[s]], cv.share[s], 0.0)))
 
 
-def fill(tl: Timeline, ix: AreaIndex, deadline: float, banned=None, fails=None) -> int:
+def fill(tl: Timeline, ix: AreaIndex, deadline: float, banned=None, fails=None, only=None) -> int:
     """Add area strips by largest exact marginal gain until none gains or the cap is reached.
 
     Args:
@@ -437,6 +482,7 @@ def fill(tl: Timeline, ix: AreaIndex, deadline: float, banned=None, fails=None) 
       banned: optional set of groups not to use.
       fails: optional dict window -> satellite's area observations at which it did not
         fit (shared across calls: a window is skipped while that timeline is unchanged).
+      only: optional int array, the windows to choose from (default: all).
     Returns:
       number of strips added.
     """
@@ -446,6 +492,8 @@ def fill(tl: Timeline, ix: AreaIndex, deadline: float, banned=None, fails=None) 
     cum = _open_cum(tl, ix, busy, boost)
     ub = cum[win.r1] - cum[win.r0]
     cand = np.nonzero(ub > MIN_GAIN)[0]
+    if only is not None:
+        cand = np.intersect1d(cand, only)
     heap = list(zip((-ub[cand]).tolist(), cand.tolist(), strict=True))
     heapq.heapify(heap)
     added = 0

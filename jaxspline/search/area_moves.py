@@ -54,6 +54,8 @@ PASS_PROB, RELATED_PROB = 0.2, 0.6
 RELATED_MOST = 3
 #: Most strips a pass re-plan puts in one pass.
 MAX_RUNS_PER_PASS = 8
+#: Most groups (those of most open value) a pass re-plan chooses among.
+DP_GROUPS = 48
 #: Value below which a run is not worth an action.
 RUN_PRICE = 1e-10
 
@@ -64,7 +66,9 @@ def reopt_pass(tl: Timeline, ix: AreaIndex, p: int) -> int:
     The pass's strips are removed; :func:`jaxspline.search.pass_dp.best_runs` picks the
     runs of best open value (at most the actions left, other observations of the
     satellite blocking their maneuver gaps, :func:`free_slots`), and each run goes in if
-    :meth:`Timeline.check` passes.
+    :meth:`Timeline.check` passes. In a pass of several pitches a sample may lie in rows
+    of different slots, which the DP would count twice: there the pass is refilled by the
+    lazy greedy (:func:`fill`) on its own windows.
 
     Args:
       tl: Timeline, modified in place; ix: AreaIndex; p: pass.
@@ -78,6 +82,8 @@ def reopt_pass(tl: Timeline, ix: AreaIndex, p: int) -> int:
     for c in area_strips(tl, k):
         if cv.group_pass[cv.option_group[c]] == p:
             _remove(tl, c)
+    if ix.pitched[p]:  # rows of different slots overlap: the DP would count them twice
+        return fill(tl, ix, math.inf, only=ix.pass_windows[p])
     t_n = p1 - p0
     vals = np.zeros((groups.size, t_n))
     allowed = np.zeros((groups.size, t_n), dtype=bool)
@@ -89,13 +95,16 @@ def reopt_pass(tl: Timeline, ix: AreaIndex, p: int) -> int:
     cap = math.inf if pb.max_actions is None else pb.max_actions - tl.n_observations
     need = int(cv.min_slots[k])
     rmax = int(min(cap, (t_n + 1) // (need + 1), MAX_RUNS_PER_PASS))
-    useful = np.nonzero((vals * allowed).sum(axis=1) > RUN_PRICE)[0]
+    worth = (vals * allowed).sum(axis=1)
+    useful = np.nonzero(worth > RUN_PRICE)[0]
     if useful.size == 0 or rmax < 1:
         return 0
+    if useful.size > DP_GROUPS:  # the DP is quadratic in the groups: the most open value
+        useful = np.sort(useful[np.argsort(-worth[useful], kind="stable")[:DP_GROUPS]])
     _, runs = best_runs(
         vals[useful],
         allowed[useful],
-        ix.gaps(p)[np.ix_(useful, useful)],
+        ix.gaps(p, useful),
         need,
         int(cv.max_slots[k]),
         rmax,

@@ -184,6 +184,7 @@ class Prices:
             self.area = np.flatnonzero(self.cv.option_group >= 0)
             self.lay = pass_layout(self.cv, pb.max_actions)
             self.rows = np.zeros(0, np.int64)
+            self.capped = []  # passes whose cover cap bounds them (area_dp)
             # below any path's value: the area options have DPs of their own
             self.shut = -(float(self.target_value.sum() + self.cv.weight.sum()) + 1.0)
         self.en = EnergyBudgets(pb) if energy else None
@@ -222,8 +223,11 @@ class Prices:
         if self.cv is None:
             self._record(vals, paths)
             return paths
-        lam_s = self.lam[self.n_tg : self.n_tg + self.n_sm]
-        total, self.rows = area_dp(self.cv, self.lay, self.cv.row_values(self.cv.weight - lam_s))
+        credit = self.cv.weight - self.lam[self.n_tg : self.n_tg + self.n_sm]
+        self.capped = []
+        total, self.rows = area_dp(
+            self.cv, self.lay, self.cv.row_values(credit), credit, self.capped
+        )
         self._record([*vals, total], paths)
         self.area_options = run_options(self.cv, self.rows)
         return [*paths, self.area_options]
@@ -256,12 +260,21 @@ class Prices:
         return cnt
 
     def _sample_takers(self) -> np.ndarray:
-        """Number of the chosen area rows covering each sample (float [N samples])."""
-        cv = self.cv
-        if not self.rows.size:
-            return np.zeros(self.n_sm)
-        pos, _ = gather_ranges(cv.indptr, self.rows)
-        return np.bincount(cv.indices[pos], minlength=self.n_sm).astype(np.float64)
+        """Number of passes covering each sample in the relaxation's solution (float [N
+        samples]): the chosen rows' samples, once per pass; every sample a capped pass can
+        cover."""
+        cv, lay = self.cv, self.lay
+        cnt = np.zeros(self.n_sm)
+        capped = np.asarray(self.capped, np.int64)
+        rows = self.rows[~np.isin(lay.row_pass[self.rows], capped)]
+        if rows.size:
+            pos, which = gather_ranges(cv.indptr, rows)
+            key = np.unique(lay.row_pass[rows[which]] * self.n_sm + cv.indices[pos])
+            np.add.at(cnt, key % self.n_sm, 1.0)
+        if capped.size:
+            pos, _ = gather_ranges(lay.pass_ptr, capped)
+            np.add.at(cnt, lay.pass_samples[pos], 1.0)
+        return cnt
 
     def _subgradient(self) -> np.ndarray:
         g = self._takers(self.paths) - 1.0

@@ -42,6 +42,7 @@ class PassLayout:
         slots of a strip).
       blocks: list of int arrays of pass indices processed together.
       cap: most runs of a plan (the action cap, or the sum of the passes' most).
+      pass_ptr, pass_samples: CSR of the samples each pass's rows cover (each once).
     """
 
     n_pass: int
@@ -54,6 +55,8 @@ class PassLayout:
     min_len: np.ndarray
     blocks: list
     cap: int
+    pass_ptr: np.ndarray
+    pass_samples: np.ndarray
 
 
 def pass_layout(cv, max_actions: int | None) -> PassLayout:
@@ -97,9 +100,12 @@ def pass_layout(cv, max_actions: int | None) -> PassLayout:
         peak = new_peak
     if cur:
         blocks.append(np.array(cur))
-    return PassLayout(
-        n_pass, gp[row_group], lg[row_group], row_lt, counts, n_slots, max_runs, need, blocks, cap
-    )
+    row_pass = gp[row_group]
+    per_row = np.diff(cv.indptr)
+    key = np.unique(np.repeat(row_pass, per_row) * cv.n_samples + cv.indices)
+    pass_ptr = np.searchsorted(key // max(cv.n_samples, 1), np.arange(n_pass + 1))
+    return PassLayout(n_pass, row_pass, lg[row_group], row_lt, counts, n_slots, max_runs, need,
+                      blocks, cap, pass_ptr, key % max(cv.n_samples, 1))  # fmt: skip
 
 
 def _block_dp(vals: np.ndarray, runs: np.ndarray, lmin: int):
@@ -202,12 +208,19 @@ def _knapsack(values: list, cap: int):
     return total, runs[::-1]
 
 
-def area_dp(cv, lay: PassLayout, row_credit: np.ndarray):
+def area_dp(cv, lay: PassLayout, row_credit: np.ndarray, sample_credit=None, capped=None):
     """The areas' part of the relaxation at row credits (module docstring).
+
+    With ``sample_credit`` each pass's value is also capped by the credits of the samples
+    it can cover, each once (the rows of a pass may cover a sample at several slots when
+    the satellite pitches; the relaxation of :mod:`jaxspline.search.lagrangian` counts a
+    sample once per pass).
 
     Args:
       cv: CoverTable; lay: its :func:`pass_layout`; row_credit: float64 [R], each row's
-        credit.
+        credit; sample_credit: optional float64 [N samples], each sample's credit (the sum
+        over its rows' samples gives ``row_credit``); capped: optional list, gets the
+        passes whose cap is below their runs' value.
     Returns:
       (value, rows): the best total (>= what any plan's area options are credited) and
       int64 the rows the chosen runs take.
@@ -230,7 +243,16 @@ def area_dp(cv, lay: PassLayout, row_credit: np.ndarray):
         for i, p in enumerate(blk):
             values[p] = v[i, : int(lay.max_runs[p]) + 1]
             choices[int(p)] = (ch, i, rowmap)
+    over = set()
+    if sample_credit is not None:
+        pos = np.maximum(sample_credit, 0.0)[lay.pass_samples]
+        most = np.add.reduceat(np.r_[pos, 0.0], lay.pass_ptr[:-1]) * (np.diff(lay.pass_ptr) > 0)
+        for p in range(lay.n_pass):
+            over.update([p] if values[p][1:].max(initial=-np.inf) > most[p] else [])
+            values[p] = np.minimum(values[p], most[p])
     total, runs = _knapsack(values, lay.cap)
+    if capped is not None:
+        capped.extend(p for p, r in enumerate(runs) if r and p in over)
     rows = []
     for p, r in enumerate(runs):
         if r:

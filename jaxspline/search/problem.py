@@ -27,7 +27,7 @@ from jaxspline.search.battery import BatteryModel
 from jaxspline.search.cover import CoverTable
 from jaxspline.search.store import NearPairs, start_order
 
-__all__ = ["JOIN_SAFETY", "SEPTIC_PEAKS", "Problem", "rest_need", "septic_time"]
+__all__ = ["JOIN_SAFETY", "SEPTIC_PEAKS", "Problem", "rest_need", "rest_needs", "septic_time"]
 
 #: Peak rate, acceleration and jerk of the rest-to-rest septic (degree-7) join over a
 #: unit turn in unit time (SPEC section 3): its time over ``theta`` within bounds is
@@ -36,7 +36,7 @@ SEPTIC_PEAKS = (35.0 / 16.0, 7.513188403792299, 52.5)
 #: A closed-form transition flown as a degree-7 join from or to a point or strip target
 #: gets this times the septic time of its turn (the motion of the target's law at that
 #: end; between two area strips, held in the track frame, the septic time itself).
-JOIN_SAFETY = 1.5
+JOIN_SAFETY = 1.0
 
 
 def septic_time(theta: float, rate: float, accel: float, jerk: float) -> float:
@@ -45,6 +45,12 @@ def septic_time(theta: float, rate: float, accel: float, jerk: float) -> float:
     k1, k2, k3 = SEPTIC_PEAKS
     t_jerk = (k3 * theta / jerk) ** (1.0 / 3.0) if math.isfinite(jerk) else 0.0
     return max(k1 * theta / rate, math.sqrt(k2 * theta / accel), t_jerk)
+
+
+def _septic_times(theta, rate, accel):
+    """:func:`septic_time` without a jerk bound, element-wise (numpy)."""
+    k1, k2, _ = SEPTIC_PEAKS
+    return np.maximum(k1 * theta / rate, np.sqrt(k2 * theta / accel))
 
 
 def rest_need(angle_a, rate_a, angle_b, rate_b, rate, accel) -> float:
@@ -65,26 +71,27 @@ def rest_need(angle_a, rate_a, angle_b, rate_b, rate, accel) -> float:
     Returns:
       float [s].
     """
+    return float(rest_needs(angle_a, rate_a, angle_b, rate_b, rate, accel))
+
+
+def rest_needs(angle_a, rate_a, angle_b, rate_b, rate, accel) -> np.ndarray:
+    """:func:`rest_need` of many transitions: states float [..., 3] -> float [...] [s]."""
     stop_a = angle_a + rate_a * np.abs(rate_a) / (2.0 * accel)
     go_b = angle_b - rate_b * np.abs(rate_b) / (2.0 * accel)
     d = np.abs(go_b - stop_a)
     slew = np.where(d <= rate * rate / accel, 2.0 * np.sqrt(d / accel), d / rate + rate / accel)
-    return float(np.max(np.abs(rate_a) / accel + slew + np.abs(rate_b) / accel))
+    return np.max(np.abs(rate_a) / accel + slew + np.abs(rate_b) / accel, axis=-1)
 
 
-def _channel_septic(st, i: int, j: int, rate, accel, jerk) -> float:
-    """Per-channel septic time of the turn from option i's end to option j's start (each
-    channel's stop and start points as in :func:`rest_need`, plus its braking and speeding
-    up), the largest channel's [s]."""
+def _channel_septic(st, i, j, rate, accel) -> np.ndarray:
+    """Per-channel septic time of the turns from options i's ends to options j's starts
+    (int arrays, or ints; each channel's stop and start points as in :func:`rest_need`,
+    plus its braking and speeding up), the largest channel's [s]."""
     ra, rb = st[3][i], st[1][j]
     d = np.abs(
         (st[0][j] - rb * np.abs(rb) / (2 * accel)) - (st[2][i] + ra * np.abs(ra) / (2 * accel))
     )
-    t = [
-        septic_time(float(x), float(w), float(a), math.inf)
-        for x, w, a in zip(d, rate, accel, strict=True)
-    ]
-    return float(np.max(np.asarray(t) + (np.abs(ra) + np.abs(rb)) / accel))
+    return np.max(_septic_times(d, rate, accel) + (np.abs(ra) + np.abs(rb)) / accel, axis=-1)
 
 
 @dataclass
@@ -166,6 +173,7 @@ class Problem:
         # the hot path of need(): tables of satellites whose near pairs are not looked up
         self._free = [None if look else t for t, look in zip(self.tables, self.lookup, strict=True)]
         self._area = None if self.cover is None else (self.cover.option_group >= 0).tolist()
+        self._los = None  # the lines of sight as arrays, for closed_needs (on first use)
         rows = start_order(self.option_start, self.option_sat)
         if not np.array_equal(self.pairs.rows, rows):  # the DP walks rows in start order
             p = self.pairs
@@ -241,7 +249,7 @@ class Problem:
             rate, accel = self.limits[k]
             t = rest_need(st[2][i], st[3][i], st[0][j], st[1][j], rate, accel)
             if joins is not None:
-                t = max(t, safety * _channel_septic(st, i, j, *joins))
+                t = max(t, safety * float(_channel_septic(st, i, j, joins[0], joins[1])))
             return t + self.gap_margin
         a, b = self.option_end_los[i], self.option_start_los[j]
         cx = a[1] * b[2] - a[2] * b[1]
@@ -253,6 +261,42 @@ class Problem:
         t = table.scalar(th)
         if joins is not None:
             t = max(t, safety * septic_time(th, *joins) + self.gap_margin)
+        return t
+
+    def closed_needs(self, i, j, k: int) -> np.ndarray:
+        """:meth:`need` of many pairs of satellite k each with an area option (the closed
+        form of the module docstring, element-wise).
+
+        Args:
+          i, j: int [P], option ids (same satellite k; in each pair one is an area option).
+          k: the satellite.
+        Returns:
+          float [P] [s].
+        """
+        i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
+        area = self.cover.option_group >= 0
+        safety = np.where(area[i] & area[j], 1.0, JOIN_SAFETY)
+        table = self.tables[k]
+        joins = None if self.joins is None else self.joins[k]
+        if table is None:
+            st = self.channels
+            rate, accel = self.limits[k]
+            t = rest_needs(st[2][i], st[3][i], st[0][j], st[1][j], rate, accel)
+            if joins is not None:
+                t = np.maximum(t, safety * _channel_septic(st, i, j, joins[0], joins[1]))
+            return t + self.gap_margin
+        if self._los is None:
+            self._los = (np.asarray(self.option_end_los), np.asarray(self.option_start_los))
+        a, b = self._los[0][i], self._los[1][j]
+        c = np.cross(a, b)
+        th = np.arctan2(np.sqrt(np.sum(c * c, axis=-1)), np.sum(a * b, axis=-1))
+        t = table(th)
+        if joins is not None:
+            rate, accel, jerk = joins
+            sep = _septic_times(th, rate, accel)
+            if math.isfinite(jerk):
+                sep = np.maximum(sep, np.cbrt(SEPTIC_PEAKS[2] * th / jerk))
+            t = np.maximum(t, safety * sep + self.gap_margin)
         return t
 
     @classmethod
