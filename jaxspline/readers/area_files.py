@@ -322,7 +322,7 @@ def parse_areas(ctx, data: dict, base_dir, satellites, horizon=None) -> list[Are
     out, names = [], {}
     for i, (f, a) in enumerate(field_tables(ctx, data, "areas", "area")):
         for key, why in RETIRED_KEYS.items():
-            if key in a:
+            if isinstance(a, dict) and key in a:
                 raise ctx.error(f"{f}.{key}", f"is no longer read: {why}")
         a = field_table(ctx, f, a, AREA_KEYS)
         name = a.get("name", f"area_{i + 1}")
@@ -409,7 +409,7 @@ def read_samples(path) -> np.ndarray:
         if bad.size:
             i = int(bad[0])
             raise ValueError(
-                f"{path.name} row {i + 2}: {c} must be within [{lo}, {hi}], got {out[i, j]!r}"
+                f"{path.name} row {i + 2}: {c} must be within [{lo}, {hi}], got {float(out[i, j])!r}"
             )
     if out[:, 2].sum() > 1.0 + 1e-9:
         raise ValueError(f"{path.name}: the weights sum to {out[:, 2].sum():.6g}, more than 1")

@@ -359,6 +359,8 @@ def _area_fields(ctx, f, sat, off_deg: float) -> dict:
     if "edge_off_nadir_deg" in sat:
         lo, hi = field_pair(ctx, f"{f}.edge_off_nadir_deg", sat["edge_off_nadir_deg"],
                             **bounds("satellites[].edge_off_nadir_deg"))  # fmt: skip
+        if not lo < hi:
+            raise ctx.error(f"{f}.edge_off_nadir_deg", f"needs inner < outer, got [{lo:g}, {hi:g}]")
         if hi > off_deg:
             raise ctx.error(
                 f"{f}.edge_off_nadir_deg",
@@ -366,8 +368,11 @@ def _area_fields(ctx, f, sat, off_deg: float) -> dict:
             )
         out["edge_band"] = (math.radians(lo), math.radians(hi))
     if "strip_duration_s" in sat:
-        out["strip_duration"] = field_pair(ctx, f"{f}.strip_duration_s", sat["strip_duration_s"],
-                                           **bounds("satellites[].strip_duration_s"))  # fmt: skip
+        lo, hi = field_pair(ctx, f"{f}.strip_duration_s", sat["strip_duration_s"],
+                            **bounds("satellites[].strip_duration_s"))  # fmt: skip
+        if not 0.0 < hi:
+            raise ctx.error(f"{f}.strip_duration_s", f"needs a longest > 0, got [{lo:g}, {hi:g}]")
+        out["strip_duration"] = (lo, hi)
     if "duty_s_per_orbit" in sat:
         out["duty"] = _num(ctx, f"{f}.duty_s_per_orbit", sat["duty_s_per_orbit"],
                            "duty_s_per_orbit")  # fmt: skip

@@ -41,8 +41,14 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
     sensor = "visible"                  # sensor type (default "visible")
     settle_s = 0.0                      # settling time after a rest-to-rest slew [s]
     swath_km = 20.0                     # ground width imaged across a strip [km] (default
-                                        # 20, at most 5000): default strip width of areas,
-                                        # footprints
+                                        # 20, at most 5000): footprints, and the field of
+                                        # view of area strips when fov_deg is not given
+    fov_deg = 1.2                       # cross-track field of view of area strips [deg]
+    edge_off_nadir_deg = [0.0, 30.0]    # off-nadir band an area strip's edges lie in [deg]
+                                        # (default: 0 to off_nadir_max_deg)
+    strip_duration_s = [0.0, 60.0]      # shortest and longest area strip [s]
+    duty_s_per_orbit = 300.0            # imaging seconds in any window of one orbital
+                                        # period (default: no rule)
     flex = { freq_hz = 0.5, damping = 0.01, tolerance_deg = 1e-4 }
                                         # structural mode (model "flexible" only, required
                                         # there): frequency [Hz] (2 pi f rad/s inside),
@@ -75,27 +81,24 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
                                         # speed >= it; points: duration_s defaults to
                                         # max(10, min_duration_s) and must reach it
 
-    [[areas]]                           # polygon area targets (jaxspline.readers.areas): strips
-                                        # along the ground tracks of the passes
+    [[areas]]                           # area targets: the weight of their samples covered
+                                        # by strips at a held roll (and pitch) counts
     name = "karst"                      # default "area_1", "area_2", ... (unique)
     geojson = "karst.geojson"           # GeoJSON file (relative to this file's folder):
                                         # Polygon / MultiPolygon, Feature or
                                         # FeatureCollection (its polygons united), [lon, lat]
     lonlat_deg = [[13.6, 45.6], [14.2, 45.6], [14.2, 45.9], [13.6, 45.9]]
                                         # or one ring of [lon, lat] [deg] (not both)
-    priority = 20.0                     # value of the whole area (> 0, default 1), split
-                                        # over the strips by covered share
-    swath_km = 15.0                     # strip width [km]; default: the narrowest swath_km
-                                        # of the satellites whose sensor the area accepts
-    max_length_km = 60.0                # longer strips are split [km] (default: no limit)
+    samples_csv = "karst_samples.csv"   # or the area's own samples: lon_deg, lat_deg,
+                                        # weight (shares of the area, summing to <= 1)
+    priority = 20.0                     # value of the whole area (> 0, default 1): a
+                                        # sample is worth priority x its weight
     sensor = ""                         # required sensor type ("" = any)
     window_s = [0.0, 3600.0]            # imaging window of every strip [s from the epoch]
-    objective = "coverage"              # "coverage" (default: strips chosen by unique
-                                        # coverage of a sample grid, each strip worth its
-                                        # marginal covered share) or "strips" (fixed cut
-                                        # strips, each worth its share of the area)
-    grid_km = 4.0                       # coverage sample spacing [km] (0.01-1000; default a
-                                        # third of swath_km; at most 200000 samples)
+    grid_km = 4.0                       # sample spacing [km] (0.01-1000; default a third
+                                        # of the narrowest swath; at most 200000 samples)
+    min_coverage = 0.5                  # share the plan should reach (the search favours
+                                        # areas below it; default: none)
 
     [targets_file]                      # alternative to targets_csv
     path = "more_targets.csv"
@@ -128,14 +131,19 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
     bound_worker = true                 # iterate the bound on a second CPU during the search
     refine_steps = 100                  # optax steps refining per-channel start times (0 = off)
     time_limit_s = 30.0                 # default search budget [s]
+    max_actions = 500                   # most observations of a plan (default: no cap)
+    area_roll_step_deg = 0.25           # roll grid of area strips [deg]
+    area_pitch_step_deg = 2.0           # pitch grid of an agile satellite's area strips
+                                        # [deg] (default: one action step of ground track)
+    duty_margin_s = 0.5                 # kept below duty_s_per_orbit [s]
 
 The target sections (``targets_csv``, ``[[targets]]``/``[[routes]]``,
 ``[targets_file]``, ``[random_targets]``) are read by :mod:`jaxspline.readers.targets`,
 whose docstring lists the CSV columns with their units and how random targets are
 drawn; :func:`~jaxspline.readers.targets.load_targets_csv` reads them. ``[[areas]]``
-(alias ``[area]``) are read by :mod:`jaxspline.readers.area_files` and cut into strip targets by
-:mod:`jaxspline.readers.areas` (method there); their
-strips follow every other target, and a file with areas needs no other targets.
+(alias ``[area]``) are read by :mod:`jaxspline.readers.area_files`, each one target of
+kind ``AREA`` after every other target (a file with areas needs no other targets); the
+planner lays their strips out (:mod:`jaxspline.planner.area_options`).
 
 :func:`default_scenario` loads the packaged ``data/default.toml``: six satellites over
 six hours with about 1500 city targets (``data/cities.csv``, made by
@@ -389,7 +397,7 @@ def parse_scenario(
 def _with_areas(ctx, data, base_dir, sc: Scenario) -> Scenario:
     """``sc`` with the ``[[areas]]`` of ``data``: each a target of kind AREA after its
     targets (priority, window, sensor, its centre) and an :class:`Area`."""
-    from jaxspline.readers.area_files import parse_areas, polygon_center
+    from jaxspline.readers.area_files import parse_areas
 
     specs = parse_areas(ctx, data, base_dir, sc.satellites, horizon=sc.duration)
     lat, lon, areas = [], [], []
@@ -400,9 +408,9 @@ def _with_areas(ctx, data, base_dir, sc: Scenario) -> Scenario:
             lon.append(math.radians(float(np.average(a.samples[:, 0], weights=w))))
             lat.append(math.radians(float(np.average(a.samples[:, 1], weights=w))))
         else:
-            c = polygon_center(a.polygon)
-            lat.append(math.asin(float(c[2])))
-            lon.append(math.atan2(float(c[1]), float(c[0])))
+            c = a.polygon.centroid  # (lon, lat) [deg], geodetic as the file gives them
+            lat.append(math.radians(float(c.y)))
+            lon.append(math.radians(float(c.x)))
         geometry = None if a.polygon is None else shapely.geometry.mapping(a.polygon)
         areas.append(Area(a.name, first + i, _plain(geometry), a.grid, a.samples, a.min_share))
     rows = make_targets(

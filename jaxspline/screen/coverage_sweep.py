@@ -179,7 +179,7 @@ def group_runs(inner, outer, hit, u_key, n_samples, g_maxq, lon, lat, region) ->
     run_id = np.cumsum(new_run) - 1
     starts = np.flatnonzero(new_piece)
     nq = np.diff(np.append(starts, aq.size))
-    run_last = np.append(np.flatnonzero(new_run)[1:], aq.size) - 1
+    run_last = np.append(np.flatnonzero(new_run)[1:], aq.size)[: int(new_run.sum())] - 1
     stats = {
         "quads": int(u.size),
         "active_quads": int(aq.size),

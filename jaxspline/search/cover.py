@@ -121,7 +121,7 @@ class CoverTable:
     group_pass: np.ndarray = field(init=False)
 
     def __post_init__(self):
-        self.group_row0 = np.concatenate([[0], np.cumsum(self.group_nslots)[:-1]]).astype(np.int64)
+        self.group_row0 = (np.cumsum(self.group_nslots) - self.group_nslots).astype(np.int64)
         self.group_pass = group_passes(self.group_sat, self.group_slot0, self.group_nslots)
         if self.indptr[-1] != self.indices.size or self.indptr.size != self.n_rows + 1:
             raise ValueError(
