@@ -52,6 +52,7 @@ _REPORT_EVERY = 5.0  # [s] between progress reports
 _REFRESH_EVERY = 16  # iterations between refreshes of the unscheduled list
 _TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
 _POLL_EVERY = 0.5  # [s] between two looks at the plans offered from outside (``incoming``)
+_CEILING_TOL = 1e-9  # relative: a plan this close to every value within reach is optimal
 
 
 def greedy_order(tl: Timeline):
@@ -345,7 +346,10 @@ def lns(
     w = _Walk(tl, has, rank)
     it = 0
     last = polled = time.monotonic()
+    ceiling = _ceiling(tl, has)
     while (max_iters is None or it < max_iters) and clock.now() < deadline:
+        if w.best_key[-2] >= ceiling:  # every target and every coverable sample: optimal
+            break
         it += 1
         if incoming is not None and time.monotonic() - polled > _POLL_EVERY:
             polled = time.monotonic()
@@ -371,6 +375,16 @@ def lns(
     if _key(tl) < w.best_key:
         tl.restore(w.best)
     return it
+
+
+def _ceiling(tl: Timeline, has) -> float:
+    """The most value any plan can have (every target with an option, every sample some
+    area option covers), less a rounding tolerance."""
+    pb = tl.pb
+    most = sum(pb.target_value[t] for t in has)
+    if pb.cover is not None:
+        most += pb.cover.union_weight()
+    return most - _CEILING_TOL * max(1.0, most)
 
 
 def _area_share(tl: Timeline, has) -> float:
