@@ -12,14 +12,9 @@ import numpy as np
 import pytest
 import yaml
 
+from jaxspline.cli.case_commands import write_solution
 from jaxspline.regional import case as rc
-from jaxspline.regional.case import (
-    format_time,
-    load_case,
-    load_solution,
-    parse_time,
-    write_solution,
-)
+from jaxspline.regional.case import format_time, load_case, load_solution, parse_time
 from jaxspline.regional.case_fields import tle_checksum
 
 DATA = Path("/work/shared/data/regional_coverage/train")
@@ -279,15 +274,18 @@ def test_solution_io(tmp_path):
          "duration_s": 20, "roll_deg": -20.5},
     ]  # fmt: skip
     path = tmp_path / "out" / "sol.json"
-    write_solution(path, actions)
+    write_solution(path, {"actions": actions})
     assert load_solution(path) == {"actions": actions}
     with pytest.raises(FileExistsError):
-        write_solution(path, [])
+        write_solution(path, {"actions": []})
     write_solution(path, {"actions": []}, force=True)
     assert load_solution(path) == {"actions": []}
     assert sorted(p.name for p in path.parent.iterdir()) == ["sol.json"]  # no temp file left
-    with pytest.raises(ValueError, match="actions: expected a list"):
+    with pytest.raises(ValueError, match="a list of actions"):
         write_solution(tmp_path / "x.json", {"actions": 3})
+    with pytest.raises(ValueError, match="a list of actions"):
+        write_solution(tmp_path / "x.json", [])
+    assert not (tmp_path / "x.json").exists()
     for text, message in [
         ("[1, 2]", "expected an object with an 'actions' list"),
         ('{"actions": 1}', "expected an object with an 'actions' list"),
