@@ -1,7 +1,8 @@
 """plan.html in a real browser: headless Chromium opens the page of a small plan offline.
 
 The plan is made by hand (as in test_czml_plot: one circular orbit, one TLE, a dozen
-targets with strips, an area, a battery curve), written as ``plan.json`` with its
+targets with strips, an area with its samples and one area strip, a battery curve),
+written as ``plan.json`` with its
 ``"view"`` section, and the page is rebuilt from that file by ``jaxspline view`` -
 the path a user takes. Chromium (the Debian package ``chromium`` on the ``PATH``, or the
 program ``$JAXSPLINE_CHROMIUM`` names) is driven by Playwright without a browser download
@@ -26,10 +27,9 @@ import shutil
 
 import numpy as np
 import pytest
-from jaxspline.readers.areas import area_coverage
 
+from jaxspline.base.elements import circular_orbit
 from jaxspline.cli import main
-from jaxspline.geometry.orbit import circular_orbit
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.planner.result import Observations, PlanResult
 from jaxspline.products.plan_html import PASS_PAD_S, plan_document, read_plan, write_plan_html
@@ -66,49 +66,55 @@ def result():
         ),
     )
     n = 14
-    kind = np.where(np.arange(n) % 5 == 0, 1, 0)
+    kind = np.r_[np.where(np.arange(n) % 5 == 0, 1, 0), 2]  # the last target: the area
     lat = rng.uniform(-50.0, 50.0, n)
     lon = np.linspace(-170.0, 170.0, n) + rng.uniform(-5.0, 5.0, n)  # spread: hover one
+    alat, alon = lat[11] + 3.0, lon[11] + 3.0  # the area, beside a target not imaged
     targets = make_targets(
         kind,
-        np.radians(lat),
-        np.radians(lon),
-        duration=10.0,
+        np.radians(np.r_[lat, alat]),
+        np.radians(np.r_[lon, alon]),
+        duration=np.r_[np.full(n, 10.0), 0.0],
         length=60e3,
         azimuth=np.radians(30.0),
-        value=rng.integers(1, 10, n).astype(float),
-        name=[f"site-{i:02d}" for i in range(n)],
+        value=np.r_[rng.integers(1, 10, n).astype(float), 5.0],
+        name=[f"site-{i:02d}" for i in range(n)] + ["block"],
     )
     ring = [
-        [lon[0] - 0.6, lat[0] - 0.6],
-        [lon[0] + 0.9, lat[0] - 0.6],
-        [lon[0] + 0.9, lat[0] + 0.9],
-        [lon[0] - 0.6, lat[0] + 0.9],
-        [lon[0] - 0.6, lat[0] - 0.6],
+        [alon - 0.6, alat - 0.6],
+        [alon + 0.9, alat - 0.6],
+        [alon + 0.9, alat + 0.9],
+        [alon - 0.6, alat + 0.9],
+        [alon - 0.6, alat - 0.6],
     ]
     area = Area(
-        name="block",
-        geometry={"type": "Polygon", "coordinates": [ring]},
-        value=5.0,
-        swath=20e3,
-        targets=np.array([0]),
-        share=np.array([1.0]),
-        cutting=np.array([0]),
-        azimuth=np.array([np.radians(30.0)]),
-        passes=np.array([1]),
+        name="block", target=n, geometry={"type": "Polygon", "coordinates": [ring]}, spacing=20e3
     )
     sc = Scenario("html-test", EPOCH, DURATION, sats, targets, areas=(area,))
-    start = np.array([300.0, 1800.0, 7000.0, 900.0, 5000.0, 9000.0])
+    start = np.array([300.0, 1800.0, 7000.0, 8000.0, 900.0, 5000.0, 9000.0])
+    tgt = np.array([0, 2, 4, n, 5, 7, 9])  # the area strip last of alpha's
+    nan = np.nan
     obs = Observations(
-        sat=np.array([0, 0, 0, 1, 1, 1]),
-        target=np.array([0, 2, 4, 5, 7, 9]),
+        sat=np.array([0, 0, 0, 0, 1, 1, 1]),
+        target=tgt,
         start=start,
-        end=start + np.array([8.0, 10.0, 12.5, 9.0, 10.0, 10.0]),
-        maneuver=np.array([30.0, 42.0, 18.0, 25.0, 60.0, 12.0]),
-        slack=np.array([0.0, 4.0, 350.0, 0.02, 2500.0, 7.5]),
-        value=np.asarray(targets.value[[0, 2, 4, 5, 7, 9]]),
-        speed=np.array([7000.0, 0, 0, 6500.0, 0, 0]),
+        end=start + np.array([8.0, 10.0, 12.5, 30.0, 9.0, 10.0, 10.0]),
+        maneuver=np.array([30.0, 42.0, 18.0, 20.0, 25.0, 60.0, 12.0]),
+        slack=np.array([0.0, 4.0, 350.0, 1.0, 0.02, 2500.0, 7.5]),
+        value=np.r_[targets.value[[0, 2, 4]], 2.5, targets.value[[5, 7, 9]]],
+        speed=np.array([7000.0, 0, 0, 0, 6500.0, 0, 0]),
+        roll=np.array([nan, nan, nan, np.radians(20.0), nan, nan, nan]),
+        pitch=np.array([nan, nan, nan, np.radians(-5.0), nan, nan, nan]),
     )
+    # the area strip's swept ground (a closed ring) and the area's samples, half covered
+    strip = np.array([[alon - 0.5, alat - 0.5], [alon + 0.8, alat - 0.5], [alon + 0.8, alat],
+                      [alon - 0.5, alat], [alon - 0.5, alat - 0.5]])  # fmt: skip
+    footprints = [None, None, None, (strip[:, 0], strip[:, 1]), None, None, None]
+    samples = {
+        "lon_deg": alon + np.array([-0.3, 0.3, -0.3, 0.3]),
+        "lat_deg": alat + np.array([-0.3, -0.3, 0.6, 0.6]),
+        "covered": np.array([True, True, False, False]),
+    }
     tb = np.linspace(0.0, DURATION, 60)
     r = PlanResult(
         scenario=sc,
@@ -133,12 +139,26 @@ def result():
                 "max_accel_ratio": 0.8765,
                 "max_jerk_ratio": 0.5,
             },
+            "areas": [
+                {
+                    "area": "block",
+                    "priority": 5.0,
+                    "samples": 4,
+                    "samples_covered": 2,
+                    "covered_share": 0.5,
+                    "value": 2.5,
+                    "strips": 1,
+                    "reachable_share": 1.0,
+                    "min_share": None,
+                }
+            ],
         },
         stats={"windows": 40, "options": 120, "near_pairs": 77, "bound_status": "time"},
         timings={"orbits": 0.01, "search": 1.5, "repair": 0.25},
         battery={"alpha": (tb, 100.0 - 5.0 * np.sin(tb / 2000.0))},
+        areas=[samples],
+        footprints=footprints,
     )
-    r.report["areas"] = area_coverage(r)
     return r
 
 
@@ -279,6 +299,11 @@ def test_imaged_target_glyphs_are_the_observations(loaded, page):
     assert n_free == n_targets - len({o["target"] for o in rows})
     assert _model(pg, "footprints", "m.data_source.data.xs.length") == len(rows)
     assert _model(pg, "areas", "m.data_source.data.name") == ["block"]
+    smp = doc["view"]["areas"][0]["samples"]
+    for flag, name in ((1, "area_samples_covered"), (0, "area_samples_uncovered")):
+        xs = _model(pg, name, "Array.from(m.data_source.data.x)")
+        want = [x for x, c in zip(smp["lon_deg"], smp["covered"], strict=True) if c == flag]
+        assert xs == pytest.approx(want, abs=1e-9), name
     assert _model(pg, "strips", "m.data_source.data.xs.length") == sum(
         k == "strip" for k in doc["view"]["targets"]["kind"]
     )
@@ -380,6 +405,29 @@ def test_header_numbers_equal_plan_json(loaded, page):
             assert float(cells[key]) == pytest.approx(want, rel=5e-3, abs=1e-12), key
     assert cells["valid"] == "valid"
     assert float(cells["gap_percent"]) == pytest.approx(100 * s["gap"] / s["bound"], rel=5e-3)
+
+
+def test_plan_json_view_holds_the_areas_samples_and_strip_footprints(result, page):
+    """The view of plan.json (what the page draws): the area's polygon and samples with
+    their covered flags, the area strip's swept ring as its footprint, its off-nadir
+    angle from its roll and pitch."""
+    _, doc, _ = page
+    (area,) = doc["view"]["areas"]
+    assert area["name"] == "block" and area["geometry"] == result.scenario.areas[0].geometry
+    smp = result.areas[0]
+    assert area["samples"]["covered"] == [1, 1, 0, 0]
+    np.testing.assert_allclose(area["samples"]["lon_deg"], smp["lon_deg"], atol=1e-4)
+    np.testing.assert_allclose(area["samples"]["lat_deg"], smp["lat_deg"], atol=1e-4)
+    feet = doc["view"]["observations"]["footprint"]
+    i = [o["kind"] for o in doc["observations"]].index("area")
+    np.testing.assert_allclose(feet[i]["lon_deg"], result.footprints[i][0], atol=1e-4)
+    np.testing.assert_allclose(feet[i]["lat_deg"], result.footprints[i][1], atol=1e-4)
+    off = doc["view"]["observations"]["off_nadir_deg"][i]
+    want = np.degrees(np.arccos(np.cos(np.radians(20.0)) * np.cos(np.radians(5.0))))
+    assert off == pytest.approx(want, abs=1e-3)  # the view rounds to 3 decimals
+    row = doc["observations"][i]
+    assert (row["roll_deg"], row["pitch_deg"], row["area_covered_share"]) == (20.0, -5.0, 0.5)
+    assert doc["report"]["areas"][0]["covered_share"] == 0.5
 
 
 def test_write_plan_html_matches_view_and_refuses_overwrite(result, page, tmp_path, capsys):
