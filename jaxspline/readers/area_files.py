@@ -408,8 +408,9 @@ def read_samples(path) -> np.ndarray:
         bad = np.flatnonzero((out[:, j] < lo) | (out[:, j] > hi))
         if bad.size:
             i = int(bad[0])
+            got = float(out[i, j])
             raise ValueError(
-                f"{path.name} row {i + 2}: {c} must be within [{lo}, {hi}], got {float(out[i, j])!r}"
+                f"{path.name} row {i + 2}: {c} must be within [{lo}, {hi}], got {got!r}"
             )
     if out[:, 2].sum() > 1.0 + 1e-9:
         raise ValueError(f"{path.name}: the weights sum to {out[:, 2].sum():.6g}, more than 1")

@@ -32,10 +32,12 @@ from jaxspline.base.elements import CircularOrbit, julian_date
 from jaxspline.base.models import ManeuverModel, maneuver_model
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.config import PlannerConfig, positive_number
+from jaxspline.readers.stereo_request import Stereo
 
 __all__ = [
     "AREA",
     "POINT",
+    "STEREO",
     "STRIP",
     "DEFAULT_STRIP_DURATION",
     "DEFAULT_SWATH",
@@ -51,6 +53,7 @@ __all__ = [
 POINT = 0  # a target imaged from one point
 STRIP = 1  # a target imaged along a strip
 AREA = 2  # a target imaged by strips at a held roll, valued by the share of its samples covered
+STEREO = 3  # a target imaged by two or three looks making a stereo product (its Stereo)
 DEFAULT_STRIP_DURATION = (0.0, 60.0)  # [s] shortest and longest area strip when unnamed
 _SHARE_TOL = 1e-9  # the samples' shares may exceed 1 by rounding this much
 DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
@@ -132,6 +135,8 @@ class Satellite:
         between (None: only the boresight's ``off_nadir_max``).
       strip_duration: ``(shortest, longest)`` imaging time of an area strip [s].
       duty: imaging seconds allowed in any window of one orbital period (None: no rule).
+      ifov: the angle one detector pixel sees [rad] (a look's pixel scale is its slant
+        range times it; None: stereo products ignore the pixel scale).
     """
 
     name: str
@@ -148,6 +153,7 @@ class Satellite:
     edge_band: tuple | None = None
     strip_duration: tuple = DEFAULT_STRIP_DURATION
     duty: float | None = None
+    ifov: float | None = None
 
     def __post_init__(self):
         who = f"satellite {self.name!r}"
@@ -203,6 +209,8 @@ class Satellite:
             )
         if self.duty is not None:
             positive_number(f"{who}: duty", self.duty)
+        if self.ifov is not None:
+            positive_number(f"{who}: ifov", self.ifov)
 
     @property
     def maneuver(self) -> ManeuverModel:
@@ -368,8 +376,8 @@ def _check_target_fields(kind: np.ndarray, out: dict) -> None:
     target breaking the first rule it breaks."""
     _reject_first(
         "kind",
-        ~np.isin(kind, (POINT, STRIP, AREA)),
-        "must be 0 (point), 1 (strip) or 2 (area)",
+        ~np.isin(kind, (POINT, STRIP, AREA, STEREO)),
+        "must be 0 (point), 1 (strip), 2 (area) or 3 (stereo)",
         kind,
     )
     for f in ("lat", "lon", "alt", "duration", "length", "azimuth", "value"):
@@ -462,6 +470,8 @@ class Scenario:
       targets: :class:`Targets`.
       planner: :class:`PlannerConfig`.
       areas: tuple of :class:`Area`, one per target of kind :data:`AREA` (unique names).
+      stereo: tuple of :class:`jaxspline.readers.stereo_request.Stereo`, one per target
+        of kind :data:`STEREO`.
     """
 
     name: str
@@ -471,6 +481,7 @@ class Scenario:
     targets: Targets
     planner: PlannerConfig = PlannerConfig()
     areas: tuple = ()
+    stereo: tuple = ()
 
     def __post_init__(self):
         if not isinstance(self.epoch, _dt.datetime):
@@ -488,20 +499,31 @@ class Scenario:
         object.__setattr__(self, "satellites", sats)
         if not isinstance(self.targets, Targets):
             raise ValueError(f"targets must be a Targets, got {type(self.targets).__name__}")
-        areas = tuple(self.areas)
+        for field, cls, kind in (("areas", Area, AREA), ("stereo", Stereo, STEREO)):
+            object.__setattr__(self, field, self._requests(field, cls, kind))
+
+    def _requests(self, field: str, cls, kind: int) -> tuple:
+        """``self.<field>`` checked: instances of ``cls``, unique names, exactly one per
+        target of ``kind``."""
+        items = tuple(getattr(self, field))
         seen = set()
-        for a in areas:
-            if not isinstance(a, Area):
-                raise ValueError(f"areas: every entry must be an Area, got {type(a).__name__}")
+        for a in items:
+            if not isinstance(a, cls):
+                raise ValueError(
+                    f"{field}: every entry must be a {cls.__name__}, got {type(a).__name__}"
+                )
             if a.name in seen:
-                raise ValueError(f"areas: duplicate name {a.name!r}")
+                raise ValueError(f"{field}: duplicate name {a.name!r}")
             seen.add(a.name)
-            if not 0 <= int(a.target) < len(self.targets) or self.targets.kind[a.target] != AREA:
-                raise ValueError(f"area {a.name!r}: target {a.target!r} is not an area target")
-        rows = sorted(int(a.target) for a in areas)
-        if rows != np.flatnonzero(self.targets.kind == AREA).tolist():
-            raise ValueError("areas: every target of kind AREA needs exactly one Area")
-        object.__setattr__(self, "areas", areas)
+            t = int(a.target)
+            if not 0 <= t < len(self.targets) or self.targets.kind[t] != kind:
+                raise ValueError(f"{field} {a.name!r}: target {a.target!r} is not of kind {kind}")
+        rows = sorted(int(a.target) for a in items)
+        if rows != np.flatnonzero(self.targets.kind == kind).tolist():
+            raise ValueError(
+                f"{field}: every target of kind {kind} needs exactly one {cls.__name__}"
+            )
+        return items
 
     @property
     def epoch_jd(self) -> float:

@@ -160,14 +160,6 @@ def test_a_file_of_areas_alone_needs_no_other_target(tmp_path):
     assert len(sc.targets) == 1 and sc.targets.kind[0] == AREA and sc.areas[0].target == 0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="package bug: readers/scenario.py _with_areas sets a polygon area's target row "
-    "latitude to asin(z) of polygon_center's unit vector, the geocentric latitude of the "
-    "centroid (0.19 deg south of it at 45 deg), while every other row (points, strips, "
-    "areas given by samples) holds geodetic latitudes",
-)
 def test_a_polygon_area_target_is_at_its_centroid(tmp_path):
     sc = load_scenario(_write(tmp_path, HEAD + f"[[areas]]\nlonlat_deg = {json.dumps(RING)}\n"))
     c = Polygon(RING).centroid
@@ -367,3 +359,19 @@ def test_example_scenario_file():
     for a in sc.areas:  # the default grid: a third of the narrowest swath (12 km)
         assert a.spacing == pytest.approx(4000.0) and a.samples.shape == (0, 3)
     assert shapely.geometry.shape(sc.areas[0].geometry).is_valid
+
+
+def test_plan_command_refuses_a_retired_key_in_one_line(tmp_path, capsys):
+    """`jaxspline plan` on a file with a retired area key: exit 2, one line naming the
+    field, its line and what replaced it, nothing written."""
+    from jaxspline.cli import main
+
+    scen = _write(tmp_path, HEAD + "[[areas]]\n" + TRI + 'objective = "coverage"\n')
+    out = tmp_path / "out"
+    capsys.readouterr()
+    assert main(["plan", str(scen), "-o", str(out), "--quiet"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "Traceback" not in err
+    line = 1 + (HEAD + "[[areas]]\n" + TRI).count("\n")
+    assert f"areas[0].objective (line {line}): is no longer read" in err, err
+    assert "unique coverage" in err and not out.exists()
