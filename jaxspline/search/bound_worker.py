@@ -224,8 +224,9 @@ class BoundWorker:
         ctx = mp.get_context("fork")
         self._conn, child = ctx.Pipe(duplex=False)
         size = pb.n_targets
-        if pb.cover is not None:
-            size += int(np.count_nonzero(pb.cover.option_group >= 0))
+        closed = pb.closed_options()
+        if closed is not None:
+            size += int(np.count_nonzero(closed))
         self._shared = _Shared(ctx, size) if plans else None
         self._seen = 0
         args = (child, pb, plan_value, deadline, max_iters, dp, self._shared, first)

@@ -171,8 +171,9 @@ def dp_prepare(pb: Problem) -> DPData:
     absorb_sats, absorb_cuts, rows_at, rows_pen, rep = [], [], [], [], []
     ptr, src = pb.pairs.ptr, pb.pairs.src
     tg = np.asarray(pb.option_target, np.int64)
-    if pb.cover is not None:  # area options share no target: never a repeat of each other
-        area = np.flatnonzero(pb.cover.option_group >= 0)
+    closed = pb.closed_options()
+    if closed is not None:  # area options and looks: numbers of their own, never repeats
+        area = np.flatnonzero(closed)
         tg = tg.copy()
         tg[area] = pb.n_targets + np.arange(area.size)
     for b, (ga, gb) in enumerate(groups):

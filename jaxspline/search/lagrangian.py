@@ -47,6 +47,9 @@ action cap). Relaxing the coupling of the two on one satellite only raises the b
 The argument above holds with ``n_s`` the number of chosen rows covering s; the
 subgradient of a sample is that number minus one.
 
+Stereo targets. Their looks leave the satellites' DPs too, and the bound adds each
+stereo target's best product value (what it collects when no other look competes).
+
 Every :data:`_REPAIR_EVERY`-th iteration also repairs the DP paths into a feasible
 plan (each target once, heaviest first, re-checked insertion incl. battery, then greedy
 fill); its value sets the step size.
@@ -180,13 +183,18 @@ class Prices:
         sample_w = np.zeros(0) if self.cv is None else self.cv.weight
         self.n_tg, self.n_sm = self.target_value.size, sample_w.size
         self.area_options = []
+        closed = pb.closed_options()
+        self.area = np.zeros(0, np.int64) if closed is None else np.flatnonzero(closed)
+        # below any path's value: area options and looks have relaxations of their own
+        self.shut = -(float(self.target_value.sum() + sample_w.sum()) + 1.0)
+        self.stereo_const = 0.0  # each stereo target's best product: the relaxation of looks
+        if pb.stereo is not None:
+            st = pb.stereo.stereo_targets
+            self.stereo_const = float(sum(pb.stereo.best_value(int(t)) for t in st))
         if self.cv is not None:
-            self.area = np.flatnonzero(self.cv.option_group >= 0)
             self.lay = pass_layout(self.cv, pb.max_actions)
             self.rows = np.zeros(0, np.int64)
             self.capped = []  # passes whose cover cap bounds them (area_dp)
-            # below any path's value: the area options have DPs of their own
-            self.shut = -(float(self.target_value.sum() + self.cv.weight.sum()) + 1.0)
         self.en = EnergyBudgets(pb) if energy else None
         if self.en is not None:
             if self.en.m:
@@ -201,6 +209,8 @@ class Prices:
         # prices: targets (in [0, w]) then energy budgets (>= 0, see search.energy); the
         # bound gains each price times its constraint's right-hand side
         self.hi = np.r_[self.target_value, sample_w, np.full(m, np.inf)]
+        if pb.stereo is not None:  # their looks are shut: no price to find
+            self.hi[pb.stereo.stereo_targets] = 0.0
         self.rhs = np.ones(self.hi.size)
         if m:
             self.rhs[self.n_tg + self.n_sm :] = self.en.budget / self.en.unit
@@ -236,13 +246,13 @@ class Prices:
         """Option values of the satellites' DPs at prices ``lam``: ``w_t - lam_t`` of a
         target's option; an area option is shut (the areas have :func:`area_dp`)."""
         w = self.target_value[self.option_target] - lam[self.option_target]
-        if self.cv is not None and self.area.size:
+        if self.area.size:
             w[self.area] = self.shut
         return w
 
     def _record(self, vals, paths):
         """Bound of this iteration from the satellites' DP values (satellite order)."""
-        bound = float(sum(vals) + self.lam @ self.rhs)
+        bound = float(sum(vals) + self.lam @ self.rhs) + self.stereo_const
         if bound < self.ub - _GAP_TOL:
             self.ub, self.best_lam, self.stall = bound, self.lam.copy(), 0
         else:

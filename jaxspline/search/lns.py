@@ -39,6 +39,7 @@ from jaxspline.search.area_fill import area_index, fill
 from jaxspline.search.area_moves import AreaWalk, area_move
 from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
+from jaxspline.search.stereo import drop_stray_looks
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["adopt", "earliest_pass", "greedy", "greedy_order", "lns"]
@@ -173,7 +174,8 @@ def _window(tl: Timeline, w: _Walk, rng):
             return None
         c = rng.choice(tl.target_options[t])
         rad = rng.choice(_RAD_TARGET)
-        return pb.option_sat[c], pb.option_start[c] - rad, pb.option_end[c] + rad, c
+        forced = -1 if pb.is_look(c) else c  # a look alone is worth nothing: its product
+        return pb.option_sat[c], pb.option_start[c] - rad, pb.option_end[c] + rad, forced
     k = rng.randrange(pb.n_sats)
     if not tl.lines[k]:
         return None
@@ -225,6 +227,8 @@ def _reinsert(tl: Timeline, er: EnergyRank, k: int, lo: float, hi: float, remove
         )
     # the greedy on noisy costs; only satellite k has new room for a target that was waiting
     greedy_pass(pool, lambda t: tl.insert_choices(t, rng, None if t in moved else span), tl.insert)
+    if pb.stereo is not None:
+        drop_stray_looks(tl, [t for t in pool if pb.stereo.target_products[t]])
 
 
 def _move(tl: Timeline, w: _Walk, mark: int, rng) -> bool:
@@ -410,7 +414,7 @@ def earliest_pass(tl: Timeline, deadline: float):
         if clock.now() > deadline:
             return
         c = tl.assigned[t]
-        if c < 0:
+        if c < 0 or pb.is_look(c):
             continue
         mark = len(tl.log)
         base = tl.score()

@@ -10,10 +10,11 @@ at least ``far[sat]`` apart are always feasible. When the engine
 also screened the flown joins (:mod:`jaxspline.planner.join_screen`), every satellite
 looks its near pairs up (``lookup``): a pair the join screen removed is infeasible.
 
-Area options (``cover``) are never screened pair by pair: a transition into or out of
-one takes the model's closed form, the slew table of rest-to-rest satellites, and for
-per-channel satellites a time that surely suffices (:func:`rest_need`: each channel
-brakes to rest, slews, waits and speeds up to the next state).
+Area options (``cover``) and the looks of stereo targets (``stereo``) are never screened
+pair by pair: a transition into or out of one takes the model's closed form, the slew
+table of rest-to-rest satellites, and for per-channel satellites a time that surely
+suffices (:func:`rest_need`: each channel brakes to rest, slews, waits and speeds up to
+the next state).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ import numpy as np
 
 from jaxspline.search.battery import BatteryModel
 from jaxspline.search.cover import CoverTable
+from jaxspline.search.stereo import ProductTable
 from jaxspline.search.store import NearPairs, start_order
 
 __all__ = ["JOIN_SAFETY", "SEPTIC_PEAKS", "Problem", "rest_need", "rest_needs", "septic_time"]
@@ -122,6 +124,8 @@ class Problem:
         whose joins were screened).
       cover: :class:`jaxspline.search.cover.CoverTable` of the areas (None: no areas;
         an area's ``target_value`` is 0, its value lies in its samples).
+      stereo: :class:`jaxspline.search.stereo.ProductTable` of the stereo targets (None:
+        none; a stereo target's ``target_value`` is its best product's value).
       max_actions: most observations of a plan, all satellites together (None: no cap).
       duty: per satellite ``(period, limit)`` [s]: the imaging time in any window of one
         period ending at an observation's start or end is at most ``limit`` (None, or a
@@ -166,13 +170,15 @@ class Problem:
     limits: list | None = None
     gap_margin: float = 0.0
     joins: list | None = None
+    stereo: ProductTable | None = None
 
     def __post_init__(self):
         if self.lookup is None:  # the model alone decides: tables where there are tables
             self.lookup = [t is None for t in self.tables]
         # the hot path of need(): tables of satellites whose near pairs are not looked up
         self._free = [None if look else t for t, look in zip(self.tables, self.lookup, strict=True)]
-        self._area = None if self.cover is None else (self.cover.option_group >= 0).tolist()
+        closed = self.closed_options()
+        self._area = None if closed is None else closed.tolist()
         self._los = None  # the lines of sight as arrays, for closed_needs (on first use)
         rows = start_order(self.option_start, self.option_sat)
         if not np.array_equal(self.pairs.rows, rows):  # the DP walks rows in start order
@@ -228,6 +234,26 @@ class Problem:
         )
         return table.scalar(th)
 
+    def closed_options(self) -> np.ndarray | None:
+        """bool [N]: the options whose transitions take the closed form (area options and
+        looks), None when there are none."""
+        if self.cover is None and self.stereo is None:
+            return None
+        out = np.zeros(self.n_options, bool)
+        if self.cover is not None:
+            out |= self.cover.option_group >= 0
+        if self.stereo is not None:
+            out |= self.stereo.is_look
+        return out
+
+    def is_closed(self, c: int) -> bool:
+        """Whether option c is an area option or a look (:meth:`closed_options`)."""
+        return self._area is not None and self._area[c]
+
+    def is_look(self, c: int) -> bool:
+        """Whether option c is a look of a stereo target (it counts through ``stereo``)."""
+        return self.stereo is not None and bool(self.stereo.is_look[c])
+
     def is_area(self, c: int) -> bool:
         """Whether option c is an area option (it counts through ``cover``)."""
         return self.cover is not None and self.cover.option_group[c] >= 0
@@ -274,7 +300,7 @@ class Problem:
           float [P] [s].
         """
         i, j = np.asarray(i, np.int64), np.asarray(j, np.int64)
-        area = self.cover.option_group >= 0
+        area = np.asarray(self._area, bool)
         safety = np.where(area[i] & area[j], 1.0, JOIN_SAFETY)
         table = self.tables[k]
         joins = None if self.joins is None else self.joins[k]
@@ -302,7 +328,7 @@ class Problem:
     @classmethod
     def build(cls, opp, sats, first, near_pairs, far, tables, battery, target_values,
               lookup=None, cover=None, max_actions=None, duty=None, gap_margin=0.0,
-              joins=None):  # fmt: skip
+              joins=None, stereo=None):  # fmt: skip
         """Assemble from numpy data.
 
         Args:
@@ -323,6 +349,7 @@ class Problem:
           duty: per satellite ``(period, limit)`` [s] or None, or None.
           gap_margin: added to closed-form transition times [s] (the planner's gap margin).
           joins: per satellite its join limits (see the class docstring), or None.
+          stereo: ProductTable of the stereo targets, or None.
         """
         o = opp.options
         sat = np.asarray(o.sat, np.int64)
@@ -339,7 +366,8 @@ class Problem:
             near_pairs = NearPairs.from_arrays(n, *near_pairs, rows=start_order(o.t_start, sat))
         pc = np.array([not s.maneuver.rest_to_rest for s in sats], bool)
         look = pc if lookup is None else np.asarray(lookup, bool) | pc
-        channels, limits = _channel_rules(o, sats, pc) if cover is not None else (None, None)
+        closed = cover is not None or stereo is not None
+        channels, limits = _channel_rules(o, sats, pc) if closed else (None, None)
         return cls(
             n_sats=n_s,
             target_value=[float(v) for v in target_values],
@@ -368,6 +396,7 @@ class Problem:
             limits=limits,
             gap_margin=gap_margin,
             joins=joins,
+            stereo=stereo,
         )
 
 

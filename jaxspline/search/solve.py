@@ -238,7 +238,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     del dp
     trim_heap()  # the bound phase's freed arrays: the LNS runs without them resident
     exact = False
-    if pb.n_options <= exact_max_options and pb.cover is None:
+    if pb.n_options <= exact_max_options and pb.closed_options() is None:
         start = tl.plan()
         tl.restore([])
         # at most half of what is left: a search that cannot finish still leaves the LNS time

@@ -114,11 +114,11 @@ def sweep(tl: Timeline, d: DPData, rng, offered=None) -> float:
     rng.shuffle(sats)
     tl.commit()
     for k in sats:
-        own = sum(pb.target_value[pb.option_target[c]] for c in tl.lines[k] if not pb.is_area(c))
+        own = sum(pb.target_value[pb.option_target[c]] for c in tl.lines[k] if not pb.is_closed(c))
         if vals[k] <= own or not paths[k]:
             continue
         base = tl.score()
-        for c in [c for c in tl.lines[k] if not pb.is_area(c)]:
+        for c in [c for c in tl.lines[k] if not pb.is_closed(c)]:
             tl.remove(c)
         path = paths[k]
         if pb.battery.has(k):

@@ -2,7 +2,8 @@
 
 A :class:`Timeline` holds, per satellite, its chosen options in start order and, per
 target, the option that images it (each point or strip target at most once; an area's
-options, any number of them, count the samples they cover, :class:`CoverCounts`).
+options, any number of them, count the samples they cover, :class:`CoverCounts`; a
+stereo target's looks count through its complete products, :class:`ProductCounts`).
 :meth:`Timeline.check` tests one insertion: no overlap, the transition from the
 predecessor (or the first maneuver) and to the successor fit their gaps, the imaging
 duty per orbit and the plan's action cap hold (where the problem has them), and the
@@ -37,6 +38,13 @@ import numpy as np
 from jaxspline.search.construct import first_least
 from jaxspline.search.cover import CoverCounts
 from jaxspline.search.problem import Problem
+from jaxspline.search.stereo import (
+    ProductCounts,
+    is_product_code,
+    missing_looks,
+    product_choices,
+    product_of,
+)
 
 __all__ = ["Timeline"]
 
@@ -64,9 +72,12 @@ class Timeline:
         (from the predecessor, or the first maneuver) [s], kept up to date by
         :meth:`insert` and :meth:`remove`.
       assigned: per target, the option that images it (-1: none; always -1 for an
-        area, whose options count through ``cover``).
+        area, whose options count through ``cover``; for a stereo target a look of the
+        product it collects).
       cover: :class:`CoverCounts` of the plan's area options (None: no areas).
       n_area: number of area observations.
+      stereo: :class:`ProductCounts` of the plan's looks (None: no stereo targets).
+      n_look: number of looks of stereo targets.
       levels: per satellite, the battery :class:`Levels` of a past state (None: not
         computed).
       debt: per satellite, an upper bound of the load energy added since [Wh].
@@ -100,6 +111,8 @@ class Timeline:
         self.assigned = [-1] * pb.n_targets
         self.cover = None if pb.cover is None else CoverCounts(pb.cover)
         self.n_area = 0
+        self.stereo = None if pb.stereo is None else ProductCounts(pb.stereo)
+        self.n_look = 0
         self.levels = [None] * n_s
         self.debt = [0.0] * n_s
         self.stale = [True] * n_s
@@ -161,9 +174,11 @@ class Timeline:
         Returns:
           tuple, larger is better.
         """
-        if self.cover is None:
+        if self.cover is None and self.stereo is None:
             return (round(self.value, 9), self.n_observations, -round(self.tat, 6))
-        count = self.n_observations - 2 * self.n_area
+        count = self.n_observations - 2 * (self.n_area + self.n_look)
+        if self.cover is None:
+            return (0.0, round(self.value, 9), count, -round(self.tat, 6))
         return (
             -round(self.cover.shortfall(), 12),
             round(self.value, 9),
@@ -349,8 +364,13 @@ class Timeline:
         """Insert option c (feasibility is the caller's business: :meth:`check`).
 
         Args:
-          c: int, option id.
+          c: int, option id, or a product's candidate id from :meth:`insert_choices`
+            (its missing looks go in).
         """
+        if is_product_code(c):
+            for look in missing_looks(self, product_of(c)):
+                self.insert(look)
+            return
         pb = self.pb
         k, t = pb.option_sat[c], pb.option_target[c]
         pos = bisect.bisect_left(self.line_starts[k], pb.option_start[c])
@@ -373,6 +393,8 @@ class Timeline:
         if self.cover is not None and pb.cover.option_group[c] >= 0:
             self.value += self.cover.change(c, +1)
             self.n_area += 1
+        elif self.stereo is not None and pb.stereo.is_look[c]:
+            self._look_change(c, t, +1)
         else:
             self.assigned[t] = c
             self.value += pb.target_value[t]
@@ -409,12 +431,21 @@ class Timeline:
         if self.cover is not None and pb.cover.option_group[c] >= 0:
             self.value += self.cover.change(c, -1)
             self.n_area -= 1
+        elif self.stereo is not None and pb.stereo.is_look[c]:
+            self._look_change(c, t, -1)
         else:
             self.assigned[t] = -1
             self.value -= pb.target_value[t]
         self.n_observations -= 1
         self.tat -= pb.option_end[c]
         self.log.append(("r", c))
+
+    def _look_change(self, c: int, t: int, sign: int) -> None:
+        """Count look c of stereo target t in (+1) or out (-1)."""
+        self.value += self.stereo.change(c, sign)
+        self.n_look += sign
+        best = self.stereo.best[t]
+        self.assigned[t] = self.pb.stereo.looks[best][0] if best >= 0 else -1
 
     def removal_ok(self, k: int, pos: int) -> bool:
         """Whether a removal at index ``pos`` of satellite k keeps the plan feasible.
@@ -483,6 +514,8 @@ class Timeline:
           is already imaged.
         """
         pb = self.pb
+        if pb.stereo is not None and pb.stereo.target_products[t]:
+            return product_choices(self, t, rng, _TURNAROUND_WEIGHT, _INSERT_NOISE)
         option_sat, option_start, option_end = pb.option_sat, pb.option_start, pb.option_end
         options, costs = [], []
         if self.assigned[t] >= 0:
@@ -542,7 +575,9 @@ class Timeline:
         self.assigned = [-1] * pb.n_targets
         if self.cover is not None:
             self.cover = CoverCounts(pb.cover)
-        self.n_area = 0
+        if self.stereo is not None:
+            self.stereo = ProductCounts(pb.stereo)
+        self.n_area = self.n_look = 0
         self.value, self.n_observations, self.tat = 0.0, 0, 0.0
         for c in sorted((c for c in assigned if c >= 0), key=lambda c: pb.option_start[c]):
             self.insert(c)
