@@ -4,7 +4,7 @@ Parses the arguments, loads the scenario (default: the built-in constellation jo
 calls :func:`jaxspline.plan` and writes into the output directory:
 
 * ``plan.json`` - summary, bound and gap, check report (with ``areas``: the covered
-  fraction of every area target, :func:`jaxspline.readers.areas.area_coverage`), statistics,
+  share of every area target, :func:`jaxspline.planner.area_report`), statistics,
   stage timings and every observation; ``plan.csv`` - one row per observation;
 * ``plan.czml`` - satellites, targets, areas, imaging intervals and sensor footprints
   for Cesium;

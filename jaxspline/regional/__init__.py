@@ -2,12 +2,12 @@
 SAR-like satellites over polygon regions, scored by unique area-weighted coverage of a
 sample grid.
 
-``case`` reads and validates case files and reads / writes solutions; ``check`` (with
-``check_geometry``) is an independent checker of every rule, sharing no code with the
-solver but the case reader; ``solve`` plans a case with the coverage machinery of the
-layers below (:mod:`jaxspline.geometry.coverage_tracks`, :mod:`jaxspline.screen.coverage`,
-:mod:`jaxspline.planner.coverage_candidates`, ``jaxspline.search.coverage_*``); ``cli``
-registers ``jaxspline regional ...``.
+``case`` reads and validates case files and reads / writes solutions; ``adapter``
+translates a case into a :class:`jaxspline.Scenario` (its regions as areas) and a plan
+into a solution: the case is planned by :func:`jaxspline.plan` like any scenario with
+areas; ``check`` (with ``check_geometry``) is an independent checker of every rule,
+sharing no code with the solver but the case reader; ``cli`` registers ``jaxspline
+regional ...``.
 """
 
 from .case import Case as Case

@@ -1,6 +1,6 @@
 """Reference geometry of the regional_coverage checker: SGP4 states, strip rays, quads.
 
-numpy + sgp4 only, independent of the solver's geometry (``jaxspline.geometry.coverage_tracks``,
+numpy + sgp4 only, independent of the solver's geometry (``jaxspline.geometry.orbit``,
 ``jaxspline.screen.coverage``); the frame and Sun models come from the other benchmark's
 independent checker (:mod:`jaxspline.aeossp.check_frames`). Conventions follow the
 official verifier (see :mod:`jaxspline.regional.check` for the sources):

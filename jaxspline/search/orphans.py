@@ -1,7 +1,7 @@
 """A child process ends with its parent: no worker outlives the command that started it.
 
 A command's helper processes (the forked bound worker of :mod:`jaxspline.search.bound_worker`,
-the coverage bound that :mod:`jaxspline.regional.solve` starts) are stopped by their
+the bound of ``jaxspline bound`` run beside a plan) are stopped by their
 parent when it ends normally, on an error or on Ctrl-C. A parent killed outright
 (``SIGKILL``, the out-of-memory killer) runs no clean-up, so :func:`die_with_parent`
 makes the child end by itself:
