@@ -13,7 +13,13 @@ plan so far and exits 130, the TLEs' age) is
 
 from __future__ import annotations
 
-from jaxspline.cli.case_commands import CaseAdapter, check_and_print, check_case_paths, run_solve
+from jaxspline.cli.case_commands import (
+    CaseAdapter,
+    add_solve_parser,
+    check_and_print,
+    check_case_paths,
+    run_solve,
+)
 from jaxspline.cli.flags import check_path
 
 __all__ = ["register"]
@@ -76,11 +82,4 @@ def register(sub) -> None:
     c.add_argument("--json", metavar="OUT", help="write the JSON result to OUT ('-' = stdout)")
     c.set_defaults(func=_cmd_check)
 
-    s = asub.add_parser("solve", help="plan a case, write the solution, then check it")
-    s.add_argument("case_dir", help="case directory with mission/satellites/tasks.yaml")
-    s.add_argument("-o", "--output", required=True, help="solution JSON file to write")
-    s.add_argument("--time-limit", type=float, default=60.0, help="seconds (default 60)")
-    s.add_argument("--seed", type=int, default=0, help="search seed (default 0)")
-    s.add_argument("--force", action="store_true", help="overwrite an existing output file")
-    s.add_argument("--json", metavar="OUT", help="write the check result to OUT ('-' = stdout)")
-    s.set_defaults(func=_cmd_solve)
+    add_solve_parser(asub, "mission/satellites/tasks.yaml", 60.0, _cmd_solve)

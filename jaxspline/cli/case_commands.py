@@ -173,6 +173,27 @@ def tle_age_problem(sc, where: str) -> str | None:
     return None
 
 
+def add_solve_parser(sub, case_help: str, default_limit: float, func):
+    """Register a benchmark's ``solve`` sub-command (the flags :func:`run_solve` reads).
+
+    Args:
+      sub: the benchmark's sub-parsers; case_help: what the case directory holds;
+      default_limit: the default ``--time-limit`` [s]; func: the command's function.
+    Returns:
+      the sub-parser.
+    """
+    s = sub.add_parser("solve", help="plan a case, write the solution, check it (exit 0 if valid)")
+    s.add_argument("case_dir", help=f"case directory ({case_help})")
+    s.add_argument("-o", "--output", required=True, help="solution JSON file to write")
+    s.add_argument("--time-limit", type=float, default=default_limit,
+                   help=f"seconds for the whole command (default {default_limit:g})")  # fmt: skip
+    s.add_argument("--seed", type=int, default=0, help="search seed (default 0)")
+    s.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    s.add_argument("--json", metavar="OUT", help="write the check report to OUT ('-' = stdout)")
+    s.set_defaults(func=func)
+    return s
+
+
 def run_solve(args, adapter: CaseAdapter) -> int:
     """A benchmark ``solve`` command (module docstring).
 

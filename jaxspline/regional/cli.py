@@ -17,7 +17,13 @@ SIGTERM writes the best plan so far and exits 130, the TLEs' age) is the one of
 
 from __future__ import annotations
 
-from jaxspline.cli.case_commands import CaseAdapter, check_and_print, check_case_paths, run_solve
+from jaxspline.cli.case_commands import (
+    CaseAdapter,
+    add_solve_parser,
+    check_and_print,
+    check_case_paths,
+    run_solve,
+)
 from jaxspline.cli.flags import check_path
 
 __all__ = ["register"]
@@ -82,11 +88,4 @@ def register(sub) -> None:
     c.add_argument("solution", help="solution JSON file")
     c.add_argument("--json", metavar="OUT", help="write the JSON report to OUT ('-' = stdout)")
     c.set_defaults(func=_cmd_check)
-    s = rsub.add_parser("solve", help="plan a case, write the solution, check it (exit 0 if valid)")
-    s.add_argument("case_dir", help="case directory")
-    s.add_argument("-o", "--output", required=True, help="solution JSON to write")
-    s.add_argument("--time-limit", type=float, default=120.0, help="wall-clock budget [s]")
-    s.add_argument("--seed", type=int, default=0, help="random seed of the search")
-    s.add_argument("--force", action="store_true", help="overwrite an existing output file")
-    s.add_argument("--json", metavar="OUT", help="write the check report to OUT ('-' = stdout)")
-    s.set_defaults(func=_cmd_solve)
+    add_solve_parser(rsub, "manifest.json, satellites.yaml, ...", 120.0, _cmd_solve)
