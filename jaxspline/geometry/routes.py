@@ -33,7 +33,7 @@ from jaxspline.geometry.orbit import orbit_state
 from jaxspline.geometry.pointing import Scene, aim_state, off_nadir_flat
 from jaxspline.kernels.batch import map_chunked
 from jaxspline.kernels.validate import check_finite, check_positive
-from jaxspline.readers.mission import AREA, POINT, STRIP  # noqa: F401 (the kinds, read here too)
+from jaxspline.readers.mission import AREA, KIND_NAMES, POINT, STEREO, STRIP  # noqa: F401 (the kinds, read here too)
 
 __all__ = [
     "RouteSet",

@@ -452,9 +452,10 @@ def _screening_line(near, removed: int, far, joins: bool) -> str:
     """The progress line of stage 4: near pairs (and those the join screen removed),
     bytes per pair, the range of the far gaps."""
     screened = f" ({removed} removed by the join screen)" if joins else ""
+    per_pair = f", {near.nbytes / len(near):.1f} B/pair" if len(near) else ""
     return (
-        f"{len(near)} feasible near pairs{screened}, {near.nbytes / max(len(near), 1):.1f} "
-        f"B/pair; far gaps {far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s"
+        f"{len(near)} feasible near pairs{screened}{per_pair}; far gaps "
+        f"{far.min(initial=np.inf):.0f}-{far.max(initial=0.0):.0f} s"
     )
 
 

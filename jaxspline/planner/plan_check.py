@@ -42,6 +42,7 @@ from jaxspline.kernels.batch import pad_rows, round_up
 from jaxspline.kernels.reach_durations import min_transfer_time
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.opportunities import evaluate, geometry_batched, observation_samples
+from jaxspline.readers.mission import HELD_KINDS
 from jaxspline.screen.options import RouteOptions, take_options
 from jaxspline.sequences.steps_check import check_steps
 
@@ -220,10 +221,10 @@ def _timing_findings(sc, pl: _PlanRows) -> _Findings:
 
 def _repeat_findings(sc, pl: _PlanRows) -> _Findings:
     """Every observation of a point or strip target but its earliest one (one violation
-    per repeat; an area takes any number): reason "repeat"."""
+    per repeat; an area or a stereo target takes any number): reason "repeat"."""
     tg = sc.targets
     f = _Findings([], [])
-    dup = np.unique(pl.tgt[tg.kind[pl.tgt] != AREA], return_counts=True)
+    dup = np.unique(pl.tgt[~np.isin(tg.kind[pl.tgt], HELD_KINDS)], return_counts=True)
     for r in dup[0][dup[1] > 1]:
         again = np.flatnonzero(pl.tgt == r)
         for i in again[np.argsort(pl.t0[again], kind="stable")][1:]:  # keep the earliest

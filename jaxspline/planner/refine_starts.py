@@ -22,9 +22,9 @@ from typing import NamedTuple
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.geometry.routes import AREA
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.opportunities import Opportunities, option_states
+from jaxspline.readers.mission import HELD_KINDS
 from jaxspline.screen.options import take_options
 from jaxspline.sequences.refine import refine_plan
 from jaxspline.sequences.sequencer import Plan
@@ -202,7 +202,7 @@ def _start_windows(sc, opp: Opportunities, grid: _Grid, ids, t0, dur, h: float):
     r = np.asarray(opp.options.route)[ids]
     lo = np.maximum.reduce([t0 - h * grid.has(opp, ids, -1), tg.t_lo[r], np.zeros_like(t0)])
     hi = np.minimum.reduce([t0 + h * grid.has(opp, ids, 1), tg.t_hi[r] - dur, sc.duration - dur])
-    area = tg.kind[r] == AREA  # an area strip stays on its slots (its rows are theirs)
+    area = np.isin(tg.kind[r], HELD_KINDS)  # a strip or look stays on its slots
     return np.where(area, t0, lo), np.where(area, t0, hi)
 
 

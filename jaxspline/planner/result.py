@@ -17,7 +17,7 @@ from typing import NamedTuple
 import numpy as np
 
 from jaxspline.planner.files import atomic_write_text
-from jaxspline.readers.mission import Scenario
+from jaxspline.readers.mission import KIND_NAMES, Scenario
 
 __all__ = ["Observations", "PlanResult"]
 
@@ -137,7 +137,7 @@ class PlanResult:
                 {
                     "satellite": sat.name,
                     "target": str(sc.targets.name[r]),
-                    "kind": _KINDS[int(sc.targets.kind[r])],
+                    "kind": KIND_NAMES[int(sc.targets.kind[r])],
                     "start_utc": _iso(sc.at(o.start[i])),
                     "end_utc": _iso(sc.at(o.end[i])),
                     "start_s": float(o.start[i]),
@@ -238,7 +238,6 @@ class PlanResult:
         return atomic_write_text(path, buf.getvalue(), force=force)
 
 
-_KINDS = ("point", "strip", "area")  # by target kind (POINT, STRIP, AREA)
 
 
 def _iso(when) -> str:

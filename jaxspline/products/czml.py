@@ -42,7 +42,7 @@ from jaxspline.base.elements import MU_EARTH, gmst
 from jaxspline.geometry.frames import earth_rotation_angle, teme_to_ecef
 from jaxspline.geometry.ground import footprint_lonlat
 from jaxspline.geometry.orbit import orbit_position, tabulate_orbits
-from jaxspline.geometry.routes import AREA, STRIP
+from jaxspline.geometry.routes import AREA, KIND_NAMES, STRIP
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 
 __all__ = ["SATELLITE_COLORS", "satellite_tracks", "write_czml"]
@@ -254,7 +254,7 @@ def _target_packets(result) -> list:
     }
     out = []
     for i in range(len(tg)):
-        kind = ("point", "strip", "area")[int(tg.kind[i])]
+        kind = KIND_NAMES[int(tg.kind[i])]
         out.append(
             Packet(
                 id=f"target-{i}",

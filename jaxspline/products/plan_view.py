@@ -44,13 +44,12 @@ from jaxspline.geometry.frames import (
 )
 from jaxspline.geometry.ground import FOOTPRINT_STEP_M, footprint_lonlat, strip_centerline
 from jaxspline.geometry.orbit import orbit_position, tabulate_orbits
-from jaxspline.geometry.routes import STRIP
+from jaxspline.geometry.routes import KIND_NAMES, STRIP
 from jaxspline.products.czml import SATELLITE_COLORS, satellite_tracks
 
 __all__ = ["disc", "view_data"]
 
 _VIEW_VERSION = 2  # bumped when the layout of the "view" section changes
-_KINDS = ("point", "strip", "area")  # by target kind
 _TRACK_STEP_S = 30.0  # ground-track sample step [s]
 DISC_SIDES = 24  # polygon sides of a point target's footprint disc
 DEG_DECIMALS = 4  # longitudes / latitudes rounded to ~10 m
@@ -211,7 +210,7 @@ def view_data(result) -> dict:
         "tracks": _tracks(sc),
         "targets": {
             "name": [str(n) for n in tg.name],
-            "kind": [_KINDS[int(k)] for k in tg.kind],
+            "kind": [KIND_NAMES[int(k)] for k in tg.kind],
             "lon_deg": _round(lon, DEG_DECIMALS),
             "lat_deg": _round(np.degrees(tg.lat), DEG_DECIMALS),
             "value": [float(v) for v in tg.value],

@@ -36,6 +36,8 @@ from jaxspline.readers.stereo_request import Stereo
 
 __all__ = [
     "AREA",
+    "HELD_KINDS",
+    "KIND_NAMES",
     "POINT",
     "STEREO",
     "STRIP",
@@ -54,6 +56,10 @@ POINT = 0  # a target imaged from one point
 STRIP = 1  # a target imaged along a strip
 AREA = 2  # a target imaged by strips at a held roll, valued by the share of its samples covered
 STEREO = 3  # a target imaged by two or three looks making a stereo product (its Stereo)
+#: Name of each target kind, by kind code (plan files, pages).
+KIND_NAMES = ("point", "strip", "area", "stereo")
+#: Kinds imaged by looks held fixed in the track frame, any number of them per target.
+HELD_KINDS = (AREA, STEREO)
 DEFAULT_STRIP_DURATION = (0.0, 60.0)  # [s] shortest and longest area strip when unnamed
 _SHARE_TOL = 1e-9  # the samples' shares may exceed 1 by rounding this much
 DEFAULT_SWATH = 20e3  # [m] ground width imaged across a strip when a satellite names none
