@@ -11,10 +11,11 @@ and margins. So ``jaxspline plan OUT_DIR/scenario.toml`` plans the same problem 
 ``jaxspline regional solve CASE_DIR``.
 
 ``--points N`` adds N random point targets (``[random_targets]``, seed 0, priorities
-1-10) over the regions' bounding box, each worth about as much as one region share
-in total; ``--model`` sets every satellite's maneuver model (``roll_only`` satellites
+1-10) over the regions' bounding box, and scales the regions' priorities so that they
+are worth together about as much as all the points; ``--model`` sets every satellite's maneuver model (``roll_only`` satellites
 image area strips only: a mixed campaign needs a model that tracks points, e.g.
-``eigen_axis``). Refuses to overwrite an existing scenario file.
+``eigen_axis``; ``--pitch-step`` then sets the pitch grid of their area strips). Refuses
+to overwrite an existing scenario file.
 """
 
 from __future__ import annotations
@@ -26,7 +27,7 @@ from pathlib import Path
 import numpy as np
 
 POINT_PRIORITY = (1, 10)  # [low, high] integer priorities of the added point targets
-POINT_SHARE = 1.0  # the added points together are worth about this many region shares
+POINT_SHARE = 1.0  # the regions together are worth about this share of the added points
 
 
 def _toml_value(v) -> str:
@@ -72,7 +73,7 @@ def _satellite(s, model: str) -> dict:
     return out
 
 
-def write_scenario(sc, out: Path, points: int, model: str | None) -> Path:
+def write_scenario(sc, out: Path, points: int, model: str | None, pitch_step=None) -> Path:
     """Write ``sc`` (satellites with TLEs, areas with samples) under ``out``."""
     out.mkdir(parents=True, exist_ok=True)
     path = out / "scenario.toml"
@@ -91,6 +92,7 @@ def write_scenario(sc, out: Path, points: int, model: str | None) -> Path:
     ]
     parts += [_table("satellites", _satellite(s, model or s.model), True) for s in sc.satellites]
     lons, lats = [], []
+    scale = POINT_SHARE * points * sum(POINT_PRIORITY) / 2.0 if points else 1.0
     for a in sc.areas:
         csv = out / f"{a.name}.csv"
         np.savetxt(csv, a.samples, delimiter=",", header="lon_deg,lat_deg,weight", comments="",
@@ -98,19 +100,16 @@ def write_scenario(sc, out: Path, points: int, model: str | None) -> Path:
         lons += [a.samples[:, 0].min(), a.samples[:, 0].max()]
         lats += [a.samples[:, 1].min(), a.samples[:, 1].max()]
         fields = {"name": a.name, "samples_csv": csv.name,
-                  "priority": float(sc.targets.value[a.target]),
+                  "priority": float(sc.targets.value[a.target]) * scale,
                   "window_s": [0.0, float(sc.duration)]}  # fmt: skip
         if not math.isnan(a.min_share):
             fields["min_coverage"] = float(a.min_share)
         parts.append(_table("areas", fields, True))
     if points:
-        share = POINT_SHARE / len(sc.areas) / (sum(POINT_PRIORITY) / 2 * points)
         parts.append(_table("random_targets", {
             "seed": 0, "count": points, "lat_deg": [min(lats), max(lats)],
             "lon_deg": [min(lons), max(lons)], "strip_fraction": 0.0,
             "priority": list(POINT_PRIORITY)}))  # fmt: skip
-        print(f"points: priorities {POINT_PRIORITY}, scale them by {share:.3g} to weigh as much "
-              "as one region")  # fmt: skip
     planner = {"time_step_s": pc.time_step, "geometry_step_s": pc.geometry_step,
                "gap_margin_s": m.gap, "battery_margin_wh": m.battery_wh,
                "shadow_guard_steps": m.shadow_guard, "duty_margin_s": m.duty,
@@ -118,6 +117,8 @@ def write_scenario(sc, out: Path, points: int, model: str | None) -> Path:
                "time_limit_s": pc.default_time_limit}  # fmt: skip
     if pc.max_actions is not None:
         planner["max_actions"] = int(pc.max_actions)
+    if pitch_step is not None:
+        planner["area_pitch_step_deg"] = float(pitch_step)
     parts.append(_table("planner", planner))
     path.write_text("\n".join(parts), encoding="utf-8")
     return path
@@ -129,10 +130,13 @@ def main(argv=None) -> int:
     ap.add_argument("out_dir")
     ap.add_argument("--points", type=int, default=0, help="random point targets to add")
     ap.add_argument("--model", default=None, help="maneuver model of every satellite")
+    ap.add_argument("--pitch-step", type=float, default=None,
+                    help="pitch grid of agile satellites' area strips [deg]")  # fmt: skip
     args = ap.parse_args(argv)
     from jaxspline.regional.adapter import case_scenario
 
-    path = write_scenario(case_scenario(args.case_dir), Path(args.out_dir), args.points, args.model)
+    sc = case_scenario(args.case_dir)
+    path = write_scenario(sc, Path(args.out_dir), args.points, args.model, args.pitch_step)
     print(f"wrote {path}")
     return 0
 
