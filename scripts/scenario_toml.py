@@ -12,8 +12,9 @@ and margins. So ``jaxspline plan OUT_DIR/scenario.toml`` plans the same problem 
 
 ``--points N`` adds N random point targets (``[random_targets]``, seed 0, priorities
 1-10) over the regions' bounding box, and scales the regions' priorities so that they
-are worth together about as much as all the points; ``--model`` sets every satellite's maneuver model (``roll_only`` satellites
-image area strips only: a mixed campaign needs a model that tracks points, e.g.
+are worth together about as much as all the points; ``--model`` sets every satellite's
+maneuver model (``roll_only`` satellites image area strips only: a mixed campaign needs
+a model that tracks points, e.g.
 ``eigen_axis``; ``--pitch-step`` then sets the pitch grid of their area strips). Refuses
 to overwrite an existing scenario file.
 """
