@@ -16,8 +16,9 @@ measuring):
 - ``job`` (only when named) -> ``job.json``, ``JOB.md``: the default job with every
   output, from an empty compilation cache and warm (:mod:`bench.job`);
 - ``coverage`` (only when named) -> ``coverage.json``, ``COVERAGE.md``: the strip
-  coverage engine against numpy + shapely on a regional_coverage training case
-  (:mod:`bench.coverage`);
+  coverage engine against numpy + shapely on a regional_coverage training case, and
+  ``jaxspline plan`` on areas scenarios (coverage, bound, gap, time, peak RSS;
+  ``--quick``: the areas example alone) (:mod:`bench.coverage`);
 - ``bound`` (only when named) -> ``bound.json``, ``BOUND.md``: the bound's DP
   iterations/s, numpy and JAX on the default device, and the plain vs strengthened
   bound (:mod:`bench.bound`).
@@ -95,13 +96,15 @@ def _parse(argv):
         "--max-rss-gb",
         type=float,
         default=8.0,
-        help="scale section: kill a plan whose process tree exceeds this RSS (default 8)",
+        help="scale, job and coverage sections: kill a plan whose process tree exceeds "
+        "this RSS (default 8)",
     )
     p.add_argument(
         "--max-wall-min",
         type=float,
         default=60.0,
-        help="scale section: kill a plan running longer than this (default 60 min)",
+        help="scale, job and coverage sections: kill a plan running longer than this "
+        "(default 60 min)",
     )
     p.add_argument(
         "--scale-dir", help="scale section: keep scenarios and plans here (default: a temp dir)"
@@ -485,7 +488,11 @@ def main(argv=None) -> int:
     if "coverage" in sections:
         from bench.coverage import bench_coverage
 
-        report["coverage"] = bench_coverage(reps=max(1, args.reps // 2))
+        report["coverage"] = bench_coverage(
+            reps=max(1, args.reps // 2),
+            quick=args.quick,
+            guard=(args.max_rss_gb, args.max_wall_min),
+        )
     if "bound" in sections:
         from bench.bound import bench_bound
 

@@ -48,3 +48,32 @@ def test_tables_show_missing_fields_as_dashes():
     text = "\n".join(aeossp.aeossp_table({"cases": [case], "certificates": {"c1": 0.55}}))
     assert "| c1 | yes | 0.5000 | 0.6000 | time | 0.1000 | 0.5500 | 0.0500 | - |" in text
     assert "| **mean** | 1/1 | **0.5000** |" in text
+
+
+def test_coverage_plan_rows_show_missing_fields_as_dashes():
+    from bench import coverage
+
+    plans = [
+        {
+            "plan": "areas_example",
+            "exit": 0,
+            "wall_s": 26.3,
+            "peak_rss_mb": 625.0,
+            "value": 53.7778,
+            "total_value": 56.0,
+            "bound": 56.0,
+            "gap": 2.2222,
+            "gap_pct": 3.968,
+            "area_coverage": 0.9444,
+            "areas": [{"area": "karst", "samples": 45, "covered_share": 1.0, "strips": 2}],
+            "left_out": ["AEM files"],
+            "command": "jaxspline plan x.toml",
+        },
+        {"plan": "case_0002", "exit": -9, "killed": "RSS", "wall_s": 3.0, "command": "c"},
+    ]
+    text = "\n".join(coverage.plans_table(plans))
+    assert "| areas_example | - | - | - | 0 | 26.3 | 625 | - | 53.7778 | 56 | 56 |" in text
+    assert "| 0.9444 | - | AEM files |" in text
+    assert "| case_0002 | - | - | - | killed | 3.0 | - |" in text
+    assert "| areas_example | karst | - | 45 | - | 1.0000 | - | - | 2 |" in text
+    assert "case_0002: exit -9 RSS" in text
