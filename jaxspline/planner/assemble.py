@@ -187,7 +187,7 @@ def _stats(ctx: PlanContext, rep, res, mip_stats, peak_rss_mb) -> dict:
         "near_pairs": len(pb.pairs),
         "pair_store_bytes": pb.pairs.nbytes,
         "far_gap_s": ctx.far.tolist(),
-        "pair_bytes": round(pb.pairs.nbytes / max(len(pb.pairs), 1), 2),
+        "pair_bytes": round(pb.pairs.nbytes / len(pb.pairs), 2) if len(pb.pairs) else None,
         "peak_rss_mb": peak_rss_mb,
         "bound_status": res.bound_status,
         "refined": rep.refined,

@@ -350,7 +350,7 @@ def lns(
     w = _Walk(tl, has, rank)
     it = 0
     last = polled = time.monotonic()
-    ceiling = _ceiling(tl, has)
+    ceiling = plan_ceiling(tl) - _CEILING_TOL * max(1.0, plan_ceiling(tl))
     while (max_iters is None or it < max_iters) and clock.now() < deadline:
         if w.best_key[-2] >= ceiling:  # every target and every coverable sample: optimal
             break
@@ -381,14 +381,20 @@ def lns(
     return it
 
 
-def _ceiling(tl: Timeline, has) -> float:
-    """The most value any plan can have (every target with an option, every sample some
-    area option covers), less a rounding tolerance."""
+def plan_ceiling(tl: Timeline) -> float:
+    """The most value any plan can have: every target with an option on offer (a stereo
+    target its best product), every sample some area option covers.
+
+    Args:
+      tl: Timeline (its options on offer).
+    Returns:
+      float, a bound that every plan meets.
+    """
     pb = tl.pb
-    most = sum(pb.target_value[t] for t in has)
+    most = sum(pb.target_value[t] for t in pb.exclusive_targets() if tl.target_options[t])
     if pb.cover is not None:
         most += pb.cover.union_weight()
-    return most - _CEILING_TOL * max(1.0, most)
+    return float(most)
 
 
 def _area_share(tl: Timeline, has) -> float:

@@ -44,7 +44,7 @@ from jaxspline.search.bound_worker import BoundWorker
 from jaxspline.search.dp import dp_prepare
 from jaxspline.search.exact import exact_search
 from jaxspline.search.lagrangian import BoundResult, lagrangian
-from jaxspline.search.lns import adopt, earliest_pass, greedy, greedy_order, lns
+from jaxspline.search.lns import adopt, earliest_pass, greedy, greedy_order, lns, plan_ceiling
 from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
@@ -252,8 +252,12 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     _lns_stage(tl, deadline - tail, random.Random(seed), its, worker, stats, say)
     earliest_pass(tl, deadline)
     bound, status = res.bound, res.status
+    ceiling = plan_ceiling(tl)
+    if tl.value >= ceiling - _OPTIMAL_TOL * max(1.0, ceiling):  # everything within reach
+        bound, status = min(bound, ceiling), BoundStatus.OPTIMAL
     if worker is not None:
-        wr = worker.result(wait=not clock.stop_requested())
+        done = status == BoundStatus.OPTIMAL
+        wr = worker.result(wait=not (clock.stop_requested() or done))
         if wr is not None:
             stats.update(
                 worker_bound=wr.bound,
