@@ -19,6 +19,7 @@ import math
 import numpy as np
 
 from jaxspline.search.area_fill import (
+    MIN_GAIN,
     AreaIndex,
     area_strips,
     fill,
@@ -31,6 +32,7 @@ from jaxspline.search.timeline import Timeline
 
 __all__ = [
     "LOCAL_EVERY",
+    "drop_idle_strips",
     "AreaWalk",
     "area_move",
     "local_moves",
@@ -287,3 +289,25 @@ def area_move(tl: Timeline, walk: AreaWalk, deadline: float) -> None:
         walk.stats["local_moves"] += local_moves(tl, ix)
     if walk.moves % REFRESH_EVERY == 0:
         tl.cover.refresh()
+
+
+def drop_idle_strips(tl: Timeline) -> int:
+    """Remove the area strips that cover no sample alone (they only spend an action),
+    latest first, each kept out only when the plan stays feasible. Returns how many went."""
+    pb = tl.pb
+    if tl.cover is None:
+        return 0
+    gone = 0
+    strips = sorted((c for c in tl.plan() if pb.is_area(c)), key=lambda c: -pb.option_start[c])
+    for c in strips:
+        if tl.cover.loss(c) > MIN_GAIN:
+            continue
+        k = pb.option_sat[c]
+        pos = tl.lines[k].index(c)
+        mark = len(tl.log)
+        tl.remove(c)
+        if tl.removal_ok(k, pos):
+            gone += 1
+        else:
+            tl.undo_to(mark)
+    return gone

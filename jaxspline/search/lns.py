@@ -36,7 +36,7 @@ import time
 
 from jaxspline.base import clock
 from jaxspline.search.area_fill import area_index, fill
-from jaxspline.search.area_moves import AreaWalk, area_move
+from jaxspline.search.area_moves import AreaWalk, area_move, drop_idle_strips
 from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
 from jaxspline.search.stereo import drop_stray_looks
@@ -378,6 +378,10 @@ def lns(
             report(it, w.improved)
     if _key(tl) < w.best_key:
         tl.restore(w.best)
+    drop_idle_strips(tl)
+    if pb.stereo is not None:
+        drop_stray_looks(tl, pb.stereo.stereo_targets.tolist())
+    tl.commit()
     return it
 
 
