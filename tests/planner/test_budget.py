@@ -107,7 +107,8 @@ def _ctx(n_targets, refining, duration=3600.0, rigid=0):
     sc = SimpleNamespace(planner=SimpleNamespace(refine_steps=50), satellites=[sat, *rest])
     n = 3 * n_targets
     opts = SimpleNamespace(route=np.repeat(np.arange(n_targets), 3), sat=np.arange(n) % (1 + rigid))
-    return SimpleNamespace(scenario=sc, opportunities=SimpleNamespace(options=opts))
+    pb = SimpleNamespace(cover=None, max_actions=None)  # no areas
+    return SimpleNamespace(scenario=sc, opportunities=SimpleNamespace(options=opts), problem=pb)
 
 
 def test_repair_estimate_grows_with_the_steps_that_run():
@@ -156,8 +157,9 @@ def test_the_greedy_start_moves_the_search_end_to_what_its_plan_needs(monkeypatc
     assert end == pytest.approx(d.end - repair - 5.0) and end > b.search_end
     assert d.split["observations"] == size and d.split["search_s"] == pytest.approx(90 - repair - 5)
     assert d.split["reserve_s"]["repair"] == round(repair, 2)
-    rigid_only = b.retime([0, 2000, 1000, 1000])  # nothing to refine: a smaller reserve
-    assert rigid_only == pytest.approx(d.end - repair - 5.0 + size / 4 * bd.REFINE_S_PER_OBS)
+    rigid_only = b.retime([0, 2000, 1000, 1000])  # nothing to refine: no refinement reserved
+    plain = bd.repair_seconds(size, False, False, 2.0)
+    assert rigid_only == pytest.approx(d.end - plain - 5.0) and rigid_only > end
     every = bd.repair_seconds(20000, False, True, 2.0)  # never past every target planned
     assert b.retime([10**6, 0, 0, 0]) == pytest.approx(d.end - every - 5.0)
     clock.wall += 40.0  # a loaded machine: the estimate at pace 3 does not fit
@@ -267,3 +269,20 @@ def test_a_stage_stopped_before_any_share_gives_a_lower_bound():
     spent = float(msg.split("need more than ")[1].split(" s")[0])
     assert spent >= 49.0 - dl.COMPILE_ALLOWANCE_S
     assert "well above" in msg
+
+
+def test_an_areas_strips_count_as_observations_per_pass():
+    """With areas the plan's most observations are the point targets with options plus,
+    per pass, the strips it holds: ``floor((slots + 1) / (shortest + 1))`` (a slot apart),
+    at most the action cap (a synthetic problem: two satellites, two passes of 6 slots)."""
+    from _synth_area import make
+
+    s = make(3, n_sats=2, passes=2, pass_slots=6, min_slots=2, n_points=3)
+    pb = s.pb
+    opts = SimpleNamespace(route=np.asarray(pb.option_target), sat=np.asarray(pb.option_sat))
+    ctx = SimpleNamespace(opportunities=SimpleNamespace(options=opts), problem=pb)
+    points = len({o.target for o in s.opts if not o.area})
+    per_pass = (6 + 1) // (2 + 1)
+    assert bd._targets(ctx) == points + 2 * 2 * per_pass
+    pb.max_actions = 5
+    assert bd._targets(ctx) == points + 5

@@ -18,13 +18,12 @@ from jax.test_util import check_grads
 from scipy.integrate import solve_ivp
 
 from jaxspline.aeossp.check_frames import bang_coast_bang_time as checker_slew
+from jaxspline.base import ManeuverModel, model_names
 from jaxspline.geometry.pointing import roll_look_direction, roll_pointing
 from jaxspline.regional.check_geometry import look_direction
 from jaxspline.screen import (
-    ManeuverModel,
     RollLimits,
     RollOnly,
-    model_names,
     roll_min_gap,
     roll_need,
     roll_profile,
