@@ -411,6 +411,24 @@ def _nearest(cv, g: int, a: int, b: int, need: int) -> int:
     return -1
 
 
+def _shorter(tl: Timeline, cv, g: int, a: int, b: int):
+    """``(a', b', option)`` of the strip of most gain inside ``[a, b)`` that is shorter and
+    passes :meth:`Timeline.check`, the longest such first; None when none gains."""
+    need = int(cv.min_slots[cv.group_sat[g]])
+    for length in range(b - a - 1, need - 1, -1):
+        best, best_gain = None, MIN_GAIN
+        for s in range(a, b - length + 1):
+            c = cv.option_of(g, s, s + length)
+            if c < 0 or tl.check(c) is None:
+                continue
+            gain = tl.cover.gain(g, s, s + length)
+            if gain > best_gain:
+                best, best_gain = (s, s + length, c), gain
+        if best is not None:
+            return best
+    return None
+
+
 def _trim(tl: Timeline, cv, g: int, a: int, b: int, gain: float):
     """The shortest window inside ``[a, b)`` with the same gain that is an option."""
     need = int(cv.min_slots[cv.group_sat[g]])
@@ -528,8 +546,11 @@ def fill(tl: Timeline, ix: AreaIndex, deadline: float, banned=None, fails=None, 
             heapq.heappush(heap, (-gain, i))
             continue
         a, b, c = _trim(tl, cv, g, got[0], got[1], tl.cover.gain(g, got[0], got[1]))
-        if c < 0 or tl.check(c) is None:
-            continue
+        if c < 0 or tl.check(c) is None:  # the duty, cap or battery: a shorter strip may do
+            got = _shorter(tl, cv, g, a, b)
+            if got is None:
+                continue
+            a, b, c = got
         tl.insert(c)
         _mark(busy, cv, k, a * cv.slot_s, b * cv.slot_s)
         if boost is not None:

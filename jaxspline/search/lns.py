@@ -274,7 +274,7 @@ def adopt(tl: Timeline, w, offer) -> bool:
 def _accept(tl: Timeline, w: _Walk, base, mark: int, thr: float, it: int, rng):
     """Threshold acceptance of a move (loses at most ``thr * U(0, 1)``) and the
     bookkeeping of the best plan and of the unscheduled list."""
-    if tl.value < base[0] - thr * rng.random() - 1e-9:
+    if tl.value < base[-3] - thr * rng.random() - 1e-9:  # the score's value entry
         tl.undo_to(mark)
         return
     w.dirty |= tl.score() != base

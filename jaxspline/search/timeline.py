@@ -520,6 +520,8 @@ class Timeline:
         options, costs = [], []
         if self.assigned[t] >= 0:
             return options, costs
+        if pb.max_actions is not None and self.n_observations >= pb.max_actions:
+            return options, costs
         opts = self.target_options[t]
         if span is not None:  # ascending ids: one slice
             opts = opts[bisect.bisect_left(opts, span[0]) : bisect.bisect_left(opts, span[1])]

@@ -308,13 +308,6 @@ def test_a_full_cap_takes_no_strip():
     assert all(tl.check(c) is None for c in range(s.pb.n_options))
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="package bug: Timeline.insert_choices (jaxspline/search/timeline.py) tests an "
-    "option with _fit but skips check()'s max_actions test, so greedy() and the LNS "
-    "re-insertion put point targets in past the action cap",
-)
 @pytest.mark.parametrize("seed", [20, 42])
 def test_point_insertions_keep_the_action_cap(seed):
     s = make(seed, n_sats=2, max_actions=3)
@@ -328,14 +321,6 @@ def test_point_insertions_keep_the_action_cap(seed):
     assert tl.n_observations <= 3 and feasible(s, tl.plan())
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="search weakness: area_fill.fill drops a window whose trimmed option "
-    "Timeline.check refuses for the duty (`if c < 0 or tl.check(c) is None: continue`) "
-    "instead of trying shorter windows, so a duty shorter than the longest strip leaves "
-    "a satellite without strips",
-)
 def test_fill_shortens_strips_to_the_duty():
     """Duty 20 s per 60 s, strips of 10-30 s: every satellite can take a 10-20 s strip
     in each pass, fill gives one satellite none."""
@@ -408,14 +393,6 @@ def test_lns_never_loses_and_reaches_the_optimum(seed, kw):
     assert tl.value == pytest.approx(best, abs=1e-7), (start, tl.value, best)
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="package bug: lns._accept (jaxspline/search/lns.py) compares tl.value with "
-    "base[0], the first entry of Timeline.score(), which with areas is the negated "
-    "shortfall, not the value: with areas every point move is accepted, losses too, "
-    "even at the end of the walk where the threshold is 0",
-)
 def test_point_moves_with_areas_lose_nothing_at_zero_threshold():
     """Threshold acceptance at threshold 0: a move that loses value is undone (as it is
     without areas, where score()[0] is the value)."""
