@@ -128,7 +128,8 @@ def roll_grid(lo_deg: float, hi_deg: float, step_deg: float) -> np.ndarray:
     """Roll magnitudes [deg] on a grid inside a band, with 1e-4 deg to spare.
 
     Args:
-      lo_deg, hi_deg: the band of the roll magnitude [deg].
+      lo_deg: inner edge of the band of the roll magnitude [deg].
+      hi_deg: outer edge of the band [deg].
       step_deg: grid step [deg] (> 0).
     Returns:
       float64 [M] increasing, on a ``10^-ROLL_DECIMALS`` grid (empty when the band is
@@ -258,8 +259,8 @@ def find_groups(pos, vel, step_s: float, sensors, areas, slot_s: float) -> Group
     """All roll groups of the satellites over the areas (module docstring).
 
     Args:
-      pos, vel: float [S, K, 3], Earth-fixed positions [m] and velocities relative to the
-        rotating Earth [m/s] on the mesh ``k * step_s``.
+      pos: float [S, K, 3], Earth-fixed positions [m] on the mesh ``k * step_s``.
+      vel: float [S, K, 3], velocities relative to the rotating Earth [m/s].
       step_s: mesh step [s].
       sensors: per satellite a :class:`StripSensor`, or None (no area strips).
       areas: list of :class:`AreaSamples`.

@@ -235,8 +235,12 @@ def footprint_lonlat(lat, lon, azimuth, length, swath, alt=0.0, upto: float = 1.
     every :data:`FOOTPRINT_STEP_M`, put on the ellipsoid.
 
     Args:
-      lat, lon: geodetic start point [rad]; azimuth: direction at the start [rad];
-      length: strip length [m]; swath: imaged width [m]; alt: start height [m];
+      lat: geodetic latitude of the start point [rad].
+      lon: longitude of the start point [rad].
+      azimuth: direction at the start [rad].
+      length: strip length [m].
+      swath: imaged width [m].
+      alt: start height [m].
       upto: fraction of the strip from its start (0 < upto <= 1).
     Returns:
       (lon [deg], lat [deg]), float [n] each, the ring closed (first point repeated).

@@ -481,8 +481,13 @@ def coverage_table(pos, vel, fov_deg, candidates: Candidates, lon_deg, lat_deg, 
     """``coverage_slices(...).csr()``: the whole CSR table in one call.
 
     Args:
-      pos, vel, fov_deg, candidates, lon_deg, lat_deg, region: as for
-        :func:`coverage_slices`.
+      pos: as for :func:`coverage_slices`.
+      vel: as for :func:`coverage_slices`.
+      fov_deg: as for :func:`coverage_slices`.
+      candidates: as for :func:`coverage_slices`.
+      lon_deg: as for :func:`coverage_slices`.
+      lat_deg: as for :func:`coverage_slices`.
+      region: as for :func:`coverage_slices`.
     Returns:
       CoverageTable (all C rows; 8 bytes per candidate + 4 per covered sample).
     """

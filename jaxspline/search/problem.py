@@ -294,7 +294,9 @@ class Problem:
         form of the module docstring, element-wise).
 
         Args:
-          i, j: int [P], option ids (same satellite k; in each pair one is an area option).
+          i: int [P], option ids of the first observations (satellite k).
+          j: int [P], option ids of the next ones (in each pair one is an area option or
+            a look).
           k: the satellite.
         Returns:
           float [P] [s].
