@@ -3,7 +3,8 @@
 Every layer reads these (the readers to check a scenario, the geometry to propagate it):
 
 * constants: WGS84 (``R_EARTH``, ``WGS84_F``, ``WGS84_E2``, ``MU_EARTH``), ``J2``, the
-  Earth's rotation rate ``OMEGA_EARTH`` (GMST per UT1 second), seconds per day;
+  Earth's spin ``OMEGA_EARTH`` (Earth-fixed velocities) and the rate ``GMST_RATE`` of
+  its rotation angle (GMST per UT1 second), seconds per day;
 * WGS84 geodetic coordinates to Earth-fixed positions (:func:`geodetic_to_ecef`);
 * time scales: :func:`julian_date` of a date-time, :func:`jd_split` (the two-part form
   SGP4 and GMST take), :func:`gmst` (IAU 1982, UT1 = UTC);
@@ -29,6 +30,7 @@ from jaxspline.kernels.validate import check_finite, check_positive
 __all__ = [
     "J2_EARTH",
     "MU_EARTH",
+    "GMST_RATE",
     "OMEGA_EARTH",
     "R_EARTH",
     "SECONDS_PER_DAY",
@@ -49,7 +51,11 @@ __all__ = [
 R_EARTH = 6378137.0  # m, WGS84 equatorial radius
 WGS84_F = 1.0 / 298.257223563
 WGS84_E2 = WGS84_F * (2.0 - WGS84_F)
-OMEGA_EARTH = 7.292115146706979e-5  # rad/s, rate of GMST (IAU 1982) per UT1 second
+OMEGA_EARTH = 7.292115146706979e-5  # rad/s, the Earth's inertial spin (Earth-fixed velocities)
+_GMST_S_PER_CENTURY = 876600.0 * 3600.0 + 8640184.812866  # linear term of GMST (IAU 1982)
+#: rad/s, GMST (IAU 1982) advance per UT1 second, the rate of the Earth rotation angle
+#: that turns inertial positions Earth-fixed (1.00273790935 sidereal turns a solar day).
+GMST_RATE = _GMST_S_PER_CENTURY / (36525.0 * 86400.0) * (2.0 * math.pi / 86400.0)
 SECONDS_PER_DAY = 86400.0
 MU_EARTH = 3.986004418e14  # m^3/s^2 (WGS84)
 J2_EARTH = 1.08262668e-3
@@ -117,7 +123,7 @@ def gmst(jd, fr=0.0):
       float64 [...], GMST [rad] in [0, 2 pi).
     """
     t = ((np.asarray(jd, np.float64) - _JD_J2000) + np.asarray(fr, np.float64)) / _DAYS_PER_CENTURY
-    sec = -6.2e-6 * t**3 + 0.093104 * t**2 + (876600.0 * 3600.0 + 8640184.812866) * t + 67310.54841
+    sec = -6.2e-6 * t**3 + 0.093104 * t**2 + _GMST_S_PER_CENTURY * t + 67310.54841
     return np.mod(np.mod(sec, SECONDS_PER_DAY) * (2.0 * np.pi / SECONDS_PER_DAY), 2.0 * np.pi)
 
 
@@ -284,7 +290,7 @@ def circular_orbit_over(
     u = np.arcsin(s)
     if descending:
         u = np.pi - u
-    raan_t = lon + gmst0 + OMEGA_EARTH * t - np.arctan2(np.cos(inc) * np.sin(u), np.cos(u))
+    raan_t = lon + gmst0 + GMST_RATE * t - np.arctan2(np.cos(inc) * np.sin(u), np.cos(u))
     u0 = u - float(base.mean_motion) * t
     raan0 = raan_t - float(base.raan_rate) * t
     return base._replace(

@@ -26,6 +26,7 @@ import jax.numpy as jnp
 import numpy as np
 
 from jaxspline.base.elements import (
+    GMST_RATE,
     OMEGA_EARTH,
     R_EARTH,
     WGS84_E2,
@@ -53,7 +54,7 @@ def _xp(*xs):
 
 
 def earth_rotation_angle(gmst0, t):
-    """Earth rotation angle ``theta(t) = gmst0 + w_E t`` (generic: numpy or JAX).
+    """Earth rotation angle ``theta(t) = gmst0 + GMST_RATE t`` (generic: numpy or JAX).
 
     Linear in t: the dropped T^2 term of GMST changes theta by < 1e-12 rad over a day.
 
@@ -63,7 +64,7 @@ def earth_rotation_angle(gmst0, t):
     Returns:
       float [...], theta [rad] (not wrapped).
     """
-    return gmst0 + OMEGA_EARTH * t
+    return gmst0 + GMST_RATE * t
 
 
 def rot_z(theta, x):

@@ -27,8 +27,8 @@ import jax
 import jax.numpy as jnp
 import numpy as np
 
-from jaxspline.base.elements import OMEGA_EARTH, geodetic_to_ecef
-from jaxspline.geometry.frames import ecef_to_geodetic
+from jaxspline.base.elements import geodetic_to_ecef
+from jaxspline.geometry.frames import earth_rotation_angle, ecef_to_geodetic
 from jaxspline.geometry.orbit import orbit_state
 from jaxspline.geometry.pointing import Scene, aim_state, off_nadir_flat
 from jaxspline.kernels.batch import map_chunked
@@ -354,7 +354,7 @@ def _scan_forward(scene: Scene, spec: RouteSpec, strip, grid):
     offn = offn.reshape(rs_.shape[0], grid.size)
     t_ca = grid[np.argmin(offn, axis=1)]
     _, v = orbit_state(scene.orbit, jnp.asarray(t_ca))
-    theta = np.asarray(scene.gmst0) + OMEGA_EARTH * t_ca
+    theta = earth_rotation_angle(np.asarray(scene.gmst0), t_ca)
     d = strip_direction(lat[strip], lon[strip], az[strip])
     # ECEF -> ECI rotation of the tangent (the Earth-rotation term does not matter for a sign)
     c, s = np.cos(theta), np.sin(theta)

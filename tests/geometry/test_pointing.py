@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from jaxspline.base.elements import (
+    GMST_RATE,
     OMEGA_EARTH,
     circular_orbit,
     circular_orbit_over,
@@ -40,7 +41,7 @@ TIMES = np.array([180.0, 260.0, 300.0, 345.0, 420.0])
 def _los_numpy(t, target):
     """Unit LOS in the orbital frame, rebuilt in numpy from position and velocity."""
     r, v = (np.asarray(x) for x in orbit_state(ORB, t))
-    th = G0 + OMEGA_EARTH * t
+    th = G0 + GMST_RATE * t
     c, s = np.cos(th), np.sin(th)
     g = np.array([c * target[0] - s * target[1], s * target[0] + c * target[1], target[2]])
     z = -r / np.linalg.norm(r)
@@ -66,7 +67,7 @@ def test_boresight_from_angles_hits_the_target(t):
 def test_nadir_target_has_zero_angles_and_zero_off_nadir():
     t = 300.0
     r = np.asarray(orbit_position(ORB, t))
-    th = G0 + OMEGA_EARTH * t
+    th = G0 + GMST_RATE * t
     c, s = np.cos(th), np.sin(th)
     re = np.array([c * r[0] + s * r[1], -s * r[0] + c * r[1], r[2]])
     tgt = re * (6.36e6 / np.linalg.norm(re))
