@@ -18,6 +18,7 @@ import numpy as np
 from jaxspline.planner.area_report import area_report, area_samples, strip_footprints
 from jaxspline.planner.context import PlanContext
 from jaxspline.planner.result import Observations, PlanResult
+from jaxspline.planner.stereo_report import look_values, stereo_report
 from jaxspline.search import BoundStatus
 
 __all__ = ["assemble_result"]
@@ -44,7 +45,7 @@ def assemble_result(
     """
     sc = ctx.scenario
     det = rep.details
-    obs = _observations(sc.targets, rep.opp, det, ctx.problem.cover)
+    obs = _observations(sc.targets, rep.opp, det, ctx.problem.cover, ctx.problem.stereo)
     value = float(np.sum(obs.value))
     bound, converged = _search_bound(sc.targets, rep.opp, res, ctx.problem.cover)
     mip_stats = None
@@ -52,6 +53,9 @@ def assemble_result(
         mip_stats, bound, converged = _with_certificate(mip, bound, converged)
     report = _report(rep, obs, flown_joins, interrupted)
     areas, footprints = [], []
+    if ctx.problem.stereo is not None:
+        report["stereo"] = stereo_report(sc, ctx.problem.stereo, ctx.stereo[1].products,
+                                         det["order"])  # fmt: skip
     if ctx.problem.cover is not None:
         report["areas"] = area_report(sc, ctx.problem.cover, det["order"])
         areas = area_samples(ctx.areas, ctx.problem.cover, det["order"])
@@ -72,10 +76,11 @@ def assemble_result(
     )
 
 
-def _observations(tg, opp, det, cover) -> Observations:
+def _observations(tg, opp, det, cover, stereo=None) -> Observations:
     """The checked observations of the options ``opp`` in the re-check's order
     (``det["order"]``), with its maneuver times and slacks, the targets' values (an
-    area strip's: what it adds to the earlier ones) and the area strips' rolls."""
+    area strip's or a look's: what it adds to the earlier ones) and the held roll and
+    pitch of area strips and looks."""
     o = opp.options
     idx = np.asarray(det["order"], np.int64)
     value = np.asarray(tg.value, np.float64)[np.asarray(o.route)[idx]]
@@ -85,6 +90,11 @@ def _observations(tg, opp, det, cover) -> Observations:
         value[area] = _strip_values(cover, idx[area], np.asarray(o.t_start)[idx[area]])
         roll[area] = opp.params[idx[area], 0]
         pitch[area] = opp.params[idx[area], 1]
+    if stereo is not None:
+        look = stereo.is_look[idx]
+        value[look] = look_values(stereo, idx, np.asarray(o.t_start)[idx])[look]
+        roll[look] = opp.params[idx[look], 0]
+        pitch[look] = opp.params[idx[look], 1]
     return Observations(
         sat=np.asarray(o.sat)[idx],
         target=np.asarray(o.route)[idx],

@@ -27,7 +27,7 @@ from jaxspline.base import clock as search_clock
 from jaxspline.base.elements import jd_split
 from jaxspline.geometry.frames import in_shadow, sun_direction
 from jaxspline.geometry.orbit import orbit_period
-from jaxspline.geometry.routes import AREA
+from jaxspline.geometry.routes import AREA, STEREO
 from jaxspline.geometry.windows import orbit_scene, visibility_windows_all, window_work
 from jaxspline.planner.area_options import area_options, cover_table, merge_options
 from jaxspline.planner.context import PlanContext
@@ -53,11 +53,13 @@ from jaxspline.planner.opportunities import (
     option_counts,
     reference_points,
 )
+from jaxspline.planner.stereo_options import merge_stereo, stereo_options
 from jaxspline.readers.mission import Scenario
 from jaxspline.screen.fused import release_programs
 from jaxspline.screen.options import take_options
 from jaxspline.screen.pairs import screen_chunks
 from jaxspline.search import BatteryModel, Problem
+from jaxspline.search.stereo import ProductTable
 from jaxspline.search.store import PairsBuilder, start_order
 
 __all__ = ["StageClock", "build_problem"]
@@ -269,20 +271,30 @@ def build_problem(
         area, window = area_options(sc, table, scene), None
         if area is not None:
             opp, window = merge_options(opp, area)
-        clock.lap("options", f"{len(opp)} options" + _area_line(area))
-        scr = _screening(sc, scene, opp, window, joins, reduce_slack, check, fits)
+        opp, window, stereo = _with_stereo(sc, table, scene, opp, window)
+        clock.lap("options", f"{len(opp)} options" + _area_line(area) + _stereo_line(stereo))
+        held = None if window is None else window[:, 0] >= 0
+        if stereo is not None:  # looks and area strips: closed-form transitions
+            looks = stereo[1].look_of_row >= 0
+            held = looks if held is None else held | looks
+        scr = _screening(sc, scene, opp, held, joins, reduce_slack, check, fits)
         tables, far, first, near, slack, lookup, _ = scr
         clock.lap("screening", _screening_line(near, scr.removed, far, lookup is not None))
         check("screening")
         battery = _battery(sc, sunlit)
         cover = None if area is None else cover_table(sc, area, window)
+        table_p = None if stereo is None else _product_table(sc, opp, stereo[1])
         values = np.where(sc.targets.kind == AREA, 0.0, sc.targets.value)  # areas: in samples
+        if table_p is not None:  # a stereo target: its best product
+            st = table_p.stereo_targets
+            values[st] = [table_p.best_value(int(t)) for t in st]
         rules = {"cover": cover, "max_actions": sc.planner.max_actions, "duty": _duty(sc),
                  "gap_margin": sc.planner.margins.gap,
-                 "joins": _join_rules(sats) if joins and cover is not None else None}  # fmt: skip
+                 "joins": _join_rules(sats) if joins and (cover or stereo) else None,
+                 "stereo": table_p}  # fmt: skip
         pb = Problem.build(opp, sats, first, near, far, tables, battery, values, lookup, **rules)
         pb.near_slack = slack
-    return PlanContext(sc, pb, opp, windows, scene, table, battery, far, areas=area)
+    return PlanContext(sc, pb, opp, windows, scene, table, battery, far, area, stereo)
 
 
 class _Screened(NamedTuple):
@@ -295,11 +307,11 @@ class _Screened(NamedTuple):
     removed: int
 
 
-def _screening(sc, scene, opp, window, joins, reduce_slack, check, fits) -> _Screened:
+def _screening(sc, scene, opp, held, joins, reduce_slack, check, fits) -> _Screened:
     """Stage 4: per satellite its screening table, always-feasible gap ``far`` and the
     options' first requirements, then the near pairs through the maneuver model (and the
-    flown-join screen with ``joins``); area options (``window`` rows >= 0) are left out
-    of the pair screen."""
+    flown-join screen with ``joins``); area strips and looks (``held``) are left out of
+    the pair screen."""
     sats = sc.satellites
     tick = check("screening", 0, work=lambda: (len(opp), "options"))
     beat = tick or _no_tick  # between the steps before the near pairs (each may be long)
@@ -316,12 +328,51 @@ def _screening(sc, scene, opp, window, joins, reduce_slack, check, fits) -> _Scr
     reach = np.asarray(far) + slack + _NEAR_SLACK + _WINDOW_GUARD
     fits("screening", lambda: pair_bytes(sc, opp.options, reach))
     tick = check("screening", 0, since=time.monotonic(), work=lambda: (len(opp), "options"))
-    skip = None if window is None else window[:, 0] >= 0
     near, removed = _near_pairs(
-        sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick, skip=skip
+        sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick, skip=held
     )
     release_programs(len(opp))  # the screen's compiled chunk programs are done with
     return _Screened(tables, far, first, near, slack, lookup, removed)
+
+
+def _with_stereo(sc, table, scene, opp, window):
+    """The options with the stereo targets' looks merged in (``window`` rows carried
+    along, -1 for the looks): ``(opp, window, (StereoOptions, StereoMerge) or None)``."""
+    stereo = stereo_options(sc, table, scene)
+    if stereo is None:
+        return opp, window, None
+    merged = merge_stereo(opp, stereo)
+    if window is not None:
+        rows = np.concatenate([window, np.full((len(stereo.opp), 3), -1, np.int64)])
+        window = rows[merged.order]
+    return merged.opp, window, (stereo, merged)
+
+
+def _product_table(sc, opp, merged) -> ProductTable:
+    """The search's :class:`ProductTable`: each product's looks, target and value (the
+    target's priority times its request's share of the product's quality, times the
+    chance that the benchmark's overlap estimates find it valid)."""
+    p = merged.products
+    req = {int(s.target): s for s in sc.stereo}
+    share = np.array([req[int(t)].value_share(q) for t, q in zip(p.target, p.quality, strict=True)])
+    value = np.asarray(sc.targets.value)[p.target] * share * p.confidence
+    return ProductTable(
+        [tuple(int(c) for c in row if c >= 0) for row in p.looks],
+        p.target,
+        value,
+        np.asarray(opp.options.route, np.int64),
+        np.flatnonzero(sc.targets.kind == STEREO),
+        len(sc.targets),
+        rank=p.quality * p.confidence,
+    )
+
+
+def _stereo_line(stereo) -> str:
+    """The options line's part on the stereo targets (empty without them)."""
+    if stereo is None:
+        return ""
+    st, merged = stereo
+    return f" ({len(st.opp)} looks, {len(merged.products)} stereo products)"
 
 
 def _stage_check(deadline: StageDeadline | None, clock):
@@ -361,7 +412,7 @@ def _window_args(sc: Scenario, scene, table) -> tuple:
     # areas have options of their own (area_options); a model that cannot track a
     # point images area strips only
     tracks = np.array([s.maneuver.tracks_points for s in sc.satellites])
-    allowed &= (tg.kind != AREA)[None, :] & tracks[:, None]
+    allowed &= ~np.isin(tg.kind, (AREA, STEREO))[None, :] & tracks[:, None]
     limit_k = np.array([s.off_nadir_max for s in sc.satellites]) - pc.margins.off_nadir
     times = (pc.margins.horizon, tg.t_lo, tg.t_hi, sc.duration)
     return (scene, table.ok, reference_points(sc), allowed, limit_k, *times)

@@ -43,6 +43,9 @@ class PlanContext:
       far: float [S], the always-feasible gap of each satellite [s].
       areas: :class:`jaxspline.planner.area_options.AreaOptions` of the scenario's areas
         (their samples, groups and rows), or None.
+      stereo: ``(StereoOptions, StereoMerge)`` of the scenario's stereo targets
+        (:mod:`jaxspline.planner.stereo_options`: the looks, their rows in
+        ``opportunities``, the products), or None.
     """
 
     scenario: Scenario
@@ -54,6 +57,7 @@ class PlanContext:
     battery: BatteryModel
     far: np.ndarray
     areas: object = None
+    stereo: object = None
 
     def usable(self, sat, t) -> np.ndarray:
         """Whether the orbit table is usable for satellites ``sat`` at times ``t``.

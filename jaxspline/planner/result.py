@@ -149,20 +149,20 @@ class PlanResult:
                     "scan_speed_m_s": float(o.speed[i]),
                 }
             )
-        if sc.areas:  # an area strip's roll and its area's covered share
+        if sc.areas or sc.stereo:  # a held look's roll and pitch, an area's covered share
             self._area_columns(out)
         return out
 
     def _area_columns(self, rows: list[dict]) -> None:
-        """Add ``roll_deg`` and ``pitch_deg`` (the pointing offset an area strip holds, ""
-        for other targets) and ``area_covered_share`` (the strip's area's covered share,
-        ``report["areas"]``) to each row of :meth:`rows`."""
+        """Add ``roll_deg`` and ``pitch_deg`` (the pointing offset an area strip or a look
+        of a stereo target holds, "" for other targets) and ``area_covered_share`` (the
+        strip's area's covered share, ``report["areas"]``) to each row of :meth:`rows`."""
         share = {a["area"]: a["covered_share"] for a in self.report.get("areas", [])}
         o = self.observations
         for row, roll, pitch in zip(rows, o.roll, o.pitch, strict=True):
-            area = row["kind"] == "area"
-            row["roll_deg"] = round(math.degrees(float(roll)), 6) if area else ""
-            row["pitch_deg"] = round(math.degrees(float(pitch)), 6) if area else ""
+            area, held = row["kind"] == "area", row["kind"] in ("area", "stereo")
+            row["roll_deg"] = round(math.degrees(float(roll)), 6) if held else ""
+            row["pitch_deg"] = round(math.degrees(float(pitch)), 6) if held else ""
             row["area_covered_share"] = round(share[row["target"]], 6) if area else ""
 
     def summary(self) -> dict:

@@ -61,6 +61,8 @@ class ProductTable:
       option_target: int64 [N], the problem's target of every option.
       stereo_targets: int64 [T'], the stereo targets (their options are looks).
       n_targets: number of targets of the problem.
+      rank: float64 [P] in [0, 1], how good each product is among its target's (the
+        insertion prefers higher ones; None: by value).
       look_products: per option the products that use it (empty for other options;
         derived).
       target_products: per target its products by decreasing value (derived; empty for
@@ -74,6 +76,7 @@ class ProductTable:
     option_target: np.ndarray
     stereo_targets: np.ndarray
     n_targets: int
+    rank: np.ndarray | None = None
     look_products: list = field(init=False)
     target_products: list = field(init=False)
     is_look: np.ndarray = field(init=False)
@@ -81,6 +84,9 @@ class ProductTable:
     def __post_init__(self):
         self.target = np.asarray(self.target, np.int64)
         self.value = np.asarray(self.value, np.float64)
+        top = float(self.value.max()) if self.value.size else 1.0
+        rank = self.value / top if self.rank is None and top > 0 else self.rank
+        self.rank = np.asarray(np.ones(self.value.size) if rank is None else rank, np.float64)
         self.looks = [tuple(int(c) for c in lk) for lk in self.looks]
         if not (len(self.looks) == self.target.size == self.value.size):
             raise ValueError("ProductTable: looks, target and value need one entry a product")
@@ -166,8 +172,9 @@ def missing_looks(tl, p: int) -> list:
 def product_choices(tl, t: int, rng, turnaround: float, noise: float):
     """Stereo target t's products whose missing looks all fit the timeline ``tl`` now,
     as candidate ids (:func:`product_code`), and their costs: the timeline time the
-    missing looks consume plus ``turnaround`` times the product's last end, scaled up to
-    twice for a product worth less than the target's best, times ``1 + U(0, noise)``
+    missing looks consume plus ``turnaround`` times the product's last end, times
+    ``(2 - rank / best rank)^2`` (up to four times for a poor product), times
+    ``1 + U(0, noise)``
     with ``rng`` (the costs of
     :meth:`jaxspline.search.timeline.Timeline.insert_choices`).
 
@@ -182,8 +189,9 @@ def product_choices(tl, t: int, rng, turnaround: float, noise: float):
     if tl.assigned[t] >= 0:
         return options, costs
     table = pb.stereo
-    top = table.best_value(t)
-    for p in table.target_products[t]:
+    ps = table.target_products[t]
+    top = float(table.rank[ps].max()) if ps else 0.0
+    for p in ps:
         mark = len(tl.log)
         cost, ok = 0.0, True
         for c in missing_looks(tl, p):
@@ -198,7 +206,7 @@ def product_choices(tl, t: int, rng, turnaround: float, noise: float):
             continue
         cost += turnaround * max(pb.option_end[c] for c in table.looks[p])
         if top > 0:
-            cost *= 2.0 - float(table.value[p]) / top
+            cost *= (2.0 - float(table.rank[p]) / top) ** 2
         if rng is not None:
             cost *= 1.0 + noise * rng.random()
         options.append(product_code(p))

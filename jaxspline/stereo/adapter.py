@@ -12,13 +12,16 @@ The benchmark (``benchmarks/stereo_imaging`` of the astro-reason project; rules 
 * targets: one stereo target each (kind ``STEREO``) at its centre and terrain height,
   its AOI disk, the mission's validity thresholds and quality model (its scene's
   preferred convergence band and tri-stereo bonus), a triple preferred; the value of a
-  product is ``1 - QUALITY_WEIGHT + QUALITY_WEIGHT * Q``, so the plan's value ranks
+  product is ``1 - w + w * Q`` with ``w = QUALITY_SHARE / targets``, so the quality of
+  all targets together weighs less than one more covered target: the plan's value ranks
   coverage first and quality second, as the benchmark does;
 * planner: whole-second action grid (the official overlap estimate is seeded by whole
   seconds), the daylight rule (``min_solar_elevation_deg``), no action cap.
 
-Margins: 0.05 s on every slew gap; the look generator keeps the overlap above the
-threshold with a margin (the official figure is a 100-point estimate).
+Margins: 0.05 s on every slew gap, 0.05 deg under the off-nadir limit (the planner's
+SGP4 constants and the checker's differ by about 150 m); the look generator keeps the
+overlap above the threshold with a margin and values each product by the chance that
+the official 100-point overlap estimates pass.
 """
 
 from __future__ import annotations
@@ -34,13 +37,12 @@ from jaxspline.readers.mission import STEREO, Satellite, Scenario, make_targets
 from jaxspline.readers.stereo_request import Stereo
 from jaxspline.stereo.case import SCENE_BANDS_DEG, format_time, load_case
 
-__all__ = ["QUALITY_WEIGHT", "STEREO_MARGINS", "case_scenario", "solution_of"]
+__all__ = ["QUALITY_SHARE", "STEREO_MARGINS", "case_scenario", "solution_of", "steering_deg"]
 
 #: The planner's margins on a stereo case (module docstring).
-STEREO_MARGINS = Margins(gap=0.05)
-#: Share of a stereo target's value its product's quality decides (coverage first: the
-#: quality of all targets together weighs less than one more covered target).
-QUALITY_WEIGHT = 1e-3
+STEREO_MARGINS = Margins(gap=0.05, off_nadir=math.radians(0.05))
+#: The quality of all targets together is worth this share of one covered target.
+QUALITY_SHARE = 0.5
 #: Action grid [s] (whole seconds).
 TIME_STEP_S = 1.0
 #: Decimals of a written steering angle [deg].
@@ -82,7 +84,7 @@ def _request(case, i: int, tgt) -> Stereo:
         anchor_off_nadir=math.radians(th.anchor_max_off_nadir_deg),
         weights=(float(q.geometry), float(q.overlap), float(q.resolution)),
         tri_bonus=float(q.tri_bonus.get(tgt.scene_type, 0.0)),
-        quality_weight=QUALITY_WEIGHT,
+        quality_weight=QUALITY_SHARE / len(case.targets),
     )
 
 
