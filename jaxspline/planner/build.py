@@ -326,7 +326,8 @@ def _screening(sc, scene, opp, held, joins, reduce_slack, check, fits) -> _Scree
         lookup = np.ones(len(sats), bool)
     beat(0.0)
     reach = np.asarray(far) + slack + _NEAR_SLACK + _WINDOW_GUARD
-    fits("screening", lambda: pair_bytes(sc, opp.options, reach))
+    screened = opp.options if held is None else take_options(opp.options, np.flatnonzero(~held))
+    fits("screening", lambda: pair_bytes(sc, screened, reach))
     tick = check("screening", 0, since=time.monotonic(), work=lambda: (len(opp), "options"))
     near, removed = _near_pairs(
         sc, opp, tables, far, slack + _NEAR_SLACK, join_filter, tick=tick, skip=held
