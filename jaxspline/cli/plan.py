@@ -487,6 +487,8 @@ def _print_summary(r, out: Path, names, page=None) -> None:
         lines.append(f"page          {HTML_FILE}: {page[0] / 1e6:.2f} MB in {page[1]:.2f} s")
     if r.report.get("areas"):
         lines.insert(5, f"areas         {coverage_line(r.report['areas'])}")
+    if r.report.get("stereo"):
+        lines.insert(5, f"stereo        {stereo_line(r.report['stereo'])}")
     j = r.report.get("joins")  # only when the flown joins were checked (--aem)
     if j:
         lines.insert(
@@ -496,6 +498,24 @@ def _print_summary(r, out: Path, names, page=None) -> None:
             f"accel {j['max_accel_ratio']:.3f}, jerk {j['max_jerk_ratio']:.3f}",
         )
     print("\n".join(lines), file=sys.stdout)
+
+
+def stereo_line(stereo: list[dict]) -> str:
+    """One line on the stereo targets of a plan: how many have a product, of which
+    triples, and the mean quality over all of them.
+
+    Args:
+      stereo: ``report["stereo"]`` of a plan (:func:`jaxspline.planner.stereo_report.stereo_report`).
+    Returns:
+      str, e.g. ``128 of 131 stereo targets with a product (12 triples), mean quality 0.962``.
+    """
+    got = [s for s in stereo if s["product"]]
+    tri = sum(1 for s in got if s["product"] == "tri")
+    quality = sum(s["quality"] for s in got) / max(len(stereo), 1)
+    return (
+        f"{len(got)} of {len(stereo)} stereo targets with a product ({tri} triples), "
+        f"mean quality {quality:.3f}"
+    )
 
 
 def coverage_line(areas: list[dict], limit: int = 6) -> str:

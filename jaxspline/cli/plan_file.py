@@ -193,6 +193,7 @@ def _report(c, where, x):
             "dropped": lambda c, w, v: c.table(w, v, dict.fromkeys(v, OPT)),
             "joins": lambda c, w, v: c.table(w, v, dict.fromkeys(v, OPT)),
             "areas": [lambda c, w, v: c.table(w, v, {"area": STR, "covered_share": OPT})],
+            "stereo": [lambda c, w, v: c.table(w, v, {"target": STR, "quality": OPT})],
             "min_battery_wh": lambda c, w, v: (
                 c.table(w, v, dict.fromkeys(v, OPT)) if isinstance(v, dict) else c.value(w, v, OPT)
             ),
