@@ -505,7 +505,8 @@ def stereo_line(stereo: list[dict]) -> str:
     triples, and the mean quality over all of them.
 
     Args:
-      stereo: ``report["stereo"]`` of a plan (:func:`jaxspline.planner.stereo_report.stereo_report`).
+      stereo: ``report["stereo"]`` of a plan
+        (:func:`jaxspline.planner.stereo_report.stereo_report`).
     Returns:
       str, e.g. ``128 of 131 stereo targets with a product (12 triples), mean quality 0.962``.
     """
