@@ -39,7 +39,7 @@ from jaxspline.search.area_fill import area_index, fill
 from jaxspline.search.area_moves import AreaWalk, area_move, drop_idle_strips
 from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
-from jaxspline.search.stereo import drop_stray_looks
+from jaxspline.search.stereo import drop_stray_looks, upgrade_product
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["adopt", "earliest_pass", "greedy", "greedy_order", "lns"]
@@ -53,6 +53,7 @@ _REPORT_EVERY = 5.0  # [s] between progress reports
 _REFRESH_EVERY = 16  # iterations between refreshes of the unscheduled list
 _TEMPERATURE = 1.0  # threshold-acceptance start value [value units]
 _POLL_EVERY = 0.5  # [s] between two looks at the plans offered from outside (``incoming``)
+_P_UPGRADE = 0.2  # share of a stereo problem's moves that trade a product for a better one
 _CEILING_TOL = 1e-9  # relative: a plan this close to every value within reach is optimal
 
 
@@ -363,6 +364,12 @@ def lns(
             if report is not None and time.monotonic() - last > _REPORT_EVERY:
                 last = time.monotonic()
                 report(it, w.improved)
+            continue
+        if pb.stereo is not None and rng.random() < _P_UPGRADE:
+            if upgrade_product(tl, rng):
+                w.dirty = True
+                _keep_best(tl, w)
+            tl.commit()
             continue
         base = tl.score()
         mark = len(tl.log)

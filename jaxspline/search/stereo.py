@@ -26,6 +26,7 @@ __all__ = [
     "ProductCounts",
     "ProductTable",
     "drop_stray_looks",
+    "upgrade_product",
     "is_product_code",
     "missing_looks",
     "product_choices",
@@ -68,6 +69,7 @@ class ProductTable:
       target_products: per target its products by decreasing value (derived; empty for
         other targets).
       is_look: bool [N], options that are looks of a stereo target (derived).
+      top_rank: float64 [T], each target's best product rank (derived; 0 without one).
     """
 
     looks: list
@@ -80,6 +82,7 @@ class ProductTable:
     look_products: list = field(init=False)
     target_products: list = field(init=False)
     is_look: np.ndarray = field(init=False)
+    top_rank: np.ndarray = field(init=False)
 
     def __post_init__(self):
         self.target = np.asarray(self.target, np.int64)
@@ -100,6 +103,8 @@ class ProductTable:
         for p in np.lexsort((np.arange(self.target.size), -self.value)).tolist():
             self.target_products[int(self.target[p])].append(p)
         self.is_look = np.isin(self.option_target, self.stereo_targets)
+        self.top_rank = np.zeros(self.n_targets)
+        np.maximum.at(self.top_rank, self.target, self.rank)
 
     def __len__(self) -> int:
         return int(self.target.size)
@@ -234,3 +239,45 @@ def drop_stray_looks(tl, targets) -> int:
             else:
                 tl.undo_to(mark)
     return gone
+
+
+def upgrade_product(tl, rng) -> bool:
+    """One quality move: a stereo target that collects a product of less than its best
+    rank gives it up for a better one that fits (the best first), kept only when the
+    plan's value grows; else the plan is as before. Returns whether it changed."""
+    pb = tl.pb
+    table, counts = pb.stereo, tl.stereo
+    cands = [
+        int(t)
+        for t in table.stereo_targets
+        if counts.best[t] >= 0 and table.rank[counts.best[t]] < table.top_rank[t]
+    ]
+    if not cands:
+        return False
+    t = cands[rng.randrange(len(cands))]
+    old = counts.best[t]
+    base = tl.value
+    mark = len(tl.log)
+    for c in table.looks[old]:
+        k = pb.option_sat[c]
+        pos = tl.lines[k].index(c)
+        tl.remove(c)
+        if not tl.removal_ok(k, pos):
+            tl.undo_to(mark)
+            return False
+    better = [p for p in table.target_products[t] if table.rank[p] > table.rank[old]]
+    for p in sorted(better, key=lambda p: -table.rank[p]):
+        inner = len(tl.log)
+        if all(_try_insert(tl, c) for c in missing_looks(tl, p)) and tl.value > base + 1e-12:
+            return True
+        tl.undo_to(inner)
+    tl.undo_to(mark)
+    return False
+
+
+def _try_insert(tl, c: int) -> bool:
+    """Insert option c when it fits; whether it did."""
+    if tl.check(c) is None:
+        return False
+    tl.insert(c)
+    return True

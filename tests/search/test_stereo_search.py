@@ -26,7 +26,7 @@ from jaxspline.search import Timeline, greedy, lns
 from jaxspline.search.battery import BatteryModel
 from jaxspline.search.lagrangian import lagrangian
 from jaxspline.search.problem import Problem
-from jaxspline.search.stereo import ProductTable, drop_stray_looks
+from jaxspline.search.stereo import ProductTable, drop_stray_looks, upgrade_product
 from jaxspline.search.store import NearPairs
 
 SLEW_S, SLEW_S_PER_RAD = 2.0, 10.0
@@ -217,3 +217,24 @@ def test_lns_reaches_the_optimum_and_the_bound_is_above_it(seed):
     assert tl.value == pytest.approx(opt, abs=1e-9)
     res = lagrangian(Timeline(pb), time.monotonic() + 2.0, None, max_iters=50)
     assert res.bound >= opt - 1e-9
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_upgrades_only_raise_the_value_and_keep_the_plan_feasible(seed):
+    pb, opts = synth(seed, n_stereo=6, looks_per=6)
+    tl = Timeline(pb)
+    greedy(tl, math.inf)
+    rng = random.Random(seed)
+    changed = 0
+    for _ in range(200):
+        before = tl.value
+        changed += upgrade_product(tl, rng)
+        tl.commit()
+        assert tl.value >= before - 1e-12
+        assert tl.value == pytest.approx(ref_value(pb, tl.plan()), abs=1e-9)
+        assert ref_feasible(pb, opts, tl.plan())
+    assert changed > 0 or all(  # nothing to gain: every collected product is its target's best
+        pb.stereo.rank[tl.stereo.best[t]] >= pb.stereo.top_rank[t]
+        for t in pb.stereo.stereo_targets.tolist()
+        if tl.stereo.best[t] >= 0
+    )
