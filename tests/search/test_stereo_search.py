@@ -225,16 +225,37 @@ def test_upgrades_only_raise_the_value_and_keep_the_plan_feasible(seed):
     tl = Timeline(pb)
     greedy(tl, math.inf)
     rng = random.Random(seed)
-    changed = 0
     for _ in range(200):
         before = tl.value
-        changed += upgrade_product(tl, rng)
+        upgrade_product(tl, rng)
         tl.commit()
         assert tl.value >= before - 1e-12
         assert tl.value == pytest.approx(ref_value(pb, tl.plan()), abs=1e-9)
         assert ref_feasible(pb, opts, tl.plan())
-    assert changed > 0 or all(  # nothing to gain: every collected product is its target's best
-        pb.stereo.rank[tl.stereo.best[t]] >= pb.stereo.top_rank[t]
-        for t in pb.stereo.stereo_targets.tolist()
-        if tl.stereo.best[t] >= 0
-    )
+
+
+def _worst_alone(seed):
+    """A timeline holding only the worst product of the one stereo target (None when it
+    does not fit alone in this draw)."""
+    pb, _ = synth(seed, n_sats=3, n_stereo=1, looks_per=6, n_points=0, horizon=2000.0)
+    st = pb.stereo
+    t = int(st.stereo_targets[0])
+    if len(st.target_products[t]) < 2:
+        return None
+    worst = st.target_products[t][-1]
+    tl = Timeline(pb)
+    for c in st.looks[worst]:
+        if tl.check(c) is None:
+            return None
+        tl.insert(c)
+    tl.commit()
+    return tl, t, worst
+
+
+def test_an_upgrade_takes_the_better_product_when_it_fits():
+    found = next(x for x in map(_worst_alone, range(50)) if x is not None)
+    tl, t, worst = found
+    st = tl.pb.stereo
+    assert tl.stereo.best[t] == worst
+    assert upgrade_product(tl, random.Random(0))
+    assert st.value[tl.stereo.best[t]] > st.value[worst]
