@@ -47,9 +47,10 @@ def stereo_report(sc, table, products, chosen) -> list:
         table's); chosen: int [M], option ids of the plan.
     Returns:
       list of dict (JSON-ready), one per stereo request in ``sc.stereo`` order:
-      ``target``, ``product`` ("pair", "tri" or None), ``looks`` (option ids), and for a
-      product ``quality``, ``convergence_deg``, ``overlap``, ``scale_ratio``,
-      ``confidence`` and ``value``.
+      ``target``, ``candidates`` (its valid products: 0 when no plan can cover it),
+      ``product`` ("pair", "tri" or None), ``looks`` (option ids), and for a product
+      ``quality``, ``convergence_deg``, ``overlap``, ``scale_ratio``, ``confidence`` and
+      ``value``.
     """
     counts = ProductCounts(table)
     for c in chosen:
@@ -59,7 +60,8 @@ def stereo_report(sc, table, products, chosen) -> list:
     for req in sc.stereo:
         t = int(req.target)
         p = counts.best[t]
-        row = {"target": req.name, "product": None, "looks": [], "quality": None}
+        row = {"target": req.name, "candidates": len(table.target_products[t]),
+               "product": None, "looks": [], "quality": None}  # fmt: skip
         if p >= 0:
             row.update(
                 product="pair" if int(products.size[p]) == 2 else "tri",

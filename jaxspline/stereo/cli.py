@@ -49,10 +49,12 @@ def _summary(result) -> str:
     rep = result.report.get("stereo", [])
     n = max(len(rep), 1)
     covered = sum(1 for r in rep if r.get("quality") is not None)
+    coverable = sum(1 for r in rep if r.get("candidates"))
     quality = sum(r.get("quality") or 0.0 for r in rep)
     looks = int(sum(1 for r in result.observations.roll if r == r))
     return (
-        f"coverage_ratio {covered / n:.5f}, quality {quality / n:.5f}, {looks} looks, bound "
+        f"coverage_ratio {covered / n:.5f} (bound {coverable / n:.5f}), quality "
+        f"{quality / n:.5f}, {looks} looks; value {result.value:.6g}, bound "
         f"{result.bound:.6g} ({result.stats['bound_status']}), gap {result.gap:.6g}"
     )
 
