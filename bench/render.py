@@ -2,9 +2,9 @@
 
 Measures nothing: for each JSON file the bench writes (``report.json``,
 ``scale.json``, ``screening.json``, ``job.json``, ``aeossp.json``, ``coverage.json``,
-``bound.json``) present in the output folder, the markdown beside it is generated
-again by the same code that wrote it after the measurement. Run it after changing how
-a table is written.
+``bound.json``, ``stereo.json``) present in the output folder, the markdown beside it
+is generated again by the same code that wrote it after the measurement. Run it after
+changing how a table is written.
 """
 
 from __future__ import annotations
@@ -49,6 +49,12 @@ def _aeossp(d: dict) -> tuple[str, list[str]]:
     return "aeossp_standard training cases", aeossp_table(d)
 
 
+def _stereo(d: dict) -> tuple[str, list[str]]:
+    from bench.stereo import stereo_table
+
+    return "stereo_imaging training cases", stereo_table(d)
+
+
 def _bound(d: dict) -> tuple[str, list[str]]:
     from bench.bound import bound_table
 
@@ -64,6 +70,7 @@ RENDERERS = {
     "aeossp.json": ("AEOSSP.md", _aeossp),
     "coverage.json": ("COVERAGE.md", _coverage),
     "bound.json": ("BOUND.md", _bound),
+    "stereo.json": ("STEREO.md", _stereo),
 }
 
 
