@@ -33,6 +33,7 @@ from jaxspline.kernels.flex import mode_suppressible
 from jaxspline.kernels.limits import AxisLimits
 from jaxspline.readers.fields import (
     field_bool,
+    field_int,
     field_number,
     field_pair,
     field_str,
@@ -40,7 +41,7 @@ from jaxspline.readers.fields import (
     field_tables,
 )
 from jaxspline.readers.mission import DEFAULT_SWATH, FlexMode, Power, Satellite
-from jaxspline.readers.ranges import MAX_NAME_CHARS, MAX_TLE_AGE_DAYS, bounds
+from jaxspline.readers.ranges import MAX_NAME_CHARS, MAX_TLE_AGE_DAYS, RANGES, bounds
 
 __all__ = ["SATELLITE_KEYS", "parse_satellites", "tle_epoch", "tle_line_problem"]
 
@@ -51,6 +52,8 @@ DEFAULT_OFF_NADIR_DEG = 45.0
 DEFAULT_SENSOR = "visible"
 DEFAULT_SWATH_KM = DEFAULT_SWATH / 1e3
 TLE_COLUMNS = 69
+#: Largest relative difference of ``fov_deg`` and ``pixels x ifov_deg`` when both are given.
+FOV_TOLERANCE = 1e-3
 _SECONDS_PER_DAY = 86400.0
 
 #: Angles of TLE line 2: (name, first column index, end index, upper end [deg]).
@@ -66,8 +69,8 @@ SATELLITE_KEYS = {
     name: frozenset(keys.split())
     for name, keys in {
         "satellite": " ".join(_ORBIT_KEYS) + " name tle model rate_deg_s accel_deg_s2 "
-        "off_nadir_max_deg sensor settle_s flex power swath_km fov_deg edge_off_nadir_deg "
-        "strip_duration_s duty_s_per_orbit",
+        "off_nadir_max_deg sensor settle_s flex power swath_km fov_deg ifov_deg pixels "
+        "edge_off_nadir_deg strip_duration_s duty_s_per_orbit",
         "over": "lat_deg lon_deg t_s descending",
         "flex": "freq_hz damping tolerance_deg",
         "power": "capacity_wh initial_wh idle_w imaging_w slew_w charge_w",
@@ -349,13 +352,49 @@ def _satellite(ctx, f, sat, default_name, epoch, duration) -> Satellite:
         raise ctx.error(f, str(exc)) from None
 
 
+def _optics(ctx, f, sat) -> dict:
+    """``fov`` and ``ifov`` [rad] of ``fov_deg``, ``ifov_deg`` and ``pixels`` (each only
+    where given): without ``fov_deg`` the field of view is ``pixels x ifov_deg``; with
+    all three they agree within :data:`FOV_TOLERANCE`; a pixel is no wider than the field."""
+    fov = _num(ctx, f"{f}.fov_deg", sat["fov_deg"], "fov_deg") if "fov_deg" in sat else None
+    ifov = _num(ctx, f"{f}.ifov_deg", sat["ifov_deg"], "ifov_deg") if "ifov_deg" in sat else None
+    if "pixels" in sat:
+        n = field_int(ctx, f"{f}.pixels", sat["pixels"], *RANGES["satellites[].pixels"])
+        if ifov is None:
+            raise ctx.error(
+                f"{f}.pixels", "needs ifov_deg (the pixel angle): fov_deg = pixels x ifov_deg"
+            )
+        across = n * ifov
+        if fov is None:
+            lo, hi = RANGES["satellites[].fov_deg"]
+            if not lo <= across <= hi:
+                raise ctx.error(
+                    f"{f}.pixels",
+                    f"pixels x ifov_deg = {n} x {ifov:g} = {across:g} deg, the field of view, "
+                    f"must be within [{lo:g}, {hi:g}] deg",
+                )
+            fov = across
+        elif abs(fov - across) > FOV_TOLERANCE * fov:
+            raise ctx.error(
+                f"{f}.fov_deg",
+                f"{fov:g} deg disagrees with pixels x ifov_deg = {n} x {ifov:g} = {across:g} "
+                f"deg by more than {100 * FOV_TOLERANCE:g} %: give one of fov_deg and pixels",
+            )
+    if fov is not None and ifov is not None and ifov > fov:
+        raise ctx.error(
+            f"{f}.ifov_deg",
+            f"the pixel angle {ifov:g} deg must be <= the field of view fov_deg = {fov:g} deg",
+        )
+    out = {} if fov is None else {"fov": math.radians(fov)}
+    return out if ifov is None else {**out, "ifov": math.radians(ifov)}
+
+
 def _area_fields(ctx, f, sat, off_deg: float) -> dict:
-    """The fields of a satellite's area strips: ``fov_deg``, ``edge_off_nadir_deg`` (its
-    edges' band, within the off-nadir limit), ``strip_duration_s`` and
-    ``duty_s_per_orbit`` (each only where given)."""
-    out = {}
-    if "fov_deg" in sat:
-        out["fov"] = math.radians(_num(ctx, f"{f}.fov_deg", sat["fov_deg"], "fov_deg"))
+    """The fields of a satellite's area strips and stereo looks: ``fov_deg``,
+    ``ifov_deg`` and ``pixels`` (:func:`_optics`), ``edge_off_nadir_deg`` (its edges'
+    band, within the off-nadir limit), ``strip_duration_s`` and ``duty_s_per_orbit``
+    (each only where given)."""
+    out = _optics(ctx, f, sat)
     if "edge_off_nadir_deg" in sat:
         lo, hi = field_pair(ctx, f"{f}.edge_off_nadir_deg", sat["edge_off_nadir_deg"],
                             **bounds("satellites[].edge_off_nadir_deg"))  # fmt: skip

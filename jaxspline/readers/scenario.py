@@ -33,7 +33,9 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
                                         # (c) circular orbit (altitude_km, inclination_deg
                                         #     as in (b)) whose sub-satellite point is at
                                         #     (lat, lon) [deg] at t_s [s] (default: mid-horizon)
-    model = "per_channel"               # "per_channel" | "eigen_axis" | "flexible"
+    model = "per_channel"               # "per_channel" | "eigen_axis" | "flexible" |
+                                        # "roll_only" (one roll axis, rest-to-rest: images
+                                        # area strips and stereo looks only)
     rate_deg_s = [3.0, 3.0, 2.0]        # rate bound [deg/s]; per_channel: one number or
     accel_deg_s2 = [1.5, 1.5, 1.0]      # [roll, pitch, yaw]; other models: one number
                                         # about the eigen-axis (defaults 2 and 1)
@@ -43,10 +45,17 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
     swath_km = 20.0                     # ground width imaged across a strip [km] (default
                                         # 20, at most 5000): footprints, and the field of
                                         # view of area strips when fov_deg is not given
-    fov_deg = 1.2                       # cross-track field of view of area strips [deg]
+    fov_deg = 1.2                       # cross-track field of view of area strips and
+                                        # stereo looks [deg]
+    ifov_deg = 6.5e-5                   # the angle one detector pixel sees [deg]: a stereo
+                                        # look's pixel scale is slant range x it (default:
+                                        # none, stereo products ignore the pixel scale)
+    pixels = 12000                      # detector pixels across the track: without fov_deg,
+                                        # fov_deg = pixels x ifov_deg (needs ifov_deg; with
+                                        # fov_deg too, the two agree within 0.1 %)
     edge_off_nadir_deg = [0.0, 30.0]    # off-nadir band an area strip's edges lie in [deg]
                                         # (default: 0 to off_nadir_max_deg)
-    strip_duration_s = [0.0, 60.0]      # shortest and longest area strip [s]
+    strip_duration_s = [0.0, 60.0]      # shortest and longest area strip or stereo look [s]
     duty_s_per_orbit = 300.0            # imaging seconds in any window of one orbital
                                         # period (default: no rule)
     flex = { freq_hz = 0.5, damping = 0.01, tolerance_deg = 1e-4 }
@@ -60,7 +69,7 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
                                         # loads [W] (default 0); omitted -> no battery rule
 
     [[targets]]                         # explicit targets ([[routes]] is an alias)
-    kind = "point"                      # "point" (default) or "strip"
+    kind = "point"                      # "point" (default), "strip" or "stereo"
     name = "Ljubljana"                  # default "target_1", "target_2", ...
     lat_deg = 46.05                     # geodetic latitude [deg] in [-90, 90] (required)
     lon_deg = 14.51                     # longitude [deg] in [-180, 180] (required)
@@ -80,6 +89,16 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
                                         # 0); strips: only scan speeds with length /
                                         # speed >= it; points: duration_s defaults to
                                         # max(10, min_duration_s) and must reach it
+    # a stereo target (kind = "stereo"): a disk imaged by a pair or a triple of looks
+    # from different angles; takes name, lat_deg, lon_deg, alt_m, priority, window_s and
+    # sensor as above (not duration_s, length_km, azimuth_deg, min_duration_s,
+    # desired_s, tolerance_s), and, each defaulting to the [stereo] table's:
+    product = "tri"                     # "pair" or "tri" (a triple preferred, a pair
+                                        # still counts)
+    radius_m = 5000.0                   # radius of the ground disk to image [m]
+    band_deg = [8.0, 18.0]              # preferred convergence angles [deg] (quality),
+                                        # within the table's convergence_deg
+    tri_bonus = 0.12                    # a triple's quality over its best pair's
 
     [[areas]]                           # area targets: the weight of their samples covered
                                         # by strips at a held roll (and pitch) counts
@@ -99,6 +118,23 @@ control characters. Only ``[scenario]``, at least one satellite and at least one
                                         # of the narrowest swath; at most 200000 samples)
     min_coverage = 0.5                  # share the plan should reach (the search favours
                                         # areas below it; default: none)
+
+    [stereo]                            # rules and defaults of every stereo target (all
+                                        # optional; defaults: the stereo_imaging benchmark)
+    product = "pair"                    # default product of a stereo target
+    radius_m = 5000.0                   # default disk radius [m]
+    min_overlap = 0.8                   # least share of the disk inside every look's strip
+    convergence_deg = [5.0, 45.0]       # accepted convergence angles at the target [deg]
+    band_deg = [8.0, 18.0]              # default preferred convergence [deg] (urban)
+    max_scale_ratio = 1.5               # largest ratio of two looks' pixel scales
+    max_separation_s = 3600.0           # largest time between two looks' midpoints [s]
+    cross_satellite = true              # two satellites may make a pair
+    anchor_off_nadir_deg = 10.0         # a triple needs a look within this of nadir [deg]
+    quality_weights = [0.5, 0.35, 0.15] # a pair's quality: geometry (convergence in the
+                                        # band), overlap, resolution (scale ratio); sum 1
+    tri_bonus = 0.1                     # default bonus of a triple over its best pair
+    quality_weight = 1.0                # share of a target's priority that quality
+                                        # decides: value = priority x (1 - w + w quality)
 
     [targets_file]                      # alternative to targets_csv
     path = "more_targets.csv"
@@ -143,7 +179,13 @@ whose docstring lists the CSV columns with their units and how random targets ar
 drawn; :func:`~jaxspline.readers.targets.load_targets_csv` reads them. ``[[areas]]``
 (alias ``[area]``) are read by :mod:`jaxspline.readers.area_files`, each one target of
 kind ``AREA`` after every other target (a file with areas needs no other targets); the
-planner lays their strips out (:mod:`jaxspline.planner.area_options`).
+planner lays their strips out (:mod:`jaxspline.planner.area_options`). Stereo targets
+(``kind = "stereo"`` in ``[[targets]]`` or a CSV file) and the ``[stereo]`` table are read
+by :mod:`jaxspline.readers.stereo_files`, each one
+:class:`~jaxspline.readers.stereo_request.Stereo` request of ``Scenario.stereo``, whose
+docstring defines the products, their quality and value; the planner builds their looks
+(:mod:`jaxspline.planner.stereo_options`). ``jaxspline/data/stereo_example.toml`` plans
+stereo products over 30 cities.
 
 :func:`default_scenario` loads the packaged ``data/default.toml``: six satellites over
 six hours with about 1500 city targets (``data/cities.csv``, made by
@@ -176,7 +218,8 @@ from jaxspline.readers.fields import (
 from jaxspline.readers.mission import AREA, Area, Scenario, make_targets
 from jaxspline.readers.ranges import EPOCH_RANGE, MAX_SCAN_SPEEDS, RANGES, bounds
 from jaxspline.readers.satellites import parse_satellites
-from jaxspline.readers.targets import TARGET_SECTIONS, scenario_targets
+from jaxspline.readers.stereo_files import parse_stereo_table
+from jaxspline.readers.targets import TARGET_SECTIONS, read_targets
 
 __all__ = [
     "DEFAULT_SCENARIO_PATH",
@@ -204,7 +247,8 @@ _KEYS = {
         "max_actions area_roll_step_deg area_pitch_step_deg duty_margin_s",
     }.items()
 }
-_TOP = frozenset("scenario satellites satellite planner areas area".split()) | TARGET_SECTIONS
+_TOP = frozenset("scenario satellites satellite planner areas area stereo".split())
+_TOP |= TARGET_SECTIONS
 
 
 # --- planner ---
@@ -383,15 +427,19 @@ def parse_scenario(
     name, epoch, duration = _header(ctx, data, source)
     sats = parse_satellites(ctx, data, epoch, duration)
     has_areas = "areas" in data or "area" in data
-    targets = scenario_targets(ctx, data, base_dir, required=not has_areas, horizon=duration)
+    template = parse_stereo_table(ctx, data)
+    targets, stereo = read_targets(
+        ctx, data, base_dir, required=not has_areas, horizon=duration, stereo=template
+    )
     planner = _planner(ctx, data.get("planner", {}), duration, sats)
     if not has_areas:
-        return Scenario(name, epoch, duration, sats, targets, planner)
+        return Scenario(name, epoch, duration, sats, targets, planner, stereo=stereo)
     if targets is None:
         targets = make_targets(
             np.zeros(0, np.int64), np.zeros(0), np.zeros(0), name=np.zeros(0, str)
         )
-    return _with_areas(ctx, data, base_dir, Scenario(name, epoch, duration, sats, targets, planner))
+    sc = Scenario(name, epoch, duration, sats, targets, planner, stereo=stereo)
+    return _with_areas(ctx, data, base_dir, sc)
 
 
 def _with_areas(ctx, data, base_dir, sc: Scenario) -> Scenario:

@@ -19,7 +19,8 @@ column            unit   meaning
 ``lat_deg``       deg    geodetic latitude in [-90, 90] (required)
 ``lon_deg``       deg    longitude in [-180, 180] (required)
 ``priority``      -      value if imaged, > 0 (column required; an empty cell means 1)
-``kind``          -      ``point`` (default) or ``strip``
+``kind``          -      ``point`` (default), ``strip`` or ``stereo`` (a stereo pair or
+                         triple of a disk: :mod:`jaxspline.readers.stereo_files`)
 ``alt_m``         m      height above the WGS84 ellipsoid in [-12000, 12000] (default 0)
 ``duration_s``    s      point: imaging time (default 10); must be empty for a strip
 ``length_km``     km     strip: length, at most 10000 (required for a strip); must be
@@ -38,14 +39,27 @@ column            unit   meaning
                          is only scanned at speeds with ``length / speed >=`` it; a point's
                          ``duration_s`` defaults to ``max(10, min_duration_s)`` and must
                          reach it
+``product``       -      stereo: ``pair`` or ``tri`` (default: the ``[stereo]`` table's,
+                         ``pair``)
+``radius_m``      m      stereo: radius of the ground disk to image (default: the table's,
+                         5000)
+``band_lo_deg``   deg    stereo: preferred convergence angles (default: the table's, 8 to
+``band_hi_deg``   deg    18); both or neither, within the table's ``convergence_deg``
+``tri_bonus``     -      stereo: a triple's quality over its best pair's (default: the
+                         table's, 0.1)
 ================  =====  ==================================================================
+
+The stereo columns must be empty on other rows, and a stereo row leaves ``duration_s``,
+``length_km``, ``azimuth_deg``, ``min_duration_s``, ``desired_s`` and ``tolerance_s``
+empty (its looks last what covers its disk, timed by their products).
 
 A bad cell raises e.g. ``cities.csv row 17, column 'lat_deg': must be within [-90, 90],
 got '95.2'`` (row = line number in the file, the header is row 1); a missing file
 raises ``FileNotFoundError``.
 
 ``[[targets]]`` (alias ``[[routes]]``) tables take the same keys, except that the
-window is one key ``window_s = [lo, hi]``. ``[random_targets]`` draws, with numpy's
+window is one key ``window_s = [lo, hi]`` and a stereo target's band one key
+``band_deg = [lo, hi]``. ``[random_targets]`` draws, with numpy's
 ``default_rng(seed)``, positions uniform in latitude and longitude over the box (not
 uniform in area), then kinds, point durations, strip lengths, azimuths and integer
 priorities (``count`` at most :data:`MAX_RANDOM_TARGETS`); with ``land_only`` the
@@ -58,6 +72,7 @@ from __future__ import annotations
 import csv
 import io
 from pathlib import Path
+from typing import NamedTuple
 
 import numpy as np
 
@@ -74,14 +89,25 @@ from jaxspline.readers.fields import (
     read_text,
     read_tick,
 )
-from jaxspline.readers.mission import POINT, STRIP, Targets, make_targets
+from jaxspline.readers.mission import POINT, STEREO, STRIP, Targets, make_targets
 from jaxspline.readers.ranges import MAX_NAME_CHARS, RANGES, bounds
+from jaxspline.readers.stereo_files import (
+    CSV_STEREO_COLUMNS,
+    TARGET_STEREO_KEYS,
+    parse_stereo_table,
+    stereo_request,
+    stereo_template,
+    target_stereo,
+)
+from jaxspline.readers.stereo_request import Stereo
 
 __all__ = [
     "CSV_OPTIONAL",
     "CSV_REQUIRED",
     "TARGET_SECTIONS",
+    "TargetRows",
     "load_targets_csv",
+    "read_targets",
     "scenario_targets",
 ]
 
@@ -102,29 +128,64 @@ LAND_PASS_POINTS = 1 << 21  # draws tested against the land mask in one read
 #: Top-level keys and sections of a scenario file that this module reads.
 TARGET_SECTIONS = frozenset("targets routes targets_csv targets_file random_targets".split())
 CSV_REQUIRED = ("name", "lat_deg", "lon_deg", "priority")
-CSV_OPTIONAL = tuple(
-    "kind alt_m duration_s length_km azimuth_deg window_lo_s window_hi_s sensor desired_s "
-    "tolerance_s min_duration_s".split()
+CSV_OPTIONAL = (
+    *"kind alt_m duration_s length_km azimuth_deg window_lo_s window_hi_s sensor desired_s "
+    "tolerance_s min_duration_s".split(),
+    *CSV_STEREO_COLUMNS,
 )
 _KEYS = {
     "target": frozenset(
         "kind name lat_deg lon_deg alt_m duration_s length_km azimuth_deg priority "
         "window_s sensor desired_s tolerance_s min_duration_s".split()
-    ),
+    )
+    | frozenset(TARGET_STEREO_KEYS),
     "targets_file": frozenset(["path"]),
     "random_targets": frozenset(
         "seed count lat_deg lon_deg land_only strip_fraction duration_s "
         "length_km azimuth_deg priority".split()
     ),
 }
-_KINDS = {"point": POINT, "strip": STRIP}
-_TEXT_COLUMNS = ("name", "kind", "sensor")
+_KINDS = {"point": POINT, "strip": STRIP, "stereo": STEREO}
+_TEXT_COLUMNS = ("name", "kind", "sensor", "product")
+#: TOML keys of two values split into the CSV format's two columns.
+_SPLIT_KEYS = {
+    "window_s": ("window_lo_s", "window_hi_s"),
+    "band_deg": ("band_lo_deg", "band_hi_deg"),
+}
+
+
+class TargetRows(NamedTuple):
+    """The targets of a scenario file and the requests of its stereo targets.
+
+    Attributes:
+      targets: :class:`Targets`, or None (no targets and none required).
+      stereo: tuple of :class:`~jaxspline.readers.stereo_request.Stereo`, one per
+        target of kind stereo, in row order (``target`` its row of ``targets``).
+    """
+
+    targets: Targets | None
+    stereo: tuple
 
 
 def scenario_targets(
     ctx, data: dict, base_dir=None, required: bool = True, horizon: float | None = None
 ) -> Targets | None:
-    """All targets of a parsed scenario table ``data``, in the order they are read.
+    """All targets of a parsed scenario table ``data``: :func:`read_targets`'s targets
+    (stereo targets checked against the file's ``[stereo]`` table)."""
+    stereo = parse_stereo_table(ctx, data)
+    return read_targets(ctx, data, base_dir, required, horizon, stereo).targets
+
+
+def read_targets(
+    ctx,
+    data: dict,
+    base_dir=None,
+    required: bool = True,
+    horizon: float | None = None,
+    stereo: Stereo | None = None,
+) -> TargetRows:
+    """All targets of a parsed scenario table ``data``, in the order they are read, and
+    the requests of its stereo targets.
 
     First the ``[[targets]]`` (or ``[[routes]]``) tables, then the CSV files of
     ``targets_csv`` and ``[targets_file]``, then ``[random_targets]``.
@@ -136,31 +197,40 @@ def scenario_targets(
       required: raise when the file gives no targets (else return None).
       horizon: the scenario's duration [s]: times from the epoch (windows, desired
         times) must lie in ``[0, horizon]`` (None: the longest horizon).
+      stereo: the ``[stereo]`` table's template request
+        (:func:`~jaxspline.readers.stereo_files.parse_stereo_table`; None: the defaults).
     Returns:
-      Targets (angles in radians, lengths in metres, times in seconds from the epoch),
-      or None (no targets and not ``required``).
+      TargetRows: Targets (angles in radians, lengths in metres, times in seconds from
+      the epoch), or None (no targets and not ``required``), and the stereo requests.
     Raises:
       ValueError: naming the field, also when ``required`` and the file gives no targets.
     """
-    parts = []  # (Targets, origin of each target: "targets[0]", "t.csv row 5", ...)
-    explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"), horizon)
+    stereo = stereo_template() if stereo is None else stereo
+    # (Targets, origin of each target: "targets[0]", "t.csv row 5", ..., stereo fields)
+    parts = []
+    explicit = _toml_targets(ctx, field_tables(ctx, data, "targets", "routes"), horizon, stereo)
     if explicit is not None:
         parts.append(explicit)
-    parts += [_read_csv(p, horizon) for p in _csv_paths(ctx, data, base_dir)]
+    parts += [_read_csv(p, horizon, stereo) for p in _csv_paths(ctx, data, base_dir)]
     if "random_targets" in data:
         tg = _random_targets(ctx, data["random_targets"])
-        parts.append((tg, ["random_targets"] * len(tg)))
+        parts.append((tg, ["random_targets"] * len(tg), [None] * len(tg)))
     if not parts and not required:
-        return None
+        return TargetRows(None, ())
     if not parts:
         raise ctx.error(
             "targets", "no targets: give [[targets]], targets_csv and/or [random_targets]"
         )
-    targets, origins = parts[0]
-    for more, where in parts[1:]:
-        targets, origins = targets.concat(more), origins + where
+    targets, origins, fields = parts[0]
+    for more, where, more_fields in parts[1:]:
+        targets, origins, fields = targets.concat(more), origins + where, fields + more_fields
     _unique_names(targets.name, origins, lambda k, msg: _name_error(ctx, origins[k], msg))
-    return targets
+    requests = tuple(
+        stereo_request(stereo, str(targets.name[k]), k, f)
+        for k, f in enumerate(fields)
+        if f is not None
+    )
+    return TargetRows(targets, requests)
 
 
 def _name_error(ctx, origin: str, msg: str) -> ValueError:
@@ -179,13 +249,14 @@ def _unique_names(names, origins, err) -> None:
         first[n] = k
 
 
-def _target_row(get, err, default_name, text=False, horizon=None) -> tuple:
+def _target_row(get, err, default_name, text=False, horizon=None, stereo=None) -> tuple:
     """One target from ``get(column) -> raw or None``; ``err(column)(msg)`` builds errors.
 
     Columns as in the CSV format, numbers within their ranges
     (:data:`jaxspline.readers.ranges.RANGES`, times within ``[0, horizon]`` s; None: the
-    longest horizon). Returns (name, kind, lat, lon, alt, duration, length, azimuth,
-    priority, t_lo, t_hi, mid_lo, mid_hi, min_duration, sensor) in degrees, metres,
+    longest horizon); ``stereo`` the template request of a stereo target's defaults.
+    Returns (name, kind, lat, lon, alt, duration, length, azimuth, priority, t_lo, t_hi,
+    mid_lo, mid_hi, min_duration, sensor, stereo fields or None) in degrees, metres,
     seconds.
     """
 
@@ -198,15 +269,18 @@ def _target_row(get, err, default_name, text=False, horizon=None) -> tuple:
         raise err("name")(f"must be a non-empty string, got {get('name')!r}")
     kind = _string(get, err, "kind", "point")
     if kind not in _KINDS:
-        raise err("kind")(f"must be 'point' or 'strip', got {kind!r}")
+        raise err("kind")(f"must be 'point' or 'strip', or 'stereo' for a stereo product, "
+                          f"got {kind!r}")  # fmt: skip
     lat, lon = num("lat_deg"), num("lon_deg")
     alt, prio = num("alt_m", default=0.0), num("priority", default=1.0)
+    template = stereo_template() if stereo is None else stereo
+    pair = target_stereo(get, err, num, kind, lambda c, d: _string(get, err, c, d), template)
     min_dur = num("min_duration_s", default=0.0)
     dur, length, az = _extent(get, err, num, kind, min_dur)
     t_lo, t_hi, mid_lo, mid_hi = _times(get, err, num, dur)
     sensor = _string(get, err, "sensor", "")
     return (name, _KINDS[kind], lat, lon, alt, dur, length, az, prio, t_lo, t_hi, mid_lo,
-            mid_hi, min_dur, sensor)  # fmt: skip
+            mid_hi, min_dur, sensor, pair)  # fmt: skip
 
 
 def _string(get, err, col, default):
@@ -223,7 +297,10 @@ def _string(get, err, col, default):
 
 def _extent(get, err, num, kind, min_dur) -> tuple[float, float, float]:
     """``(duration [s], length [m], azimuth [deg])`` of a point (duration) or a strip
-    (length and azimuth; the duration is length / scan speed, 0 here)."""
+    (length and azimuth; the duration is length / scan speed, 0 here); zeros for a
+    stereo target (its looks' durations are the planner's)."""
+    if kind == "stereo":
+        return 0.0, 0.0, 0.0
     if kind == "strip":
         if get("duration_s") is not None:
             raise err("duration_s")("a strip has no duration_s (it is length / scan speed)")
@@ -265,6 +342,7 @@ def _times(get, err, num, dur) -> tuple[float, float, float, float]:
 
 
 def _targets_from_rows(rows) -> Targets:
+    """The Targets of rows of :func:`_target_row` (their stereo fields aside)."""
     cols = list(zip(*rows, strict=True))
     num = [np.asarray(c, np.float64) for c in cols[2:14]]
     lat, lon, alt, dur, length, az, prio, t_lo, t_hi, mid_lo, mid_hi, min_dur = num
@@ -287,23 +365,25 @@ def _targets_from_rows(rows) -> Targets:
     )
 
 
-def _toml_targets(ctx, items, horizon=None) -> tuple[Targets, list[str]] | None:
+def _toml_targets(ctx, items, horizon=None, stereo=None) -> tuple | None:
+    """``(Targets, origins, stereo fields)`` of the ``[[targets]]`` tables (None: none)."""
     rows, origins = [], []
     for i, (f, rt) in enumerate(items):
         rt = dict(field_table(ctx, f, rt, _KEYS["target"]))
-        if "window_s" in rt:
-            win = rt.pop("window_s")
-            if not isinstance(win, list) or len(win) != 2:
-                raise ctx.error(f"{f}.window_s", f"must be a list [lo, hi], got {win!r}")
-            rt["window_lo_s"], rt["window_hi_s"] = win
+        for key, (lo, hi) in _SPLIT_KEYS.items():
+            if key in rt:
+                two = rt.pop(key)
+                if not isinstance(two, list) or len(two) != 2:
+                    raise ctx.error(f"{f}.{key}", f"must be a list [lo, hi], got {two!r}")
+                rt[lo], rt[hi] = two
 
         def err(col, f=f):
-            key = "window_s" if col.startswith("window_") else col
+            key = next((k for k, cols in _SPLIT_KEYS.items() if col in cols), col)
             return lambda m: ctx.error(f"{f}.{key}", m)
 
-        rows.append(_target_row(rt.get, err, f"target_{i + 1}", horizon=horizon))
+        rows.append(_target_row(rt.get, err, f"target_{i + 1}", horizon=horizon, stereo=stereo))
         origins.append(f)
-    return (_targets_from_rows(rows), origins) if rows else None
+    return (_targets_from_rows(rows), origins, [r[-1] for r in rows]) if rows else None
 
 
 def load_targets_csv(path) -> Targets:
@@ -320,9 +400,10 @@ def load_targets_csv(path) -> Targets:
     return _read_csv(path)[0]
 
 
-def _read_csv(path, horizon=None) -> tuple[Targets, list[str]]:
-    """:func:`load_targets_csv` and the origin (``file row N``) of each target (times
-    within ``[0, horizon]`` s)."""
+def _read_csv(path, horizon=None, stereo=None) -> tuple[Targets, list[str], list]:
+    """:func:`load_targets_csv`, the origin (``file row N``) of each target (times
+    within ``[0, horizon]`` s) and its stereo fields (None: not a stereo target;
+    ``stereo``: the template request, None: the defaults)."""
     path = Path(path)
     label = path.name
     try:
@@ -365,7 +446,9 @@ def _read_csv(path, horizon=None) -> tuple[Targets, list[str]]:
                 if col in _TEXT_COLUMNS:
                     check_text(cell, err(col))
 
-            rows.append(_target_row(rec.get, err, f"row_{line}", text=True, horizon=horizon))
+            rows.append(
+                _target_row(rec.get, err, f"row_{line}", text=True, horizon=horizon, stereo=stereo)
+            )
             origins.append(f"{label} row {line}")
     except csv.Error as exc:  # an over-long cell (an unbalanced quote), a NUL byte, ...
         raise ValueError(f"{label} row {reader.line_num}: not readable as CSV: {exc}") from None
@@ -375,7 +458,7 @@ def _read_csv(path, horizon=None) -> tuple[Targets, list[str]]:
     _unique_names(
         targets.name, origins, lambda k, msg: ValueError(f"{origins[k]}, column 'name': {msg}")
     )
-    return targets, origins
+    return targets, origins, [r[-1] for r in rows]
 
 
 def _land_positions(ctx, rng, count, lat, lon):

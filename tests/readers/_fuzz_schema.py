@@ -3,7 +3,9 @@
 One small valid scenario uses every section: a TLE satellite with every area-strip key
 (``fov_deg``, ``edge_off_nadir_deg``, ``strip_duration_s``, ``duty_s_per_orbit``), a
 circular one with a battery, a flexible one placed with ``over``, point and strip
-targets with windows and desired times, a targets CSV with every column, random
+targets with windows and desired times, a stereo target with every stereo key and a
+``[stereo]`` table with all of its keys (the TLE satellite with ``ifov_deg``, the
+circular one with ``ifov_deg`` and ``pixels``), a targets CSV with every column, random
 targets, an inline area ring, a GeoJSON area and an area of samples (``smp.csv``)
 between them using every area key, and every planner key. For every numeric key (TOML
 keys and CSV columns, :data:`jaxspline.readers.ranges.RANGES`) the generator puts
@@ -12,7 +14,10 @@ wrong type, and values at both ends of its range; for strings, control character
 over-long names; for TLEs, a damaged checksum, a cut line, swapped lines, an epoch
 months away; for GeoJSON, positions given as strings, collinear and zero-area polygons,
 a bowtie; for areas, the retired keys of the strip-cutting reader, two polygons or
-none, entries that are not tables, bad cells of the sample file.
+none, entries that are not tables, bad cells of the sample file; for stereo targets,
+bad product names, bands outside the convergence, quality weights not summing to 1,
+keys of one kind on a target of another, a field of view that ``pixels x ifov_deg``
+contradicts, CSV stereo cells.
 Each case says what must happen: ``error`` (a ``ValueError`` naming the file and the
 field), ``ok`` (accepted, the value where it belongs) or ``either`` (a value inside
 its range that another rule may still refuse, e.g. a geometry step the time step is
@@ -42,11 +47,12 @@ BASE = {
     "satellites": [
         {"name": "tle", "tle": TLE, "model": "per_channel", "rate_deg_s": [3.0, 3.0, 2.0],
          "accel_deg_s2": [1.5, 1.5, 1.0], "off_nadir_max_deg": 30.0, "sensor": "visible",
-         "swath_km": 15.0, "fov_deg": 1.2, "edge_off_nadir_deg": [0.0, 25.0],
+         "swath_km": 15.0, "fov_deg": 1.2, "ifov_deg": 5e-4, "edge_off_nadir_deg": [0.0, 25.0],
          "strip_duration_s": [5.0, 60.0], "duty_s_per_orbit": 600.0},
         {"name": "circ", "altitude_km": 600.0, "inclination_deg": 97.8, "raan_deg": 10.0,
          "arg_lat_deg": 20.0, "model": "eigen_axis", "rate_deg_s": 1.8, "accel_deg_s2": 0.4,
-         "settle_s": 2.0, "power": {"capacity_wh": 1300.0, "initial_wh": 800.0,
+         "settle_s": 2.0, "ifov_deg": 6.5e-5, "pixels": 12000,
+         "power": {"capacity_wh": 1300.0, "initial_wh": 800.0,
          "idle_w": 20.0, "imaging_w": 420.0, "slew_w": 360.0, "charge_w": 85.0}},
         {"name": "flex", "over": {"lat_deg": 46.0, "lon_deg": 14.5, "t_s": 1800.0,
          "descending": True}, "model": "flexible", "rate_deg_s": 1.5, "accel_deg_s2": 0.3,
@@ -58,7 +64,15 @@ BASE = {
          "desired_s": 1800.0, "tolerance_s": 900.0, "min_duration_s": 8.0},
         {"kind": "strip", "name": "s", "lat_deg": 46.3, "lon_deg": 14.2, "length_km": 40.0,
          "azimuth_deg": 190.0, "priority": 3.0},
+        {"kind": "stereo", "name": "st", "lat_deg": 46.1, "lon_deg": 14.6, "alt_m": 300.0,
+         "priority": 2.0, "window_s": [0.0, 3000.0], "sensor": "visible", "product": "tri",
+         "radius_m": 4000.0, "band_deg": [10.0, 20.0], "tri_bonus": 0.1},
     ],
+    "stereo": {"product": "pair", "radius_m": 5000.0, "min_overlap": 0.8,
+               "convergence_deg": [5.0, 45.0], "band_deg": [8.0, 18.0], "max_scale_ratio": 1.5,
+               "max_separation_s": 3600.0, "cross_satellite": True,
+               "anchor_off_nadir_deg": 10.0, "quality_weights": [0.5, 0.35, 0.15],
+               "tri_bonus": 0.12, "quality_weight": 0.5},
     "random_targets": {"seed": 1, "count": 5, "lat_deg": [40.0, 50.0], "lon_deg": [10.0, 20.0],
                        "land_only": False, "strip_fraction": 0.5, "duration_s": [10.0, 20.0],
                        "length_km": [20.0, 40.0], "azimuth_deg": [0.0, 180.0],
@@ -80,10 +94,12 @@ BASE = {
                 "duty_margin_s": 1.0},
 }  # fmt: skip
 CSV_HEAD = ("name,lat_deg,lon_deg,priority,kind,alt_m,duration_s,length_km,azimuth_deg,"
-            "window_lo_s,window_hi_s,sensor,desired_s,tolerance_s,min_duration_s")  # fmt: skip
+            "window_lo_s,window_hi_s,sensor,desired_s,tolerance_s,min_duration_s,"
+            "product,radius_m,band_lo_deg,band_hi_deg,tri_bonus")  # fmt: skip
 CSV_ROWS = [
-    "c1,45.5,13.8,2,point,10,12,,,0,3600,,1800,1800,5",
-    "c2,46.5,15.5,3,strip,0,,25,45,,,visible,,,",
+    "c1,45.5,13.8,2,point,10,12,,,0,3600,,1800,1800,5,,,,,",
+    "c2,46.5,15.5,3,strip,0,,25,45,,,visible,,,,,,,,",
+    "c3,46.2,14.9,2,stereo,0,,,,0,3600,visible,,,,tri,4500,9,19,0.08",
 ]
 GEOJSON = {
     "type": "Polygon",
@@ -110,6 +126,7 @@ def _paths(prefix, table):
 def numeric_paths():
     """(document path, RANGES key) of every numeric key of :data:`BASE`."""
     out = [(("scenario", "duration_s"), "scenario.duration_s")]
+    out += [(("stereo", *p), r) for p, r in _paths("stereo", BASE["stereo"])]
     for i, sat in enumerate(BASE["satellites"]):
         out += [(("satellites", i, *p), r) for p, r in _paths("satellites[]", sat)]
     for i, tg in enumerate(BASE["targets"]):
@@ -130,6 +147,16 @@ def _label(path) -> str:
     return text
 
 
+#: Keys of the stereo schema: four bad values each (below, above, 1e300 or NaN, text), not
+#: ten; their checks are the shared field readers that every other key exercises in full,
+#: and the file's run time stays what it was (a case costs ~3 ms, most of it TOML).
+FEW_BAD_KEYS = frozenset(k for k in RANGES if k.startswith("stereo.")) | {
+    "targets[].radius_m", "targets[].band_deg", "targets[].tri_bonus",
+    "satellites[].ifov_deg", "satellites[].pixels",
+}  # fmt: skip
+_FEW_LABELS = ("below", "above", "1e300", "nan", "text")
+
+
 def _bad_values(rng_key, old):
     """(label, value) that must be refused at ``rng_key`` (old: the valid value there)."""
     lo, hi = RANGES[rng_key]
@@ -147,8 +174,11 @@ def _bad_values(rng_key, old):
     ]
     if not integer:
         out += [("nan", math.nan), ("inf", math.inf), ("-inf", -math.inf)]
+    if rng_key in FEW_BAD_KEYS:
+        out = [(lab, v) for lab, v in out if lab in _FEW_LABELS and (integer or lab != "1e300")]
     if isinstance(old, list):  # a pair or a per-channel list: spoil one entry
-        out = [(f"{lab}[0]", [v, *old[1:]]) for lab, v in out[:4]] + out[4:]
+        spoil = ("below", "above", "1e300", "-1e300")
+        out = [(f"{lab}[0]", [v, *old[1:]]) if lab in spoil else (lab, v) for lab, v in out]
     return out
 
 
@@ -225,13 +255,17 @@ CSV_COLUMNS = {
     "tolerance_s": "targets[].tolerance_s", "min_duration_s": "targets[].min_duration_s",
 }  # fmt: skip
 CSV_STRIP_COLUMNS = {"length_km": "targets[].length_km", "azimuth_deg": "targets[].azimuth_deg"}
+CSV_STEREO_COLUMNS = {
+    "radius_m": "targets[].radius_m", "band_lo_deg": "targets[].band_deg",
+    "band_hi_deg": "targets[].band_deg", "tri_bonus": "targets[].tri_bonus",
+}  # fmt: skip
 
 
 def csv_cases(rng) -> list[Fuzz]:
     """Out-of-range and non-numeric cells in every numeric CSV column, control characters."""
     head = CSV_HEAD.split(",")
     out = []
-    for cols, row in ((CSV_COLUMNS, 0), (CSV_STRIP_COLUMNS, 1)):
+    for cols, row in ((CSV_COLUMNS, 0), (CSV_STRIP_COLUMNS, 1), (CSV_STEREO_COLUMNS, 2)):
         for col, key in cols.items():
             lo, hi = RANGES[key]
             hi = DURATION_S if hi == HORIZON else hi
@@ -244,7 +278,7 @@ def csv_cases(rng) -> list[Fuzz]:
                 fields = (f"row {row + 2}", f"column {col!r}")
                 out.append(_case(f"schema:csv:{col}:{lab}", BASE, fields, "error", rows))
     for lab, name in (("nul", "a\x00b"), ("esc", "a\x1bb"), ("bell", "x\x07"), ("long", "n" * 300)):
-        rows = [name + CSV_ROWS[0][2:], CSV_ROWS[1]]
+        rows = [name + CSV_ROWS[0][2:], *CSV_ROWS[1:]]
         out.append(_case(f"schema:csv:name:{lab}", BASE, ("row 2", "column 'name'"), "error", rows))
     return out
 
@@ -360,6 +394,83 @@ def area_cases() -> list[Fuzz]:
     return out
 
 
+_NOT_STEREO = {"duration_s": 10.0, "length_km": 5.0, "azimuth_deg": 10.0, "min_duration_s": 2.0,
+               "desired_s": 100.0, "tolerance_s": 10.0}  # fmt: skip
+_STEREO_ONLY = {"product": "pair", "radius_m": 5000.0, "band_deg": [8.0, 18.0], "tri_bonus": 0.1}
+STEREO_WRONG = {  # label: (table's path, changes (None: deleted), fields named, TOML line key)
+    "table_product": (("stereo",), {"product": "quad"}, ("stereo.product", "quad"), "product"),
+    "table_product_number": (("stereo",), {"product": 2}, ("stereo.product",), "product"),
+    "target_product": (("targets", 2), {"product": "pairs"}, ("targets[2].product", "pairs"),
+                       "product"),
+    "cross_satellite": (("stereo",), {"cross_satellite": "yes"}, ("stereo.cross_satellite",),
+                        "cross_satellite"),
+    "weights_two": (("stereo",), {"quality_weights": [0.5, 0.5]}, ("stereo.quality_weights",),
+                    "quality_weights"),
+    "weights_sum": (("stereo",), {"quality_weights": [0.5, 0.5, 0.5]},
+                    ("stereo.quality_weights", "sum to 1"), "quality_weights"),
+    "weights_number": (("stereo",), {"quality_weights": 1.0}, ("stereo.quality_weights",),
+                       "quality_weights"),
+    "table_band_outside": (("stereo",), {"band_deg": [2.0, 18.0]},
+                           ("stereo.band_deg", "convergence_deg"), "band_deg"),
+    "target_band_outside": (("targets", 2), {"band_deg": [30.0, 50.0]},
+                            ("targets[2].band_deg", "convergence_deg"), "band_deg"),
+    "target_band_order": (("targets", 2), {"band_deg": [20.0, 10.0]}, ("targets[2].band_deg",),
+                          "band_deg"),
+    "target_band_one": (("targets", 2), {"band_deg": [10.0]}, ("targets[2].band_deg",),
+                        "band_deg"),
+    "unknown_key": (("stereo",), {"overlap": 0.8}, ("stereo.overlap",), None),
+    "pixels_no_ifov": (("satellites", 1), {"ifov_deg": None}, ("satellites[1].pixels", "ifov_deg"),
+                       "pixels"),
+    "fov_disagrees": (("satellites", 1), {"fov_deg": 1.0}, ("satellites[1].fov_deg", "disagrees"),
+                      "fov_deg"),
+    "ifov_over_fov": (("satellites", 0), {"ifov_deg": 0.9, "fov_deg": 0.5},
+                      ("satellites[0].ifov_deg", "field of view"), "ifov_deg"),
+    "pixels_float": (("satellites", 1), {"pixels": 12000.0}, ("satellites[1].pixels",), "pixels"),
+    **{f"stereo_{k}": (("targets", 2), {k: v}, (f"targets[2].{k}", "stereo target takes no"), k)
+       for k, v in _NOT_STEREO.items()},
+    **{f"point_{k}": (("targets", 0), {k: v}, (f"targets[0].{k}", "only a stereo target"), k)
+       for k, v in _STEREO_ONLY.items()},
+}  # fmt: skip
+#: CSV cells of the stereo rules: (row, column, cell, words of the message).
+STEREO_CELLS = [
+    (2, "product", "quad", "'quad'"),
+    (2, "band_hi_deg", "", "give both"),
+    (2, "band_lo_deg", "2", "convergence_deg"),
+    (2, "duration_s", "10", "stereo target takes no"),
+    (0, "tri_bonus", "0.1", "only a stereo target"),
+    (1, "radius_m", "4000", "only a stereo target"),
+]
+
+
+def stereo_cases() -> list[Fuzz]:
+    """The stereo rules beyond ranges: product names, the band inside the convergence,
+    the quality weights, keys of one kind on a target of another, a field of view of
+    pixels, a ``[stereo]`` that is not a table, the CSV stereo cells."""
+    out = []
+    for lab, (path, change, fields, line_key) in STEREO_WRONG.items():
+        doc = copy.deepcopy(BASE)
+        table = _get(doc, path)
+        for key, value in change.items():
+            if value is None:
+                del table[key]
+            else:
+                table[key] = value
+        out.append(_case(f"schema:stereo:{lab}", doc, fields, "error", line_key=line_key))
+    for lab, value in (("number", 5), ("list", [{"product": "pair"}])):
+        doc = copy.deepcopy(BASE)
+        doc["stereo"] = value
+        out.append(_case(f"schema:stereo:table_{lab}", doc, ("stereo",), "error"))
+    head = CSV_HEAD.split(",")
+    for row, col, cell, what in STEREO_CELLS:
+        cells = CSV_ROWS[row].split(",")
+        cells[head.index(col)] = cell
+        rows = list(CSV_ROWS)
+        rows[row] = ",".join(cells)
+        fields = (f"row {row + 2}", f"column {col!r}", what)
+        out.append(_case(f"schema:stereo:csv_{col}", BASE, fields, "error", rows))
+    return out
+
+
 def _polygon_cases() -> list[Fuzz]:
     out = []
     rings = {
@@ -394,5 +505,6 @@ def schema_cases(rng=None) -> list[Fuzz]:
         number_cases(rng)
         + csv_cases(rng)
         + text_cases(rng)
+        + stereo_cases()
         + [_case("schema:base", BASE, (), "ok")]
     )

@@ -29,7 +29,10 @@ mutating at random: every number outside its range, of the wrong type and at bot
 of its range, names with control characters, damaged TLEs, far epochs, degenerate
 polygons, GeoJSON positions that are not numbers, the retired area keys (``swath_km``,
 ``max_length_km``, ``objective``: "is no longer read"), area entries that are not
-tables, bad cells of an area's sample file. The ~890 that must be refused stop at
+tables, bad cells of an area's sample file, the stereo rules (product names, a preferred
+band inside the accepted convergence, quality weights summing to 1, keys of one kind on
+a target of another, a field of view ``pixels x ifov_deg`` contradicts, CSV stereo
+cells). The ~1100 that must be refused stop at
 validation and run by default (a few seconds); the boundary values that may be accepted
 load whole scenarios (orbits, areas) and run with the ``slow`` marker, as does a handful
 that plans through the command (a plan or a named error, never a traceback). An
@@ -70,9 +73,10 @@ from _fuzz_schema import RETIRED, schema_cases
 from jaxspline.aeossp.case import Case, load_case
 from jaxspline.base.elements import CircularOrbit
 from jaxspline.readers.area_files import AREA_KEYS, RETIRED_KEYS, read_geojson
-from jaxspline.readers.mission import AREA, Scenario, Targets
+from jaxspline.readers.mission import AREA, STEREO, Scenario, Targets
 from jaxspline.readers.ranges import RANGES
 from jaxspline.readers.scenario import load_scenario
+from jaxspline.readers.stereo_files import STEREO_KEYS, TARGET_STEREO_KEYS
 from jaxspline.readers.targets import load_targets_csv
 
 # --- no writes: an audit hook, active only while a reader runs ---
@@ -154,7 +158,7 @@ def _check_scenario(sc: Scenario) -> list[str]:
     bad = [] if _finite(sc.duration) and sc.duration > 0 else ["duration"]
     for s in sc.satellites:
         nums = [s.limits.rate, s.limits.accel, s.off_nadir_max, s.settle, s.swath]
-        nums += [x for x in (s.fov, s.edge_band, s.duty) if x is not None]
+        nums += [x for x in (s.fov, s.edge_band, s.duty, s.ifov) if x is not None]
         nums += [s.strip_duration]
         if isinstance(s.orbit, CircularOrbit):
             nums += list(s.orbit)
@@ -188,6 +192,13 @@ def _check_scenario(sc: Scenario) -> list[str]:
     bad += [f"area {a.name}: {why}" for a in sc.areas for why in _check_area(sc, a)]
     if sorted(a.target for a in sc.areas) != np.flatnonzero(sc.targets.kind == AREA).tolist():
         bad.append("areas and the targets of kind AREA differ")
+    if [s.target for s in sc.stereo] != np.flatnonzero(sc.targets.kind == STEREO).tolist():
+        bad.append("stereo requests and the targets of kind STEREO differ")
+    for s in sc.stereo:
+        nums = [s.radius, s.min_overlap, s.convergence, s.band, s.max_scale_ratio]
+        nums += [s.max_separation, s.anchor_off_nadir, s.weights, s.tri_bonus, s.quality_weight]
+        if not _finite(*nums) or sc.targets.name[s.target] != s.name:
+            bad.append(f"stereo {s.name}")
     return bad
 
 
@@ -457,6 +468,8 @@ def _in_ranges(sc: Scenario) -> list[str]:
         within("satellites[].swath_km", s.swath, 1e3)
         if s.fov is not None:
             within("satellites[].fov_deg", np.degrees(s.fov))
+        if s.ifov is not None:
+            within("satellites[].ifov_deg", np.degrees(s.ifov))
         if s.edge_band is not None:
             within("satellites[].edge_off_nadir_deg", np.degrees(s.edge_band))
         within("satellites[].strip_duration_s", s.strip_duration)
@@ -479,6 +492,17 @@ def _in_ranges(sc: Scenario) -> list[str]:
     for f in ("t_lo", "t_hi"):  # finite windows lie in the horizon
         v = getattr(tg, f)
         within("targets[].window_s", v[np.isfinite(v)])
+    for s in sc.stereo:  # a target's own keys share the [stereo] table's ranges
+        within("stereo.radius_m", s.radius)
+        within("stereo.min_overlap", s.min_overlap)
+        within("stereo.convergence_deg", np.degrees(s.convergence))
+        within("stereo.band_deg", np.degrees(s.band))
+        within("stereo.max_scale_ratio", s.max_scale_ratio)
+        within("stereo.max_separation_s", s.max_separation)
+        within("stereo.anchor_off_nadir_deg", np.degrees(s.anchor_off_nadir))
+        within("stereo.quality_weights", s.weights)
+        within("stereo.tri_bonus", s.tri_bonus)
+        within("stereo.quality_weight", s.quality_weight)
     pl = sc.planner
     within("planner.time_step_s", pl.time_step)
     within("planner.geometry_step_s", pl.geometry_step)
@@ -535,8 +559,13 @@ def test_schema_cases_cover_every_key():
     retired = {c.kind.split(":")[2] for c in cases if c.kind.startswith("schema:retired:")}
     assert retired == set(RETIRED_KEYS), sorted(set(RETIRED_KEYS) - retired)
     base = next(c for c in cases if c.kind == "schema:base")
-    used = set().union(*tomllib.loads(base.files["s.toml"].decode())["areas"])
+    doc = tomllib.loads(base.files["s.toml"].decode())
+    used = set().union(*doc["areas"])
     assert used == AREA_KEYS, sorted(AREA_KEYS ^ used)
+    # ... every [stereo] key, and a stereo target with every key of its own
+    assert set(doc["stereo"]) == STEREO_KEYS, sorted(STEREO_KEYS ^ set(doc["stereo"]))
+    stereo = [t for t in doc["targets"] if t.get("kind") == "stereo"]
+    assert stereo and set(TARGET_STEREO_KEYS) <= set(stereo[0]), stereo
 
 
 def test_fuzz_schema_refusals(tmp_path, monkeypatch):
