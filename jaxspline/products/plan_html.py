@@ -18,16 +18,19 @@ scripts, ``Bokeh.documents[0].get_model_by_name(name)``):
   not imaged (``targets_not_imaged``, grey) and one glyph per observation at its
   target in the satellite's colour (``targets_imaged``); hovering a target shows its
   name, priority, satellite, start and end (UTC), off-nadir angle, maneuver time and
-  slack;
+  slack; stereo targets marked by the product the plan collects (``stereo_targets``,
+  :mod:`jaxspline.products.plan_html_stereo`);
 * ``timeline``: per-satellite Gantt chart of imaging (``imaging``) and maneuvers
-  (``maneuvers``), and ``battery`` below (``battery-<satellite>`` lines) on the same
+  (``maneuvers``), the looks of each stereo product joined (``stereo_joins``), and
+  ``battery`` below (``battery-<satellite>`` lines) on the same
   time axis (a note when no satellite has a power model);
 * linking: the satellite check boxes (``satellite_filter``) and the time range shown
   by the timeline (zoom or pan it) filter the map's tracks, footprints and imaged
   targets (a few lines of ``CustomJS`` set the renderers' ``BooleanFilter``); the
   battery lines of unchecked satellites are hidden; ``filter_status`` says what is
   shown; a click on an imaged target zooms the timeline to its observation
-  +- :data:`PASS_PAD_S` (and so the map to that pass).
+  +- :data:`PASS_PAD_S` (and so the map to that pass), on a stereo target to its
+  product's looks +- the same.
 
 A ``plan.json`` without the ``"view"`` section (older jaxspline) still gives the
 header and the timeline; the map then has the coastlines only.
@@ -44,6 +47,7 @@ import numpy as np
 from jaxspline.planner.files import atomic_write_text, refuse_overwrite
 from jaxspline.planner.result import PlanResult
 from jaxspline.products import plan_html_columns as columns
+from jaxspline.products import plan_html_stereo as stereo
 from jaxspline.products.plan_html_header import header_html
 
 __all__ = ["HTML_FILE", "plan_document", "read_plan", "write_plan_html"]
@@ -87,11 +91,18 @@ status.text = `map shows ${names.length} of ${boxes.labels.length} satellites ` 
   `(${names.join(", ") || "none"}), ${iso(a)} to ${iso(b)} UTC`
 """
 _ALL_JS = "boxes.active = boxes.labels.map((_, k) => k)"
-# a click on an imaged target zooms the timeline (and so the map) to its pass
+# a click on an imaged target zooms the timeline (and so the map) to its pass; on a stereo
+# target (its marker rings the glyphs of its looks; it wins) to its product's looks
 _TAP_JS = """
-const i = src.selected.indices[0]
-if (i !== undefined) {
-  const d = src.data
+let d = null, i
+for (const s of [stereo, src]) {
+  if (s !== null && s.selected.indices.length > 0) {
+    d = s.data
+    i = s.selected.indices[0]
+    break
+  }
+}
+if (d !== null && isFinite(d.t0[i]) && isFinite(d.t1[i])) {
   const [lo, hi] = xr.bounds
   xr.setv({start: Math.max(d.t0[i] - pad, lo), end: Math.min(d.t1[i] + pad, hi)})
 }
@@ -150,6 +161,7 @@ def _map(doc, sats, obs):
     filt = _add_tracks_and_footprints(fig, doc, sats, obs)
     if view.get("targets"):
         _add_free_targets(fig, view["targets"], obs)
+    stereo.add_stereo_targets(fig, doc, obs)  # under the observation glyphs, larger
     filt.append(_add_imaged_targets(fig, obs))
     return fig, filt
 
@@ -360,7 +372,7 @@ def _timeline(doc, sats, obs):
     duration = view.get("duration_s") or max([o["end_s"] for o in doc["observations"]] or [1.0])
     end = epoch + columns.MS * duration
     x_range = Range1d(epoch, end, bounds=(epoch, end), min_interval=10.0 * columns.MS)
-    gantt = _gantt(sats, obs, x_range)
+    gantt = _gantt(doc, sats, obs, x_range)
     bat = view.get("battery") or {}
     if not bat:
         note = "<i>battery: no satellite of this plan has a power model</i>"
@@ -369,7 +381,7 @@ def _timeline(doc, sats, obs):
     return gantt, batt, x_range, lines
 
 
-def _gantt(sats, obs, x_range):
+def _gantt(doc, sats, obs, x_range):
     """Per-satellite rows of imaging bars and the maneuvers before them."""
     from bokeh.models import ColumnDataSource, FactorRange, HoverTool
     from bokeh.plotting import figure
@@ -406,6 +418,7 @@ def _gantt(sats, obs, x_range):
         source=src,
         name="imaging",
     )
+    stereo.add_stereo_joins(gantt, doc, obs)  # a product's looks joined, over the bars
     gantt.add_tools(
         HoverTool(
             renderers=[ri, rm],
@@ -478,7 +491,7 @@ def _plan_page(doc):
       a Bokeh layout model.
     """
     from bokeh.layouts import column, row
-    from bokeh.models import Button, CheckboxGroup, CustomJS, Div, TapTool
+    from bokeh.models import Button, CheckboxGroup, CustomJS, Div
 
     sats = columns.satellites(doc)
     obs = columns.observation_columns(doc, sats)
@@ -496,13 +509,7 @@ def _plan_page(doc):
     )
     show_all = Button(label="all satellites", width=CONTROLS_WIDTH - 20, name="all_satellites")
     status = Div(text="", width=MAP_WIDTH + CONTROLS_WIDTH, name="filter_status")
-    imaged = next(r for r in filt if r.name == "targets_imaged")
-    tap = TapTool(renderers=[imaged], behavior="select")
-    fmap.add_tools(tap)
-    tap.callback = CustomJS(
-        args={"src": imaged.data_source, "xr": x_range, "pad": PASS_PAD_S * columns.MS},
-        code=_TAP_JS,
-    )
+    _add_tap(fmap, filt, x_range)
     args = {"boxes": boxes, "xr": x_range, "filtered": filt, "battery": lines, "status": status}
     cb = CustomJS(args=args, code=_FILTER_JS)
     boxes.js_on_change("active", cb)
@@ -510,14 +517,16 @@ def _plan_page(doc):
     x_range.js_on_change("end", cb)
     show_all.js_on_event("button_click", CustomJS(args={"boxes": boxes}, code=_ALL_JS))
     n_obs, n_tg = len(obs["sat"]), len((doc.get("view") or {}).get("targets", {}).get("name", []))
+    n_free = max(n_tg - len(set(obs["target"])), 0)  # a stereo target may have several looks
     key = Div(
         text=(
             "<b>satellites</b> (check to show on the map)"
             f'<div style="font-size:12px">{legend}</div>'
             f'<p style="font-size:12px;width:{CONTROLS_WIDTH - 16}px">{n_obs} observations; '
-            f"{max(n_tg - n_obs, 0)} targets not imaged (grey). Hover a target for who "
+            f"{n_free} targets not imaged (grey). Hover a target for who "
             "images it when, click it to zoom the timeline to its pass; wheel / box zoom "
             "the map; zoom or pan the timeline to filter the map by time.</p>"
+            + stereo.stereo_summary(doc)
         ),
         width=CONTROLS_WIDTH,
     )
@@ -528,6 +537,22 @@ def _plan_page(doc):
         "(zoom the timeline or uncheck satellites to filter)"
     )
     return column(header, row(controls, fmap), status, gantt, batt)
+
+
+def _add_tap(fmap, filt, x_range) -> None:
+    """A click on an imaged target zooms the timeline to its pass, on a stereo target to
+    its product's looks."""
+    from bokeh.models import CustomJS, TapTool
+
+    imaged = next(r for r in filt if r.name == "targets_imaged")
+    marks = fmap.select_one({"name": "stereo_targets"})
+    tap = TapTool(renderers=[imaged] + ([marks] if marks else []), behavior="select")
+    fmap.add_tools(tap)
+    tap.callback = CustomJS(
+        args={"src": imaged.data_source, "stereo": marks.data_source if marks else None,
+              "xr": x_range, "pad": PASS_PAD_S * columns.MS},
+        code=_TAP_JS,
+    )  # fmt: skip
 
 
 def write_plan_html(doc, path, *, force: bool = False) -> Path:

@@ -19,7 +19,13 @@ is rebuilt from ``plan.json`` alone, without the scenario or a re-plan
   export);
 * ``areas``: the GeoJSON geometry, the priority and the samples (covered or not) of
   every area target;
-* ``battery``: the planned battery level of every powered satellite.
+* ``battery``: the planned battery level of every powered satellite;
+* ``stereo`` (only when the scenario has stereo targets; absent otherwise): per stereo
+  request its target's name and position, the product the plan collects
+  (``report["stereo"]``: ``"pair"``, ``"tri"`` or ``null``, its candidates, quality,
+  convergence and overlap) and the product's ``looks`` as indices of ``observations``
+  in time order (the report names them by option ids, which the plan does not keep:
+  :func:`_look_indices`).
 
 The off-nadir angle is ``atan2(|d x n|, d . n)`` between the line of sight
 ``d = g - r`` (aim point ``g``, satellite ``r``, both Earth-fixed) and the geocentric
@@ -30,6 +36,7 @@ scanned at constant ground speed).
 
 from __future__ import annotations
 
+import itertools
 import math
 
 import jax
@@ -114,10 +121,10 @@ def _aim_points(tg, r):
     return g
 
 
-def _off_nadir_deg(sc, obs) -> np.ndarray:
-    """Off-nadir angle [deg] of every observation at mid-imaging (module docstring)."""
+def _mid_positions(sc, obs) -> np.ndarray:
+    """Earth-fixed satellite positions [K, 3] [m] of every observation at mid-imaging."""
     if len(obs) == 0:
-        return np.zeros(0)
+        return np.zeros((0, 3))
     mid = 0.5 * (np.asarray(obs.start, np.float64) + np.asarray(obs.end, np.float64))
     sat = np.asarray(obs.sat, np.int64)
     with jax.enable_x64(True):  # metre-level positions need float64 (global config untouched)
@@ -125,12 +132,19 @@ def _off_nadir_deg(sc, obs) -> np.ndarray:
             [s.orbit for s in sc.satellites], sc.epoch_jd, sc.duration, sc.planner.geometry_step
         )
         r_teme = np.asarray(_orbit_position(table.orbit, mid, sat=sat), np.float64)
-    r = teme_to_ecef(r_teme, earth_rotation_angle(float(gmst(sc.epoch_jd)), mid))
+    return teme_to_ecef(r_teme, earth_rotation_angle(float(gmst(sc.epoch_jd)), mid))
+
+
+def _off_nadir_deg(sc, obs, r) -> np.ndarray:
+    """Off-nadir angle [deg] of every observation at mid-imaging (module docstring), the
+    satellites at ``r`` [K, 3] (:func:`_mid_positions`)."""
+    if len(obs) == 0:
+        return np.zeros(0)
     g = _aim_points(sc.targets, np.asarray(obs.target, np.int64))
     off = np.degrees(angle_between(g - r, -r))
-    area = np.isfinite(obs.roll)  # an area strip: the angle of its held offset
-    r, p = (np.where(area, x, 0.0) for x in (obs.roll, obs.pitch))
-    return np.where(area, np.degrees(np.arccos(np.cos(r) * np.cos(p))), off)
+    held = np.isfinite(obs.roll)  # an area strip or a look: the angle of its held offset
+    roll, pitch = (np.where(held, x, 0.0) for x in (obs.roll, obs.pitch))
+    return np.where(held, np.degrees(np.arccos(np.cos(roll) * np.cos(pitch))), off)
 
 
 def _tracks(sc) -> dict:
@@ -194,7 +208,8 @@ def view_data(result) -> dict:
     obs = result.observations
     tg = sc.targets
     lon = _wrap_deg(np.degrees(tg.lon))
-    return {
+    r = _mid_positions(sc, obs)
+    view = {
         "version": _VIEW_VERSION,
         "epoch_utc": sc.epoch.strftime("%Y-%m-%dT%H:%M:%S.%fZ"),
         "duration_s": float(sc.duration),
@@ -217,7 +232,7 @@ def view_data(result) -> dict:
         },
         "strips": _strips(tg),
         "observations": {
-            "off_nadir_deg": _round(_off_nadir_deg(sc, obs), VALUE_DECIMALS),
+            "off_nadir_deg": _round(_off_nadir_deg(sc, obs, r), VALUE_DECIMALS),
             "footprint": _footprints(result),
         },
         "areas": [_area_view(result, i, a) for i, a in enumerate(sc.areas)],
@@ -226,6 +241,9 @@ def view_data(result) -> dict:
             for name, (t, level) in (result.battery or {}).items()
         },
     }
+    if sc.stereo:  # only then: the view of other plans stays as it was
+        view["stereo"] = _stereo_view(result, r)
+    return view
 
 
 def _area_view(result, i: int, a) -> dict:
@@ -241,3 +259,60 @@ def _area_view(result, i: int, a) -> dict:
             "covered": [int(c) for c in smp["covered"]],
         }
     return out
+
+
+def _stereo_view(result, r) -> list[dict]:
+    """Per stereo request (``sc.stereo`` order) its target, position and product
+    (``report["stereo"]``), the product's looks as observation indices (module docstring).
+
+    Args:
+      result: PlanResult; r: float [K, 3], the satellites at mid-imaging (:func:`_mid_positions`).
+    """
+    sc, obs = result.scenario, result.observations
+    tg = sc.targets
+    report = result.report.get("stereo") or []
+    out = []
+    for k, req in enumerate(sc.stereo):
+        t = int(req.target)
+        rep = report[k] if k < len(report) else {}
+        g = geodetic_to_ecef(tg.lat[t], tg.lon[t], tg.alt[t])
+        conv = rep.get("convergence_deg")
+        looks = _look_indices(obs, r, t, len(rep.get("looks") or []), g, conv)
+        out.append(
+            {
+                "target": str(tg.name[t]),
+                "lon_deg": _round(_wrap_deg(math.degrees(float(tg.lon[t]))), DEG_DECIMALS)[0],
+                "lat_deg": _round(math.degrees(float(tg.lat[t])), DEG_DECIMALS)[0],
+                "product": rep.get("product"),
+                "candidates": rep.get("candidates"),
+                "quality": rep.get("quality"),
+                "convergence_deg": conv,
+                "overlap": rep.get("overlap"),
+                "looks": looks,
+            }
+        )
+    return out
+
+
+def _look_indices(obs, r, t: int, n: int, g, conv_deg) -> list[int]:
+    """Observation indices (time order) of the ``n`` looks of target ``t``'s product.
+
+    The report names a product's looks by option ids, which the plan does not keep; its
+    looks are observations of the target with a held roll and pitch. When the plan holds
+    more such looks than ``n``, the ``n`` whose best pair's convergence (the angle at the
+    target ``g`` between the satellites ``r`` at mid-imaging,
+    :mod:`jaxspline.screen.stereo_products`) is nearest the report's ``conv_deg`` are
+    taken, the shortest span of time first on a tie."""
+    mine = np.flatnonzero((np.asarray(obs.target) == t) & np.isfinite(obs.roll))
+    mine = mine[np.argsort(np.asarray(obs.start)[mine], kind="stable")]
+    if n == 0 or len(mine) <= n:
+        return [int(i) for i in mine] if n else []
+
+    def miss(sub):
+        pairs = itertools.combinations(sub, 2)
+        conv = [math.degrees(float(angle_between(r[i] - g, r[j] - g))) for i, j in pairs]
+        err = min(abs(c - conv_deg) for c in conv) if conv_deg is not None else 0.0
+        return (round(err, 3), float(obs.end[sub[-1]] - obs.start[sub[0]]))
+
+    best = min(itertools.combinations(mine.tolist(), n), key=miss)
+    return [int(i) for i in best]
