@@ -366,10 +366,7 @@ def lns(
                 report(it, w.improved)
             continue
         if pb.stereo is not None and rng.random() < _P_UPGRADE:
-            if upgrade_product(tl, rng):
-                w.dirty = True
-                _keep_best(tl, w)
-            tl.commit()
+            _upgrade_step(tl, w, rng)
             continue
         base = tl.score()
         mark = len(tl.log)
@@ -383,13 +380,26 @@ def lns(
         if report is not None and time.monotonic() - last > _REPORT_EVERY:
             last = time.monotonic()
             report(it, w.improved)
+    _finish(tl, w)
+    return it
+
+
+def _upgrade_step(tl: Timeline, w: _Walk, rng) -> None:
+    """One stereo quality move (:func:`jaxspline.search.stereo.upgrade_product`)."""
+    if upgrade_product(tl, rng):
+        w.dirty = True
+        _keep_best(tl, w)
+    tl.commit()
+
+
+def _finish(tl: Timeline, w: _Walk) -> None:
+    """The walk's best plan, without area strips or looks that add nothing."""
     if _key(tl) < w.best_key:
         tl.restore(w.best)
     drop_idle_strips(tl)
-    if pb.stereo is not None:
-        drop_stray_looks(tl, pb.stereo.stereo_targets.tolist())
+    if tl.pb.stereo is not None:
+        drop_stray_looks(tl, tl.pb.stereo.stereo_targets.tolist())
     tl.commit()
-    return it
 
 
 def plan_ceiling(tl: Timeline) -> float:

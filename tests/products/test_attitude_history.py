@@ -23,7 +23,7 @@ from scipy.integrate import solve_ivp
 from scipy.interpolate import BPoly
 
 from jaxspline.base.elements import (
-    OMEGA_EARTH,
+    GMST_RATE,
     circular_orbit_over,
     geodetic_to_ecef,
     gmst,
@@ -150,7 +150,7 @@ def test_boundaries_match_planned_angles(case):
             assert np.abs(_angles(c) - ref).max() < ANGLE_TOL
         else:  # boresight along the line of sight, zero yaw
             r = np.asarray(orbit_state(sc.satellites[0].orbit, jnp.asarray(t))[0])
-            g = rot_z(-(gmst0 + OMEGA_EARTH * t), pts[tgt])
+            g = rot_z(-(gmst0 + GMST_RATE * t), pts[tgt])
             los = (g - r) / np.linalg.norm(g - r, axis=-1, keepdims=True)
             zb = np.einsum(
                 "nij,nj->ni", np.asarray(quat_to_dcm(q)), np.tile([0, 0, 1.0], (t.size, 1))
