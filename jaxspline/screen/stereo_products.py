@@ -244,7 +244,9 @@ class _Target(NamedTuple):
 
 def _compatible(sc, looks: StereoLooks, idx) -> np.ndarray:
     """bool [L, L]: two looks of other satellites, or of one satellite one after the
-    other with the slew and settling between them (module docstring, Mode)."""
+    other with the slew and settling between them (module docstring, Mode); a model
+    without a rest-to-rest slew law (per-channel) gets the least time its fastest
+    channel needs, a lower bound: the search checks the exact transition."""
     sat = looks.sat[idx]
     t0, t1 = looks.t_start[idx], looks.t_end[idx]
     same = sat[:, None] == sat[None, :]
@@ -254,7 +256,11 @@ def _compatible(sc, looks: StereoLooks, idx) -> np.ndarray:
     for s in np.unique(sat):
         m = sat == s
         sat_s = sc.satellites[int(s)]
-        need[m] = sat_s.maneuver.slew_time(sat_s, theta[m], gap)  # rows: the earlier look
+        slew = getattr(sat_s.maneuver, "slew_time", None)
+        if slew is None:
+            need[m] = theta[m] / float(np.max(sat_s.limits.rate))
+        else:
+            need[m] = slew(sat_s, theta[m], gap)  # rows: the earlier look
     after = t0[None, :] - t1[:, None]  # [i, j]: j starts this long after i ends
     fits = (after >= 0.0) & (after + 1e-9 >= need)
     return ~same | fits | fits.T

@@ -341,3 +341,21 @@ def test_a_cut_of_the_example_plans_its_products():
         assert np.all((dur >= 2.0 - 1e-9) & (dur <= 60.0 + 1e-9))
     assert r.value == pytest.approx(sum(row["value"] for row in got), rel=1e-9)
     assert r.value <= r.bound * (1 + 1e-9)
+
+
+def test_per_channel_satellites_plan_stereo_targets():
+    """The same cut with per-channel satellites (no rest-to-rest slew law): a valid plan
+    whose products are made of the plan's looks."""
+    data = tomllib.loads(EXAMPLE.read_text(encoding="utf-8"))
+    data["targets"] = [t for t in data["targets"] if t["name"] in CUT]
+    data["scenario"]["duration_h"] = 12.0
+    for s in data["satellites"]:
+        s["model"] = "per_channel"
+    sc = parse_scenario(data)
+    r = jaxspline.plan(sc, time_limit=20, progress=False)
+    assert r.report["valid"], r.report["violations"]
+    got = [row for row in r.report["stereo"] if row["product"]]
+    assert got
+    for row in got:
+        k = list(sc.targets.name).index(row["target"])
+        assert int(np.sum(r.observations.target == k)) >= len(row["looks"])
