@@ -40,6 +40,8 @@ __all__ = [
     "reopt_related",
 ]
 
+#: Probability that an area move first removes a few point observations (room for strips).
+ROOM_PROB = 0.1
 #: Most strips removed by one destroy.
 MAX_DESTROY = 4
 #: Moves between exact recomputations of the row gains.
@@ -260,13 +262,22 @@ class AreaWalk:
         self.rng = np.random.default_rng(seed)
         self.moves = 0
         self.fails: dict = {}
-        self.stats = {"pass_moves": 0, "related_moves": 0, "destroy_moves": 0, "local_moves": 0}
+        self.stats = {"pass_moves": 0, "related_moves": 0, "destroy_moves": 0, "local_moves": 0,
+                      "room_moves": 0}  # fmt: skip
 
 
 def area_move(tl: Timeline, walk: AreaWalk, deadline: float) -> None:
     """One move on the area strips (module docstring); the caller accepts or undoes it."""
     ix, rng = walk.ix, walk.rng
     walk.moves += 1
+    if rng.random() < ROOM_PROB:  # points give way to strips (the cap, a pass's time)
+        freed = _free_points(tl, rng)
+        if freed:
+            fill(tl, ix, deadline, fails=walk.fails)
+            for t in freed:
+                tl.best_insert(t)
+            walk.stats["room_moves"] += 1
+            return
     u = rng.random()
     if u < PASS_PROB and ix.passes:
         ow = np.bincount(ix.row_pass, weights=tl.cover.row_gain, minlength=len(ix.passes))
@@ -289,6 +300,20 @@ def area_move(tl: Timeline, walk: AreaWalk, deadline: float) -> None:
         walk.stats["local_moves"] += local_moves(tl, ix)
     if walk.moves % REFRESH_EVERY == 0:
         tl.cover.refresh()
+
+
+def _free_points(tl: Timeline, rng) -> list:
+    """Remove 1 to :data:`MAX_DESTROY` point or strip observations, the least valuable
+    most likely; returns their targets (those removed)."""
+    pb = tl.pb
+    ids = [c for line in tl.lines for c in line if not pb.is_closed(c)]
+    if not ids:
+        return []
+    n = int(rng.integers(1, 1 + min(len(ids), MAX_DESTROY)))
+    value = np.array([pb.target_value[pb.option_target[c]] for c in ids]) + 1e-12
+    w = 1.0 / value
+    chosen = [ids[j] for j in rng.choice(len(ids), size=n, replace=False, p=w / w.sum())]
+    return [pb.option_target[c] for c in chosen if _remove(tl, int(c))]
 
 
 def drop_idle_strips(tl: Timeline) -> int:

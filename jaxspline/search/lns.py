@@ -95,8 +95,20 @@ def greedy(tl: Timeline, deadline: float, order=None):
     """
     targets = order if order is not None else greedy_order(tl)
     greedy_pass(targets, tl.insert_choices, tl.insert, deadline)
-    if tl.cover is not None:
-        fill(tl, area_index(tl.pb), deadline)
+    if tl.cover is None:
+        tl.commit()
+        return
+    ix = area_index(tl.pb)
+    fill(tl, ix, deadline)
+    tl.commit()
+    if tl.pb.max_actions is None:
+        return
+    first = (tl.score(), tl.plan())  # with a cap, the strips first may be worth more
+    tl.restore([c for c in first[1] if tl.pb.is_closed(c) and not tl.pb.is_area(c)])
+    fill(tl, ix, deadline)
+    greedy_pass(targets, tl.insert_choices, tl.insert, deadline)
+    if tl.score() < first[0]:
+        tl.restore(first[1])
     tl.commit()
 
 

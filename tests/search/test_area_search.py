@@ -354,13 +354,6 @@ def test_the_search_meets_the_least_shares_where_a_plan_does(seed):
     assert feasible(s, tl.plan()) and tl.cover.shortfall() == 0.0
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="search limitation: no move trades a point observation for area strips (the "
-    "point moves re-insert what they remove, the area moves never remove a point), so "
-    "point targets placed first can keep an area below its least share for good",
-)
 def test_points_do_not_keep_an_area_below_its_least_share():
     s = make(60, area_min=[np.nan, 0.5])  # three point targets, no cap
     assert _meets_min_exists(s)
