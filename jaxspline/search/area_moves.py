@@ -281,7 +281,7 @@ def area_move(tl: Timeline, walk: AreaWalk, deadline: float) -> None:
     u = rng.random()
     if u < PASS_PROB and ix.passes:
         ow = np.bincount(ix.row_pass, weights=tl.cover.row_gain, minlength=len(ix.passes))
-        ow = ow + 1e-9
+        ow = np.maximum(ow, 0.0) + 1e-9  # the row gains' rounding may dip below 0
         reopt_pass(tl, ix, int(rng.choice(ow.size, p=ow / ow.sum())))
         fill(tl, ix, deadline, fails=walk.fails)
         walk.stats["pass_moves"] += 1
