@@ -115,7 +115,8 @@ class _ShardPrices(Prices):
     """:class:`Prices` whose DP covers the owned satellites and whose totals are gathered."""
 
     def __init__(self, pb: Problem, sat_ids, n_sats: int, allgather):
-        super().__init__(pb, energy=False, merge_repeats=True, mu_min=BOUND_MU_MIN)
+        super().__init__(pb, energy=False, merge_repeats=True, mu_min=BOUND_MU_MIN,
+                         price_cap=False)  # fmt: skip
         self.sat_ids = np.asarray(sat_ids, np.int64)
         self.n_sats = int(n_sats)
         self.allgather = allgather

@@ -50,6 +50,15 @@ subgradient of a sample is that number minus one.
 Stereo targets. Their looks leave the satellites' DPs too, and the bound adds each
 stereo target's best product value (what it collects when no other look competes).
 
+The action cap. With ``max_actions`` and options of both kinds (points or strips and
+area strips) the cap couples them; a price ``mu >= 0`` on it relaxes the coupling: every
+option of a satellite's DP pays ``mu``, a pass with ``r`` runs of :func:`area_dp` pays
+``r mu`` (its knapsack keeps the cap too) and the bound gains ``mu max_actions``. A plan
+of ``n <= max_actions`` actions is charged at most ``n mu`` (a merged repeat is charged
+once, a look never), so the bound stays above it; the subgradient is the relaxed
+solution's charged actions minus the cap. Without points it never binds (the knapsack
+keeps the cap: ``mu`` stays 0).
+
 Every :data:`_REPAIR_EVERY`-th iteration also repairs the DP paths into a feasible
 plan (each target once, heaviest first, re-checked insertion incl. battery, then greedy
 fill); its value sets the step size.
@@ -156,7 +165,8 @@ class Prices:
 
     ``lam`` holds the target prices, the area samples' prices, then (``energy``) the
     prices of the energy budgets the unpriced DP optimum overdraws
-    (:mod:`jaxspline.search.energy`).
+    (:mod:`jaxspline.search.energy`), then (``price_cap`` with an action cap and
+    options outside the areas) the price of the cap (module docstring).
     ``lam += mu (UB - plan_value) / |g|^2 g`` with ``g = takers - 1`` (targets) and
     ``g = (usage - budget) / unit`` (budgets, in observations' worth of energy),
     projected on ``[0, w]`` / ``[0, inf)``; after
@@ -172,6 +182,7 @@ class Prices:
         merge_repeats: bool = False,
         dp=None,
         mu_min: float = _MU_MIN,
+        price_cap: bool = True,
     ):
         self.pb = pb
         self.mu_min = float(mu_min)
@@ -195,6 +206,7 @@ class Prices:
             self.lay = pass_layout(self.cv, pb.max_actions)
             self.rows = np.zeros(0, np.int64)
             self.capped = []  # passes whose cover cap bounds them (area_dp)
+        self.cap_at = None  # index of the action cap's price in lam (None: not priced)
         self.en = EnergyBudgets(pb) if energy else None
         if self.en is not None:
             if self.en.m:
@@ -206,14 +218,20 @@ class Prices:
             if not self.en.m:
                 self.en = None
         m = self.en.m if self.en is not None else 0
+        if price_cap and pb.max_actions is not None and self.area.size < pb.n_options:
+            self.cap_at = self.n_tg + self.n_sm + m
+        self.en_slice = slice(self.n_tg + self.n_sm, self.n_tg + self.n_sm + m)
         # prices: targets (in [0, w]) then energy budgets (>= 0, see search.energy); the
         # bound gains each price times its constraint's right-hand side
-        self.hi = np.r_[self.target_value, sample_w, np.full(m, np.inf)]
+        n_cap = 0 if self.cap_at is None else 1
+        self.hi = np.r_[self.target_value, sample_w, np.full(m + n_cap, np.inf)]
         if pb.stereo is not None:  # their looks are shut: no price to find
             self.hi[pb.stereo.stereo_targets] = 0.0
         self.rhs = np.ones(self.hi.size)
         if m:
-            self.rhs[self.n_tg + self.n_sm :] = self.en.budget / self.en.unit
+            self.rhs[self.en_slice] = self.en.budget / self.en.unit
+        if self.cap_at is not None:
+            self.rhs[self.cap_at] = float(pb.max_actions)
         self.lam = np.zeros(self.hi.size)
         # samples start most of the way to their weight: a row is credited little at first
         self.lam[self.n_tg : self.n_tg + self.n_sm] = _SAMPLE_PRICE0 * sample_w
@@ -227,25 +245,34 @@ class Prices:
         w = self._values(self.lam)
         arc, self.used = None, None
         if self.en is not None:
-            node_pen, arc_pen = self.en.penalties(self.lam[self.n_tg + self.n_sm :])
+            node_pen, arc_pen = self.en.penalties(self.lam[self.en_slice])
             w, arc, self.used = w - node_pen, arc_pen, []
         paths, vals = dp_paths(self.pb, self.d, w, arc, self.used, self.merge)
         if self.cv is None:
             self._record(vals, paths)
             return paths
         credit = self.cv.weight - self.lam[self.n_tg : self.n_tg + self.n_sm]
-        self.capped = []
+        self.capped, self.runs = [], []
         total, self.rows = area_dp(
-            self.cv, self.lay, self.cv.row_values(credit), credit, self.capped
-        )
+            self.cv, self.lay, self.cv.row_values(credit), credit, self.capped,
+            self._cap_price(self.lam), self.runs,
+        )  # fmt: skip
         self._record([*vals, total], paths)
         self.area_options = run_options(self.cv, self.rows)
         return [*paths, self.area_options]
 
+    def _cap_price(self, lam: np.ndarray) -> float:
+        """The action cap's price in ``lam`` (0 where it is not priced)."""
+        if self.cap_at is None or lam.size <= self.cap_at:
+            return 0.0
+        return float(lam[self.cap_at])
+
     def _values(self, lam: np.ndarray) -> np.ndarray:
         """Option values of the satellites' DPs at prices ``lam``: ``w_t - lam_t`` of a
-        target's option; an area option is shut (the areas have :func:`area_dp`)."""
+        target's option, less the action cap's price; an area option is shut (the areas
+        have :func:`area_dp`)."""
         w = self.target_value[self.option_target] - lam[self.option_target]
+        w -= self._cap_price(lam)
         if self.area.size:
             w[self.area] = self.shut
         return w
@@ -286,13 +313,24 @@ class Prices:
             np.add.at(cnt, lay.pass_samples[pos], 1.0)
         return cnt
 
+    def _actions(self) -> float:
+        """Actions the relaxed solution is charged for: its DP paths' options (a merged
+        run once) and the areas' runs."""
+        n = 0
+        for p in self.paths[: self.pb.n_sats]:
+            t = self.option_target[p]
+            n += (run_targets(t) if self.merge else t).size
+        return float(n + sum(self.runs if self.cv is not None else []))
+
     def _subgradient(self) -> np.ndarray:
-        g = self._takers(self.paths) - 1.0
+        g = self._takers(self.paths[: self.pb.n_sats]) - 1.0
         if self.cv is not None:
             g = np.r_[g, self._sample_takers() - 1.0]
-        if self.used is None:
-            return g
-        return np.r_[g, self.en.subgradient(self.paths, self.used)]
+        if self.used is not None:
+            g = np.r_[g, self.en.subgradient(self.paths, self.used)]
+        if self.cap_at is not None:
+            g = np.r_[g, self._actions() - float(self.pb.max_actions)]
+        return g
 
     def step(self, plan_value: float) -> bool:
         """Move the prices toward ``plan_value``, a value some plan reaches; False when the

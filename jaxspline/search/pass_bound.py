@@ -208,7 +208,15 @@ def _knapsack(values: list, cap: int):
     return total, runs[::-1]
 
 
-def area_dp(cv, lay: PassLayout, row_credit: np.ndarray, sample_credit=None, capped=None):
+def area_dp(
+    cv,
+    lay: PassLayout,
+    row_credit: np.ndarray,
+    sample_credit=None,
+    capped=None,
+    action_price: float = 0.0,
+    runs_out=None,
+):
     """The areas' part of the relaxation at row credits (module docstring).
 
     With ``sample_credit`` each pass's value is also capped by the credits of the samples
@@ -220,7 +228,9 @@ def area_dp(cv, lay: PassLayout, row_credit: np.ndarray, sample_credit=None, cap
       cv: CoverTable; lay: its :func:`pass_layout`; row_credit: float64 [R], each row's
         credit; sample_credit: optional float64 [N samples], each sample's credit (the sum
         over its rows' samples gives ``row_credit``); capped: optional list, gets the
-        passes whose cap is below their runs' value.
+        passes whose cap is below their runs' value; action_price: each run's charge
+        (the Lagrangian price of the action cap); runs_out: optional list, gets the runs
+        of each pass in the chosen plan.
     Returns:
       (value, rows): the best total (>= what any plan's area options are credited) and
       int64 the rows the chosen runs take.
@@ -250,7 +260,11 @@ def area_dp(cv, lay: PassLayout, row_credit: np.ndarray, sample_credit=None, cap
         for p in range(lay.n_pass):
             over.update([p] if values[p][1:].max(initial=-np.inf) > most[p] else [])
             values[p] = np.minimum(values[p], most[p])
+    if action_price:
+        values = [v - action_price * np.arange(v.size) for v in values]
     total, runs = _knapsack(values, lay.cap)
+    if runs_out is not None:
+        runs_out.extend(runs)
     if capped is not None:
         capped.extend(p for p, r in enumerate(runs) if r and p in over)
     rows = []

@@ -12,9 +12,11 @@ best runs of a pass by enumerating every set of runs.
 
 from __future__ import annotations
 
+import functools
 import itertools
 import math
 import random
+import sys
 import time
 
 import numpy as np
@@ -403,3 +405,22 @@ def test_point_moves_with_areas_lose_nothing_at_zero_threshold():
     tl.remove(points[0])  # a move that loses a point target's value
     lns_mod._accept(tl, walk, base, mark, 0.0, 1, random.Random(0))
     assert tl.value == pytest.approx(before)
+
+
+@pytest.mark.parametrize("seed,cap", [(0, 2), (4, 3), (6, 4), (7, 3)])
+def test_the_action_cap_price_keeps_the_bound_above_the_optimum_and_tightens_it(
+    seed, cap, monkeypatch
+):
+    """Points and strips under one action cap: the bound with the cap priced is above
+    the best plan (HiGHS over every plan) and below the bound that leaves the points'
+    DPs uncapped (the price off)."""
+    s = make(seed, n_sats=2, max_actions=cap, n_points=6)
+    best, _ = optimum(s)
+    tl = Timeline(s.pb)
+    greedy(tl, _deadline())
+    priced = upper_bound(s.pb, tl.value, _deadline(), max_iters=200).bound
+    prices = sys.modules["jaxspline.search.lagrangian"].Prices
+    off = functools.partialmethod(prices.__init__, price_cap=False)
+    monkeypatch.setattr(prices, "__init__", off)
+    plain = upper_bound(s.pb, tl.value, _deadline(), max_iters=200).bound
+    assert best - 1e-7 <= priced < plain - 1.0, (best, priced, plain)
