@@ -238,8 +238,6 @@ class PlanResult:
         return atomic_write_text(path, buf.getvalue(), force=force)
 
 
-
-
 def _iso(when) -> str:
     return when.strftime("%Y-%m-%dT%H:%M:%S.%fZ")
 
