@@ -365,6 +365,7 @@ def _product_table(sc, opp, merged) -> ProductTable:
         np.flatnonzero(sc.targets.kind == STEREO),
         len(sc.targets),
         rank=p.quality * p.confidence,
+        confidence=p.confidence,
     )
 
 

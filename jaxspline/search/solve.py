@@ -49,6 +49,7 @@ from jaxspline.search.lns_energy import EnergyRank
 from jaxspline.search.memory import trim_heap
 from jaxspline.search.problem import Problem
 from jaxspline.search.status import BoundStatus
+from jaxspline.search.stereo import add_backups
 from jaxspline.search.sweep import sweeps
 from jaxspline.search.timeline import Timeline
 
@@ -251,6 +252,8 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     its = 0 if exact or res.status == BoundStatus.OPTIMAL else max_iters  # 0: no LNS
     _lns_stage(tl, deadline - tail, random.Random(seed), its, worker, stats, say)
     earliest_pass(tl, deadline)
+    if pb.stereo is not None:  # the worker's plan may have come without them
+        add_backups(tl, pb.stereo.stereo_targets.tolist())
     bound, status = res.bound, res.status
     ceiling = plan_ceiling(tl)
     if tl.value >= ceiling - _OPTIMAL_TOL * max(1.0, ceiling):  # everything within reach

@@ -13,6 +13,13 @@ together: :meth:`jaxspline.search.timeline.Timeline.insert_choices` offers a ste
 target's products (as :func:`product_code` candidates) and
 :meth:`~jaxspline.search.timeline.Timeline.insert` of such a code inserts the product's
 missing looks.
+
+A product's value is weighed by its *confidence*, the chance that the benchmark's
+random overlap estimate finds it valid; a failed estimate takes the product out. At the
+end of a walk :func:`add_backups` therefore gives a target whose collected products
+could all fail (more than :data:`BACKUP_FAIL`) the looks of further products that fit
+without removing anything: each product's estimate is seeded apart, so the target is
+lost only when every one of them fails.
 """
 
 from __future__ import annotations
@@ -23,7 +30,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = [
+    "BACKUP_FAIL",
     "ProductCounts",
+    "add_backups",
+    "fail_chance",
     "ProductTable",
     "drop_stray_looks",
     "upgrade_product",
@@ -33,6 +43,10 @@ __all__ = [
     "product_code",
     "product_of",
 ]
+
+#: A stereo target whose complete products all fail their overlap estimates with at
+#: most this chance gets no backup product (:func:`add_backups`).
+BACKUP_FAIL = 0.01
 
 
 def product_code(p: int) -> int:
@@ -64,6 +78,8 @@ class ProductTable:
       n_targets: number of targets of the problem.
       rank: float64 [P] in [0, 1], how good each product is among its target's (the
         insertion prefers higher ones; None: by value).
+      confidence: float64 [P] in [0, 1], the chance that each product's overlap
+        estimate passes (None: 1, every product sure).
       look_products: per option the products that use it (empty for other options;
         derived).
       target_products: per target its products by decreasing value (derived; empty for
@@ -79,6 +95,7 @@ class ProductTable:
     stereo_targets: np.ndarray
     n_targets: int
     rank: np.ndarray | None = None
+    confidence: np.ndarray | None = None
     look_products: list = field(init=False)
     target_products: list = field(init=False)
     is_look: np.ndarray = field(init=False)
@@ -90,6 +107,8 @@ class ProductTable:
         top = float(self.value.max()) if self.value.size else 1.0
         rank = self.value / top if self.rank is None and top > 0 else self.rank
         self.rank = np.asarray(np.ones(self.value.size) if rank is None else rank, np.float64)
+        conf = np.ones(self.value.size) if self.confidence is None else self.confidence
+        self.confidence = np.clip(np.asarray(conf, np.float64), 0.0, 1.0)
         self.looks = [tuple(int(c) for c in lk) for lk in self.looks]
         if not (len(self.looks) == self.target.size == self.value.size):
             raise ValueError("ProductTable: looks, target and value need one entry a product")
@@ -275,9 +294,46 @@ def upgrade_product(tl, rng) -> bool:
     return False
 
 
-def _try_insert(tl, c: int) -> bool:
-    """Insert option c when it fits; whether it did."""
-    if tl.check(c) is None:
+def fail_chance(tl, t: int) -> float:
+    """The chance that every complete product of stereo target t in the plan of ``tl``
+    fails its overlap estimate (1 without one; the estimates taken as independent)."""
+    table, counts = tl.pb.stereo, tl.stereo
+    fail = 1.0
+    for p in table.target_products[t]:
+        if counts.present[p] == len(table.looks[p]):
+            fail *= 1.0 - float(table.confidence[p])
+    return fail
+
+
+def add_backups(tl, targets) -> int:
+    """Give each of ``targets`` that collects a product but could lose it (its
+    :func:`fail_chance` above :data:`BACKUP_FAIL`) the looks of further products, the
+    surest first, while they fit without removing anything and until the chance is
+    below :data:`BACKUP_FAIL`; the plan's value never drops. Returns the products added."""
+    table, counts = tl.pb.stereo, tl.stereo
+    added = 0
+    for t in targets:
+        fail = fail_chance(tl, t)
+        if counts.best[t] < 0 or fail <= BACKUP_FAIL:
+            continue
+        for p in sorted(table.target_products[t], key=lambda p: -table.confidence[p]):
+            if counts.present[p] == len(table.looks[p]) or table.confidence[p] <= 0.0:
+                continue
+            mark, base = len(tl.log), tl.value
+            if all(_try_insert(tl, c, True) for c in missing_looks(tl, p)) and tl.value >= base:
+                added += 1
+                fail *= 1.0 - float(table.confidence[p])
+                if fail <= BACKUP_FAIL:
+                    break
+            else:
+                tl.undo_to(mark)
+    return added
+
+
+def _try_insert(tl, c: int, collected: bool = False) -> bool:
+    """Insert option c when it fits (``collected``: also a look of a target the plan
+    collects); whether it did."""
+    if tl.check(c, collected) is None:
         return False
     tl.insert(c)
     return True

@@ -286,17 +286,19 @@ class Timeline:
         return steps_w * self.pb.battery.dt / 3600.0
 
     # ------------------------------------------------------------ moves
-    def check(self, c: int):
+    def check(self, c: int, collected: bool = False):
         """Feasibility of inserting option c.
 
         Args:
           c: int, option id.
+          collected: allow an option of a target the plan already collects (a backup
+            look of a stereo target, :func:`jaxspline.search.stereo.add_backups`).
         Returns:
           float, the time it consumes [s], or None when infeasible.
         """
         pb = self.pb
         self.battery_failed = False
-        if self.assigned[pb.option_target[c]] >= 0:
+        if not collected and self.assigned[pb.option_target[c]] >= 0:
             return None
         if pb.max_actions is not None and self.n_observations >= pb.max_actions:
             return None

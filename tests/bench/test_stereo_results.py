@@ -20,6 +20,7 @@ CASE = {
     "valid": True,
     "exit": 0,
     "coverage_ratio": 0.9,
+    "expected_coverage": 0.875,
     "coverage_bound": 0.95,
     "normalized_quality": 0.85,
     "quality_bound": 0.94,
@@ -47,14 +48,14 @@ def test_stereo_table_rows_means_and_missing_fields():
     text = "\n".join(stereo.stereo_table(REPORT))
     assert "--time-limit 120 --seed 0" in text
     assert (
-        "| case_0001 | yes | 0.9000 | 0.9500 | 0.0500 | 0.8500 | 0.9400 | 120 | 7 | 250 | "
+        "| case_0001 | yes | 0.9000 | 0.8750 | 0.9500 | 0.0500 | 0.8500 | 0.9400 | 120 | 7 | 250 | "
         "123.5 | 130.25 | converged | 6.75 | 118.0 | 2048 | 1.50 |"
     ) in text
-    assert "| case_0002 | - | - | - | - | - | - | - | - | - | - | - | - | - | - | - | - |" in text
+    assert "| case_0002 | - | - |" + " - |" * (len(stereo.CASE_COLUMNS) - 3) in text
     # means over the cases that have the field; valid counted over all cases
     mean = next(ln for ln in text.splitlines() if ln.startswith("| **mean** |"))
     assert mean.startswith(
-        "| **mean** | 1/2 | **0.9000** | 0.9500 | 0.0500 | **0.8500** | 0.9400 |"
+        "| **mean** | 1/2 | **0.9000** | 0.8750 | 0.9500 | 0.0500 | **0.8500** | 0.9400 |"
     )
     assert mean.endswith("|  |  |  |  |  |  |  | 118.0 | 2048 |  |")  # wall, RSS in place
     assert mean.count("|") == len(stereo.CASE_COLUMNS) + 1
@@ -96,3 +97,46 @@ def test_parse_summary_of_the_solve_line():
         "command_s": 117.3,
     }
     assert stereo.parse_summary("no such line") == {}
+
+
+def test_expected_coverage_matches_a_simulation_of_the_random_estimates():
+    """The official checker's expectation, against a Monte-Carlo draw of its estimates:
+    each valid pair passes when >= 80 of 100 random points fall in both strips; a triple
+    when its common overlap passes with 100 points and two of its three pairs with 80."""
+    from types import SimpleNamespace as NS
+
+    import numpy as np
+
+    def pair(t, acts, ov, failed=()):
+        return NS(target_id=t, actions=acts, overlap=ov, failed=failed)
+
+    pairs = [
+        pair("a", (0, 1), 0.84),  # two pairs of target a, drawn apart
+        pair("a", (2, 3), 0.86),
+        pair("b", (4, 5), 0.79, ("overlap",)),  # fails exactly, passes by chance
+        pair("c", (6, 7), 0.95, ("convergence",)),  # never valid
+        pair("d", (8, 9), 0.83),  # the triple 8, 9, 10 of target d
+        pair("d", (8, 10), 0.81),
+        pair("d", (9, 10), 0.9, ("convergence",)),
+    ]
+    triples = [
+        NS(target_id="d", actions=(10, 9, 8), common_overlap=0.82, failed=()),
+        NS(target_id="c", actions=(6, 7, 11), common_overlap=0.99, failed=("anchor",)),
+    ]
+    rep = NS(pairs=pairs, triples=triples, num_targets=5)
+    got = stereo.expected_coverage(rep, 0.8)
+
+    rng = np.random.default_rng(7)
+    n = 200_000
+
+    def passes(share, points):
+        return rng.binomial(points, share, n) >= 80 * points // 100
+
+    a = passes(0.84, 100) | passes(0.86, 100)
+    b = passes(0.79, 100)
+    d_pair = passes(0.83, 100) | passes(0.81, 100)
+    e1, e2 = passes(0.83, 80), passes(0.81, 80)  # the triple's third edge is invalid
+    d = d_pair | (passes(0.82, 100) & e1 & e2)
+    want = (a.mean() + b.mean() + d.mean()) / 5
+    assert abs(got - want) < 0.004, (got, want)
+    assert 0.0 < got < 3 / 5

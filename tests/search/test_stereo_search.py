@@ -26,7 +26,13 @@ from jaxspline.search import Timeline, greedy, lns
 from jaxspline.search.battery import BatteryModel
 from jaxspline.search.lagrangian import lagrangian
 from jaxspline.search.problem import Problem
-from jaxspline.search.stereo import ProductTable, drop_stray_looks, upgrade_product
+from jaxspline.search.stereo import (
+    BACKUP_FAIL,
+    ProductTable,
+    add_backups,
+    drop_stray_looks,
+    upgrade_product,
+)
 from jaxspline.search.store import NearPairs
 
 SLEW_S, SLEW_S_PER_RAD = 2.0, 10.0
@@ -52,8 +58,9 @@ def _angle(a, b) -> float:
     return math.acos(max(-1.0, min(1.0, float(np.dot(a, b)))))
 
 
-def synth(seed: int, n_sats=2, n_stereo=4, looks_per=5, n_points=3, horizon=400.0):
-    """A random problem; returns (Problem, products as (looks, value) per stereo target)."""
+def synth(seed: int, n_sats=2, n_stereo=4, looks_per=5, n_points=3, horizon=400.0, sure=True):
+    """A random problem; returns (Problem, options). ``sure=False``: each product gets a
+    random confidence in [0.5, 1]."""
     rng = np.random.default_rng(seed)
     opts = []  # (sat, start, end, target, los)
     n_t = n_points + n_stereo
@@ -82,7 +89,9 @@ def synth(seed: int, n_sats=2, n_stereo=4, looks_per=5, n_points=3, horizon=400.
                     ptarget.append(t)
                     pvalue.append(float(rng.uniform(0.5, 1.0)) * (1.1 if size == 3 else 1.0))
     stereo_targets = np.arange(n_points, n_t)
-    table = ProductTable(looks, ptarget, pvalue, [o[3] for o in opts], stereo_targets, n_t)
+    conf = None if sure else np.random.default_rng(seed + 1).uniform(0.5, 1.0, len(looks))
+    table = ProductTable(looks, ptarget, pvalue, [o[3] for o in opts], stereo_targets, n_t,
+                         confidence=conf)  # fmt: skip
     point_value = [float(rng.uniform(0.5, 2.0)) for _ in range(n_points)]
     value = point_value + [table.best_value(int(t)) for t in stereo_targets]
     src, dst, need = [], [], []
@@ -259,3 +268,53 @@ def test_an_upgrade_takes_the_better_product_when_it_fits():
     assert tl.stereo.best[t] == worst
     assert upgrade_product(tl, random.Random(0))
     assert st.value[tl.stereo.best[t]] > st.value[worst]
+
+
+def _ref_fail(pb: Problem, plan, t: int) -> float:
+    """Chance that every product of target t complete in ``plan`` fails (recounted)."""
+    held = set(plan)
+    fail = 1.0
+    for p, lk in enumerate(pb.stereo.looks):
+        if pb.stereo.target[p] == t and set(lk) <= held:
+            fail *= 1.0 - pb.stereo.confidence[p]
+    return fail
+
+
+def test_backups_lower_the_chance_of_losing_a_target_and_cost_nothing():
+    """After the greedy, :func:`add_backups` adds looks only where a collected product
+    could fail, keeps the plan feasible and its value, and stops only when the target
+    is safe enough or no further product of it fits the plan."""
+    added = 0
+    for seed in range(8):
+        pb, opts = synth(seed, n_stereo=6, looks_per=6, sure=False)
+        tl = Timeline(pb)
+        greedy(tl, math.inf)
+        before, v0 = tl.plan(), tl.value
+        risky = {t: _ref_fail(pb, before, t) for t in pb.stereo.stereo_targets.tolist()}
+        added += add_backups(tl, pb.stereo.stereo_targets.tolist())
+        plan = tl.plan()
+        assert ref_feasible(pb, opts, plan)
+        assert tl.value == pytest.approx(ref_value(pb, plan), abs=1e-9) and tl.value >= v0
+        for t, fail0 in risky.items():
+            new = [c for c in set(plan) - set(before) if pb.option_target[c] == t]
+            if fail0 >= 1.0 or fail0 <= BACKUP_FAIL:  # nothing collected, or safe
+                assert not new
+                continue
+            fail = _ref_fail(pb, plan, t)
+            assert fail <= fail0
+            if fail <= BACKUP_FAIL:
+                continue
+            for p in pb.stereo.target_products[t]:  # nothing more fits
+                missing = [c for c in pb.stereo.looks[p] if c not in set(plan)]
+                if not missing:
+                    continue
+                mark = len(tl.log)
+                fits = True
+                for c in missing:
+                    if tl.check(c, collected=True) is None:
+                        fits = False
+                        break
+                    tl.insert(c)
+                tl.undo_to(mark)
+                assert not fits, (seed, t, p)
+    assert added > 0
