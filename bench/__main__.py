@@ -80,6 +80,12 @@ def _parse(argv):
         help="screening section: route counts (repeatable; default 1000 2000 5000 10000)",
     )
     p.add_argument(
+        "--modes",
+        action="append",
+        choices=("all", "feasible", "top_k"),
+        help="screening section: comparison modes (repeatable; default all three)",
+    )
+    p.add_argument(
         "--sizes",
         default="default:20,12x12h:120,day:540",
         help="scale section: comma-separated sizes, default / 12x12h / day or a scenario "
@@ -348,7 +354,7 @@ FULL_MAX_ROUTES = 5000
 HOST_MAX_ROUTES = 5000
 
 
-def bench_screening(route_counts: list[int], reps: int) -> dict:
+def bench_screening(route_counts: list[int], reps: int, only_modes=None) -> dict:
     """End-to-end screening: host vs fused path vs ceiling, peak RSS, screen + search.
 
     Speed: one subprocess per route count, interleaved repetitions of both paths and
@@ -356,13 +362,15 @@ def bench_screening(route_counts: list[int], reps: int) -> dict:
     subprocess per (routes, path, mode), ``VmHWM`` of one call
     (``bench.scenarios.screening_rss``). Streaming: one subprocess per (routes,
     search), the screen's chunks consumed by the search as they come
-    (``bench.scenarios.screening_stream``).
+    (``bench.scenarios.screening_stream``). ``only_modes``: the comparison modes to run
+    (None: every mode of ``bench.scenarios.MODES``).
     """
     from bench.scenarios import MODES
 
     speed, rss, stream = [], [], []
     for r in route_counts:
         modes = list(MODES) if r <= FULL_MAX_ROUTES else ["feasible", "top_k"]
+        modes = [m for m in modes if only_modes is None or m in only_modes]
         if r <= HOST_MAX_ROUTES:
             spec = {"kind": "screening_speed", "routes": r, "reps": reps, "modes": modes}
             speed.append(_run_child(spec))
@@ -471,7 +479,7 @@ def main(argv=None) -> int:
         report["threads"] = bench_threads(args.reps, 10**5 if args.quick else 10**7)
     if "screening" in sections:
         counts = args.routes or ([300, 1000] if args.quick else SCREEN_ROUTES)
-        report["screening"] = bench_screening(counts, max(3, args.reps // 2))
+        report["screening"] = bench_screening(counts, max(3, args.reps // 2), args.modes)
     if "scale" in sections:
         from bench.scale import bench_scale
 

@@ -99,8 +99,11 @@ def _paths():
 
 def _call(f, opts, limits, mode: str):
     """One screen of ``opts`` by path function ``f`` in comparison mode ``mode``."""
+    from jaxspline.screen import transitions
+
     feasible_only, top_k = MODES[mode]
-    return f(opts, limits, MAX_GAP, 2**18, False, feasible_only, 0, 1, top_k=top_k)
+    chunk = transitions.default_chunk_size()  # 2**18 on CPU, larger on an accelerator
+    return f(opts, limits, MAX_GAP, chunk, False, feasible_only, 0, 1, top_k=top_k)
 
 
 def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):

@@ -58,6 +58,7 @@ from jaxspline.readers.mission import Scenario
 from jaxspline.screen.fused import release_programs
 from jaxspline.screen.options import take_options
 from jaxspline.screen.pairs import screen_chunks
+from jaxspline.screen.transitions import default_chunk_size
 from jaxspline.search import BatteryModel, Problem
 from jaxspline.search.stereo import ProductTable
 from jaxspline.search.store import PairsBuilder, start_order
@@ -67,8 +68,8 @@ __all__ = ["StageClock", "build_problem"]
 _NEAR_SLACK = 1e-6  # [s] near pairs reach at least this far past the always-feasible gap
 _WINDOW_GUARD = 1e-6  # [s] the near-pair screen reaches this far past far + slack, then cuts
 _NEAR_CHUNK = 1 << 13  # candidates per near-pair screening chunk: whole chunks share programs
-_NEAR_CHUNK_LARGE = 1 << 18  # ... on satellites of more than _LARGE_SAT options (docs/scale.md)
-_LARGE_SAT = 1 << 14  # their tables pad past the shared programs' size anyway
+_LARGE_SAT = 1 << 14  # larger satellites screen in the devices' chunk (default_chunk_size):
+# their tables pad past the shared programs' size anyway
 _JOIN_BATCH = 1 << 16  # screened pairs per call of the flown-join screen
 _PAIRS, _CANDS = "target-satellite pairs", "candidate options"  # the stages' work units
 
@@ -181,7 +182,7 @@ def _near_pairs(sc, opp, tables, far, slack, join_filter=None, tick=None, skip=N
             sub,
             tables[k],
             max_gap=far[k] + slack + _WINDOW_GUARD,
-            chunk_size=_NEAR_CHUNK_LARGE if n > _LARGE_SAT else _NEAR_CHUNK,
+            chunk_size=default_chunk_size() if n > _LARGE_SAT else _NEAR_CHUNK,
             feasible_only=True,
             progress=False,
             process_index=0,  # every pair of these satellites here, also under

@@ -39,3 +39,4 @@ from jaxspline.screen.pairs import screen_pairs as screen_pairs
 from jaxspline.screen.pairs import screen_transitions as screen_transitions
 from jaxspline.screen.transitions import Transitions as Transitions
 from jaxspline.screen.transitions import best_per_source as best_per_source
+from jaxspline.screen.transitions import default_chunk_size as default_chunk_size

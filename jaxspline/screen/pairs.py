@@ -83,6 +83,7 @@ from jaxspline.screen.transitions import (
     Stream,
     Transitions,
     collect,
+    default_chunk_size,
     empty_transitions,
     top_k_merge,
     top_k_score,
@@ -100,6 +101,7 @@ def _stream(
     """Validate the arguments eagerly and start the screen's chunk generator."""
     validate_options(options)
     validate_model(model, options)
+    chunk_size = default_chunk_size(chunk_size)
     check_positive("chunk_size", chunk_size)
     if max_gap is not None:
         check_positive("max_gap", max_gap)
@@ -131,7 +133,7 @@ def screen_chunks(
     model,
     *,
     max_gap: float | None = None,
-    chunk_size: int = 2**18,
+    chunk_size: int | None = None,
     progress: bool = True,
     feasible_only: bool = True,
     top_k: int | None = None,
@@ -166,7 +168,8 @@ def screen_chunks(
         (rest to rest; needs ``options.end_los`` / ``start_los``), see
         :func:`screen_transitions`.
       max_gap: optional upper bound on T [s].
-      chunk_size: candidates per compiled batch.
+      chunk_size: candidates per compiled batch (None: :func:`default_chunk_size`, by
+        the local devices' platform).
       progress: show a tqdm bar over candidates.
       feasible_only: yield only feasible rows (default True here).
       top_k: keep for every source only its ``top_k`` feasible successors of
@@ -193,7 +196,7 @@ def screen_transitions(
     model,
     *,
     max_gap: float | None = None,
-    chunk_size: int = 2**18,
+    chunk_size: int | None = None,
     progress: bool = True,
     feasible_only: bool = False,
     process_index: int | None = None,
@@ -221,7 +224,8 @@ def screen_transitions(
       max_gap: optional upper bound on T [s]; bounds the work to the pairs that
         lie within ``max_gap`` of each other in time.
       chunk_size: candidates per compiled batch (memory ~ 150 bytes each; the
-        fused path rounds it to whole rows of up to 256 slots).
+        fused path rounds it to whole rows of up to 256 slots). None:
+        :func:`default_chunk_size`, 2**18 on CPU and 2**22 on an accelerator.
       progress: show a tqdm bar over candidates.
       feasible_only: keep only feasible candidates in the result (compacted on
         the device; saves memory when most candidates fail).

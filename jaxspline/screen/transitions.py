@@ -22,7 +22,14 @@ from jax.sharding import Mesh
 from jaxspline.kernels.batch import ragged_positions
 from jaxspline.screen.options import RouteOptions
 
-__all__ = ["Transitions", "best_per_source"]
+__all__ = ["Transitions", "best_per_source", "default_chunk_size"]
+
+#: Candidates per screening chunk on CPU devices: a chunk's temporaries (~150 bytes a
+#: candidate) stay within the caches' reach (bench/results/SCREENING.md).
+CPU_CHUNK = 1 << 18
+#: ... on accelerators: 16x fewer chunks, so per-chunk dispatch, host syncs and
+#: transfers stop bounding the rate (~0.6 GB of temporaries a chunk on the device).
+ACCEL_CHUNK = 1 << 22
 
 
 class Transitions(NamedTuple):
@@ -61,6 +68,14 @@ class Transitions(NamedTuple):
     effort: np.ndarray
     t_min: np.ndarray
     n_screened: int
+
+
+def default_chunk_size(chunk_size: int | None = None) -> int:
+    """``chunk_size`` if given, else the screening chunk for the local devices:
+    :data:`CPU_CHUNK` on CPU, :data:`ACCEL_CHUNK` on a GPU or TPU."""
+    if chunk_size is not None:
+        return chunk_size
+    return CPU_CHUNK if jax.local_devices()[0].platform == "cpu" else ACCEL_CHUNK
 
 
 def device_mesh():

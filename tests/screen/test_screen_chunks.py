@@ -131,3 +131,21 @@ def test_release_keeps_a_small_screens_programs_and_drops_a_large_ones():
     assert fused._fused_program.cache_info().currsize == 0
     fused.release_programs()
     assert fused._compact_program.cache_info().currsize == 0
+
+
+def test_the_default_chunk_follows_the_devices_platform(monkeypatch):
+    """None picks 2**18 candidates on a CPU and 2**22 on an accelerator (a device whose
+    platform is not "cpu"); a chunk given is kept, and a bad one is named."""
+    from types import SimpleNamespace
+
+    from jaxspline.screen import transitions
+
+    assert transitions.default_chunk_size() == 2**18  # the tests run on the CPU
+    assert transitions.default_chunk_size(4096) == 4096
+    gpu = [SimpleNamespace(platform="gpu")]
+    monkeypatch.setattr(transitions.jax, "local_devices", lambda: gpu)
+    assert transitions.default_chunk_size() == 2**22
+    monkeypatch.undo()
+    opt = synthetic_options(np.random.default_rng(3), n_routes=6, per_route=2)
+    with pytest.raises(ValueError, match="chunk_size"):
+        screen.screen_transitions(opt, LIMITS, chunk_size=0, progress=False)
