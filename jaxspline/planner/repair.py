@@ -57,6 +57,7 @@ from jaxspline.planner.flown_joins import reject_unflyable
 from jaxspline.planner.plan_check import check_plan
 from jaxspline.planner.refine_starts import refine_starts
 from jaxspline.search import Timeline, greedy, lns
+from jaxspline.search.stereo import add_backups
 
 __all__ = ["DROP_REASONS", "Repaired", "drop_failing", "dropped_line", "repair"]
 
@@ -170,6 +171,7 @@ def _refill(pb, chosen, withdrawn, seconds, iters, seed):
     greedy(tl, deadline)
     if iters is None or iters > 0:
         lns(tl, deadline, random.Random(seed), iters)
+    add_backups(tl)  # stereo targets that could lose their product
     new = tl.plan()
     return new, len(new) - len(chosen)
 

@@ -39,7 +39,7 @@ from jaxspline.search.area_fill import area_index, fill
 from jaxspline.search.area_moves import AreaWalk, area_move, drop_idle_strips
 from jaxspline.search.construct import greedy_pass
 from jaxspline.search.lns_energy import EnergyRank, make_room
-from jaxspline.search.stereo import add_backups, drop_stray_looks, upgrade_product
+from jaxspline.search.stereo import drop_stray_looks, upgrade_product
 from jaxspline.search.timeline import Timeline
 
 __all__ = ["adopt", "earliest_pass", "greedy", "greedy_order", "lns"]
@@ -405,14 +405,12 @@ def _upgrade_step(tl: Timeline, w: _Walk, rng) -> None:
 
 
 def _finish(tl: Timeline, w: _Walk) -> None:
-    """The walk's best plan, without area strips or looks that add nothing, with
-    backup products for stereo targets that could lose theirs."""
+    """The walk's best plan, without area strips or looks that add nothing."""
     if _key(tl) < w.best_key:
         tl.restore(w.best)
     drop_idle_strips(tl)
     if tl.pb.stereo is not None:
         drop_stray_looks(tl, tl.pb.stereo.stereo_targets.tolist())
-        add_backups(tl, tl.pb.stereo.stereo_targets.tolist())
     tl.commit()
 
 

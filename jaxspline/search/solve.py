@@ -252,8 +252,7 @@ def _stages(pb, tl, order, budget, seed, exact_max_options, stats, worker, share
     its = 0 if exact or res.status == BoundStatus.OPTIMAL else max_iters  # 0: no LNS
     _lns_stage(tl, deadline - tail, random.Random(seed), its, worker, stats, say)
     earliest_pass(tl, deadline)
-    if pb.stereo is not None:  # the worker's plan may have come without them
-        add_backups(tl, pb.stereo.stereo_targets.tolist())
+    add_backups(tl)  # stereo targets that could lose their product
     bound, status = res.bound, res.status
     ceiling = plan_ceiling(tl)
     if tl.value >= ceiling - _OPTIMAL_TOL * max(1.0, ceiling):  # everything within reach

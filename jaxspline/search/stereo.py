@@ -16,7 +16,7 @@ missing looks.
 
 A product's value is weighed by its *confidence*, the chance that the benchmark's
 random overlap estimate finds it valid; a failed estimate takes the product out. At the
-end of a walk :func:`add_backups` therefore gives a target whose collected products
+end of a search :func:`add_backups` therefore gives a target whose collected products
 could all fail (more than :data:`BACKUP_FAIL`) the looks of further products that fit
 without removing anything: each product's estimate is seeded apart, so the target is
 lost only when every one of them fails.
@@ -305,14 +305,19 @@ def fail_chance(tl, t: int) -> float:
     return fail
 
 
-def add_backups(tl, targets) -> int:
-    """Give each of ``targets`` that collects a product but could lose it (its
-    :func:`fail_chance` above :data:`BACKUP_FAIL`) the looks of further products, the
-    surest first, while they fit without removing anything and until the chance is
-    below :data:`BACKUP_FAIL`; the plan's value never drops. Returns the products added."""
+def add_backups(tl, targets=None) -> int:
+    """Give each of ``targets`` (None: every stereo target; none without a product
+    table) that collects a product but could lose it (its :func:`fail_chance` above
+    :data:`BACKUP_FAIL`) the looks of further products, the surest first, while they fit
+    without removing anything and until the chance is below :data:`BACKUP_FAIL`; the
+    plan's value never drops. The last step of a search that hands its plan over (a
+    walk that goes on from its plan would carry the extra looks). Returns the products
+    added."""
     table, counts = tl.pb.stereo, tl.stereo
+    if table is None:
+        return 0
     added = 0
-    for t in targets:
+    for t in table.stereo_targets.tolist() if targets is None else targets:
         fail = fail_chance(tl, t)
         if counts.best[t] < 0 or fail <= BACKUP_FAIL:
             continue
@@ -322,7 +327,7 @@ def add_backups(tl, targets) -> int:
             mark, base = len(tl.log), tl.value
             if all(_try_insert(tl, c, True) for c in missing_looks(tl, p)) and tl.value >= base:
                 added += 1
-                fail *= 1.0 - float(table.confidence[p])
+                fail = fail_chance(tl, t)  # its looks may complete more than p
                 if fail <= BACKUP_FAIL:
                     break
             else:
