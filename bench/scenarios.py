@@ -106,11 +106,13 @@ def _call(f, opts, limits, mode: str):
     return f(opts, limits, MAX_GAP, chunk, False, feasible_only, 0, 1, top_k=top_k)
 
 
-def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
+def _ceiling(opts, limits, n: int = 1 << 20):
     """The host path's chunk program over ``n`` materialized candidates (device arrays).
 
     The compute ceiling of the same per-candidate work with no pair generation, no
-    compaction and no result copies. Returns a function that screens them once.
+    compaction and no result copies, in the fused path's chunk (``default_chunk_size``;
+    ``n`` grows to four chunks, the chunk shrinks to what the pass holds). Returns a
+    function that screens them once.
     """
     import jax
     import jax.numpy as jnp
@@ -120,6 +122,8 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     from jaxspline.screen import host as screen_host
     from jaxspline.screen import transitions
 
+    chunk = transitions.default_chunk_size()
+    n = max(n, 4 * chunk)
     runs = transitions.candidate_runs(opts, MAX_GAP)
     k, p = ragged_positions(runs.counts)
     src, dst = runs.order[k[:n]], runs.order[runs.lo[k[:n]] + p[:n]]
@@ -127,6 +131,7 @@ def _ceiling(opts, limits, n: int = 1 << 20, chunk: int = 1 << 18):
     src, dst = src[keep], dst[keep]
     sc = screen_host.Screener(opts, limits)
     T = sc.t_start[dst] - sc.t_end[src]
+    chunk = min(chunk, 1 << (src.size.bit_length() - 1))  # at least one whole chunk
     chunks = [
         tuple(
             jax.device_put(jnp.asarray(a[i : i + chunk], dt), sc.cand)
